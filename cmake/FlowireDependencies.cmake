@@ -1,0 +1,52 @@
+# Every dependency is a Debian 12 package (scripts/install-deps.sh); nothing is downloaded.
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(yaml-cpp REQUIRED)
+find_package(nlohmann_json 3.10 REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(fmt REQUIRED)
+find_package(Threads REQUIRED)
+find_package(PkgConfig REQUIRED)
+
+# SuiteSparse 5.x on Debian ships neither a CMake config nor a .pc file.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
+foreach(lib cholmod amd colamd camd ccolamd suitesparseconfig)
+  find_library(SUITESPARSE_${lib}_LIBRARY ${lib} REQUIRED)
+endforeach()
+if(NOT TARGET flowire_cholmod)
+  add_library(flowire_cholmod INTERFACE)
+  target_include_directories(flowire_cholmod SYSTEM INTERFACE ${CHOLMOD_INCLUDE_DIR})
+  target_link_libraries(flowire_cholmod INTERFACE
+    ${SUITESPARSE_cholmod_LIBRARY} ${SUITESPARSE_amd_LIBRARY} ${SUITESPARSE_colamd_LIBRARY}
+    ${SUITESPARSE_camd_LIBRARY} ${SUITESPARSE_ccolamd_LIBRARY}
+    ${SUITESPARSE_suitesparseconfig_LIBRARY})
+endif()
+
+if(FLOWIRE_WITH_VTK)
+  find_package(VTK 9.1 REQUIRED COMPONENTS
+    CommonCore CommonDataModel IOXML IOLegacy IOGeometry FiltersCore FiltersSources
+    FiltersGeneral RenderingCore RenderingOpenGL2 RenderingFreeType InteractionStyle
+    RenderingAnnotation IOImage)
+endif()
+
+if(FLOWIRE_WITH_PETSC OR FLOWIRE_WITH_FEM)
+  find_package(MPI COMPONENTS C CXX)
+  pkg_check_modules(PETSC IMPORTED_TARGET PETSc>=3.18)
+  if(NOT (MPI_FOUND AND PETSC_FOUND))
+    message(STATUS "flowire: PETSc/MPI not found: the petsc solver and the FEM path are off")
+    set(FLOWIRE_WITH_PETSC OFF)
+    set(FLOWIRE_WITH_FEM OFF)
+  endif()
+endif()
+
+if(FLOWIRE_WITH_FEM)
+  find_path(GMSH_INCLUDE_DIR gmsh.h)
+  find_library(GMSH_LIBRARY gmsh)
+  if(GMSH_INCLUDE_DIR AND GMSH_LIBRARY)
+    add_library(flowire_gmsh INTERFACE)
+    target_include_directories(flowire_gmsh SYSTEM INTERFACE ${GMSH_INCLUDE_DIR})
+    target_link_libraries(flowire_gmsh INTERFACE ${GMSH_LIBRARY})
+  else()
+    message(STATUS "flowire: gmsh not found: the FEM path is off")
+    set(FLOWIRE_WITH_FEM OFF)
+  endif()
+endif()

@@ -1,0 +1,108 @@
+#pragma once
+/// @file config.hpp
+/// @brief Declared, validated configuration trees (the scene file).
+///
+/// Every key is declared once in a `Schema` (type, default, unit, doc). `load_config`
+/// reads YAML, applies `--set` overrides, rejects unknown keys naming file and line,
+/// converts "<number> <unit>" strings to SI, and fills defaults for every section that is
+/// present. A section that is absent stays absent: nothing of it is run.
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "flowire/common/units.hpp"
+
+namespace flowire::config {
+
+enum class Type {
+  Number,      ///< real, optionally "<number> <unit>"
+  Integer,     ///< whole number
+  Bool,        ///< true / false
+  String,      ///< free text (file names, node names)
+  Enum,        ///< one of `choices`
+  Vector3,     ///< [x, y, z], each optionally with a unit
+  NumberList,  ///< [a, b, ...]
+  Section,     ///< a map whose children are declared keys
+  List,        ///< a list of maps; item keys are declared as "<path>[].<key>"
+  NumberOrSection,  ///< either a number (with unit) or a map with declared children
+  StringOrInteger,  ///< a name or an index (e.g. a node)
+};
+
+struct Key {
+  std::string path;         ///< dotted path, e.g. "flow.inlet.pressure"; list items "loads[].type"
+  Type type = Type::Number;
+  std::string default_text; ///< YAML text of the default; empty: no default (absent unless given)
+  units::Dimension dim = units::Dimension::None;
+  std::string doc;
+  std::vector<std::string> choices;  ///< for Enum
+};
+
+class Schema {
+ public:
+  Schema& add(Key key);
+  [[nodiscard]] const Key* find(std::string_view path) const;
+  [[nodiscard]] const std::vector<Key>& keys() const { return keys_; }
+  /// @brief Children declared directly under `path` ("" for the top level).
+  [[nodiscard]] std::vector<const Key*> children(std::string_view path) const;
+  /// @brief The reference page: one table row per key (path, type, default, unit, doc).
+  [[nodiscard]] std::string markdown() const;
+
+ private:
+  std::vector<Key> keys_;
+  std::map<std::string, size_t, std::less<>> index_;
+};
+
+/// @brief One resolved value, in SI, with the place it came from.
+struct Value {
+  Type type = Type::Number;
+  double number = 0.0;
+  bool boolean = false;
+  std::string text;
+  std::vector<double> list;
+  std::string where;  ///< "scene.yaml:12" or "--set" or "default"
+};
+
+/// @brief A validated scene: flat map from concrete path ("loads[0].type") to value.
+class Config {
+ public:
+  [[nodiscard]] bool has(std::string_view path) const;
+  /// @brief True if a section (or any key below it) was given or defaulted.
+  [[nodiscard]] bool has_section(std::string_view path) const;
+  [[nodiscard]] double number(std::string_view path) const;
+  [[nodiscard]] double number_or(std::string_view path, double fallback) const;
+  [[nodiscard]] int integer(std::string_view path) const;
+  [[nodiscard]] bool boolean(std::string_view path) const;
+  [[nodiscard]] const std::string& string(std::string_view path) const;
+  [[nodiscard]] std::string string_or(std::string_view path, std::string fallback) const;
+  [[nodiscard]] Eigen::Vector3d vector3(std::string_view path) const;
+  [[nodiscard]] const std::vector<double>& list(std::string_view path) const;
+  /// @brief Number of items of a List key.
+  [[nodiscard]] int count(std::string_view path) const;
+  /// @brief Where a value came from, for error messages ("scene.yaml:12: flow.solver").
+  [[nodiscard]] std::string where(std::string_view path) const;
+  [[nodiscard]] const std::map<std::string, Value, std::less<>>& values() const { return values_; }
+  /// @brief The file the config was read from (empty for strings).
+  [[nodiscard]] const std::string& file() const { return file_; }
+  /// @brief Directory of that file, for resolving relative file names.
+  [[nodiscard]] std::string resolve_path(std::string_view relative) const;
+  /// @brief Set a value programmatically (used by loaders and tests).
+  void set(std::string path, Value v) { values_[std::move(path)] = std::move(v); }
+  void set_file(std::string f) { file_ = std::move(f); }
+
+ private:
+  const Value& get(std::string_view path) const;
+  std::map<std::string, Value, std::less<>> values_;
+  std::string file_;
+};
+
+/// @brief Read a YAML scene file, apply `--set KEY=VALUE` overrides, validate against `schema`.
+/// @throws flowire::Error (input) naming file, line and key.
+Config load_config(const std::string& file, const Schema& schema,
+                   const std::vector<std::string>& overrides = {});
+/// @brief Same, from YAML text (`name` is used in messages in place of a file name).
+Config load_config_text(const std::string& text, const std::string& name, const Schema& schema,
+                        const std::vector<std::string>& overrides = {});
+
+}  // namespace flowire::config

@@ -1,0 +1,352 @@
+#include "flowire/common/config.hpp"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "flowire/common/error.hpp"
+
+namespace flowire::config {
+
+// ---------------------------------------------------------------- Schema
+
+Schema& Schema::add(Key key) {
+  if (index_.count(key.path)) throw_usage_error(fmt::format("schema: key '{}' declared twice", key.path));
+  index_.emplace(key.path, keys_.size());
+  keys_.push_back(std::move(key));
+  return *this;
+}
+
+const Key* Schema::find(std::string_view path) const {
+  auto it = index_.find(path);
+  return it == index_.end() ? nullptr : &keys_[it->second];
+}
+
+namespace {
+
+std::string_view parent_of(std::string_view path) {
+  const auto dot = path.rfind('.');
+  return dot == std::string_view::npos ? std::string_view{} : path.substr(0, dot);
+}
+
+std::string_view leaf_of(std::string_view path) {
+  const auto dot = path.rfind('.');
+  return dot == std::string_view::npos ? path : path.substr(dot + 1);
+}
+
+std::string_view type_name(Type t) {
+  switch (t) {
+    case Type::Number: return "number";
+    case Type::Integer: return "integer";
+    case Type::Bool: return "bool";
+    case Type::String: return "string";
+    case Type::Enum: return "enum";
+    case Type::Vector3: return "[x, y, z]";
+    case Type::NumberList: return "list of numbers";
+    case Type::Section: return "section";
+    case Type::List: return "list of sections";
+    case Type::NumberOrSection: return "number or section";
+    case Type::StringOrInteger: return "name or index";
+  }
+  return "?";
+}
+
+size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+}  // namespace
+
+std::vector<const Key*> Schema::children(std::string_view path) const {
+  std::vector<const Key*> out;
+  for (const auto& k : keys_)
+    if (parent_of(k.path) == path) out.push_back(&k);
+  return out;
+}
+
+std::string Schema::markdown() const {
+  std::string out = "| key | type | default | unit | description |\n|---|---|---|---|---|\n";
+  for (const auto& k : keys_) {
+    std::string type(type_name(k.type));
+    if (k.type == Type::Enum) {
+      type.clear();
+      for (const auto& c : k.choices) type += (type.empty() ? "" : " \\| ") + c;
+    }
+    const auto unit = k.dim == units::Dimension::None ? std::string_view{} : units::si_unit(k.dim);
+    out += fmt::format("| `{}` | {} | {} | {} | {} |\n", k.path, type,
+                       k.default_text.empty() ? "" : "`" + k.default_text + "`", unit, k.doc);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- Config accessors
+
+const Value& Config::get(std::string_view path) const {
+  auto it = values_.find(path);
+  if (it == values_.end()) throw_usage_error(fmt::format("scene key '{}' is not set", path));
+  return it->second;
+}
+
+bool Config::has(std::string_view path) const { return values_.find(path) != values_.end(); }
+
+bool Config::has_section(std::string_view path) const {
+  if (has(path)) return true;
+  const std::string prefix = std::string(path) + ".";
+  auto it = values_.lower_bound(prefix);
+  return it != values_.end() && it->first.compare(0, prefix.size(), prefix) == 0;
+}
+
+double Config::number(std::string_view path) const { return get(path).number; }
+double Config::number_or(std::string_view path, double fallback) const {
+  return has(path) ? get(path).number : fallback;
+}
+int Config::integer(std::string_view path) const { return static_cast<int>(get(path).number); }
+bool Config::boolean(std::string_view path) const { return get(path).boolean; }
+const std::string& Config::string(std::string_view path) const { return get(path).text; }
+std::string Config::string_or(std::string_view path, std::string fallback) const {
+  return has(path) ? get(path).text : fallback;
+}
+Eigen::Vector3d Config::vector3(std::string_view path) const {
+  const auto& l = get(path).list;
+  return {l.at(0), l.at(1), l.at(2)};
+}
+const std::vector<double>& Config::list(std::string_view path) const { return get(path).list; }
+int Config::count(std::string_view path) const {
+  return has(path) ? static_cast<int>(get(path).number) : 0;
+}
+std::string Config::where(std::string_view path) const {
+  auto it = values_.find(path);
+  const std::string src = it == values_.end() ? file_ : it->second.where;
+  return fmt::format("{}: {}", src, path);
+}
+std::string Config::resolve_path(std::string_view relative) const {
+  namespace fs = std::filesystem;
+  fs::path p(relative);
+  if (p.is_absolute() || file_.empty()) return p.string();
+  return (fs::path(file_).parent_path() / p).lexically_normal().string();
+}
+
+// ---------------------------------------------------------------- loading
+
+namespace {
+
+class Loader {
+ public:
+  Loader(const Schema& schema, std::string name, Config& out, std::set<std::string> overridden)
+      : schema_(schema), name_(std::move(name)), out_(out), overridden_(std::move(overridden)) {}
+
+  std::string where(const YAML::Node& node) const {
+    if (node.Mark().is_null() || node.Mark().line < 0) return "--set";
+    return fmt::format("{}:{}", name_, node.Mark().line + 1);
+  }
+
+  void unknown_key(const YAML::Node& key_node, const std::string& decl_path) const {
+    const Key* best = nullptr;
+    size_t best_d = 4;
+    for (const auto& k : schema_.keys()) {
+      if (parent_of(k.path) != parent_of(decl_path)) continue;
+      const size_t d = edit_distance(leaf_of(k.path), leaf_of(decl_path));
+      if (d < best_d) best_d = d, best = &k;
+    }
+    std::string allowed;
+    for (const auto* k : schema_.children(parent_of(decl_path)))
+      allowed += (allowed.empty() ? "" : ", ") + std::string(leaf_of(k->path));
+    const std::string hint = best ? fmt::format(" (did you mean '{}'?)", leaf_of(best->path))
+                                  : fmt::format(" (allowed here: {})", allowed);
+    throw_input_error(where(key_node), fmt::format("unknown key '{}'{}", decl_path, hint));
+  }
+
+  void map(const YAML::Node& node, const std::string& decl, const std::string& concrete) {
+    if (!node.IsMap())
+      throw_input_error(where(node), fmt::format("'{}' must be a map of keys", concrete.empty() ? "scene" : concrete));
+    for (const auto& kv : node) {
+      const auto key = kv.first.as<std::string>();
+      const std::string dpath = decl.empty() ? key : decl + "." + key;
+      const std::string cpath = concrete.empty() ? key : concrete + "." + key;
+      const Key* k = schema_.find(dpath);
+      if (!k) unknown_key(kv.first, dpath);
+      value(kv.second, *k, dpath, cpath);
+    }
+  }
+
+  void value(const YAML::Node& node, const Key& k, const std::string& dpath, const std::string& cpath) {
+    Value v;
+    v.type = k.type;
+    v.where = overridden_.count(cpath) ? std::string("--set") : where(node);
+    const std::string w = fmt::format("{}: {}", v.where, cpath);
+    auto scalar = [&]() -> std::string {
+      if (!node.IsScalar())
+        throw_input_error(w, fmt::format("expected a {}, got a {}", type_name(k.type),
+                                         node.IsMap() ? "map" : node.IsSequence() ? "list" : "null"));
+      return node.Scalar();
+    };
+    switch (k.type) {
+      case Type::Section:
+        if (!node.IsNull()) map(node, dpath, cpath);
+        break;
+      case Type::NumberOrSection:
+        if (node.IsMap()) {
+          v.type = Type::Section;
+          map(node, dpath, cpath);
+        } else {
+          v.type = Type::Number;
+          v.number = units::parse_quantity(scalar(), k.dim, w);
+        }
+        break;
+      case Type::List: {
+        if (!node.IsSequence()) throw_input_error(w, "expected a list");
+        int i = 0;
+        for (const auto& item : node) map(item, dpath + "[]", fmt::format("{}[{}]", cpath, i++));
+        v.number = i;
+        break;
+      }
+      case Type::Number: v.number = units::parse_quantity(scalar(), k.dim, w); break;
+      case Type::Integer: {
+        v.number = units::parse_quantity(scalar(), units::Dimension::None, w);
+        if (v.number != std::floor(v.number) || std::abs(v.number) > 2e9)
+          throw_input_error(w, fmt::format("'{}' must be a whole number", node.Scalar()));
+        break;
+      }
+      case Type::Bool: {
+        const auto s = scalar();
+        if (s == "true" || s == "yes" || s == "on") v.boolean = true;
+        else if (s == "false" || s == "no" || s == "off") v.boolean = false;
+        else throw_input_error(w, fmt::format("'{}' must be true or false", s));
+        break;
+      }
+      case Type::String:
+      case Type::StringOrInteger: v.text = scalar(); break;
+      case Type::Enum: {
+        v.text = scalar();
+        if (std::find(k.choices.begin(), k.choices.end(), v.text) == k.choices.end()) {
+          std::string c;
+          for (const auto& x : k.choices) c += (c.empty() ? "" : ", ") + x;
+          throw_input_error(w, fmt::format("'{}' is not one of: {}", v.text, c));
+        }
+        break;
+      }
+      case Type::Vector3:
+      case Type::NumberList: {
+        if (!node.IsSequence()) throw_input_error(w, fmt::format("expected a {}", type_name(k.type)));
+        for (const auto& item : node) {
+          if (!item.IsScalar()) throw_input_error(w, "list items must be numbers");
+          v.list.push_back(units::parse_quantity(item.Scalar(), k.dim, w));
+        }
+        if (k.type == Type::Vector3 && v.list.size() != 3)
+          throw_input_error(w, fmt::format("expected 3 numbers [x, y, z], got {}", v.list.size()));
+        break;
+      }
+    }
+    out_.set(cpath, std::move(v));
+  }
+
+  void defaults() {
+    // Keys are declared parents-first, so a defaulted section makes its children's defaults apply.
+    for (const auto& k : schema_.keys()) {
+      if (k.default_text.empty()) continue;
+      const std::string parent(parent_of(k.path));
+      std::vector<std::string> parents;
+      if (parent.empty()) {
+        parents.emplace_back();
+      } else if (parent.size() > 2 && parent.compare(parent.size() - 2, 2, "[]") == 0) {
+        const std::string list = parent.substr(0, parent.size() - 2);
+        const int n = out_.count(list);
+        for (int i = 0; i < n; ++i) parents.push_back(fmt::format("{}[{}]", list, i));
+      } else {
+        std::string concrete = parent;  // a section below list items is not defaulted
+        if (out_.has(concrete)) parents.push_back(concrete);
+      }
+      for (const auto& p : parents) {
+        const std::string cpath = p.empty() ? std::string(leaf_of(k.path)) : p + "." + std::string(leaf_of(k.path));
+        if (out_.has(cpath) || out_.has_section(cpath)) continue;
+        YAML::Node node = YAML::Load(k.default_text);
+        value(node, k, k.path, cpath);
+        out_.set(cpath, [&] { Value v = out_.values().at(cpath); v.where = "default"; return v; }());
+      }
+    }
+  }
+
+ private:
+  const Schema& schema_;
+  std::string name_;
+  Config& out_;
+  std::set<std::string> overridden_;
+};
+
+std::string apply_override(YAML::Node& root, const std::string& text, const Schema& schema) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw_input_error("--set", fmt::format("'{}' must be KEY=VALUE", text));
+  const std::string path = text.substr(0, eq);
+  const std::string val = text.substr(eq + 1);
+  if (!schema.find(path)) throw_input_error("--set", fmt::format("unknown key '{}'", path));
+  YAML::Node value;
+  try {
+    value = YAML::Load(val);
+  } catch (const YAML::Exception& e) {
+    throw_input_error("--set", fmt::format("{}: cannot parse '{}': {}", path, val, e.msg));
+  }
+  std::vector<std::string> parts;
+  std::stringstream ss(path);
+  for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+  // Walk down, creating maps as needed. yaml-cpp nodes are handles: reassigning a
+  // local Node would rebind it, so keep them in a vector.
+  std::vector<YAML::Node> chain{root};
+  for (size_t i = 0; i + 1 < parts.size(); ++i) {
+    YAML::Node next = chain.back()[parts[i]];
+    if (next.IsScalar()) {  // e.g. pressure: 13000 overridden by pressure.waveform=sine
+      chain.back()[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      next = chain.back()[parts[i]];
+    }
+    chain.push_back(next);
+  }
+  YAML::Node clean = YAML::Clone(value);
+  chain.back()[parts.back()] = clean;
+  return path;
+}
+
+}  // namespace
+
+Config load_config_text(const std::string& text, const std::string& name, const Schema& schema,
+                        const std::vector<std::string>& overrides) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw_input_error(fmt::format("{}:{}", name, e.mark.line + 1), fmt::format("YAML syntax error: {}", e.msg));
+  }
+  if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+  if (!root.IsMap()) throw_input_error(name, "a scene must be a map of sections (vessels:, flow:, wire:, ...)");
+  std::set<std::string> overridden;
+  for (const auto& o : overrides) overridden.insert(apply_override(root, o, schema));
+  Config cfg;
+  cfg.set_file(name);
+  Loader loader(schema, name, cfg, std::move(overridden));
+  loader.map(root, "", "");
+  loader.defaults();
+  return cfg;
+}
+
+Config load_config(const std::string& file, const Schema& schema, const std::vector<std::string>& overrides) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw_input_error(file, "cannot open the scene file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return load_config_text(ss.str(), file, schema, overrides);
+}
+
+}  // namespace flowire::config

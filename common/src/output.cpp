@@ -1,0 +1,37 @@
+#include "flowire/common/output.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <system_error>
+
+#include "flowire/common/error.hpp"
+
+namespace flowire {
+
+void write_atomically(const std::filesystem::path& target,
+                      const std::function<void(const std::filesystem::path& tmp)>& writer) {
+  namespace fs = std::filesystem;
+  const fs::path tmp = target.parent_path() / (target.filename().string() + ".partial");
+  try {
+    if (!target.parent_path().empty()) fs::create_directories(target.parent_path());
+    writer(tmp);
+    if (!fs::exists(tmp)) throw_input_error(target.string(), "the file could not be written");
+    fs::rename(tmp, target);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
+}
+
+void write_text_atomically(const std::filesystem::path& target, const std::string& text) {
+  write_atomically(target, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw_input_error(target.string(), "cannot open for writing");
+    out << text;
+    if (!out) throw_input_error(target.string(), "write failed (disk full?)");
+  });
+}
+
+}  // namespace flowire

@@ -1,0 +1,78 @@
+#pragma once
+/// @file spatial.hpp
+/// @brief Spatial queries on a network: which segment holds a point, distance to the wall.
+///
+/// The lumen is the union of the segments' capsules (cylinder of radius r around the
+/// segment's axis, closed by half-spheres at the nodes). `locate` searches first a window
+/// of ±`window` segments (by index, plus the segments sharing a node with the hint) around
+/// a hint — the previous query's answer, as in the published method — and falls back to an
+/// AABB tree when no segment of the window holds the point, so the answer is never wrong:
+/// the returned segment holds the point whenever any segment does; otherwise it is the
+/// segment whose wall is nearest and `inside` is false.
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "flowire/vessels/network.hpp"
+
+namespace flowire::vessels {
+
+/// @brief Closest point on a segment's axis.
+struct AxisProjection {
+  double t = 0.0;         ///< parameter along the axis, clamped to [0, 1]
+  double distance = 0.0;  ///< distance from the point to the axis point
+};
+AxisProjection project_on_axis(const Vec3& p, const Vec3& a, const Vec3& b);
+
+struct Location {
+  int segment = -1;
+  bool inside = false;
+  double t = 0.0;              ///< axial parameter in [0, 1] from node_from
+  double axis_distance = 0.0;  ///< distance to the axis (m)
+  bool from_window = false;    ///< found by the window search (else by the fallback)
+};
+
+struct LocatorStats {
+  std::uint64_t window_hits = 0;
+  std::uint64_t fallbacks = 0;
+};
+
+class SpatialIndex {
+ public:
+  explicit SpatialIndex(const Network& net, int window = 4);
+
+  /// @brief The segment holding `p`, searched around `hint` first (hint < 0: no hint).
+  Location locate(const Vec3& p, int hint = -1) const;
+  /// @brief Reference answer by checking every segment (for tests and benchmarks).
+  Location locate_brute_force(const Vec3& p) const;
+
+  /// @brief Signed distance to the wall of the union of capsules (negative inside), with a
+  /// smooth minimum of width `blend` (m) across junctions; gradient (outward normal) if asked.
+  /// Only segments within reach of `hint` are considered when hint >= 0.
+  double wall_distance(const Vec3& p, int hint = -1, Vec3* gradient = nullptr) const;
+
+  [[nodiscard]] const LocatorStats& stats() const { return stats_; }
+  void reset_stats() const { stats_ = {}; }
+  [[nodiscard]] const Network& network() const { return net_; }
+  [[nodiscard]] int window() const { return window_; }
+
+ private:
+  struct BvhNode {
+    Eigen::AlignedBox3d box;
+    int left = -1, right = -1;  ///< children (internal) or -1
+    int first = 0, count = 0;   ///< leaf range in order_
+  };
+  int build_bvh(int first, int count, int depth);
+  bool test_segment(const Vec3& p, int s, Location& best) const;
+  Location fallback(const Vec3& p) const;
+  void nearby_segments(const Vec3& p, double radius, std::vector<int>& out) const;
+
+  const Network& net_;
+  int window_;
+  std::vector<Eigen::AlignedBox3d> seg_boxes_;
+  std::vector<int> order_;
+  std::vector<BvhNode> bvh_;
+  mutable LocatorStats stats_;
+};
+
+}  // namespace flowire::vessels
