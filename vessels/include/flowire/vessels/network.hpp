@@ -9,6 +9,7 @@
 /// nodes of degree one are ends (inlets/outlets). Loops are allowed and counted as the
 /// cyclomatic number E − V + C.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 

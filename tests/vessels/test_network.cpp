@@ -1,0 +1,179 @@
+// Network construction: splitting, joining, counting, generators, bad input.
+#include "flowire/vessels/network.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "flowire/common/error.hpp"
+#include "flowire/vessels/generators.hpp"
+#include "flowire_test.hpp"
+
+using namespace flowire::vessels;
+
+namespace {
+
+Polyline line(std::string name, Vec3 a, Vec3 b, double ra, double rb, int n = 1) {
+  Polyline p;
+  p.name = std::move(name);
+  for (int i = 0; i <= n; ++i) {
+    const double w = static_cast<double>(i) / n;
+    p.points.push_back((1 - w) * a + w * b);
+    p.radii.push_back((1 - w) * ra + w * rb);
+  }
+  return p;
+}
+
+std::string build_error(const Centerlines& c) {
+  try {
+    (void)Network::build(c);
+  } catch (const flowire::Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Network, SplitsBranchesUniformlyNoLongerThanTheLimit) {
+  Centerlines c;
+  c.branches.push_back(line("a", Vec3::Zero(), Vec3(0.01, 0, 0), 1e-3, 1e-3, 7));
+  BuildOptions opt;
+  opt.max_segment_length = 3e-3;
+  const auto net = Network::build(c, opt);
+  EXPECT_EQ(net.num_segments(), 4);  // ceil(10 / 3)
+  for (const auto& s : net.segments()) {
+    EXPECT_LE(s.length, 3e-3 + 1e-15);
+    EXPECT_NEAR(s.length, 2.5e-3, 1e-15);
+    EXPECT_NEAR(s.radius, 1e-3, 1e-15);
+  }
+  EXPECT_NEAR(net.counts().total_length, 0.01, 1e-15);
+  EXPECT_EQ(net.counts().ends, 2);
+}
+
+TEST(Network, SplitsWhereTheRadiusChangesAndAveragesTheRadius) {
+  Centerlines c;
+  c.branches.push_back(line("taper", Vec3::Zero(), Vec3(0.01, 0, 0), 2e-3, 1e-3, 10));
+  BuildOptions opt;
+  opt.max_segment_length = 1.0;
+  opt.radius_change = 0.2;
+  const auto net = Network::build(c, opt);
+  EXPECT_GT(net.num_segments(), 2);
+  double mean = 0;
+  for (const auto& s : net.segments()) {
+    const double r0 = 2e-3 - 1e-3 * net.node(s.node_from).x() / 0.01;
+    const double r1 = 2e-3 - 1e-3 * net.node(s.node_to).x() / 0.01;
+    EXPECT_NEAR(s.radius, 0.5 * (r0 + r1), 1e-15);  // exact mean of a linear taper
+    EXPECT_LE(std::abs(r1 - r0), 0.2 * r0 + 1e-4 + 1e-15);
+    mean += s.radius * s.length;
+  }
+  EXPECT_NEAR(mean / 0.01, 1.5e-3, 1e-15);
+}
+
+TEST(Network, JoinsBranchEndsIntoJunctionsAndCountsLoops) {
+  // A diamond: S→A, S→B, A→T, B→T, plus A→B: two independent loops.
+  const Vec3 S(0, 0, 0), A(0.01, 0.01, 0), B(0.01, -0.01, 0), T(0.02, 0, 0);
+  Centerlines c;
+  c.branches = {line("SA", S, A, 1e-3, 1e-3), line("SB", S, B, 1e-3, 1e-3), line("AT", A, T, 1e-3, 1e-3),
+                line("BT", B, T, 1e-3, 1e-3), line("AB", A, B, 1e-3, 1e-3)};
+  const auto n = Network::build(c, {.max_segment_length = 1.0, .radius_change = 0.1, .join_tolerance = 0}).counts();
+  EXPECT_EQ(n.nodes, 4);
+  EXPECT_EQ(n.segments, 5);
+  EXPECT_EQ(n.loops, 2);
+  EXPECT_EQ(n.junctions, 2);
+  EXPECT_EQ(n.ends, 0);
+  EXPECT_EQ(n.components, 1);
+}
+
+TEST(Network, CountsComponentsAndKeepsOne) {
+  Centerlines c;
+  c.branches = {line("a", Vec3::Zero(), Vec3(0.01, 0, 0), 2e-3, 2e-3), line("b", Vec3(0, 1, 0), Vec3(0.01, 1, 0), 1e-3, 1e-3)};
+  const auto net = Network::build(c);
+  EXPECT_EQ(net.counts().components, 2);
+  EXPECT_EQ(net.widest_end(), 0);
+  const auto kept = net.keep_component(net.widest_end());
+  EXPECT_EQ(kept.counts().components, 1);
+  EXPECT_NEAR(kept.counts().radius_max, 2e-3, 1e-15);
+  EXPECT_NEAR(kept.counts().radius_min, 2e-3, 1e-15);
+}
+
+TEST(Network, BadInputNamesBranchAndPoint) {
+  auto c = Centerlines{{line("ok", Vec3::Zero(), Vec3(0.01, 0, 0), 1e-3, 1e-3, 4)}, "file.vtp"};
+  auto bad = c;
+  bad.branches[0].radii[2] = 0.0;
+  EXPECT_NE(build_error(bad).find("file.vtp: branch 0 ('ok'), point 2: radius 0 is not positive"), std::string::npos)
+      << build_error(bad);
+  bad = c;
+  bad.branches[0].radii[3] = std::nan("");
+  EXPECT_NE(build_error(bad).find("point 3: radius is not finite"), std::string::npos);
+  bad = c;
+  bad.branches[0].points[1].y() = INFINITY;
+  EXPECT_NE(build_error(bad).find("point 1: coordinate is not finite"), std::string::npos);
+  bad = c;
+  bad.branches[0].points[2] = bad.branches[0].points[1];
+  EXPECT_NE(build_error(bad).find("points 1 and 2 coincide"), std::string::npos);
+  bad = c;
+  bad.branches[0].points.resize(1);
+  bad.branches[0].radii.resize(1);
+  EXPECT_NE(build_error(bad).find("needs at least 2"), std::string::npos);
+  // A branch that closes on itself in one segment is a self-loop.
+  Centerlines loop{{line("loop", Vec3::Zero(), Vec3(1e-9, 0, 0), 1e-3, 1e-3)}, "f"};
+  loop.branches[0].points[1] = Vec3(2e-7, 0, 0);
+  EXPECT_NE(build_error(loop).find("self-loop"), std::string::npos) << build_error(loop);
+  EXPECT_NE(build_error(Centerlines{{}, "empty.vtp"}).find("empty.vtp: no centerline branches"), std::string::npos);
+}
+
+TEST(Generators, YBifurcationObeysMurray) {
+  const auto net = Network::build(y_bifurcation({}), {.max_segment_length = 5e-3});
+  const auto n = net.counts();
+  EXPECT_EQ(n.branches, 3);
+  EXPECT_EQ(n.junctions, 1);
+  EXPECT_EQ(n.ends, 3);
+  EXPECT_EQ(n.loops, 0);
+  const double rp = net.segment(net.branch(0).segments[0]).radius;
+  const double r1 = net.segment(net.branch(1).segments[0]).radius;
+  const double r2 = net.segment(net.branch(2).segments[0]).radius;
+  EXPECT_NEAR(std::pow(r1, 3) + std::pow(r2, 3), std::pow(rp, 3), 1e-20);
+  EXPECT_NEAR(n.total_length, 0.12, 1e-12);
+}
+
+TEST(Generators, AorticArchIsAnAdultAortaWithThreeSupraAorticBranches) {
+  const auto c = aortic_arch();
+  const auto net = Network::build(c, {.max_segment_length = 5e-3});
+  const auto n = net.counts();
+  EXPECT_EQ(n.branches, 9);
+  EXPECT_EQ(n.junctions, 4);   // brachiocephalic, carotid, subclavian, iliac bifurcation
+  EXPECT_EQ(n.ends, 6);        // root, three supra-aortic, two femoral
+  EXPECT_EQ(n.loops, 0);
+  EXPECT_NEAR(n.radius_max, 0.014, 0.001);
+  EXPECT_GT(n.radius_min, 3e-3);
+  // The root is the widest end (flow inlet) and sits at the origin.
+  EXPECT_LT(net.node(net.widest_end()).norm(), 1e-12);
+  // The femoral entry is well below the root: a realistic insertion path of 60–80 cm.
+  double path = 0;
+  for (const auto& b : c.branches)
+    if (b.name == "ascending_aorta" || b.name == "arch_1" || b.name == "arch_2" || b.name == "descending_aorta" ||
+        b.name == "right_iliac_femoral")
+      for (size_t i = 1; i < b.points.size(); ++i) path += (b.points[i] - b.points[i - 1]).norm();
+  EXPECT_GT(path, 0.60);
+  EXPECT_LT(path, 0.80);
+  EXPECT_LT(aortic_arch_entry().z(), -0.4);
+}
+
+TEST(Generators, BinaryTreeCountsAndMurrayScaling) {
+  const auto net = binary_tree({.depth = 5});
+  const auto n = net.counts();
+  EXPECT_EQ(n.segments, 63);
+  EXPECT_EQ(n.ends, 33);
+  EXPECT_EQ(n.junctions, 31);
+  EXPECT_EQ(n.loops, 0);
+  EXPECT_NEAR(net.segment(62).radius, 2e-3 * std::pow(2.0, -5.0 / 3.0), 1e-15);
+  EXPECT_NEAR(net.segment(62).length, 20e-3 * std::pow(2.0, -5.0 / 3.0), 1e-15);
+}
+
+TEST(Generators, RejectBadParameters) {
+  EXPECT_THROW(straight_tube({.length = 0.0}), flowire::Error);
+  EXPECT_THROW(y_bifurcation({.parent_radius = -1.0}), flowire::Error);
+  EXPECT_THROW(binary_tree({.depth = 40}), flowire::Error);
+}

@@ -1,0 +1,152 @@
+// Spatial queries: the window search with its fallback against brute force, and the
+// signed wall distance against its analytic value and its own gradient.
+#include "flowire/vessels/spatial.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "flowire/vessels/generators.hpp"
+#include "flowire_test.hpp"
+
+using namespace flowire::vessels;
+
+namespace {
+
+bool holds(const Network& net, int s, const Vec3& p) {
+  const auto& seg = net.segment(s);
+  return project_on_axis(p, net.node(seg.node_from), net.node(seg.node_to)).distance <= seg.radius;
+}
+
+double wall_gap(const Network& net, int s, const Vec3& p) {
+  const auto& seg = net.segment(s);
+  return project_on_axis(p, net.node(seg.node_from), net.node(seg.node_to)).distance - seg.radius;
+}
+
+/// Random points near the network: on a random segment, offset up to `spread` radii.
+std::vector<Vec3> random_points(const Network& net, int n, double spread, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> pick(0, net.num_segments() - 1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<Vec3> out;
+  for (int i = 0; i < n; ++i) {
+    const auto& s = net.segment(pick(rng));
+    const Vec3 a = net.node(s.node_from), b = net.node(s.node_to);
+    Vec3 dir(g(rng), g(rng), g(rng));
+    dir.normalize();
+    out.push_back(a + u(rng) * (b - a) + spread * s.radius * u(rng) * dir);
+  }
+  return out;
+}
+
+void check_against_brute_force(const Network& net, const std::vector<Vec3>& pts, bool chain_hints) {
+  const SpatialIndex index(net, 4);
+  int hint = -1;
+  int inside = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const auto& p = pts[i];
+    const auto ref = index.locate_brute_force(p);
+    const auto got = index.locate(p, chain_hints ? hint : static_cast<int>(i % static_cast<size_t>(net.num_segments())));
+    ASSERT_EQ(got.inside, ref.inside) << "point " << i;
+    if (ref.inside) {
+      ++inside;
+      EXPECT_TRUE(holds(net, got.segment, p)) << "point " << i;
+    } else {
+      EXPECT_NEAR(wall_gap(net, got.segment, p), wall_gap(net, ref.segment, p), 1e-15) << "point " << i;
+    }
+    hint = got.segment;
+  }
+  EXPECT_GT(inside, static_cast<int>(pts.size()) / 3);
+  EXPECT_LT(inside, static_cast<int>(pts.size()));
+  EXPECT_EQ(index.stats().window_hits + index.stats().fallbacks, pts.size());
+}
+
+}  // namespace
+
+TEST(Spatial, WindowWithFallbackEqualsBruteForceOnTheAorta) {
+  const auto net = Network::build(aortic_arch(), {.max_segment_length = 2e-3});
+  check_against_brute_force(net, random_points(net, 4000, 1.6, 1), false);
+}
+
+TEST(Spatial, WindowWithFallbackEqualsBruteForceOnATree) {
+  const auto net = binary_tree({.depth = 9});
+  check_against_brute_force(net, random_points(net, 4000, 1.6, 2), false);
+}
+
+TEST(Spatial, AWireWalkMostlyHitsTheWindow) {
+  // Points along the aortic centreline from the femoral entry up, hint = previous answer.
+  const auto c = aortic_arch();
+  const auto net = Network::build(c, {.max_segment_length = 2e-3});
+  std::vector<Vec3> pts;
+  for (const auto& b : c.branches)
+    if (b.name == "right_iliac_femoral" || b.name == "descending_aorta")
+      for (const auto& p : b.points) pts.push_back(p + Vec3(0.3e-3, 0, 0));
+  const SpatialIndex index(net, 4);
+  int hint = -1;
+  for (const auto& p : pts) {
+    const auto loc = index.locate(p, hint);
+    ASSERT_TRUE(loc.inside);
+    EXPECT_TRUE(holds(net, loc.segment, p));
+    hint = loc.segment;
+  }
+  EXPECT_GE(index.stats().window_hits, pts.size() - 3);  // only jumps between branches miss
+}
+
+TEST(Spatial, WallDistanceIsExactInAStraightTube) {
+  const auto net = Network::build(straight_tube({.length = 0.1, .radius = 2e-3}), {.max_segment_length = 5e-3});
+  const SpatialIndex index(net);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 500; ++i) {
+    const Vec3 p(0.005 + 0.09 * (0.5 + 0.5 * u(rng)), 3e-3 * u(rng), 3e-3 * u(rng));
+    Vec3 g;
+    const double d = index.wall_distance(p, -1, &g);
+    const double rho = std::hypot(p.y(), p.z());
+    EXPECT_NEAR(d, rho - 2e-3, 1e-15);
+    EXPECT_NEAR(g.x(), 0.0, 1e-12);
+    EXPECT_NEAR(g.y(), p.y() / rho, 1e-12);
+  }
+}
+
+TEST(Spatial, WallDistanceGradientMatchesFiniteDifferencesAtAJunction) {
+  const auto net = Network::build(y_bifurcation({}), {.max_segment_length = 5e-3});
+  const SpatialIndex index(net);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Vec3 junction(0.04, 0, 0);
+  const double h = 1e-8;
+  int checked = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 p = junction + 6e-3 * Vec3(u(rng), u(rng), u(rng));
+    Vec3 g;
+    const double d = index.wall_distance(p, -1, &g);
+    Vec3 fd;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 e = Vec3::Zero();
+      e[k] = h;
+      fd[k] = (index.wall_distance(p + e) - index.wall_distance(p - e)) / (2 * h);
+    }
+    // Skip points on the medial axis (distance to the axis ~ 0) where d is not differentiable.
+    if (d < -0.9 * 5e-3 / std::cbrt(2.0)) continue;
+    EXPECT_NEAR((g - fd).norm(), 0.0, 1e-5) << "at " << p.transpose() << " d=" << d;
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(Spatial, WallDistanceIsContinuousAcrossTheJunction) {
+  const auto net = Network::build(y_bifurcation({}), {.max_segment_length = 5e-3});
+  const SpatialIndex index(net);
+  // March across the crease between the daughters on a fine grid: no jumps.
+  double prev = index.wall_distance(Vec3(0.035, -0.01, 0.002));
+  double max_jump = 0;
+  const int n = 4000;
+  for (int i = 1; i <= n; ++i) {
+    const Vec3 p(0.035 + 0.02 * i / n, -0.01 + 0.02 * i / n, 0.002);
+    const double d = index.wall_distance(p);
+    max_jump = std::max(max_jump, std::abs(d - prev));
+    prev = d;
+  }
+  EXPECT_LT(max_jump, 2.0 * 0.02 * std::sqrt(2.0) / n);  // Lipschitz constant 1
+}
