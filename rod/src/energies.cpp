@@ -1,0 +1,341 @@
+#include "flowire/rod/energies.hpp"
+
+#include <cassert>
+#include <cmath>
+#include <numbers>
+
+namespace flowire::rod {
+
+namespace {
+
+using Vec8 = Eigen::Matrix<double, 8, 1>;
+using Mat8 = Eigen::Matrix<double, 8, 8>;
+using Mat36 = Eigen::Matrix<double, 3, 6>;
+using Mat38 = Eigen::Matrix<double, 3, 8>;
+using Mat8x11 = Eigen::Matrix<double, 8, 11>;
+
+Mat3 skew(const Vec3& v) {
+  Mat3 m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+/// Any unit vector perpendicular to unit vector a.
+Vec3 any_perpendicular(const Vec3& a) {
+  const Vec3 trial = std::abs(a.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  return (trial - a * a.dot(trial)).normalized();
+}
+
+/// Geometry of a stencil at the base point. Variables "y" are (t_e, t_f, θ_e, θ_f).
+struct Local {
+  Vec3 te, tf;
+  double le = 1.0, lf = 1.0;
+  Vec3 m1e, m2e, m1f, m2f;  // material directors (frames transported to te, tf)
+  Vec3 kb;
+  double chi = 2.0;  // 1 + te·tf
+  Mat36 dkb;         // ∂(κb)/∂(te, tf)
+  double ref_twist = 0.0;
+};
+
+Local make_local(const VertexStencil& s, bool need_dkb) {
+  Local L;
+  const Vec3 e = s.x1 - s.x0;
+  const Vec3 f = s.x2 - s.x1;
+  L.le = e.norm();
+  L.lf = f.norm();
+  L.te = e / L.le;
+  L.tf = f / L.lf;
+  const Vec3 te0 = s.frame_e.d1.cross(s.frame_e.d2);
+  const Vec3 tf0 = s.frame_f.d1.cross(s.frame_f.d2);
+  const Vec3 d1e = parallel_transport(s.frame_e.d1, te0, L.te);
+  const Vec3 d2e = parallel_transport(s.frame_e.d2, te0, L.te);
+  const Vec3 d1f = parallel_transport(s.frame_f.d1, tf0, L.tf);
+  const Vec3 d2f = parallel_transport(s.frame_f.d2, tf0, L.tf);
+  const double ce = std::cos(s.theta_e), se = std::sin(s.theta_e);
+  const double cf = std::cos(s.theta_f), sf = std::sin(s.theta_f);
+  L.m1e = ce * d1e + se * d2e;
+  L.m2e = -se * d1e + ce * d2e;
+  L.m1f = cf * d1f + sf * d2f;
+  L.m2f = -sf * d1f + cf * d2f;
+  L.chi = 1.0 + L.te.dot(L.tf);
+  const Vec3 w = L.te.cross(L.tf);
+  L.kb = 2.0 * w / L.chi;
+  L.ref_twist = reference_twist(d1e, L.te, d1f, L.tf, s.ref_twist);
+  if (need_dkb) {
+    const double c = L.chi;
+    L.dkb.leftCols<3>() = -(2.0 / c) * skew(L.tf) - (2.0 / (c * c)) * w * L.tf.transpose();
+    L.dkb.rightCols<3>() = (2.0 / c) * skew(L.te) - (2.0 / (c * c)) * w * L.te.transpose();
+  }
+  return L;
+}
+
+/// Hessian of s = v·(κb) w.r.t. (te, tf) for a fixed vector v.
+Mat6 hessian_v_dot_kb(const Local& L, const Vec3& v) {
+  const double c = L.chi;
+  const double N = v.dot(L.te.cross(L.tf));
+  Vec6 gN;
+  gN << L.tf.cross(v), v.cross(L.te);
+  Vec6 gc;
+  gc << L.tf, L.te;
+  Mat6 HN = Mat6::Zero();
+  HN.block<3, 3>(0, 3) = -skew(v);
+  HN.block<3, 3>(3, 0) = skew(v);
+  Mat6 Hc = Mat6::Zero();
+  Hc.block<3, 3>(0, 3).setIdentity();
+  Hc.block<3, 3>(3, 0).setIdentity();
+  return (2.0 / c) * HN - (2.0 / (c * c)) * (gN * gc.transpose() + gc * gN.transpose()) -
+         (2.0 * N / (c * c)) * Hc + (4.0 * N / (c * c * c)) * gc * gc.transpose();
+}
+
+/// g = (κb)·u where u is director d of edge `edge` (0: e, 1: f), transported in time with
+/// its edge; d' and d'' are its derivatives w.r.t. the edge's angle. Adds
+/// `scale` × (gradient, Hessian) in y = (te, tf, θe, θf).
+void add_director_term(const Local& L, const Vec3& d, const Vec3& dp, const Vec3& dpp, int edge,
+                       double scale, Vec8& g, Mat8* H) {
+  const int tcol = 3 * edge;
+  const int acol = 6 + edge;
+  const Vec3& t = edge == 0 ? L.te : L.tf;
+  g.head<6>() += scale * (L.dkb.transpose() * d);
+  g(acol) += scale * L.kb.dot(dp);
+  if (H == nullptr) return;
+  Mat8 h = Mat8::Zero();
+  h.topLeftCorner<6, 6>() = hessian_v_dot_kb(L, d);
+  Mat38 U = Mat38::Zero();
+  U.block<3, 3>(0, tcol) = -t * d.transpose();
+  U.col(acol) = dp;
+  Mat38 K = Mat38::Zero();
+  K.leftCols<6>() = L.dkb;
+  h += K.transpose() * U + U.transpose() * K;
+  h.block<3, 3>(tcol, tcol) -= 0.5 * (d * L.kb.transpose() + L.kb * d.transpose());
+  h(acol, acol) += L.kb.dot(dpp);
+  *H += scale * h;
+}
+
+/// Curvature (k = 0: κ1, k = 1: κ2) with gradient and Hessian in y.
+double curvature_y(const Local& L, int k, Vec8& g, Mat8* H) {
+  g.setZero();
+  if (H) H->setZero();
+  if (k == 0) {  // κ1 = ½ (m2e + m2f)·κb ; m2' = −m1, m2'' = −m2
+    add_director_term(L, L.m2e, -L.m1e, -L.m2e, 0, 0.5, g, H);
+    add_director_term(L, L.m2f, -L.m1f, -L.m2f, 1, 0.5, g, H);
+    return 0.5 * (L.m2e + L.m2f).dot(L.kb);
+  }
+  // κ2 = −½ (m1e + m1f)·κb ; m1' = m2, m1'' = −m1
+  add_director_term(L, L.m1e, L.m2e, -L.m1e, 0, -0.5, g, H);
+  add_director_term(L, L.m1f, L.m2f, -L.m1f, 1, -0.5, g, H);
+  return -0.5 * (L.m1e + L.m1f).dot(L.kb);
+}
+
+/// Second derivative of t = e/|e| contracted with p: Σ_k p_k ∂²t_k/∂e².
+Mat3 tangent_curvature_term(const Vec3& p, const Vec3& t, double l) {
+  const double pt = p.dot(t);
+  return -(t * p.transpose() + p * t.transpose() +
+           pt * (Mat3::Identity() - 3.0 * t * t.transpose())) /
+         (l * l);
+}
+
+/// Chain rule from y = (te, tf, θe, θf) to the stencil unknowns (x0, θe, x1, θf, x2).
+void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11* Hx) {
+  const Mat3 Pe = (Mat3::Identity() - L.te * L.te.transpose()) / L.le;
+  const Mat3 Pf = (Mat3::Identity() - L.tf * L.tf.transpose()) / L.lf;
+  if (gx) {
+    const Vec3 ge = Pe * gy.segment<3>(0);
+    const Vec3 gf = Pf * gy.segment<3>(3);
+    gx->segment<3>(0) = -ge;
+    (*gx)(3) = gy(6);
+    gx->segment<3>(4) = ge - gf;
+    (*gx)(7) = gy(7);
+    gx->segment<3>(8) = gf;
+  }
+  if (Hx && Hy) {
+    Mat8x11 J = Mat8x11::Zero();
+    J.block<3, 3>(0, 0) = -Pe;
+    J.block<3, 3>(0, 4) = Pe;
+    J.block<3, 3>(3, 4) = -Pf;
+    J.block<3, 3>(3, 8) = Pf;
+    J(6, 3) = 1.0;
+    J(7, 7) = 1.0;
+    *Hx = J.transpose() * (*Hy) * J;
+    const Mat3 Qe = tangent_curvature_term(gy.segment<3>(0), L.te, L.le);
+    const Mat3 Qf = tangent_curvature_term(gy.segment<3>(3), L.tf, L.lf);
+    Hx->block<3, 3>(0, 0) += Qe;
+    Hx->block<3, 3>(0, 4) -= Qe;
+    Hx->block<3, 3>(4, 0) -= Qe;
+    Hx->block<3, 3>(4, 4) += Qe + Qf;
+    Hx->block<3, 3>(4, 8) -= Qf;
+    Hx->block<3, 3>(8, 4) -= Qf;
+    Hx->block<3, 3>(8, 8) += Qf;
+  }
+}
+
+/// Bending energy with gradient/Hessian in y.
+double bend_y(const Local& L, const VertexParams& p, Vec8* gy, Mat8* Hy) {
+  const double B[2] = {p.bend_stiffness1, p.bend_stiffness2};
+  const double kbar[2] = {p.rest_kappa1, p.rest_kappa2};
+  double energy = 0.0;
+  Vec8 gk;
+  Mat8 Hk;
+  for (int k = 0; k < 2; ++k) {
+    const double kappa = curvature_y(L, k, gk, Hy ? &Hk : nullptr);
+    const double dk = kappa - kbar[k];
+    const double c = B[k] / p.voronoi_length;
+    energy += 0.5 * c * dk * dk;
+    if (gy) *gy += c * dk * gk;
+    if (Hy) *Hy += c * (gk * gk.transpose() + dk * Hk);
+  }
+  return energy;
+}
+
+/// Twisting energy with gradient/Hessian in y.
+double twist_y(const Local& L, const VertexStencil& s, const VertexParams& p, Vec8* gy, Mat8* Hy) {
+  const double m = s.theta_f - s.theta_e + L.ref_twist;
+  const double dm = m - p.rest_twist;
+  const double c = p.twist_stiffness / p.voronoi_length;
+  Vec8 gm;
+  gm << 0.5 * L.kb, 0.5 * L.kb, -1.0, 1.0;
+  if (gy) *gy += c * dm * gm;
+  if (Hy) {
+    // m_ref = m⁰ − Ω₁(te⁰, te, tf) − Ω₂(te⁰, tf, tf⁰) at the base point te = te⁰, tf = tf⁰.
+    const double D = 2.0 * L.chi;
+    const Vec3 n = L.tf.cross(L.te);
+    Vec6 gN1;
+    gN1 << n, Vec3::Zero();
+    Vec6 gD1;
+    gD1 << L.te + L.tf, 2.0 * L.te;
+    Mat6 HN1 = Mat6::Zero();
+    HN1.block<3, 3>(0, 3) = -skew(L.te);
+    HN1.block<3, 3>(3, 0) = skew(L.te);
+    Mat6 HA = (2.0 / D) * HN1 - (2.0 / (D * D)) * (gN1 * gD1.transpose() + gD1 * gN1.transpose());
+    const Vec3 gD2 = L.te + L.tf;
+    HA.block<3, 3>(3, 3) -= (2.0 / (D * D)) * (n * gD2.transpose() + gD2 * n.transpose());
+    Mat8 Hm = Mat8::Zero();
+    Hm.topLeftCorner<6, 6>() = -HA;
+    *Hy += c * (gm * gm.transpose() + dm * Hm);
+  }
+  return 0.5 * c * dm * dm;
+}
+
+}  // namespace
+
+Vec3 parallel_transport(const Vec3& u, const Vec3& from, const Vec3& to) {
+  const Vec3 b = from.cross(to);
+  const double c = from.dot(to);
+  if (1.0 + c < 1e-14) {
+    const Vec3 axis = any_perpendicular(from);
+    return 2.0 * axis * axis.dot(u) - u;  // rotation by π about axis
+  }
+  return c * u + b.cross(u) + b * (b.dot(u) / (1.0 + c));
+}
+
+double signed_angle(const Vec3& a, const Vec3& b, const Vec3& axis) {
+  return std::atan2(a.cross(b).dot(axis), a.dot(b));
+}
+
+Vec3 curvature_binormal(const Vec3& te, const Vec3& tf) {
+  return 2.0 * te.cross(tf) / (1.0 + te.dot(tf));
+}
+
+double reference_twist(const Vec3& d1e, const Vec3& te, const Vec3& d1f, const Vec3& tf,
+                       double previous) {
+  const Vec3 u = parallel_transport(d1e, te, tf);
+  const double a = signed_angle(u, d1f, tf);
+  constexpr double two_pi = 2.0 * std::numbers::pi;
+  return a + two_pi * std::round((previous - a) / two_pi);
+}
+
+double stretch_energy(const Vec3& x0, const Vec3& x1, double ks, double rest_length) {
+  const double strain = (x1 - x0).norm() / rest_length - 1.0;
+  return 0.5 * ks * rest_length * strain * strain;
+}
+
+Vec6 stretch_gradient(const Vec3& x0, const Vec3& x1, double ks, double rest_length) {
+  const Vec3 e = x1 - x0;
+  const double l = e.norm();
+  const Vec3 g = ks * (l / rest_length - 1.0) * (e / l);
+  Vec6 out;
+  out << -g, g;
+  return out;
+}
+
+Mat6 stretch_hessian(const Vec3& x0, const Vec3& x1, double ks, double rest_length) {
+  const Vec3 e = x1 - x0;
+  const double l = e.norm();
+  const Vec3 t = e / l;
+  const Mat3 tt = t * t.transpose();
+  const Mat3 h = (ks / rest_length) * tt + ks * (1.0 / rest_length - 1.0 / l) * (Mat3::Identity() - tt);
+  Mat6 out;
+  out << h, -h, -h, h;
+  return out;
+}
+
+Eigen::Vector2d material_curvature(const VertexStencil& s) {
+  const Local L = make_local(s, false);
+  return {0.5 * (L.m2e + L.m2f).dot(L.kb), -0.5 * (L.m1e + L.m1f).dot(L.kb)};
+}
+
+double bend_energy(const VertexStencil& s, const VertexParams& p) {
+  const Local L = make_local(s, false);
+  return bend_y(L, p, nullptr, nullptr);
+}
+
+Vec11 bend_gradient(const VertexStencil& s, const VertexParams& p) {
+  const Local L = make_local(s, true);
+  Vec8 gy = Vec8::Zero();
+  bend_y(L, p, &gy, nullptr);
+  Vec11 g;
+  to_stencil(L, gy, nullptr, &g, nullptr);
+  return g;
+}
+
+Mat11 bend_hessian(const VertexStencil& s, const VertexParams& p) {
+  const Local L = make_local(s, true);
+  Vec8 gy = Vec8::Zero();
+  Mat8 Hy = Mat8::Zero();
+  bend_y(L, p, &gy, &Hy);
+  Mat11 H;
+  to_stencil(L, gy, &Hy, nullptr, &H);
+  return H;
+}
+
+double twist(const VertexStencil& s) {
+  const Local L = make_local(s, false);
+  return s.theta_f - s.theta_e + L.ref_twist;
+}
+
+double twist_energy(const VertexStencil& s, const VertexParams& p) {
+  const Local L = make_local(s, false);
+  return twist_y(L, s, p, nullptr, nullptr);
+}
+
+Vec11 twist_gradient(const VertexStencil& s, const VertexParams& p) {
+  const Local L = make_local(s, false);
+  Vec8 gy = Vec8::Zero();
+  twist_y(L, s, p, &gy, nullptr);
+  Vec11 g;
+  to_stencil(L, gy, nullptr, &g, nullptr);
+  return g;
+}
+
+Mat11 twist_hessian(const VertexStencil& s, const VertexParams& p) {
+  const Local L = make_local(s, false);
+  Vec8 gy = Vec8::Zero();
+  Mat8 Hy = Mat8::Zero();
+  twist_y(L, s, p, &gy, &Hy);
+  Mat11 H;
+  to_stencil(L, gy, &Hy, nullptr, &H);
+  return H;
+}
+
+double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient, Mat11* hessian) {
+  const Local L = make_local(s, gradient != nullptr || hessian != nullptr);
+  Vec8 gy = Vec8::Zero();
+  Mat8 Hy = Mat8::Zero();
+  Vec8* gp = (gradient || hessian) ? &gy : nullptr;
+  Mat8* hp = hessian ? &Hy : nullptr;
+  double e = bend_y(L, p, gp, hp);
+  e += twist_y(L, s, p, gp, hp);
+  if (gradient || hessian) to_stencil(L, gy, hp, gradient, hessian);
+  return e;
+}
+
+}  // namespace flowire::rod
