@@ -1,0 +1,34 @@
+#pragma once
+/// @file scene.hpp
+/// @brief Scenes: the declaration of every scene key, and the runner that executes only the
+/// sections a scene has (no `flow:` → no flow assembly, no `wire:` → no rod, no output → no I/O).
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "flowire/common/config.hpp"
+#include "flowire/vessels/network.hpp"
+
+namespace flowire::coupling {
+
+/// @brief The one declaration of every scene key (type, default, unit, doc).
+const config::Schema& scene_schema();
+
+/// @brief Load a scene file with `--set` overrides (and `--out` as output.dir).
+config::Config load_scene(const std::string& file, const std::vector<std::string>& overrides,
+                          const std::string& out_dir = {});
+
+/// @brief Build the vessel network a scene describes (`vessels.file` or `vessels.generator`).
+vessels::Network build_scene_network(const config::Config& scene);
+
+/// @brief Result of a run; `summary` is what `summary.json` holds.
+struct RunResult {
+  nlohmann::json summary;
+  std::string out_dir;
+};
+
+/// @brief Run a validated scene and write its outputs (summary.json always).
+/// @throws flowire::Error; a numerical error still leaves summary.json with status "error".
+RunResult run_scene(const config::Config& scene);
+
+}  // namespace flowire::coupling

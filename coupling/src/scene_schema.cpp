@@ -1,0 +1,154 @@
+// The declaration of every scene key. docs/scene-keys.md is generated from it
+// (`flowire help scene`).
+#include "flowire/coupling/scene.hpp"
+
+namespace flowire::coupling {
+
+namespace {
+using config::Key;
+using config::Type;
+using D = units::Dimension;
+
+config::Schema make_schema() {
+  config::Schema s;
+  auto add = [&](std::string path, Type t, std::string def, D dim, std::string doc,
+                 std::vector<std::string> choices = {}) {
+    s.add(Key{std::move(path), t, std::move(def), dim, std::move(doc), std::move(choices)});
+  };
+  // ---- vessels
+  add("name", Type::String, "", D::None, "a name for the scene, copied to summary.json");
+  add("vessels", Type::Section, "", D::None, "the vessel network (required by flow, contact and fem)");
+  add("vessels.file", Type::String, "", D::None,
+      "centerline / network file: VMTK or SimVascular .vtp, legacy .vtk, flowire .vtp/.yaml, svOneDSolver .in");
+  add("vessels.length_unit", Type::Enum, "", D::None, "unit of the file's coordinates and radii (default: the file's own, else m)",
+      {"m", "cm", "mm", "um"});
+  add("vessels.max_segment_length", Type::Number, "5 mm", D::Length, "branches are split into cylinders no longer than this");
+  add("vessels.radius_change", Type::Number, "0.1", D::None, "also split where the radius changes by more than this fraction");
+  add("vessels.keep_inlet_piece", Type::Bool, "false", D::None,
+      "if the network is in several pieces keep the one holding the inlet (with a warning) instead of failing");
+  add("vessels.generator", Type::Section, "", D::None, "a built-in anatomy instead of a file");
+  add("vessels.generator.type", Type::Enum, "", D::None, "which anatomy",
+      {"straight_tube", "y_bifurcation", "aortic_arch", "binary_tree", "arterial_tree"});
+  add("vessels.generator.length", Type::Number, "0.1", D::Length, "straight_tube: length");
+  add("vessels.generator.radius", Type::Number, "2 mm", D::Length, "straight_tube: radius");
+  add("vessels.generator.parent_radius", Type::Number, "5 mm", D::Length, "y_bifurcation: parent radius (daughters by Murray's law)");
+  add("vessels.generator.parent_length", Type::Number, "40 mm", D::Length, "y_bifurcation: parent length");
+  add("vessels.generator.child_length", Type::Number, "40 mm", D::Length, "y_bifurcation: daughter length");
+  add("vessels.generator.angle", Type::Number, "0.6 rad", D::Angle, "y_bifurcation / binary_tree: branching half-angle");
+  add("vessels.generator.asymmetry", Type::Number, "0", D::None, "y_bifurcation: flow-split asymmetry in (-1, 1)");
+  add("vessels.generator.scale", Type::Number, "1", D::None, "aortic_arch / arterial_tree: size factor (1 = adult)");
+  add("vessels.generator.depth", Type::Integer, "5", D::None, "binary_tree: generations (2^(depth+1) - 1 vessels)");
+  add("vessels.generator.root_radius", Type::Number, "2 mm", D::Length, "binary_tree: root radius");
+  add("vessels.generator.root_length", Type::Number, "20 mm", D::Length, "binary_tree: root length");
+  add("vessels.generator.radius_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: r(k+1)/r(k) (Murray 2^-1/3)");
+  add("vessels.generator.length_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: L(k+1)/L(k)");
+
+  // ---- flow
+  add("flow", Type::Section, "", D::None, "blood flow in the network (absent: no flow is computed)");
+  add("flow.model", Type::Enum, "poiseuille", D::None, "poiseuille: resistances only; rlc: also inertance and wall compliance",
+      {"poiseuille", "rlc"});
+  add("flow.solver", Type::Enum, "superposition", D::None,
+      "superposition (factor once, affine in the sources) | dense_inverse (the published precomputed K^-1) | sparse "
+      "(a direct solve per frame) | petsc (distributed)",
+      {"superposition", "dense_inverse", "sparse", "petsc"});
+  add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity, "blood dynamic viscosity");
+  add("flow.density", Type::Number, "1060", D::Density, "blood density");
+  add("flow.inertance", Type::Enum, "poiseuille", D::None,
+      "rlc: inertance per segment, poiseuille = rho*l/(pi*r^2), womersley = 4*rho*l/(3*pi*r^2)", {"poiseuille", "womersley"});
+  add("flow.wall_youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus (compliance)");
+  add("flow.wall_thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
+  add("flow.profile", Type::Enum, "laminar", D::None, "velocity profile across a segment", {"laminar", "womersley"});
+  add("flow.inlet", Type::Section, "{}", D::None, "inlet boundary condition");
+  add("flow.inlet.node", Type::StringOrInteger, "", D::None, "inlet node id (default: the network end with the largest radius)");
+  add("flow.inlet.pressure", Type::NumberOrSection, "", D::Pressure, "constant pressure, or a waveform section");
+  add("flow.inlet.pressure.waveform", Type::Enum, "sine", D::None, "sine: (P1-P2)/2 sin(wt) + (P1+P2)/2 | constant | table",
+      {"sine", "constant", "table"});
+  add("flow.inlet.pressure.systolic", Type::Number, "120 mmHg", D::Pressure, "sine: P1");
+  add("flow.inlet.pressure.diastolic", Type::Number, "80 mmHg", D::Pressure, "sine: P2");
+  add("flow.inlet.pressure.period", Type::Number, "0.8 s", D::Time, "sine/table: cardiac period");
+  add("flow.inlet.pressure.value", Type::Number, "", D::Pressure, "constant: value");
+  add("flow.inlet.pressure.file", Type::String, "", D::None, "table: CSV with columns time,pressure (SI)");
+  add("flow.inlet.flow", Type::Number, "", D::FlowRate, "prescribed inlet flow rate instead of a pressure");
+  add("flow.outlets", Type::Section, "{}", D::None, "boundary condition at every other network end");
+  add("flow.outlets.pressure", Type::Number, "", D::Pressure, "fixed outlet pressure (default 0 when nothing else is given)");
+  add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure");
+  add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
+  add("flow.outlets.rcr", Type::Section, "", D::None, "RCR windkessel at every outlet");
+  add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance");
+  add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance");
+  add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance");
+  add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure, "distal pressure");
+
+  // ---- wire
+  add("wire", Type::Section, "", D::None, "the guidewire (absent: no rod is simulated)");
+  add("wire.length", Type::Number, "1.0", D::Length, "total wire length");
+  add("wire.radius", Type::Number, "0.45 mm", D::Length, "wire radius (0.035 inch wire: 0.445 mm)");
+  add("wire.youngs_modulus", Type::Number, "60 GPa", D::Pressure, "shaft Young's (flexural) modulus");
+  add("wire.poisson_ratio", Type::Number, "0.33", D::None, "Poisson ratio (shear modulus G = E / (2 (1 + nu)))");
+  add("wire.shear_modulus", Type::Number, "", D::Pressure, "shear modulus (overrides poisson_ratio)");
+  add("wire.density", Type::Number, "6450", D::Density, "wire density");
+  add("wire.segments", Type::Integer, "100", D::None, "number of rod segments");
+  add("wire.segment_length", Type::Number, "", D::Length, "rod segment length (overrides segments)");
+  add("wire.damping", Type::Number, "0", D::None, "viscous damping (1/s, mass-proportional)");
+  add("wire.tip", Type::Section, "", D::None, "a softer, possibly pre-shaped tip");
+  add("wire.tip.length", Type::Number, "3 cm", D::Length, "tip length");
+  add("wire.tip.youngs_modulus", Type::Number, "10 GPa", D::Pressure, "tip Young's modulus");
+  add("wire.tip.shape", Type::Enum, "straight", D::None, "tip shape", {"straight", "angled", "j"});
+  add("wire.tip.angle", Type::Number, "45 deg", D::Angle, "angled/j: total bend angle of the tip");
+  add("wire.tip.bend_radius", Type::Number, "3 mm", D::Length, "angled/j: radius of the pre-bent arc");
+  add("wire.base", Type::Section, "", D::None, "where the wire is held");
+  add("wire.base.position", Type::Vector3, "[0, 0, 0]", D::Length, "base position (vessel scenes: the entry node)");
+  add("wire.base.direction", Type::Vector3, "[1, 0, 0]", D::None, "base direction (vessel scenes: into the entry vessel)");
+  add("wire.entry", Type::StringOrInteger, "auto", D::None, "network end where the wire enters (node id, or auto)");
+
+  add("loads", Type::List, "", D::None, "external loads on the wire");
+  add("loads[].type", Type::Enum, "", D::None, "load kind", {"tip_force", "tip_moment", "gravity", "point_force"});
+  add("loads[].value", Type::Vector3, "", D::None, "force (N), moment (N*m) or acceleration (m/s^2), SI");
+  add("loads[].s", Type::Number, "", D::Length, "point_force: arc length from the base");
+
+  add("insertion", Type::Section, "", D::None, "pushing and turning the wire at its base");
+  add("insertion.speed", Type::Number, "0", D::Velocity, "insertion speed (negative: pull back)");
+  add("insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "base rotation speed");
+  add("insertion.initial_length", Type::Number, "2 cm", D::Length, "length inside at t = 0");
+  add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length");
+
+  add("contact", Type::Section, "", D::None, "wall contact (present by default when a wire moves in vessels)");
+  add("contact.friction", Type::Number, "0.1", D::None, "Coulomb friction coefficient (shaft)");
+  add("contact.tip_friction", Type::Number, "", D::None, "Coulomb friction coefficient of the tip (default: friction)");
+  add("contact.stiffness", Type::Number, "", D::None, "penalty stiffness (N/m per vertex; default from the wire's bending stiffness)");
+  add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
+
+  add("coupling", Type::Section, "", D::None, "how blood acts on the wire");
+  add("coupling.drag", Type::Enum, "slender_body", D::None,
+      "slender_body | velocity_offset (the published form) | none", {"slender_body", "velocity_offset", "none"});
+  add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force");
+  add("coupling.flow_every", Type::Integer, "1", D::None, "evaluate the flow every this many rod steps");
+
+  add("solve", Type::Section, "{}", D::None, "time stepping (also drives flow-only scenes: one flow frame per step)");
+  add("solve.mode", Type::Enum, "dynamic", D::None, "static: equilibrium; dynamic: time stepping", {"static", "dynamic"});
+  add("solve.dt", Type::Number, "1 ms", D::Time, "time step");
+  add("solve.duration", Type::Number, "0", D::Time, "simulated time (0: one frame / the steady state)");
+  add("solve.integrator", Type::Enum, "implicit_euler", D::None, "rod time integrator", {"implicit_euler", "implicit_midpoint"});
+
+  add("fem", Type::Section, "", D::None, "finite-element comparison of the flow (needs FLOWIRE_WITH_FEM)");
+  add("fem.mesh_size", Type::Number, "", D::Length, "target tetrahedron size (default from the smallest radius)");
+  add("fem.equations", Type::Enum, "stokes", D::None, "stokes | navier_stokes", {"stokes", "navier_stokes"});
+  add("fem.solver", Type::Enum, "mumps", D::None, "mumps | fieldsplit", {"mumps", "fieldsplit"});
+  add("fem.samples_per_branch", Type::Integer, "10", D::None, "comparison points per branch");
+
+  add("output", Type::Section, "{}", D::None, "what is written and where");
+  add("output.dir", Type::String, "out", D::None, "output folder (relative to the working directory)");
+  add("output.every", Type::Number, "0", D::Time, "output interval of simulated time (0: only the final state)");
+  add("output.vtk", Type::Bool, "true", D::None, "write .vtp/.pvd files");
+  add("output.csv", Type::Bool, "true", D::None, "write .csv files");
+  add("output.png", Type::Bool, "false", D::None, "render PNG pictures (needs an X server, e.g. xvfb-run)");
+  return s;
+}
+}  // namespace
+
+const config::Schema& scene_schema() {
+  static const config::Schema schema = make_schema();
+  return schema;
+}
+
+}  // namespace flowire::coupling

@@ -1,0 +1,188 @@
+// The flowire executable end to end: exit statuses, messages and files, per the contract.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "flowire_test.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int status = -1;
+  std::string out, err;
+};
+
+Result run(const std::string& args) {
+  const auto dir = flowire::testing::scratch_dir("cli-capture");
+  const std::string cmd = std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire " + args + " >" + (dir / "o").string() +
+                          " 2>" + (dir / "e").string();
+  const int raw = std::system(cmd.c_str());
+  Result r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  std::ifstream o(dir / "o"), e(dir / "e");
+  std::stringstream so, se;
+  so << o.rdbuf();
+  se << e.rdbuf();
+  r.out = so.str();
+  r.err = se.str();
+  return r;
+}
+
+void write(const fs::path& p, const std::string& text) {
+  std::ofstream(p) << text;
+}
+
+/// A vmtkcenterlines-style file: one polyline per inlet→outlet path, overlapping along the
+/// shared trunk, radius in MaximumInscribedSphereRadius, coordinates in mm.
+/// Paths: trunk along z to 100 mm; one outlet leaves at z = 50 towards (+30, 0, 80), one at
+/// z = 75 towards (−30, 0, 95). Expected: 1 inlet + 3 outlets, 2 junctions, 5 branches.
+std::string vmtk_three_outlet_aorta(const std::string& radius_override = "") {
+  std::vector<std::array<double, 4>> pts;  // x, y, z, r
+  std::vector<std::vector<int>> lines;
+  auto path = [&](double z_split, std::array<double, 3> end, double r_branch) {
+    std::vector<int> ids;
+    const double z_end = z_split < 0 ? 100.0 : z_split;
+    for (double z = 0; z <= z_end + 1e-9; z += 1.0) {
+      ids.push_back(static_cast<int>(pts.size()));
+      pts.push_back({0, 0, z, 4.0});
+    }
+    if (z_split >= 0) {
+      const std::array<double, 3> a{0, 0, z_split};
+      const double len = std::hypot(end[0] - a[0], end[2] - a[2]);
+      const int n = static_cast<int>(std::round(len));
+      for (int i = 1; i <= n; ++i) {
+        const double w = static_cast<double>(i) / n;
+        ids.push_back(static_cast<int>(pts.size()));
+        pts.push_back({w * end[0], 0, a[2] + w * (end[2] - a[2]), r_branch});
+      }
+    }
+    lines.push_back(ids);
+  };
+  path(-1, {}, 0);
+  path(50, {30, 0, 80}, 2.0);
+  path(75, {-30, 0, 95}, 2.0);
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n<PolyData>\n"
+    << "<Piece NumberOfPoints=\"" << pts.size() << "\" NumberOfVerts=\"0\" NumberOfLines=\"" << lines.size()
+    << "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n<PointData Scalars=\"MaximumInscribedSphereRadius\">\n"
+    << "<DataArray type=\"Float64\" Name=\"MaximumInscribedSphereRadius\" format=\"ascii\">\n";
+  for (size_t i = 0; i < pts.size(); ++i)
+    x << (i == 5 && !radius_override.empty() ? radius_override : std::to_string(pts[i][3])) << " ";
+  x << "\n</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const auto& p : pts) x << p[0] << " " << p[1] << " " << p[2] << " ";
+  x << "\n</DataArray>\n</Points>\n<Lines>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  size_t off = 0;
+  std::string offsets;
+  for (const auto& l : lines) {
+    for (int id : l) x << id << " ";
+    off += l.size();
+    offsets += std::to_string(off) + " ";
+  }
+  x << "\n</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n"
+    << offsets << "\n</DataArray>\n</Lines>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  return x.str();
+}
+
+}  // namespace
+
+TEST(Cli, VersionAndHelp) {
+  const auto v = run("--version");
+  EXPECT_EQ(v.status, 0);
+  EXPECT_NE(v.out.find("flowire 0."), std::string::npos) << v.out;
+  const auto h = run("help");
+  EXPECT_EQ(h.status, 0);
+  EXPECT_NE(h.out.find("network"), std::string::npos);
+  const auto hs = run("help scene");
+  EXPECT_EQ(hs.status, 0);
+  EXPECT_NE(hs.out.find("`flow.solver`"), std::string::npos);
+  EXPECT_NE(hs.out.find("`wire.tip.shape`"), std::string::npos);
+  EXPECT_EQ(run("frobnicate").status, 2);
+  EXPECT_EQ(run("help frobnicate").status, 2);
+}
+
+TEST(Cli, NetworkInfoOnAVmtkThreeOutletAorta) {
+  const auto dir = flowire::testing::scratch_dir("cli-info");
+  write(dir / "aorta.vtp", vmtk_three_outlet_aorta());
+  const auto r = run("network info " + (dir / "aorta.vtp").string() + " --length-unit mm --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["ends"], 4);
+  EXPECT_EQ(j["junctions"], 2);
+  EXPECT_EQ(j["branches"], 5);
+  EXPECT_EQ(j["loops"], 0);
+  const double expected = 0.100 + std::hypot(0.030, 0.030) + std::hypot(0.030, 0.020);
+  EXPECT_NEAR(j["total_length"].get<double>(), expected, 0.02 * expected);
+  EXPECT_NEAR(j["radius_max"].get<double>(), 4e-3, 1e-9);
+  EXPECT_NEAR(j["radius_min"].get<double>(), 2e-3, 0.2e-3);
+  // The text form carries the same counts.
+  const auto t = run("network info " + (dir / "aorta.vtp").string() + " --length-unit mm");
+  EXPECT_EQ(t.status, 0);
+  EXPECT_NE(t.out.find("junctions:     2"), std::string::npos) << t.out;
+}
+
+TEST(Cli, ConvertWritesAVtpThatReadsBackIdentically) {
+  const auto dir = flowire::testing::scratch_dir("cli-convert");
+  write(dir / "aorta.vtp", vmtk_three_outlet_aorta());
+  ASSERT_EQ(run("network convert " + (dir / "aorta.vtp").string() + " " + (dir / "net.vtp").string() +
+                " --length-unit mm").status,
+            0);
+  const auto a = nlohmann::json::parse(run("network info " + (dir / "aorta.vtp").string() + " --length-unit mm --json").out);
+  const auto b = nlohmann::json::parse(run("network info " + (dir / "net.vtp").string() + " --json").out);
+  for (const char* k : {"branches", "nodes", "segments", "junctions", "ends", "loops"}) EXPECT_EQ(a[k], b[k]) << k;
+  EXPECT_NEAR(a["total_length"].get<double>(), b["total_length"].get<double>(), 1e-12);
+}
+
+TEST(Cli, BadInputGivesOneLineAndStatusTwo) {
+  const auto dir = flowire::testing::scratch_dir("cli-bad");
+  auto expect_bad = [&](const std::string& args, const std::string& fragment) {
+    const auto r = run(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("flowire: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(fragment), std::string::npos) << "expected '" << fragment << "' in: " << r.err;
+    EXPECT_LE(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  };
+  expect_bad("network info " + (dir / "missing.vtp").string(), "missing.vtp");
+  write(dir / "nan.vtp", vmtk_three_outlet_aorta("nan"));
+  expect_bad("network info " + (dir / "nan.vtp").string(), "nan.vtp");
+  write(dir / "zero.vtp", vmtk_three_outlet_aorta("0"));
+  expect_bad("network info " + (dir / "zero.vtp").string(), "zero.vtp");
+  const auto full = vmtk_three_outlet_aorta();
+  write(dir / "truncated.vtp", full.substr(0, full.size() / 2));
+  expect_bad("network info " + (dir / "truncated.vtp").string(), "truncated.vtp");
+  write(dir / "empty.vtp", "");
+  expect_bad("network info " + (dir / "empty.vtp").string(), "empty.vtp");
+  write(dir / "scene.yaml", "vessels:\n  generator: {type: straight_tube}\nflow:\n  solvr: sparse\n");
+  expect_bad("run " + (dir / "scene.yaml").string() + " --out " + (dir / "o").string(), "scene.yaml:4");
+  EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
+  write(dir / "scene2.yaml", "vessels:\n  generator: {type: straight_tube, radius: 2 mmHg}\n");
+  expect_bad("run " + (dir / "scene2.yaml").string(), "scene2.yaml:2: vessels.generator.radius");
+  write(dir / "scene3.yaml", "vessels:\n  generator: {type: straight_tube}\n");
+  expect_bad("run " + (dir / "scene3.yaml").string() + " --set vessels.nothing=1", "vessels.nothing");
+  expect_bad("run " + (dir / "scene3.yaml").string() + " --set vessels.generator.radius=0", "radius");
+  expect_bad("network info", "file");
+}
+
+TEST(Cli, VesselsOnlySceneWritesSummaryAndSegments) {
+  const auto dir = flowire::testing::scratch_dir("cli-run");
+  write(dir / "scene.yaml", "vessels:\n  generator: {type: y_bifurcation}\n  max_segment_length: 10 mm\n");
+  const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "out").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(dir / "out" / "summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["network"]["segments"], 12);
+  EXPECT_EQ(s["scene"]["vessels.generator.type"], "y_bifurcation");
+  for (const char* k : {"setup", "flow", "rod", "contact", "coupling", "output", "total"})
+    EXPECT_TRUE(s["timings"].contains(k)) << k;
+  EXPECT_TRUE(fs::exists(dir / "out" / "segments.csv"));
+  for (const auto& e : fs::directory_iterator(dir / "out"))
+    EXPECT_EQ(e.path().extension(), e.path().extension() == ".partial" ? ".none" : e.path().extension());
+}

@@ -1,0 +1,188 @@
+// The flowire command line (contract: ../shared/contract/flowire-cli.md).
+// Exit status: 0 success; 2 bad usage or bad input; 3 numerical failure.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <new>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
+#include "flowire/common/units.hpp"
+#include "flowire/coupling/scene.hpp"
+#include "flowire/coupling/trace_compare.hpp"
+#include "flowire/vessels/io.hpp"
+
+namespace {
+
+using flowire::Error;
+using flowire::ErrorKind;
+
+int error_exit(const std::string& message, int status) {
+  std::fprintf(stderr, "flowire: error: %s\n", message.c_str());
+  return status;
+}
+
+void print_warnings() {
+  for (const auto& w : flowire::take_warnings()) std::fprintf(stderr, "flowire: warning: %s\n", w.c_str());
+}
+
+flowire::vessels::ReadOptions read_options(const std::string& unit, double max_seg) {
+  flowire::vessels::ReadOptions ro;
+  ro.length_unit = unit;
+  if (max_seg > 0) ro.build.max_segment_length = max_seg;
+  return ro;
+}
+
+int cmd_run(const std::string& scene, const std::string& out, const std::vector<std::string>& sets) {
+  namespace fs = std::filesystem;
+  if (!fs::exists(scene)) throw flowire::Error(ErrorKind::Input, fmt::format("{}: no such file", scene));
+  const auto cfg = flowire::coupling::load_scene(scene, sets, out);
+  const auto res = flowire::coupling::run_scene(cfg);
+  print_warnings();
+  const auto& s = res.summary;
+  std::printf("flowire: %s: %s in %.3f s, %d steps; outputs in %s\n", scene.c_str(),
+              s.value("status", std::string("ok")).c_str(), s["timings"].value("total", 0.0), s.value("steps", 0),
+              res.out_dir.c_str());
+  return 0;
+}
+
+int cmd_info(const std::string& file, const std::string& unit, double max_seg, bool json) {
+  const auto net = flowire::vessels::read_network(file, read_options(unit, max_seg));
+  const auto n = net.counts();
+  print_warnings();
+  if (json) {
+    nlohmann::json j = {{"file", file},           {"branches", n.branches},         {"nodes", n.nodes},
+                        {"segments", n.segments}, {"junctions", n.junctions},       {"ends", n.ends},
+                        {"loops", n.loops},       {"components", n.components},     {"total_length", n.total_length},
+                        {"radius_min", n.radius_min}, {"radius_max", n.radius_max}, {"inlet_node", net.widest_end()}};
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("file:          %s\n", file.c_str());
+    std::printf("branches:      %d\nnodes:         %d\nsegments:      %d\njunctions:     %d\nends:          %d\n",
+                n.branches, n.nodes, n.segments, n.junctions, n.ends);
+    std::printf("loops:         %d\ncomponents:    %d\n", n.loops, n.components);
+    std::printf("total length:  %.6g m\nradius:        %.6g .. %.6g m\ninlet (widest end): node %d\n", n.total_length,
+                n.radius_min, n.radius_max, net.widest_end());
+  }
+  return 0;
+}
+
+int cmd_convert(const std::string& in, const std::string& out, const std::string& unit, double max_seg) {
+  const auto net = flowire::vessels::read_network(in, read_options(unit, max_seg));
+  flowire::vessels::write_network(net, out);
+  print_warnings();
+  const auto n = net.counts();
+  std::printf("flowire: wrote %s (%d branches, %d segments)\n", out.c_str(), n.branches, n.segments);
+  return 0;
+}
+
+int cmd_compare(const std::string& a, const std::string& b, const std::string& out, const std::string& spacing,
+                const std::string& row) {
+  using flowire::units::Dimension;
+  const double h = flowire::units::parse_quantity(spacing, Dimension::Length, "--spacing");
+  const double H = flowire::units::parse_quantity(row, Dimension::Length, "--rows");
+  const auto r = flowire::coupling::compare_traces(flowire::coupling::read_tip_trace(a),
+                                                   flowire::coupling::read_tip_trace(b), h, H);
+  if (r.samples == 0) throw flowire::Error(ErrorKind::Input, fmt::format("{} and {}: the traces share no inserted length", a, b));
+  const auto csv = flowire::coupling::compare_csv(r);
+  if (!out.empty()) flowire::write_text_atomically(out, csv);
+  std::printf("%-18s %8s %22s %14s %14s\n", "inserted length mm", "samples", "RMS (1/2 sum)^1/2 mm", "RMS mean mm",
+              "max mm");
+  for (const auto& row_ : r.rows)
+    std::printf("%18.1f %8d %22.3f %14.3f %14.3f\n", row_.inserted_length * 1e3, row_.samples,
+                row_.rms_published * 1e3, row_.rms * 1e3, row_.max_distance * 1e3);
+  std::printf("%18s %8d %22.3f %14.3f\n", "all", r.samples, r.rms_published_total * 1e3, r.rms_total * 1e3);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"flowire: guidewire and blood-flow co-simulation in vessel networks", "flowire"};
+  app.set_version_flag("--version", std::string("flowire ") + FLOWIRE_VERSION);
+  app.require_subcommand(0, 1);
+  app.set_help_all_flag("--help-all", "help for every command");
+
+  std::string scene, out;
+  std::vector<std::string> sets;
+  auto* run = app.add_subcommand("run", "run a scene: YAML scene file or svZeroDSolver JSON model");
+  run->add_option("scene", scene, "scene file (.yaml) or svZeroDSolver model (.json)")->required();
+  run->add_option("--out", out, "output folder (overrides output.dir)");
+  run->add_option("--set", sets, "override a scene key: --set flow.solver=sparse (repeatable)")->allow_extra_args(false);
+
+  auto* network = app.add_subcommand("network", "read, inspect and convert vessel networks");
+  network->require_subcommand(1);
+  std::string file, unit, in, outfile;
+  double max_seg = 0;
+  bool json = false;
+  auto* info = network->add_subcommand("info", "print branches, nodes, segments, junctions, ends, loops, length, radii");
+  info->add_option("file", file, "network file (.vtp, .vtk, .yaml, .in)")->required();
+  info->add_option("--length-unit", unit, "unit of the file's coordinates: m, cm, mm, um");
+  info->add_option("--max-segment-length", max_seg, "split branches into segments no longer than this (m)");
+  info->add_flag("--json", json, "print one JSON object");
+  auto* convert = network->add_subcommand("convert", "convert a network file (to .vtp or .yaml)");
+  convert->add_option("in", in, "input network file")->required();
+  convert->add_option("out", outfile, "output file (.vtp or .yaml)")->required();
+  convert->add_option("--length-unit", unit, "unit of the input's coordinates: m, cm, mm, um");
+  convert->add_option("--max-segment-length", max_seg, "split branches into segments no longer than this (m)");
+
+  std::string ta, tb, cmp_out, spacing = "5 mm", rows = "50 mm";
+  auto* compare = app.add_subcommand("compare", "RMS distance between two tip traces by inserted length");
+  compare->add_option("a", ta, "tip_trace.csv")->required();
+  compare->add_option("b", tb, "tip_trace.csv")->required();
+  compare->add_option("--out", cmp_out, "write the table as CSV");
+  compare->add_option("--spacing", spacing, "sample spacing of inserted length (default 5 mm)");
+  compare->add_option("--rows", rows, "table row spacing (default 50 mm)");
+
+  std::vector<std::string> help_topic;
+  auto* help = app.add_subcommand("help", "help for a command; `help scene` lists every scene key");
+  help->add_option("command", help_topic, "command (run, network, compare, scene)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    return error_exit(e.what(), 2);
+  }
+
+  try {
+    if (*run) return cmd_run(scene, out, sets);
+    if (*info) return cmd_info(file, unit, max_seg, json);
+    if (*convert) return cmd_convert(in, outfile, unit, max_seg);
+    if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows);
+    if (*help) {
+      if (help_topic.empty()) {
+        std::cout << app.help();
+      } else if (help_topic[0] == "scene") {
+        std::cout << "Scene keys (SI units; \"<number> <unit>\" strings accepted):\n\n"
+                  << flowire::coupling::scene_schema().markdown();
+      } else if (help_topic[0] == "run" || help_topic[0] == "network" || help_topic[0] == "compare") {
+        std::cout << app.get_subcommand(help_topic[0])->help();
+      } else {
+        return error_exit(fmt::format("help: unknown command '{}' (commands: run, network, compare, help scene)",
+                                      help_topic[0]),
+                          2);
+      }
+      return 0;
+    }
+    std::cout << app.help();
+    return 0;
+  } catch (const Error& e) {
+    print_warnings();
+    return error_exit(e.what(), e.kind() == ErrorKind::Numerical ? 3 : 2);
+  } catch (const std::bad_alloc&) {
+    return error_exit("out of memory", 3);
+  } catch (const std::exception& e) {
+    return error_exit(fmt::format("unexpected failure: {}", e.what()), 3);
+  }
+}
