@@ -1,0 +1,96 @@
+#pragma once
+/// @file io.hpp
+/// @brief Reading vessel networks from centerline files and writing them back.
+///
+/// Formats read (chosen by extension, then by the arrays the file holds):
+/// - `.vtp` (VTK XML poly data) and `.vtk` (legacy VTK poly data), needs VTK:
+///   - flowire's own `.vtp` (field array `flowire_network`): read back to the identical network;
+///   - VMTK `vmtkbranchextractor` output (cell arrays `GroupIds`, `Blanking`, `CenterlineIds`,
+///     `TractIds`): one branch per group, junctions at the blanked bifurcation regions;
+///   - SimVascular ROM centerlines (point arrays `BranchId`, `BifurcationId`): one branch per
+///     `BranchId`, each bifurcation region (`BranchId` = -1) collapsed into one junction;
+///   - VMTK `vmtkcenterlines` output (one polyline per inlet→outlet path, paths overlapping
+///     along shared trunks): the paths are merged into one tree from their common inlet;
+///   - any other set of polylines: cells sharing points (or coinciding end points) are joined,
+///     one branch per chain between junctions and ends.
+///   The radius comes from the point array `radius` / `radii` (any case),
+///   `MaximumInscribedSphereRadius`, or else `sqrt(CenterlineSectionArea / pi)`.
+/// - `.yaml` / `.yml`: flowire's network file,
+///   `branches: [{name, points: [[x, y, z, r], ...]}]` with an optional `length_unit`
+///   (and, as written by `write_network_yaml`, optional exact `nodes` / `segments`).
+/// - `.in`: svOneDSolver input deck (`NODE`, `SEGMENT`, `JOINT` cards, CGS units):
+///   radius = sqrt(area / pi), daughters joined to the parent at every `JOINT`.
+///
+/// Every reader reports bad input (missing radius array, non-positive or non-finite radius
+/// or coordinate, empty or truncated file, duplicate points, self-loops, a network in several
+/// pieces) as one `flowire::Error` naming the file and the point, line or cell at fault.
+#include <string>
+#include <vector>
+
+#include "flowire/vessels/network.hpp"
+
+namespace flowire::vessels {
+
+/// @brief How a network file is read.
+struct ReadOptions {
+  /// Unit of the file's coordinates and radii: "m", "cm", "mm" or "um". Empty: the unit the
+  /// file declares (flowire files: their `length_unit`; svOneDSolver decks: cm), else m.
+  /// A file that declares its unit keeps it; a different unit given here is then reported
+  /// in a warning and ignored.
+  std::string length_unit;
+  /// Factor from file units to metres; when > 0 it is used instead of `length_unit`.
+  double length_factor = 0.0;
+  /// How branches become segments (`read_network` only).
+  BuildOptions build;
+  /// If the network falls into several disconnected pieces: false (default) is an error that
+  /// names the pieces; true keeps the piece that holds the widest end (the inlet) and warns.
+  bool keep_inlet_piece = false;
+  /// Overlapping VMTK paths are the same vessel while their points stay within this fraction
+  /// of the local radius of each other; the point where they part becomes a junction.
+  double merge_tolerance = 0.2;
+  /// Warn when the radii look like another unit (largest radius above 5 cm or below 1 um).
+  bool check_units = true;
+};
+
+/// @brief Read a centerline file into raw branches (metres), without building segments.
+/// svOneDSolver decks give one branch per vessel chain between junctions, with the node
+/// radius taken as the mean of the adjoining segment ends.
+/// @throws flowire::Error (input) naming the file and the place at fault.
+Centerlines read_centerlines(const std::string& path, const ReadOptions& options = {});
+
+/// @brief Read a network file and build the network (see the file comment for formats).
+/// flowire's own `.vtp` and `.yaml` files with `nodes`/`segments` give back the exact network
+/// they were written from; svOneDSolver decks keep the deck's segments (lengths from the
+/// deck), split further only by `options.build`.
+/// @throws flowire::Error (input) naming the file and the place at fault.
+Network read_network(const std::string& path, const ReadOptions& options = {});
+
+/// @brief A named array attached to the nodes (point data) or segments (cell data) of a
+/// written network: `values.size() == count * components`, components 1 or 3.
+struct DataArray {
+  std::string name;
+  std::vector<double> values;
+  int components = 1;
+};
+
+/// @brief Write a network as VTK XML poly data (`.vtp`, raw appended binary, opens in
+/// ParaView): points = nodes, one VTK_LINE cell per segment (cell `i` is segment `i`), cell data
+/// `radius`, `length`, `branch_id`, `segment_id`, point data `radius` (mean radius of the
+/// segments at the node), then the caller's arrays; field data `flowire_network`,
+/// `branch_names` and the branch node / segment lists, from which `read_network` rebuilds the
+/// identical network. Written atomically (no partial file on failure).
+/// @throws flowire::Error (usage) if an array has the wrong size, (input) if the file cannot
+/// be written.
+void write_network_vtp(const Network& net, const std::string& path,
+                       const std::vector<DataArray>& point_data = {},
+                       const std::vector<DataArray>& cell_data = {});
+
+/// @brief Write a network as flowire YAML: `length_unit: m`, `branches` with points
+/// `[x, y, z, r]` along each branch (readable by any YAML tool), plus exact `nodes` and
+/// `segments` lists from which `read_network` rebuilds the identical network.
+void write_network_yaml(const Network& net, const std::string& path);
+
+/// @brief Write a network in the format chosen by the extension of `path` (.vtp or .yaml/.yml).
+void write_network(const Network& net, const std::string& path);
+
+}  // namespace flowire::vessels
