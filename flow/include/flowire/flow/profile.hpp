@@ -1,0 +1,34 @@
+#pragma once
+/// @file profile.hpp
+/// @brief Velocity profiles in a rigid circular tube: laminar (Poiseuille) and Womersley.
+#include <complex>
+
+namespace flowire::flow {
+
+/// @brief Laminar axial velocity at distance d from the axis of a tube of radius r
+/// carrying flow Q: \f$ u(d) = \frac{2Q}{\pi r^2}\left(1 - \frac{d^2}{r^2}\right) \f$, 0 for d ≥ r.
+[[nodiscard]] double laminar_velocity(double flow, double radius, double d);
+
+/// @brief Bessel functions of the first kind J0, J1 of a complex argument (power series;
+/// accurate to ~1e-12 relative for |z| ≤ 60, which covers α ≤ 60).
+[[nodiscard]] std::complex<double> bessel_j0(std::complex<double> z);
+[[nodiscard]] std::complex<double> bessel_j1(std::complex<double> z);
+
+/// @brief Womersley number \f$ \alpha = r\sqrt{\omega\rho/\eta} \f$.
+[[nodiscard]] double womersley_number(double radius, double omega, double density, double viscosity);
+
+/// @brief Flow of the Womersley solution relative to the quasi-steady Poiseuille flow for
+/// the same sinusoidal pressure gradient: \f$ \frac{-8i}{\alpha^2}\left(1 - \frac{2J_1(\Lambda)}{\Lambda J_0(\Lambda)}\right) \f$,
+/// \f$ \Lambda = i^{3/2}\alpha \f$. |ratio| and arg(ratio) are the amplitude and phase of
+/// the reference table (e.g. α = 2: 0.825, −33°).
+[[nodiscard]] std::complex<double> womersley_flow_ratio(double alpha);
+
+/// @brief Womersley velocity at relative radius ρ = d/r of the oscillating flow
+/// Q(t) = Re[Q̂ e^{iωt}] in a tube of radius r at Womersley number α:
+/// \f$ u = \mathrm{Re}\left[\frac{\hat Q}{\pi r^2}
+/// \frac{1 - J_0(\Lambda\rho)/J_0(\Lambda)}{1 - 2J_1(\Lambda)/(\Lambda J_0(\Lambda))} e^{i\omega t}\right] \f$.
+/// Tends to the laminar profile as α → 0. Allocation-free.
+[[nodiscard]] double womersley_velocity(std::complex<double> flow_amplitude, double radius, double alpha,
+                                        double rho, double omega_t);
+
+}  // namespace flowire::flow

@@ -1,0 +1,137 @@
+#pragma once
+/// @file solver.hpp
+/// @brief Network flow solvers behind one interface.
+///
+/// A solver is created once for a network and a FlowSpec (`make_solver`): this assembles
+/// the system and does the expensive part (factorization, inverse, per-source solves).
+/// Then `advance(t)` moves it to time t (a frame) and the accessors read the state at
+/// that time. The network must outlive the solver.
+///
+/// Quasi-steady Poiseuille model (the published method): every segment obeys
+/// \f$ Q_s = (p_{from} - p_{to}) / R_s \f$ with \f$ R_s = 8\eta l_s / (\pi r_s^4) \f$ and mass is
+/// conserved at every node; the state at t depends only on the boundary values at t.
+/// - `dense_inverse`: the published system \f$ K [Q; P] = [b; p_{source}(t)] \f$,
+///   K = [A 0; C −Aᵀ] of size N+E, inverted densely once and multiplied every frame.
+/// - `superposition`: the nodal conductance system G p = b factored once with CHOLMOD,
+///   solved once per independent boundary source k; a frame is
+///   \f$ p(t) = \sum_k f_k(t)\, p_k \f$ and only the nodes/segments asked for are evaluated.
+/// - `sparse`: the nodal system factored once (Eigen SimplicialLDLT, independent of
+///   CHOLMOD) and solved for the full right-hand side every frame (reference).
+/// - `petsc`: the nodal system distributed with PETSc (KSPCG + GAMG or hypre), solved once
+///   per source like superposition; every MPI rank ends with the whole answer.
+/// Model::Rlc: segments also carry inertance and nodes compliance; `advance` integrates
+/// in time (see rlc.hpp).
+#include <chrono>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "flowire/flow/spec.hpp"
+
+namespace flowire::flow {
+
+/// @brief Derived quantities of one segment at the solver's current time.
+struct SegmentState {
+  double flow_rate = 0.0;          ///< m³/s, positive from node_from to node_to
+  double pressure_from = 0.0;      ///< Pa
+  double pressure_to = 0.0;        ///< Pa
+  double mean_velocity = 0.0;      ///< m/s, Q/(πr²), signed like Q
+  double wall_shear_stress = 0.0;  ///< Pa, 4η|Q|/(πr³) (Poiseuille)
+  double reynolds = 0.0;           ///< ρ|v̄|2r/η
+  double womersley = 0.0;          ///< r·sqrt(ωρ/η) at the spec's cycle, 0 if steady
+};
+
+/// @brief Seconds spent per phase of a solver's life.
+struct SolverTimings {
+  double assemble = 0.0;  ///< building the matrices
+  double factor = 0.0;    ///< factorization / inverse / per-source solves / periodic search
+  double frames = 0.0;    ///< accumulated time in advance()
+  long frame_count = 0;
+};
+
+class FlowSolver {
+ public:
+  virtual ~FlowSolver() = default;
+  FlowSolver(const FlowSolver&) = delete;
+  FlowSolver& operator=(const FlowSolver&) = delete;
+
+  /// @brief Move to time t (s): quasi-steady models evaluate the boundary values at t;
+  /// the rlc model integrates from the current time to t.
+  void advance(double t);
+  /// @brief advance(t), then fill the full pressure and flow arrays.
+  void solve_at(double t, std::span<double> node_pressures, std::span<double> segment_flows);
+  /// @brief Current time.
+  [[nodiscard]] double time() const { return time_; }
+
+  [[nodiscard]] virtual double node_pressure(int node) const = 0;
+  [[nodiscard]] virtual double segment_flow(int segment) const;
+  /// @brief Flow of a segment at time t without moving the solver (quasi-steady models:
+  /// any t; rlc: linear between the last two steps, clamped to them).
+  [[nodiscard]] virtual double segment_flow_at(int segment, double t) const = 0;
+  /// @brief All node pressures (size num_nodes) / segment flows (size num_segments).
+  virtual void node_pressures(std::span<double> out) const;
+  virtual void segment_flows(std::span<double> out) const;
+
+  [[nodiscard]] SegmentState segment_state(int segment) const;
+  /// @brief Axial blood velocity (m/s, along node_from→node_to) at world point `p`, which
+  /// the caller has located in `segment`; 0 outside the lumen. Allocation-free.
+  [[nodiscard]] double axial_velocity_at(int segment, const Vec3& p) const;
+  [[nodiscard]] double axial_velocity_at(int segment, const Vec3& p, double t) const;
+  /// @brief The velocity vector: axial_velocity_at times the unit axis.
+  [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p) const;
+  [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p, double t) const;
+
+  /// @brief Poiseuille resistance of each segment (Pa·s/m³).
+  [[nodiscard]] double resistance(int segment) const { return resistance_[static_cast<size_t>(segment)]; }
+  [[nodiscard]] const Network& network() const { return net_; }
+  [[nodiscard]] const FlowSpec& spec() const { return spec_; }
+  [[nodiscard]] const SolverTimings& timings() const { return timings_; }
+  [[nodiscard]] virtual std::string_view name() const = 0;
+
+ protected:
+  FlowSolver(const Network& net, FlowSpec spec);
+  /// Move the state to time t.
+  virtual void do_advance(double t) = 0;
+  /// Axial velocity given the segment, squared distance ratio d²/r² and time.
+  [[nodiscard]] double profile_velocity(int segment, double rho2, double t) const;
+
+  friend std::unique_ptr<FlowSolver> make_solver(const Network&, FlowSpec);
+  /// Womersley profile: split every segment's flow into mean + A·sin(ωt) (quasi-steady
+  /// model with sine sources of one period); otherwise the laminar profile is used.
+  void prepare_profile();
+
+  const Network& net_;
+  FlowSpec spec_;
+  std::vector<Vec3> axis_;          // (num_segments) unit axis node_from -> node_to
+  std::vector<double> harmonic_mean_, harmonic_amp_;  // (num_segments) when the Womersley profile is on
+  std::vector<double> resistance_;  // (num_segments)
+  double time_ = 0.0;
+  double omega_ = 0.0;              // angular frequency of the spec's cycle
+  SolverTimings timings_;
+};
+
+/// @brief Create the solver chosen by spec.solver / spec.model. Missing BC nodes are
+/// resolved (resolve_nodes) first.
+/// @throws flowire::Error: input (bad BC, dense_inverse too large, petsc not built),
+/// numerical (a piece of the network without a pressure reference, singular matrix).
+std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec);
+
+/// @brief Poiseuille resistance \f$ R = 8\eta l/(\pi r^4) \f$.
+[[nodiscard]] inline double poiseuille_resistance(double viscosity, double length, double radius) {
+  constexpr double pi = 3.14159265358979323846;
+  return 8.0 * viscosity * length / (pi * radius * radius * radius * radius);
+}
+
+/// @brief Wall-clock helper for timings.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  [[nodiscard]] double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace flowire::flow

@@ -1,0 +1,141 @@
+#pragma once
+/// @file spec.hpp
+/// @brief What a flow computation is asked to do: model, solver, blood properties and
+/// boundary conditions (the `flow:` section of a scene), in SI units.
+///
+/// Boundary conditions are attached to network nodes. Inlets prescribe a pressure or a
+/// flow into the network; outlets prescribe a pressure, a resistance to a distal pressure,
+/// or a three-element (RCR) windkessel. An RCR outlet has state, so it is only dynamic
+/// in `Model::Rlc`; the quasi-steady Poiseuille model replaces it by its total
+/// resistance Rp + Rd to Pd and reports that with a warning.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "flowire/vessels/network.hpp"
+
+namespace flowire::config {
+class Config;
+}
+
+namespace flowire::flow {
+
+using vessels::Network;
+using vessels::Vec3;
+
+/// @brief A scalar function of time: constant, the published sine, or a periodic table.
+///
+/// Sine: \f$ p(t) = \frac{P_1 - P_2}{2}\sin(2\pi t / T) + \frac{P_1 + P_2}{2} \f$ with
+/// P1 = `systolic`, P2 = `diastolic`, T = `period` (eq. 5 of the published method).
+/// Table: piecewise-linear in `times`/`values`, repeated with period
+/// `times.back() - times.front()` when `periodic` (the default), held constant otherwise.
+struct Waveform {
+  enum class Kind { Constant, Sine, Table };
+  Kind kind = Kind::Constant;
+  double value = 0.0;      ///< Constant
+  double systolic = 0.0;   ///< Sine: P1
+  double diastolic = 0.0;  ///< Sine: P2
+  double period = 0.8;     ///< Sine: T (s)
+  std::vector<double> times, values;  ///< Table
+  bool periodic = true;               ///< Table
+
+  static Waveform constant(double v);
+  static Waveform sine(double systolic, double diastolic, double period);
+  static Waveform table(std::vector<double> times, std::vector<double> values, bool periodic = true);
+
+  /// @brief Value at time t (allocation-free).
+  [[nodiscard]] double operator()(double t) const;
+  /// @brief Time average over one period (the value itself for a constant).
+  [[nodiscard]] double mean() const;
+  /// @brief Period in s, or 0 when the waveform is not periodic.
+  [[nodiscard]] double cycle() const;
+  [[nodiscard]] bool is_constant() const { return kind == Kind::Constant; }
+};
+
+/// @brief Read a table waveform from a CSV file with columns `time,<value>` (one header line).
+/// @throws flowire::Error (input) naming the file and line.
+Waveform read_waveform_csv(const std::string& path);
+
+struct InletBC {
+  enum class Type { Pressure, Flow };
+  int node = -1;            ///< network node (default: Network::widest_end())
+  Type type = Type::Pressure;
+  Waveform waveform;        ///< Pa or m³/s into the network
+};
+
+struct OutletBC {
+  enum class Type { Pressure, Resistance, Rcr };
+  int node = -1;
+  Type type = Type::Pressure;
+  double pressure = 0.0;         ///< Pressure: Pa
+  double resistance = 0.0;       ///< Resistance: Pa·s/m³
+  double distal_pressure = 0.0;  ///< Resistance and Rcr: Pa
+  double rp = 0.0, c = 0.0, rd = 0.0;  ///< Rcr: proximal resistance, compliance (m³/Pa), distal resistance
+};
+
+enum class Model { Poiseuille, Rlc };
+enum class SolverKind { Superposition, DenseInverse, Sparse, Petsc };
+/// @brief Inertance per segment in the rlc model.
+/// Poiseuille: \f$ L = \rho l / (\pi r^2) \f$ (flat profile, the usual 0D choice);
+/// Womersley: \f$ L = 4\rho l / (3\pi r^2) \f$, which with R in series reproduces the
+/// Womersley flow amplitude and phase within about 1–4 % up to α ≈ 4.
+enum class Inertance { Poiseuille, Womersley };
+/// @brief Velocity profile reported by velocity queries.
+/// Laminar: \f$ u(d) = \frac{2Q}{\pi r^2}(1 - d^2/r^2) \f$; Womersley: the mean flow carries
+/// the parabola and each sinusoidal flow harmonic the Womersley profile of its α.
+enum class Profile { Laminar, Womersley };
+
+std::string_view to_string(Model m);
+std::string_view to_string(SolverKind s);
+
+/// @brief The whole flow problem apart from the network.
+struct FlowSpec {
+  Model model = Model::Poiseuille;
+  SolverKind solver = SolverKind::Superposition;
+  double viscosity = 3.5e-3;  ///< Pa·s
+  double density = 1060.0;    ///< kg/m³
+  std::vector<InletBC> inlets;
+  std::vector<OutletBC> outlets;
+  Inertance inertance = Inertance::Poiseuille;
+  Profile profile = Profile::Laminar;
+
+  /// rlc model: wall compliance of a segment \f$ C = 3\pi r^3 l / (2 E h) \f$ (thin elastic
+  /// wall, incompressible), with h = `wall_thickness_ratio`·r; half of it at each end node.
+  double wall_youngs_modulus = 0.4e6;  ///< Pa
+  double wall_thickness_ratio = 0.1;   ///< h / r
+  double dt = 1e-3;                    ///< rlc time step (s)
+  double rho_infinity = 0.5;           ///< rlc generalized-α spectral radius (1: trapezoidal-like, 0: most damping)
+  double periodic_tolerance = 1e-6;    ///< rlc: relative change between cycles taken as periodic
+  int max_cycles = 50;                 ///< rlc: cycles run at most when looking for the periodic state
+
+  /// dense_inverse refuses above this many bytes for K and K⁻¹ (≈ 2·8·(N+E)² bytes).
+  double dense_memory_limit = 8e9;
+  /// petsc: preconditioner "gamg" or "hypre"; relative tolerance of CG.
+  std::string petsc_pc = "gamg";
+  double petsc_rtol = 1e-14;
+
+  /// @brief Period of the first periodic inlet waveform, or 0 if all are constant.
+  [[nodiscard]] double cycle() const;
+};
+
+/// @brief Inlet at the widest end with `inlet_pressure`, every other end at 0 Pa.
+FlowSpec default_spec(const Network& net, const Waveform& inlet_pressure);
+
+/// @brief Fill missing nodes: an inlet without node gets the widest end; an empty outlet
+/// list (or the template outlet with node -1) is copied to every end that is no inlet.
+void resolve_nodes(FlowSpec& spec, const Network& net);
+
+/// @brief Read the `flow:` section of a validated scene (keys listed in docs of the header).
+///
+/// Keys: flow.model (poiseuille|rlc), flow.solver (superposition|dense_inverse|sparse|petsc),
+/// flow.viscosity, flow.density, flow.inertance (poiseuille|womersley), flow.profile
+/// (laminar|womersley), flow.inlet.node, flow.inlet.pressure (number, or section with
+/// waveform: constant|sine|table, value, systolic, diastolic, period, file),
+/// flow.inlet.flow (number, or the same section), flow.outlets.pressure,
+/// flow.outlets.resistance, flow.outlets.distal_pressure, flow.outlets.rcr.{Rp,C,Rd,Pd},
+/// flow.wall.youngs_modulus, flow.wall.thickness_ratio, solve.dt (rlc step).
+/// Absent keys keep the FlowSpec defaults.
+/// @throws flowire::Error (input) naming the key where a value is inconsistent.
+FlowSpec from_config(const config::Config& cfg, const Network& net);
+
+}  // namespace flowire::flow

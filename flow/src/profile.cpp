@@ -1,0 +1,56 @@
+#include "flowire/flow/profile.hpp"
+
+#include <cmath>
+
+namespace flowire::flow {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+// Power series of J_n(z), n = 0 or 1: sum_m (-1)^m (z/2)^(2m+n) / (m! (m+n)!).
+std::complex<double> bessel_series(int n, std::complex<double> z) {
+  const std::complex<double> h = 0.5 * z;
+  const std::complex<double> h2 = -h * h;
+  std::complex<double> term = n == 0 ? std::complex<double>(1.0) : h;
+  std::complex<double> sum = term;
+  for (int m = 1; m < 400; ++m) {
+    term *= h2 / (static_cast<double>(m) * static_cast<double>(m + n));
+    sum += term;
+    if (std::abs(term) <= 1e-17 * std::abs(sum) && m > std::abs(z)) break;
+  }
+  return sum;
+}
+}  // namespace
+
+double laminar_velocity(double flow, double radius, double d) {
+  const double rho2 = (d * d) / (radius * radius);
+  if (rho2 >= 1.0) return 0.0;
+  return 2.0 * flow / (kPi * radius * radius) * (1.0 - rho2);
+}
+
+std::complex<double> bessel_j0(std::complex<double> z) { return bessel_series(0, z); }
+std::complex<double> bessel_j1(std::complex<double> z) { return bessel_series(1, z); }
+
+double womersley_number(double radius, double omega, double density, double viscosity) {
+  return radius * std::sqrt(omega * density / viscosity);
+}
+
+std::complex<double> womersley_flow_ratio(double alpha) {
+  if (alpha < 1e-3) return {1.0, 0.0};
+  const std::complex<double> lambda = alpha * std::polar(1.0, 0.75 * kPi);
+  const std::complex<double> f = 1.0 - 2.0 * bessel_j1(lambda) / (lambda * bessel_j0(lambda));
+  return std::complex<double>(0.0, -8.0 / (alpha * alpha)) * f;  // Q = πR²G/(iρω)·f
+}
+
+double womersley_velocity(std::complex<double> flow_amplitude, double radius, double alpha, double rho,
+                          double omega_t) {
+  if (rho >= 1.0) return 0.0;
+  const std::complex<double> phase = std::polar(1.0, omega_t);
+  const double area = kPi * radius * radius;
+  if (alpha < 1e-3) return 2.0 * (flow_amplitude * phase).real() / area * (1.0 - rho * rho);
+  const std::complex<double> lambda = alpha * std::polar(1.0, 0.75 * kPi);
+  const std::complex<double> j0 = bessel_j0(lambda);
+  const std::complex<double> shape = (1.0 - bessel_j0(lambda * rho) / j0) / (1.0 - 2.0 * bessel_j1(lambda) / (lambda * j0));
+  return (flow_amplitude / area * shape * phase).real();
+}
+
+}  // namespace flowire::flow

@@ -1,0 +1,391 @@
+#include "flowire/flow/solver.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+
+#include "assembly.hpp"
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/flow/profile.hpp"
+#include "solvers.hpp"
+
+namespace flowire::flow {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+// ---------------------------------------------------------------------------------------
+// FlowSolver: common queries
+
+FlowSolver::FlowSolver(const Network& net, FlowSpec spec) : net_(net), spec_(std::move(spec)) {
+  const double c = spec_.cycle();
+  omega_ = c > 0.0 ? 2.0 * kPi / c : 0.0;
+  axis_.resize(static_cast<size_t>(net_.num_segments()));
+  for (int s = 0; s < net_.num_segments(); ++s) {
+    const auto& seg = net_.segment(s);
+    axis_[static_cast<size_t>(s)] = (net_.node(seg.node_to) - net_.node(seg.node_from)).normalized();
+  }
+}
+
+void FlowSolver::advance(double t) {
+  Stopwatch sw;
+  do_advance(t);
+  time_ = t;
+  timings_.frames += sw.seconds();
+  ++timings_.frame_count;
+}
+
+void FlowSolver::solve_at(double t, std::span<double> node_pressures_out, std::span<double> segment_flows_out) {
+  advance(t);
+  node_pressures(node_pressures_out);
+  segment_flows(segment_flows_out);
+}
+
+double FlowSolver::segment_flow(int segment) const {
+  const auto& seg = net_.segment(segment);
+  return (node_pressure(seg.node_from) - node_pressure(seg.node_to)) / resistance_[static_cast<size_t>(segment)];
+}
+
+void FlowSolver::node_pressures(std::span<double> out) const {
+  if (out.size() != static_cast<size_t>(net_.num_nodes())) throw_usage_error("node_pressures: span size != num_nodes");
+  for (int i = 0; i < net_.num_nodes(); ++i) out[static_cast<size_t>(i)] = node_pressure(i);
+}
+
+void FlowSolver::segment_flows(std::span<double> out) const {
+  if (out.size() != static_cast<size_t>(net_.num_segments())) throw_usage_error("segment_flows: span size != num_segments");
+  for (int s = 0; s < net_.num_segments(); ++s) out[static_cast<size_t>(s)] = segment_flow(s);
+}
+
+SegmentState FlowSolver::segment_state(int segment) const {
+  const auto& seg = net_.segment(segment);
+  SegmentState st;
+  st.flow_rate = segment_flow(segment);
+  st.pressure_from = node_pressure(seg.node_from);
+  st.pressure_to = node_pressure(seg.node_to);
+  const double r = seg.radius;
+  st.mean_velocity = st.flow_rate / (kPi * r * r);
+  st.wall_shear_stress = 4.0 * spec_.viscosity * std::abs(st.flow_rate) / (kPi * r * r * r);
+  st.reynolds = spec_.density * std::abs(st.mean_velocity) * 2.0 * r / spec_.viscosity;
+  st.womersley = omega_ > 0.0 ? womersley_number(r, omega_, spec_.density, spec_.viscosity) : 0.0;
+  return st;
+}
+
+double FlowSolver::profile_velocity(int segment, double rho2, double t) const {
+  if (rho2 >= 1.0) return 0.0;
+  const auto& seg = net_.segment(segment);
+  const double r = seg.radius;
+  const double area = kPi * r * r;
+  if (harmonic_mean_.empty()) {
+    const double q = t == time_ ? segment_flow(segment) : segment_flow_at(segment, t);
+    return 2.0 * q / area * (1.0 - rho2);
+  }
+  const auto s = static_cast<size_t>(segment);
+  const double alpha = womersley_number(r, omega_, spec_.density, spec_.viscosity);
+  // A sin(ωt) = Re[-i A e^{iωt}]
+  return 2.0 * harmonic_mean_[s] / area * (1.0 - rho2) +
+         womersley_velocity(std::complex<double>(0.0, -harmonic_amp_[s]), r, alpha, std::sqrt(rho2), omega_ * t);
+}
+
+double FlowSolver::axial_velocity_at(int segment, const Vec3& p) const { return axial_velocity_at(segment, p, time_); }
+
+double FlowSolver::axial_velocity_at(int segment, const Vec3& p, double t) const {
+  const auto& seg = net_.segment(segment);
+  const Vec3 rel = p - net_.node(seg.node_from);
+  const Vec3& e = axis_[static_cast<size_t>(segment)];
+  const double d2 = std::max(0.0, rel.squaredNorm() - std::pow(rel.dot(e), 2));
+  return profile_velocity(segment, d2 / (seg.radius * seg.radius), t);
+}
+
+Vec3 FlowSolver::velocity_at(int segment, const Vec3& p) const {
+  return axial_velocity_at(segment, p, time_) * axis_[static_cast<size_t>(segment)];
+}
+
+Vec3 FlowSolver::velocity_at(int segment, const Vec3& p, double t) const {
+  return axial_velocity_at(segment, p, t) * axis_[static_cast<size_t>(segment)];
+}
+
+void FlowSolver::prepare_profile() {
+  if (spec_.profile != Profile::Womersley) return;
+  bool sines = omega_ > 0.0 && spec_.model == Model::Poiseuille;
+  const double period = spec_.cycle();
+  for (const auto& in : spec_.inlets)
+    if (!(in.waveform.is_constant() || (in.waveform.kind == Waveform::Kind::Sine && in.waveform.period == period)))
+      sines = false;
+  if (!sines) {
+    warn("flow.profile: womersley needs the quasi-steady model driven by sine waveforms of one period; "
+         "using the laminar profile");
+    return;
+  }
+  // Q(t) = mean + A sin(ωt): sin = 0 at t = 0, 1 at t = T/4.
+  const auto ne = static_cast<size_t>(net_.num_segments());
+  harmonic_mean_.resize(ne);
+  harmonic_amp_.resize(ne);
+  for (size_t s = 0; s < ne; ++s) {
+    const double q0 = segment_flow_at(static_cast<int>(s), 0.0);
+    const double q1 = segment_flow_at(static_cast<int>(s), 0.25 * period);
+    harmonic_mean_[s] = q0;
+    harmonic_amp_[s] = q1 - q0;
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Solvers of the quasi-steady model
+
+namespace detail {
+
+ResponseSolver::ResponseSolver(const Network& net, FlowSpec spec) : FlowSolver(net, std::move(spec)) {
+  Stopwatch sw;
+  a_ = assemble(net_, spec_, resistance_);
+  timings_.assemble = sw.seconds();
+}
+
+Eigen::MatrixXd ResponseSolver::source_rhs() const {
+  const int nu = a_.num_unknowns();
+  const int k = a_.num_sources();
+  Eigen::MatrixXd b = Eigen::MatrixXd::Zero(nu, k);
+  Eigen::VectorXd col(nu);
+  for (int j = 0; j < k; ++j) {
+    col.setZero();
+    add_nodal_rhs(net_, a_, a_.sources[static_cast<size_t>(j)], 1.0, col);
+    b.col(j) = col;
+  }
+  return b;
+}
+
+void ResponseSolver::set_responses(const Eigen::MatrixXd& x) {
+  k_ = a_.num_sources();
+  const auto kk = static_cast<size_t>(k_);
+  if (!x.allFinite()) throw_numerical_error("flow: the network solve produced non-finite pressures");
+  p_.assign(static_cast<size_t>(net_.num_nodes()) * kk, 0.0);
+  for (int u = 0; u < a_.num_unknowns(); ++u) {
+    const auto i = static_cast<size_t>(a_.node_of_unknown[static_cast<size_t>(u)]);
+    for (int k = 0; k < k_; ++k) p_[i * kk + static_cast<size_t>(k)] = x(u, k);
+  }
+  for (size_t k = 0; k < kk; ++k)
+    for (const auto& [node, value] : a_.sources[k].node_values)
+      if (a_.dirichlet[static_cast<size_t>(node)]) p_[static_cast<size_t>(node) * kk + k] += value;
+  coef_.assign(kk, 0.0);
+  a_.coefficients(0.0, coef_.data());
+}
+
+double ResponseSolver::node_pressure(int node) const {
+  const double* row = p_.data() + static_cast<size_t>(node) * static_cast<size_t>(k_);
+  double v = 0.0;
+  for (int k = 0; k < k_; ++k) v += coef_[static_cast<size_t>(k)] * row[k];
+  return v;
+}
+
+double ResponseSolver::segment_flow_at(int segment, double t) const {
+  const auto& seg = net_.segment(segment);
+  const double* a = p_.data() + static_cast<size_t>(seg.node_from) * static_cast<size_t>(k_);
+  const double* b = p_.data() + static_cast<size_t>(seg.node_to) * static_cast<size_t>(k_);
+  double dp = a[0] - b[0];
+  for (int k = 1; k < k_; ++k) dp += (*a_.sources[static_cast<size_t>(k)].waveform)(t) * (a[k] - b[k]);
+  return dp * a_.conductance[static_cast<size_t>(segment)];
+}
+
+/// Superposition: the responses solved with one CHOLMOD factorization.
+class SuperpositionSolver final : public ResponseSolver {
+ public:
+  SuperpositionSolver(const Network& net, FlowSpec spec) : ResponseSolver(net, std::move(spec)) {
+    Stopwatch sw;
+    const Eigen::SparseMatrix<double> g = nodal_matrix(net_, a_);
+    const Eigen::MatrixXd b = source_rhs();
+    timings_.assemble += sw.seconds();
+    Stopwatch sf;
+    Eigen::MatrixXd x(b.rows(), b.cols());
+    if (b.rows() > 0) {
+      Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol;
+      chol.compute(g);
+      if (chol.info() != Eigen::Success)
+        throw_numerical_error("flow: the nodal conductance matrix could not be factored (not positive definite)");
+      x = chol.solve(b);
+    }
+    set_responses(x);
+    timings_.factor = sf.seconds();
+  }
+  [[nodiscard]] std::string_view name() const override { return "superposition"; }
+};
+
+/// Base of the solvers that compute full arrays every frame.
+class FrameSolver : public FlowSolver {
+ public:
+  [[nodiscard]] double node_pressure(int node) const override { return p_[static_cast<size_t>(node)]; }
+  [[nodiscard]] double segment_flow(int segment) const override { return q_[static_cast<size_t>(segment)]; }
+  [[nodiscard]] double segment_flow_at(int segment, double t) const override {
+    if (t == time_) return q_[static_cast<size_t>(segment)];
+    if (scratch_time_ != t || scratch_q_.empty()) {
+      scratch_p_.resize(p_.size());
+      scratch_q_.resize(q_.size());
+      compute(t, scratch_p_.data(), scratch_q_.data());
+      scratch_time_ = t;
+    }
+    return scratch_q_[static_cast<size_t>(segment)];
+  }
+
+ protected:
+  FrameSolver(const Network& net, FlowSpec spec) : FlowSolver(net, std::move(spec)) {}
+  void do_advance(double t) override { compute(t, p_.data(), q_.data()); }
+  /// Full node pressures and segment flows at time t.
+  virtual void compute(double t, double* p, double* q) const = 0;
+  void init_arrays() {
+    p_.assign(static_cast<size_t>(net_.num_nodes()), 0.0);
+    q_.assign(static_cast<size_t>(net_.num_segments()), 0.0);
+    compute(0.0, p_.data(), q_.data());
+  }
+  std::vector<double> p_, q_;
+  mutable std::vector<double> scratch_p_, scratch_q_;
+  mutable double scratch_time_ = 0.0;
+};
+
+/// Sparse direct reference: the full right-hand side solved every frame (Eigen LDLᵀ).
+class SparseSolver final : public FrameSolver {
+ public:
+  SparseSolver(const Network& net, FlowSpec spec) : FrameSolver(net, std::move(spec)) {
+    Stopwatch sw;
+    a_ = assemble(net_, spec_, resistance_);
+    const auto g = nodal_matrix(net_, a_);
+    const int nu = a_.num_unknowns();
+    b_.resize(static_cast<size_t>(a_.num_sources()));
+    for (size_t k = 0; k < b_.size(); ++k) {
+      b_[k] = Eigen::VectorXd::Zero(nu);
+      add_nodal_rhs(net_, a_, a_.sources[k], 1.0, b_[k]);
+    }
+    timings_.assemble = sw.seconds();
+    Stopwatch sf;
+    if (nu > 0) {
+      ldlt_.compute(g);
+      if (ldlt_.info() != Eigen::Success) throw_numerical_error("flow: the nodal conductance matrix is singular");
+    }
+    coef_.resize(b_.size());
+    rhs_ = Eigen::VectorXd::Zero(nu);
+    x_ = Eigen::VectorXd::Zero(nu);
+    timings_.factor = sf.seconds();
+    init_arrays();
+  }
+  [[nodiscard]] std::string_view name() const override { return "sparse"; }
+
+ protected:
+  void compute(double t, double* p, double* q) const override {
+    a_.coefficients(t, coef_.data());
+    rhs_.setZero();
+    for (size_t k = 0; k < b_.size(); ++k) rhs_.noalias() += coef_[k] * b_[k];
+    if (rhs_.size() > 0) x_ = ldlt_.solve(rhs_);
+    for (int i = 0; i < net_.num_nodes(); ++i) {
+      const int u = a_.unknown_of_node[static_cast<size_t>(i)];
+      p[i] = u >= 0 ? x_[u] : 0.0;
+    }
+    for (size_t k = 0; k < b_.size(); ++k) add_dirichlet(a_, a_.sources[k], coef_[k], p);
+    for (int s = 0; s < net_.num_segments(); ++s) {
+      const auto& seg = net_.segment(s);
+      q[s] = (p[seg.node_from] - p[seg.node_to]) * a_.conductance[static_cast<size_t>(s)];
+    }
+  }
+
+ private:
+  Assembly a_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  std::vector<Eigen::VectorXd> b_;
+  mutable std::vector<double> coef_;
+  mutable Eigen::VectorXd rhs_, x_;
+};
+
+/// The published method: K = [A 0; C −Aᵀ] over [Q; P], inverted densely once.
+/// Rows 0..N−1: node balance (A Q + g_out P = injected flow) or P = prescribed pressure;
+/// rows N..N+E−1: R_s Q_s − (P_from − P_to) = 0.
+class DenseInverseSolver final : public FrameSolver {
+ public:
+  DenseInverseSolver(const Network& net, FlowSpec spec) : FrameSolver(net, std::move(spec)) {
+    const auto nn = static_cast<Eigen::Index>(net_.num_nodes());
+    const auto ne = static_cast<Eigen::Index>(net_.num_segments());
+    const Eigen::Index m = nn + ne;
+    const double bytes = dense_inverse_bytes(net_.num_nodes(), net_.num_segments());
+    if (bytes > spec_.dense_memory_limit)
+      throw_input_error("flow.solver: dense_inverse",
+                        fmt::format("the published dense K⁻¹ of this network ({} nodes + {} segments = {}² entries) "
+                                    "needs {:.3g} GB, above the limit of {:.3g} GB; use flow.solver: superposition "
+                                    "(same answer, factored sparse)",
+                                    nn, ne, m, bytes / 1e9, spec_.dense_memory_limit / 1e9));
+    Stopwatch sw;
+    a_ = assemble(net_, spec_, resistance_);
+    Eigen::MatrixXd k = Eigen::MatrixXd::Zero(m, m);
+    for (Eigen::Index i = 0; i < nn; ++i) {
+      if (a_.dirichlet[static_cast<size_t>(i)]) {
+        k(i, ne + i) = 1.0;
+      } else {
+        k(i, ne + i) = a_.outlet_conductance[static_cast<size_t>(i)];
+      }
+    }
+    for (Eigen::Index s = 0; s < ne; ++s) {
+      const auto& seg = net_.segment(static_cast<int>(s));
+      if (!a_.dirichlet[static_cast<size_t>(seg.node_from)]) k(seg.node_from, s) += 1.0;
+      if (!a_.dirichlet[static_cast<size_t>(seg.node_to)]) k(seg.node_to, s) -= 1.0;
+      k(nn + s, s) = resistance_[static_cast<size_t>(s)];
+      k(nn + s, ne + seg.node_from) = -1.0;
+      k(nn + s, ne + seg.node_to) = 1.0;
+    }
+    timings_.assemble = sw.seconds();
+    Stopwatch sf;
+    Eigen::PartialPivLU<Eigen::MatrixXd> lu(k);
+    k.resize(0, 0);
+    const double rc = lu.rcond();
+    if (!(rc > 1e-300)) throw_numerical_error(fmt::format("flow: the published system K is singular (rcond {:.3g})", rc));
+    kinv_ = lu.inverse();
+    if (!kinv_.allFinite()) throw_numerical_error("flow: the dense inverse of K is not finite");
+    coef_.resize(static_cast<size_t>(a_.num_sources()));
+    rhs_ = Eigen::VectorXd::Zero(m);
+    y_ = Eigen::VectorXd::Zero(m);
+    timings_.factor = sf.seconds();
+    init_arrays();
+  }
+  [[nodiscard]] std::string_view name() const override { return "dense_inverse"; }
+
+ protected:
+  void compute(double t, double* p, double* q) const override {
+    const auto nn = static_cast<Eigen::Index>(net_.num_nodes());
+    const auto ne = static_cast<Eigen::Index>(net_.num_segments());
+    a_.coefficients(t, coef_.data());
+    rhs_.setZero();
+    for (size_t k = 0; k < coef_.size(); ++k)
+      for (const auto& [node, value] : a_.sources[k].node_values) rhs_[node] += coef_[k] * value;
+    y_.noalias() = kinv_ * rhs_;  // the published per-frame cost: a dense (N+E)² product
+    for (Eigen::Index s = 0; s < ne; ++s) q[s] = y_[s];
+    for (Eigen::Index i = 0; i < nn; ++i) p[i] = y_[ne + i];
+  }
+
+ private:
+  Assembly a_;
+  Eigen::MatrixXd kinv_;
+  mutable std::vector<double> coef_;
+  mutable Eigen::VectorXd rhs_, y_;
+};
+
+double dense_inverse_bytes(int nodes, int segments) {
+  const double m = static_cast<double>(nodes) + static_cast<double>(segments);
+  return 2.0 * 8.0 * m * m;
+}
+
+}  // namespace detail
+
+std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec) {
+  resolve_nodes(spec, net);
+  std::unique_ptr<FlowSolver> s;
+  if (spec.model == Model::Rlc) {
+    s = detail::make_rlc_solver(net, std::move(spec));
+  } else {
+    switch (spec.solver) {
+      case SolverKind::Superposition: s = std::make_unique<detail::SuperpositionSolver>(net, std::move(spec)); break;
+      case SolverKind::Sparse: s = std::make_unique<detail::SparseSolver>(net, std::move(spec)); break;
+      case SolverKind::DenseInverse: s = std::make_unique<detail::DenseInverseSolver>(net, std::move(spec)); break;
+      case SolverKind::Petsc: s = detail::make_petsc_solver(net, std::move(spec)); break;
+    }
+  }
+  s->prepare_profile();
+  return s;
+}
+
+}  // namespace flowire::flow

@@ -1,0 +1,42 @@
+#pragma once
+// Internal: factories of the solvers that live in their own files.
+#include <memory>
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "assembly.hpp"
+#include "flowire/flow/solver.hpp"
+
+namespace flowire::flow::detail {
+
+/// A quasi-steady solver that stores the node-pressure response p_k to each source k
+/// (unit value, all others zero); a frame is p(t) = sum_k f_k(t) p_k, evaluated only
+/// where asked. Subclasses solve G X = B and call set_responses(X).
+class ResponseSolver : public FlowSolver {
+ public:
+  [[nodiscard]] double node_pressure(int node) const override;
+  [[nodiscard]] double segment_flow_at(int segment, double t) const override;
+  [[nodiscard]] int num_sources() const { return k_; }
+
+ protected:
+  ResponseSolver(const Network& net, FlowSpec spec);
+  void do_advance(double t) override { a_.coefficients(t, coef_.data()); }
+  /// Right-hand sides of the nodal system, one column per source (num_unknowns x k).
+  [[nodiscard]] Eigen::MatrixXd source_rhs() const;
+  /// Store the solutions over unknown nodes (num_unknowns x k).
+  void set_responses(const Eigen::MatrixXd& x);
+  Assembly a_;
+  int k_ = 0;
+  std::vector<double> p_;     // (num_nodes x k) node pressure response to each source
+  std::vector<double> coef_;  // (k) f_k(time)
+};
+
+/// Bytes the dense_inverse solver needs for K and K⁻¹.
+double dense_inverse_bytes(int nodes, int segments);
+/// The rlc (resistance–inertance–compliance) model, rlc.cpp.
+std::unique_ptr<FlowSolver> make_rlc_solver(const Network& net, FlowSpec spec);
+/// PETSc solver (petsc_solver.cpp), or an input error when PETSc is not built in.
+std::unique_ptr<FlowSolver> make_petsc_solver(const Network& net, FlowSpec spec);
+
+}  // namespace flowire::flow::detail

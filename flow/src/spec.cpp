@@ -1,0 +1,315 @@
+#include "flowire/flow/spec.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "flowire/common/config.hpp"
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+
+namespace flowire::flow {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+Waveform Waveform::constant(double v) {
+  Waveform w;
+  w.kind = Kind::Constant;
+  w.value = v;
+  return w;
+}
+
+Waveform Waveform::sine(double systolic, double diastolic, double period) {
+  if (!(period > 0.0) || !std::isfinite(period)) throw_usage_error(fmt::format("sine waveform: period {} must be positive", period));
+  Waveform w;
+  w.kind = Kind::Sine;
+  w.systolic = systolic;
+  w.diastolic = diastolic;
+  w.period = period;
+  return w;
+}
+
+Waveform Waveform::table(std::vector<double> times, std::vector<double> values, bool periodic) {
+  if (times.size() != values.size() || times.empty())
+    throw_usage_error("table waveform: times and values must be non-empty and of equal length");
+  for (size_t i = 1; i < times.size(); ++i)
+    if (!(times[i] > times[i - 1])) throw_usage_error(fmt::format("table waveform: times must increase (row {})", i));
+  Waveform w;
+  w.kind = Kind::Table;
+  w.times = std::move(times);
+  w.values = std::move(values);
+  w.periodic = periodic && w.times.size() > 1;
+  return w;
+}
+
+double Waveform::operator()(double t) const {
+  switch (kind) {
+    case Kind::Constant: return value;
+    case Kind::Sine:
+      return 0.5 * (systolic - diastolic) * std::sin(2.0 * kPi * t / period) + 0.5 * (systolic + diastolic);
+    case Kind::Table: {
+      if (times.size() == 1) return values[0];
+      const double t0 = times.front(), t1 = times.back();
+      if (periodic) {
+        t = t0 + std::fmod(t - t0, t1 - t0);
+        if (t < t0) t += t1 - t0;
+      } else {
+        if (t <= t0) return values.front();
+        if (t >= t1) return values.back();
+      }
+      const auto it = std::upper_bound(times.begin(), times.end(), t);
+      size_t i = static_cast<size_t>(std::max<std::ptrdiff_t>(1, it - times.begin())) - 1;
+      i = std::min(i, times.size() - 2);
+      const double w = (t - times[i]) / (times[i + 1] - times[i]);
+      return (1.0 - w) * values[i] + w * values[i + 1];
+    }
+  }
+  return 0.0;
+}
+
+double Waveform::mean() const {
+  switch (kind) {
+    case Kind::Constant: return value;
+    case Kind::Sine: return 0.5 * (systolic + diastolic);
+    case Kind::Table: {
+      if (times.size() == 1) return values[0];
+      double s = 0.0;
+      for (size_t i = 1; i < times.size(); ++i) s += 0.5 * (values[i] + values[i - 1]) * (times[i] - times[i - 1]);
+      return s / (times.back() - times.front());
+    }
+  }
+  return 0.0;
+}
+
+double Waveform::cycle() const {
+  switch (kind) {
+    case Kind::Constant: return 0.0;
+    case Kind::Sine: return period;
+    case Kind::Table: return periodic ? times.back() - times.front() : 0.0;
+  }
+  return 0.0;
+}
+
+Waveform read_waveform_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw_input_error(path, "cannot open the waveform table");
+  std::string line;
+  std::vector<double> t, v;
+  int lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line[0] == '#') continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream ss(line);
+    double a = 0, b = 0;
+    if (!(ss >> a >> b)) {
+      if (t.empty() && lineno == 1) continue;  // header
+      throw_input_error(fmt::format("{}:{}", path, lineno), "expected two numbers: time,value");
+    }
+    if (!t.empty() && !(a > t.back()))
+      throw_input_error(fmt::format("{}:{}", path, lineno), "times must increase");
+    t.push_back(a);
+    v.push_back(b);
+  }
+  if (t.empty()) throw_input_error(path, "the waveform table has no rows");
+  return Waveform::table(std::move(t), std::move(v), true);
+}
+
+std::string_view to_string(Model m) { return m == Model::Rlc ? "rlc" : "poiseuille"; }
+
+std::string_view to_string(SolverKind s) {
+  switch (s) {
+    case SolverKind::Superposition: return "superposition";
+    case SolverKind::DenseInverse: return "dense_inverse";
+    case SolverKind::Sparse: return "sparse";
+    case SolverKind::Petsc: return "petsc";
+  }
+  return "?";
+}
+
+double FlowSpec::cycle() const {
+  for (const auto& in : inlets)
+    if (const double c = in.waveform.cycle(); c > 0.0) return c;
+  return 0.0;
+}
+
+FlowSpec default_spec(const Network& net, const Waveform& inlet_pressure) {
+  FlowSpec s;
+  InletBC in;
+  in.node = net.widest_end();
+  in.waveform = inlet_pressure;
+  s.inlets.push_back(in);
+  resolve_nodes(s, net);
+  return s;
+}
+
+void resolve_nodes(FlowSpec& spec, const Network& net) {
+  if (spec.inlets.empty()) throw_usage_error("flow: no inlet boundary condition");
+  for (auto& in : spec.inlets)
+    if (in.node < 0) in.node = net.widest_end();
+  // A single outlet with node -1 is a template for every end that is not an inlet.
+  OutletBC tmpl;
+  bool expand = spec.outlets.empty();
+  if (spec.outlets.size() == 1 && spec.outlets[0].node < 0) {
+    tmpl = spec.outlets[0];
+    expand = true;
+  }
+  if (expand) {
+    spec.outlets.clear();
+    for (int e : net.ends()) {
+      const bool is_inlet = std::any_of(spec.inlets.begin(), spec.inlets.end(), [&](const InletBC& i) { return i.node == e; });
+      if (is_inlet) continue;
+      OutletBC o = tmpl;
+      o.node = e;
+      spec.outlets.push_back(o);
+    }
+  }
+  for (const auto& o : spec.outlets)
+    if (o.node < 0) throw_usage_error("flow: an outlet without node among several outlets");
+}
+
+namespace {
+
+using config::Config;
+
+bool is_section(const Config& cfg, const std::string& path) {
+  const auto& vals = cfg.values();
+  const auto it = vals.find(path);
+  if (it != vals.end()) return it->second.type == config::Type::Section;
+  return cfg.has_section(path);
+}
+
+Waveform waveform_from(const Config& cfg, const std::string& path) {
+  if (!is_section(cfg, path)) return Waveform::constant(cfg.number(path));
+  const std::string kind = cfg.string_or(path + ".waveform", cfg.has(path + ".file") ? "table" : "sine");
+  if (kind == "constant") {
+    if (!cfg.has(path + ".value")) throw_input_error(cfg.where(path), "waveform: constant needs 'value'");
+    return Waveform::constant(cfg.number(path + ".value"));
+  }
+  if (kind == "sine") {
+    const double sys = cfg.number_or(path + ".systolic", 120.0 * units::mmHg);
+    const double dia = cfg.number_or(path + ".diastolic", 80.0 * units::mmHg);
+    const double period = cfg.number_or(path + ".period", 0.8);
+    if (!(period > 0.0)) throw_input_error(cfg.where(path + ".period"), "period must be positive");
+    return Waveform::sine(sys, dia, period);
+  }
+  if (kind == "table") {
+    if (!cfg.has(path + ".file")) throw_input_error(cfg.where(path), "waveform: table needs 'file' (CSV time,value)");
+    return read_waveform_csv(cfg.resolve_path(cfg.string(path + ".file")));
+  }
+  throw_input_error(cfg.where(path + ".waveform"), fmt::format("unknown waveform '{}' (constant, sine, table)", kind));
+}
+
+int node_from(const Config& cfg, const std::string& path, const Network& net) {
+  const std::string text = cfg.string(path);
+  try {
+    size_t used = 0;
+    const int n = std::stoi(text, &used);
+    if (used == text.size()) {
+      if (n < 0 || n >= net.num_nodes())
+        throw_input_error(cfg.where(path), fmt::format("node {} is not in the network (0..{})", n, net.num_nodes() - 1));
+      return n;
+    }
+  } catch (const std::logic_error&) {
+  }
+  for (const auto& b : net.branches()) {
+    if (b.name != text) continue;
+    const int first = b.nodes.front(), last = b.nodes.back();
+    if (net.degree(first) == 1) return first;
+    if (net.degree(last) == 1) return last;
+    return first;
+  }
+  throw_input_error(cfg.where(path), fmt::format("'{}' is neither a node index nor a branch name", text));
+}
+
+}  // namespace
+
+FlowSpec from_config(const config::Config& cfg, const Network& net) {
+  FlowSpec s;
+  if (cfg.has("flow.model")) {
+    const auto& m = cfg.string("flow.model");
+    if (m == "poiseuille") s.model = Model::Poiseuille;
+    else if (m == "rlc") s.model = Model::Rlc;
+    else throw_input_error(cfg.where("flow.model"), fmt::format("'{}' is not one of: poiseuille, rlc", m));
+  }
+  if (cfg.has("flow.solver")) {
+    const auto& m = cfg.string("flow.solver");
+    if (m == "superposition") s.solver = SolverKind::Superposition;
+    else if (m == "dense_inverse") s.solver = SolverKind::DenseInverse;
+    else if (m == "sparse") s.solver = SolverKind::Sparse;
+    else if (m == "petsc") s.solver = SolverKind::Petsc;
+    else throw_input_error(cfg.where("flow.solver"), fmt::format("'{}' is not one of: superposition, dense_inverse, sparse, petsc", m));
+  }
+  if (cfg.has("flow.inertance")) s.inertance = cfg.string("flow.inertance") == "womersley" ? Inertance::Womersley : Inertance::Poiseuille;
+  if (cfg.has("flow.profile")) s.profile = cfg.string("flow.profile") == "womersley" ? Profile::Womersley : Profile::Laminar;
+  s.viscosity = cfg.number_or("flow.viscosity", s.viscosity);
+  s.density = cfg.number_or("flow.density", s.density);
+  if (!(s.viscosity > 0.0)) throw_input_error(cfg.where("flow.viscosity"), "viscosity must be positive");
+  if (!(s.density > 0.0)) throw_input_error(cfg.where("flow.density"), "density must be positive");
+  s.wall_youngs_modulus = cfg.number_or("flow.wall.youngs_modulus", s.wall_youngs_modulus);
+  s.wall_thickness_ratio = cfg.number_or("flow.wall.thickness_ratio", s.wall_thickness_ratio);
+  if (cfg.has("solve.dt")) s.dt = cfg.number("solve.dt");
+
+  InletBC in;
+  in.node = cfg.has("flow.inlet.node") ? node_from(cfg, "flow.inlet.node", net) : net.widest_end();
+  const bool has_p = cfg.has("flow.inlet.pressure") || cfg.has_section("flow.inlet.pressure");
+  const bool has_q = cfg.has("flow.inlet.flow") || cfg.has_section("flow.inlet.flow");
+  if (has_p && has_q) throw_input_error(cfg.where("flow.inlet.flow"), "give either flow.inlet.pressure or flow.inlet.flow, not both");
+  if (has_q) {
+    in.type = InletBC::Type::Flow;
+    in.waveform = waveform_from(cfg, "flow.inlet.flow");
+  } else if (has_p) {
+    in.waveform = waveform_from(cfg, "flow.inlet.pressure");
+  } else {
+    in.waveform = Waveform::sine(120.0 * units::mmHg, 80.0 * units::mmHg, 0.8);
+  }
+  s.inlets.push_back(in);
+
+  OutletBC o;  // template for every other end
+  const bool has_r = cfg.has("flow.outlets.resistance");
+  const bool has_rcr = cfg.has_section("flow.outlets.rcr");
+  if (has_r && has_rcr) throw_input_error(cfg.where("flow.outlets.resistance"), "give either flow.outlets.resistance or flow.outlets.rcr, not both");
+  if (has_rcr) {
+    o.type = OutletBC::Type::Rcr;
+    o.rp = cfg.number_or("flow.outlets.rcr.Rp", 0.0);
+    o.c = cfg.number_or("flow.outlets.rcr.C", 0.0);
+    o.rd = cfg.number_or("flow.outlets.rcr.Rd", 0.0);
+    o.distal_pressure = cfg.number_or("flow.outlets.rcr.Pd", 0.0);
+    if (!(o.rp + o.rd > 0.0)) throw_input_error(cfg.where("flow.outlets.rcr"), "Rp + Rd must be positive");
+  } else if (has_r) {
+    o.type = OutletBC::Type::Resistance;
+    o.resistance = cfg.number("flow.outlets.resistance");
+    o.distal_pressure = cfg.number_or("flow.outlets.distal_pressure", 0.0);
+    if (!(o.resistance > 0.0)) throw_input_error(cfg.where("flow.outlets.resistance"), "resistance must be positive");
+  } else {
+    o.type = OutletBC::Type::Pressure;
+    o.pressure = cfg.number_or("flow.outlets.pressure", 0.0);
+  }
+  s.outlets.push_back(o);
+  resolve_nodes(s, net);
+
+  // Murray scaling: the given resistance / RCR is the total of all outlets in parallel,
+  // split so that each outlet's flow is proportional to r³.
+  if (cfg.string_or("flow.outlets.scaling", "none") == "murray" && o.type != OutletBC::Type::Pressure) {
+    auto end_radius = [&](int node) {
+      const auto [b, e] = net.node_segments(node);
+      return b != e ? net.segment(*b).radius : 0.0;
+    };
+    double sum = 0.0;
+    for (const auto& x : s.outlets) sum += std::pow(end_radius(x.node), 3);
+    for (auto& x : s.outlets) {
+      const double f = sum / std::pow(end_radius(x.node), 3);
+      x.resistance *= f;
+      x.rp *= f;
+      x.rd *= f;
+      x.c /= f;
+    }
+  }
+  return s;
+}
+
+}  // namespace flowire::flow
