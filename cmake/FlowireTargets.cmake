@@ -2,7 +2,7 @@
 add_library(flowire_warnings INTERFACE)
 target_compile_options(flowire_warnings INTERFACE
   $<$<CXX_COMPILER_ID:GNU,Clang>:-Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
-    -Wold-style-cast -Wcast-align -Woverloaded-virtual -Wnull-dereference -Wimplicit-fallthrough>
+    -Wold-style-cast -Wcast-align -Woverloaded-virtual -Wimplicit-fallthrough>
   $<$<BOOL:${FLOWIRE_WARNINGS_AS_ERRORS}>:-Werror>)
 
 set(FLOWIRE_EXPORTED_TARGETS "" CACHE INTERNAL "")
