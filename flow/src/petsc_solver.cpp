@@ -22,18 +22,19 @@ void check(PetscErrorCode code, const char* what) {
 }
 #define FLOWIRE_PETSC(call) check((call), #call)
 
+bool g_we_initialized = false;
+
 void ensure_petsc() {
   PetscBool up = PETSC_FALSE;
   PetscInitialized(&up);
   if (up) return;
+  int mpi_up = 0, mpi_done = 0;
+  MPI_Initialized(&mpi_up);
+  MPI_Finalized(&mpi_done);
+  if (mpi_done) throw_usage_error("flow.solver: petsc used after MPI_Finalize");
   FLOWIRE_PETSC(PetscInitializeNoArguments());
-  std::atexit([] {
-    PetscBool still = PETSC_FALSE;
-    PetscInitialized(&still);
-    PetscBool done = PETSC_FALSE;
-    PetscFinalized(&done);
-    if (still && !done) PetscFinalize();
-  });
+  if (!g_we_initialized) std::atexit([] { finalize_petsc(); });
+  g_we_initialized = true;
 }
 
 class PetscSolver final : public ResponseSolver {
@@ -159,3 +160,17 @@ std::unique_ptr<FlowSolver> make_petsc_solver(const Network& net, FlowSpec spec)
 }
 
 }  // namespace flowire::flow::detail
+
+namespace flowire::flow {
+
+void finalize_petsc() {
+  if (!detail::g_we_initialized) return;
+  PetscBool up = PETSC_FALSE, done = PETSC_FALSE;
+  PetscInitialized(&up);
+  PetscFinalized(&done);
+  int mpi_done = 0;
+  MPI_Finalized(&mpi_done);
+  if (up && !done && !mpi_done) PetscFinalize();
+}
+
+}  // namespace flowire::flow

@@ -10,3 +10,7 @@ std::unique_ptr<FlowSolver> make_petsc_solver(const Network&, FlowSpec) {
 }
 
 }  // namespace flowire::flow::detail
+
+namespace flowire::flow {
+void finalize_petsc() {}
+}  // namespace flowire::flow

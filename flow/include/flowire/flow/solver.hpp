@@ -81,7 +81,11 @@ class FlowSolver {
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p) const;
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p, double t) const;
 
-  /// @brief Poiseuille resistance of each segment (Pa·s/m³).
+  /// @brief Finalize PETSc if the petsc solver initialized it (it also runs at exit). A
+/// program that calls MPI_Init itself calls this before MPI_Finalize. No-op without PETSc.
+void finalize_petsc();
+
+/// @brief Poiseuille resistance of each segment (Pa·s/m³).
   [[nodiscard]] double resistance(int segment) const { return resistance_[static_cast<size_t>(segment)]; }
   [[nodiscard]] const Network& network() const { return net_; }
   [[nodiscard]] const FlowSpec& spec() const { return spec_; }
@@ -115,6 +119,10 @@ class FlowSolver {
 /// @throws flowire::Error: input (bad BC, dense_inverse too large, petsc not built),
 /// numerical (a piece of the network without a pressure reference, singular matrix).
 std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec);
+
+/// @brief Finalize PETSc if the petsc solver initialized it (it also runs at exit). A
+/// program that calls MPI_Init itself calls this before MPI_Finalize. No-op without PETSc.
+void finalize_petsc();
 
 /// @brief Poiseuille resistance \f$ R = 8\eta l/(\pi r^4) \f$.
 [[nodiscard]] inline double poiseuille_resistance(double viscosity, double length, double radius) {
