@@ -42,6 +42,8 @@ std::string read_all(const std::string& path) {
 }
 
 Format sniff(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw_input_error(path, "is a directory, not a network file");
   const auto ext = lower(std::filesystem::path(path).extension().string());
   if (ext == ".vtp" || ext == ".vtk") return Format::Vtk;
   if (ext == ".yaml" || ext == ".yml") return Format::Yaml;

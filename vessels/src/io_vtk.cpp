@@ -22,6 +22,7 @@
 #include <vtkDataArray.h>
 #include <vtkFieldData.h>
 #include <vtkIdList.h>
+#include <vtkLogger.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkOutputWindow.h>
@@ -88,20 +89,27 @@ class CaptureWindow : public vtkOutputWindow {
 };
 vtkStandardNewMacro(CaptureWindow)
 
-/// Installs a CaptureWindow for its lifetime.
+/// Installs a CaptureWindow and silences VTK's logger (which writes to stderr itself) for its
+/// lifetime.
 class CaptureGuard {
  public:
-  CaptureGuard() : previous_(vtkOutputWindow::GetInstance()) {
+  CaptureGuard()
+      : previous_(vtkOutputWindow::GetInstance()), verbosity_(vtkLogger::GetCurrentVerbosityCutoff()) {
     window_ = vtkSmartPointer<CaptureWindow>::New();
     vtkOutputWindow::SetInstance(window_);
+    vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
   }
-  ~CaptureGuard() { vtkOutputWindow::SetInstance(previous_); }
+  ~CaptureGuard() {
+    vtkLogger::SetStderrVerbosity(verbosity_);
+    vtkOutputWindow::SetInstance(previous_);
+  }
   CaptureGuard(const CaptureGuard&) = delete;
   CaptureGuard& operator=(const CaptureGuard&) = delete;
   CaptureWindow& window() { return *window_; }
 
  private:
   vtkSmartPointer<vtkOutputWindow> previous_;
+  vtkLogger::Verbosity verbosity_;
   vtkSmartPointer<CaptureWindow> window_;
 };
 
