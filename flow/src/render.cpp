@@ -1,0 +1,187 @@
+// Offscreen VTK rendering of the network as tubes coloured by a node scalar.
+#include <fmt/format.h>
+
+#include <cstdlib>
+
+#include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
+#include "flowire/flow/output.hpp"
+
+#ifdef FLOWIRE_FLOW_HAVE_VTK
+#include <vtkActor.h>
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkLookupTable.h>
+#include <vtkNew.h>
+#include <vtkPNGWriter.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkScalarBarActor.h>
+#include <vtkTextActor.h>
+#include <vtkTextProperty.h>
+#include <vtkTubeFilter.h>
+#include <vtkWindowToImageFilter.h>
+#endif
+
+namespace flowire::flow {
+
+#ifdef FLOWIRE_FLOW_HAVE_VTK
+namespace {
+
+vtkNew<vtkActor> tube_actor(vtkPolyData* poly, double radius_scale, int sides) {
+  vtkNew<vtkTubeFilter> tube;
+  tube->SetInputData(poly);
+  tube->SetNumberOfSides(sides);
+  tube->SetRadius(radius_scale);
+  tube->CappingOn();
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputConnection(tube->GetOutputPort());
+  vtkNew<vtkActor> actor;
+  actor->SetMapper(mapper);
+  return actor;
+}
+
+}  // namespace
+#endif
+
+void render_network_png(const Network& net, std::span<const double> node_values, const std::filesystem::path& path,
+                        const RenderOptions& opt) {
+#ifndef FLOWIRE_FLOW_HAVE_VTK
+  (void)net, (void)node_values, (void)opt;
+  throw_input_error(path.string(), "PNG rendering needs VTK (this build has FLOWIRE_WITH_VTK=OFF)");
+#else
+  if (node_values.size() != static_cast<size_t>(net.num_nodes()))
+    throw_usage_error("render_network_png: node_values must have one value per node");
+  const char* display = std::getenv("DISPLAY");
+  if (!display || !*display)
+    throw_input_error(path.string(), "rendering a PNG needs an X display; run under xvfb-run -a -s \"-screen 0 1024x768x24\"");
+
+  // Vessels: one polydata, tubes of radius varying with the node radius.
+  vtkNew<vtkPoints> pts;
+  pts->SetNumberOfPoints(net.num_nodes());
+  for (int i = 0; i < net.num_nodes(); ++i) pts->SetPoint(i, net.node(i).data());
+  vtkNew<vtkCellArray> lines;
+  for (const auto& s : net.segments()) {
+    const vtkIdType ids[2] = {s.node_from, s.node_to};
+    lines->InsertNextCell(2, ids);
+  }
+  vtkNew<vtkDoubleArray> scalars;
+  scalars->SetName("value");
+  scalars->SetNumberOfTuples(net.num_nodes());
+  double lo = 1e300, hi = -1e300;
+  for (int i = 0; i < net.num_nodes(); ++i) {
+    const double v = node_values[static_cast<size_t>(i)] * opt.scalar_scale;
+    scalars->SetValue(i, v);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  if (opt.range_max > opt.range_min) lo = opt.range_min, hi = opt.range_max;
+  if (!(hi > lo)) hi = lo + 1.0;
+  vtkNew<vtkDoubleArray> radius;
+  radius->SetName("radius");
+  radius->SetNumberOfTuples(net.num_nodes());
+  for (int i = 0; i < net.num_nodes(); ++i) {
+    double r = 0.0;
+    int n = 0;
+    const auto [b, e] = net.node_segments(i);
+    for (const int* p = b; p != e; ++p, ++n) r += net.segment(*p).radius;
+    radius->SetValue(i, n ? r / n : 1e-3);
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(pts);
+  poly->SetLines(lines);
+  poly->GetPointData()->AddArray(radius);
+  poly->GetPointData()->AddArray(scalars);
+  poly->GetPointData()->SetActiveScalars("radius");
+
+  vtkNew<vtkTubeFilter> tube;
+  tube->SetInputData(poly);
+  tube->SetNumberOfSides(16);
+  tube->SetVaryRadiusToVaryRadiusByAbsoluteScalar();
+  tube->CappingOn();
+  vtkNew<vtkLookupTable> lut;
+  lut->SetHueRange(0.667, 0.0);  // blue (low) to red (high)
+  lut->SetTableRange(lo, hi);
+  lut->Build();
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputConnection(tube->GetOutputPort());
+  mapper->SetScalarModeToUsePointFieldData();
+  mapper->SelectColorArray("value");
+  mapper->SetLookupTable(lut);
+  mapper->SetScalarRange(lo, hi);
+  mapper->ScalarVisibilityOn();
+  vtkNew<vtkActor> vessels_actor;
+  vessels_actor->SetMapper(mapper);
+
+  vtkNew<vtkRenderer> ren;
+  ren->SetBackground(1.0, 1.0, 1.0);
+  ren->AddActor(vessels_actor);
+
+  std::vector<vtkSmartPointer<vtkPolyData>> keep;
+  for (const auto& ov : opt.overlays) {
+    if (ov.points.size() < 2) continue;
+    auto p = vtkSmartPointer<vtkPolyData>::New();
+    vtkNew<vtkPoints> op;
+    vtkNew<vtkCellArray> ol;
+    ol->InsertNextCell(static_cast<vtkIdType>(ov.points.size()));
+    for (size_t i = 0; i < ov.points.size(); ++i) ol->InsertCellPoint(op->InsertNextPoint(ov.points[i].data()));
+    p->SetPoints(op);
+    p->SetLines(ol);
+    keep.push_back(p);
+    auto actor = tube_actor(p, ov.radius, 12);
+    actor->GetProperty()->SetColor(ov.color[0], ov.color[1], ov.color[2]);
+    ren->AddActor(actor);
+  }
+
+  vtkNew<vtkScalarBarActor> bar;
+  bar->SetLookupTable(lut);
+  bar->SetTitle(opt.scalar_name.c_str());
+  bar->SetNumberOfLabels(5);
+  bar->GetTitleTextProperty()->SetColor(0, 0, 0);
+  bar->GetLabelTextProperty()->SetColor(0, 0, 0);
+  bar->SetWidth(0.1);
+  bar->SetHeight(0.6);
+  bar->SetPosition(0.88, 0.2);
+  ren->AddActor2D(bar);
+  vtkNew<vtkTextActor> title;
+  if (!opt.title.empty()) {
+    title->SetInput(opt.title.c_str());
+    title->GetTextProperty()->SetColor(0, 0, 0);
+    title->GetTextProperty()->SetFontSize(20);
+    title->SetDisplayPosition(10, opt.height - 30);
+    ren->AddActor2D(title);
+  }
+
+  auto* cam = ren->GetActiveCamera();
+  cam->SetFocalPoint(0, 0, 0);
+  cam->SetPosition(-opt.view_direction.x(), -opt.view_direction.y(), -opt.view_direction.z());
+  cam->SetViewUp(opt.view_up.x(), opt.view_up.y(), opt.view_up.z());
+  ren->ResetCamera();
+
+  vtkNew<vtkRenderWindow> win;
+  win->SetOffScreenRendering(1);
+  win->SetSize(opt.width, opt.height);
+  win->AddRenderer(ren);
+  win->Render();
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(win);
+  grab->ReadFrontBufferOff();
+  grab->Update();
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    vtkNew<vtkPNGWriter> png;
+    png->SetFileName(tmp.string().c_str());
+    png->SetInputConnection(grab->GetOutputPort());
+    png->Write();
+    if (png->GetErrorCode() != 0 || !std::filesystem::exists(tmp) || std::filesystem::file_size(tmp) == 0)
+      throw_input_error(path.string(), "the PNG could not be written");
+  });
+#endif
+}
+
+}  // namespace flowire::flow
