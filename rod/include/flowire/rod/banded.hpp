@@ -1,0 +1,99 @@
+#pragma once
+/// @file banded.hpp
+/// @brief Symmetric banded matrices and their LDLᵀ factorization, O(n·b²).
+///
+/// The rod's unknowns are interleaved per vertex (x_0, θ_0, x_1, θ_1, …, x_n), so every
+/// stencil couples unknowns at most 10 apart and the Hessian is a band of half-width 10.
+/// Storage is the lower band by rows: row i holds columns i−b … i contiguously, so the
+/// factorization and both triangular solves run over contiguous memory. All storage is
+/// reserved up front (`reserve`); `resize` within that capacity does not allocate.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace flowire::rod {
+
+/// @brief Symmetric matrix with half-bandwidth b (A(i,j) = 0 for |i − j| > b).
+class BandedMatrix {
+ public:
+  BandedMatrix() = default;
+  BandedMatrix(int n, int bandwidth) { reserve(n, bandwidth); resize(n); }
+  /// @brief Allocate room for up to @p max_n rows with half-bandwidth @p bandwidth.
+  void reserve(int max_n, int bandwidth);
+  /// @brief Set the size (≤ reserved) and zero the entries.
+  void resize(int n);
+  void set_zero();
+  [[nodiscard]] int size() const { return n_; }
+  [[nodiscard]] int bandwidth() const { return b_; }
+  /// @brief Entry (i, j) of the lower band, i ≥ j, i − j ≤ b (asserted).
+  [[nodiscard]] double& lower(int i, int j) { return data_[static_cast<size_t>(i) * (b_ + 1) + (j - i + b_)]; }
+  [[nodiscard]] double lower(int i, int j) const { return data_[static_cast<size_t>(i) * (b_ + 1) + (j - i + b_)]; }
+  /// @brief A(i, j) for any i, j (0 outside the band).
+  [[nodiscard]] double operator()(int i, int j) const;
+  /// @brief Add a dense symmetric block whose rows/columns map to global indices @p idx.
+  template <typename Derived>
+  void add_block(const Eigen::MatrixBase<Derived>& block, const int* idx, int count) {
+    for (int a = 0; a < count; ++a)
+      for (int c = 0; c < count; ++c)
+        if (idx[a] >= idx[c]) lower(idx[a], idx[c]) += block(a, c);
+  }
+  /// @brief Add a dense symmetric block on the contiguous index range [first, first + size).
+  template <typename Derived>
+  void add_block(const Eigen::MatrixBase<Derived>& block, int first) {
+    const int m = static_cast<int>(block.rows());
+    for (int a = 0; a < m; ++a)
+      for (int c = 0; c <= a; ++c) lower(first + a, first + c) += block(a, c);
+  }
+  /// @brief Replace row and column @p i by those of the identity (a prescribed unknown).
+  void set_identity_row(int i);
+  /// @brief y = A x.
+  void multiply(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const;
+  /// @brief Largest |A(i,i)|.
+  [[nodiscard]] double max_diagonal() const;
+  /// @brief Add s to every diagonal entry.
+  void add_to_diagonal(double s);
+  /// @brief The same matrix in compressed sparse form (lower triangle), for the general path.
+  void to_sparse_lower(Eigen::SparseMatrix<double>& out) const;
+  [[nodiscard]] const std::vector<double>& data() const { return data_; }
+  [[nodiscard]] std::vector<double>& data() { return data_; }
+
+ private:
+  int n_ = 0;
+  int b_ = 0;
+  std::vector<double> data_;
+};
+
+/// @brief LDLᵀ factorization of a BandedMatrix (no pivoting; fails on a zero pivot).
+///
+/// Without pivoting the inertia (number of negative pivots) equals the number of negative
+/// eigenvalues (Sylvester), which the simulator uses to detect indefinite Hessians and
+/// the tests use to find buckling loads.
+class BandedLDLT {
+ public:
+  void reserve(int max_n, int bandwidth);
+  /// @brief Factorize @p a. Returns false if a pivot is zero, tiny (|d| ≤ 1e-14·max|a_ii|)
+  /// or not finite.
+  ///
+  /// With @p min_pivot > 0 the factorization is *modified* instead: every pivot below
+  /// min_pivot is replaced by max(|d|, min_pivot) (counted in modified_pivots()), which
+  /// turns an indefinite Newton matrix into a nearby positive definite one while leaving
+  /// the well-conditioned directions untouched; only non-finite values then fail.
+  bool factorize(const BandedMatrix& a, double min_pivot = 0.0);
+  /// @brief Solve A x = rhs in place (after a successful factorize).
+  void solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const;
+  /// @brief Number of negative pivots of the last factorization.
+  [[nodiscard]] int negative_pivots() const { return negative_; }
+  /// @brief Number of pivots replaced by a modified factorization.
+  [[nodiscard]] int modified_pivots() const { return modified_; }
+  /// @brief Smallest pivot of the last factorization.
+  [[nodiscard]] double min_pivot() const { return min_pivot_; }
+
+ private:
+  BandedMatrix l_;  // unit lower factor (diagonal slot holds D)
+  std::vector<double> work_;
+  int negative_ = 0;
+  int modified_ = 0;
+  double min_pivot_ = 0.0;
+};
+
+}  // namespace flowire::rod

@@ -1,0 +1,94 @@
+#pragma once
+/// @file external.hpp
+/// @brief How other modules (contact, blood drag, haptics) push on the rod.
+///
+/// An `ExternalForce` is asked, at every Newton iterate of an implicit step, for per-vertex
+/// forces f_i(x, v) and their Jacobians ∂f_i/∂x_i and ∂f_i/∂v_i (3×3 blocks on the vertex
+/// diagonal). The rod adds −∂f/∂x − ∂f/∂v / Δt to its system matrix, so stiff contact
+/// penalties and drag stay implicit. The blocks are symmetrized; forces whose Jacobian is
+/// not negative semi-definite (not dissipative, not a convex penalty) may slow Newton.
+///
+/// rod/ knows nothing about vessels or blood: implementations live in coupling/.
+///
+/// Example — a floor z ≥ 0 as a stiff penalty:
+/// @code
+/// class Floor : public flowire::rod::ExternalForce {
+///   void evaluate(const RodView& rod, ForceAccumulator& out) override {
+///     for (int i = 0; i < rod.vertex_count(); ++i) {
+///       const double d = rod.position(i).z();
+///       if (d < 0) { out.add_force(i, {0, 0, -k * d}); out.add_position_jacobian(i, -k * e_z e_zᵀ); }
+///     }
+///   }
+/// };
+/// @endcode
+#include <Eigen/Core>
+#include <functional>
+#include <span>
+#include <vector>
+
+namespace flowire::rod {
+
+/// @brief Read-only view of the rod at the configuration being evaluated.
+struct RodView {
+  std::span<const Eigen::Vector3d> positions;   ///< (vertex_count) [m], vertex 0 = distal tip
+  std::span<const Eigen::Vector3d> velocities;  ///< (vertex_count) [m/s] at this iterate
+  std::span<const double> arc_length;           ///< (vertex_count) [m] from the entry, >0 inserted
+  std::span<const double> radius;               ///< (vertex_count − 1) per edge [m]
+  int first_clamped_vertex = 0;  ///< vertices with index ≥ this are held by the clamp
+  double time = 0.0;             ///< [s] end of the step (implicit evaluation time)
+  double dt = 0.0;               ///< [s] step size (0 in a static solve)
+  [[nodiscard]] int vertex_count() const { return static_cast<int>(positions.size()); }
+  [[nodiscard]] const Eigen::Vector3d& position(int i) const { return positions[i]; }
+  [[nodiscard]] const Eigen::Vector3d& velocity(int i) const { return velocities[i]; }
+};
+
+/// @brief Where forces and Jacobians are accumulated (sized by the rod; no allocation).
+class ForceAccumulator {
+ public:
+  void add_force(int vertex, const Eigen::Vector3d& f) { force_[vertex] += f; }
+  /// @brief Add ∂f_i/∂x_i (e.g. −k n nᵀ for a penalty contact of stiffness k).
+  void add_position_jacobian(int vertex, const Eigen::Matrix3d& dfdx) { dfdx_[vertex] += dfdx; }
+  /// @brief Add ∂f_i/∂v_i (e.g. −c·I for viscous drag).
+  void add_velocity_jacobian(int vertex, const Eigen::Matrix3d& dfdv) { dfdv_[vertex] += dfdv; }
+
+  // Used by the simulator.
+  void reserve(int n) { force_.reserve(n); dfdx_.reserve(n); dfdv_.reserve(n); }
+  void reset(int n) {
+    force_.assign(n, Eigen::Vector3d::Zero());
+    dfdx_.assign(n, Eigen::Matrix3d::Zero());
+    dfdv_.assign(n, Eigen::Matrix3d::Zero());
+  }
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& forces() const { return force_; }
+  [[nodiscard]] const std::vector<Eigen::Matrix3d>& position_jacobians() const { return dfdx_; }
+  [[nodiscard]] const std::vector<Eigen::Matrix3d>& velocity_jacobians() const { return dfdv_; }
+
+ private:
+  std::vector<Eigen::Vector3d> force_;
+  std::vector<Eigen::Matrix3d> dfdx_;
+  std::vector<Eigen::Matrix3d> dfdv_;
+};
+
+/// @brief A source of external forces on the rod's vertices.
+class ExternalForce {
+ public:
+  virtual ~ExternalForce() = default;
+  /// @brief Add forces (and Jacobians) at the configuration in @p rod. Called several
+  /// times per step (once per Newton iterate and line-search trial): must not keep state
+  /// that assumes one call per step; use `end_step` for that.
+  virtual void evaluate(const RodView& rod, ForceAccumulator& out) = 0;
+  /// @brief Called once after each accepted step (e.g. to update friction anchors).
+  virtual void end_step(const RodView& /*rod*/) {}
+};
+
+/// @brief Adapter for a plain function.
+class ExternalForceFunction : public ExternalForce {
+ public:
+  using Fn = std::function<void(const RodView&, ForceAccumulator&)>;
+  explicit ExternalForceFunction(Fn fn) : fn_(std::move(fn)) {}
+  void evaluate(const RodView& rod, ForceAccumulator& out) override { fn_(rod, out); }
+
+ private:
+  Fn fn_;
+};
+
+}  // namespace flowire::rod

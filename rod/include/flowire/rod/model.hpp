@@ -1,0 +1,99 @@
+#pragma once
+/// @file model.hpp
+/// @brief What a guidewire is made of: `WireSpec` (the user's description) and `RodModel`
+/// (the constant per-segment data derived from it, built once).
+///
+/// **Material coordinate.** Properties are functions of u, the distance from the distal
+/// tip along the wire (u = 0 at the tip, u = length at the proximal end). The rod is
+/// discretized on a fixed grid u_k = k·h anchored at the tip, so a vertex keeps its
+/// material (stiffness, mass, rest curvature) for its whole life while the wire is fed in
+/// and pulled back; the simulated vertices are the grid points from the tip up to two
+/// points behind the entry (the clamp stub). Beyond the proximal end the shaft material
+/// is continued (the holder is virtual).
+///
+/// **Inextensibility.** Stretching uses the wire's physical axial stiffness EA as a stiff
+/// penalty (no constraint): the strain is N/(EA) for an axial force N. For the stiffest
+/// wires (steel core, 200 GPa, EA ≈ 1.2·10⁵ N at r = 0.445 mm) the drift is below 10⁻⁵ at
+/// newton-level loads; the softest listed (5 GPa, r = 0.2 mm, EA ≈ 630 N) stays below
+/// 0.1% up to 0.6 N of axial load. A penalty keeps the step an unconstrained minimization
+/// with a banded symmetric Hessian (solved in O(n)); the implicit integrator makes its
+/// stiffness harmless for stability. `stretch_stiffness` can raise EA if a test needs a
+/// stricter length.
+///
+/// Tip shapes (the pre-shaped, softer distal part):
+/// - straight: no rest curvature;
+/// - angled: an arc of radius `bend_radius` turning by `angle`, ending `bend_offset` from
+///   the tip (default 2 mm);
+/// - j: as angled with default angle 180° and offset 0 (the arc reaches the tip).
+#include <Eigen/Core>
+#include <vector>
+
+namespace flowire::rod {
+
+enum class TipShape { Straight, Angled, J };
+
+/// @brief The distal part of the wire: softer, optionally thinner, optionally pre-shaped.
+struct TipSpec {
+  double length = 0.03;            ///< [m] softer part length (0: no tip)
+  double youngs_modulus = 0.0;     ///< [Pa] 0: same as the shaft
+  double radius = 0.0;             ///< [m] 0: same as the shaft
+  double transition_length = 0.0;  ///< [m] linear blend of E and r across the tip/shaft joint
+  TipShape shape = TipShape::Straight;
+  double angle = -1.0;             ///< [rad] bend angle; < 0: default (45° angled, 180° j)
+  double bend_radius = 0.005;      ///< [m] radius of the pre-shaped arc
+  double bend_offset = -1.0;       ///< [m] distance from the tip to the arc; < 0: default
+};
+
+/// @brief A guidewire and where it enters (the clamp/introducer).
+struct WireSpec {
+  double length = 1.7;              ///< [m] total wire length
+  double radius = 4.45e-4;          ///< [m] shaft radius (0.035")
+  double youngs_modulus = 67e9;     ///< [Pa] flexural modulus of the shaft
+  double shear_modulus = 0.0;       ///< [Pa] 0: E / (2(1 + ν))
+  double poisson_ratio = 0.3;
+  double density = 6450.0;          ///< [kg/m³]
+  int segments = 0;                 ///< > 0: segment length = length / segments
+  double segment_length = 1e-3;     ///< [m] used when segments == 0
+  TipSpec tip;
+  Eigen::Vector3d base_position = Eigen::Vector3d::Zero();  ///< entry point [m]
+  Eigen::Vector3d base_direction = Eigen::Vector3d::UnitX(); ///< insertion direction
+  /// Direction ⊥ base_direction fixing the material frame at zero rotation (the plane of
+  /// a pre-shaped tip); zero: any perpendicular.
+  Eigen::Vector3d base_normal = Eigen::Vector3d::Zero();
+  double inserted_length = -1.0;    ///< [m] initially inserted; < 0: the whole length
+  double damping = 0.0;             ///< [N s/m²] viscous damping per unit length
+  // Overrides (0: derived from E, r, G, ρ) for benchmark cases given in stiffnesses.
+  double bending_stiffness = 0.0;   ///< EI [N m²]
+  double twist_stiffness = 0.0;     ///< GJ [N m²]
+  double stretch_stiffness = 0.0;   ///< EA [N]
+  double mass_per_length = 0.0;     ///< ρA [kg/m]
+};
+
+/// @brief Constant per-grid data (grid index k from the distal tip; edge j joins grid
+/// points j and j+1). Sizes are the grid capacity: `grid_vertices` and `grid_vertices − 1`.
+struct RodModel {
+  double h = 1e-3;        ///< segment (rest) length [m]
+  double length = 0.0;    ///< total wire length [m]
+  int grid_vertices = 0;  ///< capacity: grid points that may ever be simulated
+  Eigen::Vector3d base_position, base_direction, base_normal;
+  double damping = 0.0;
+
+  // per edge j
+  std::vector<double> stretch_stiffness;  ///< EA [N]
+  std::vector<double> rho_a;              ///< mass per length [kg/m]
+  std::vector<double> twist_inertia;      ///< ρ J h: rotational inertia of the edge [kg m²]
+  std::vector<double> edge_radius;        ///< [m]
+  // per grid point k (bending/twisting quantities live on interior vertices)
+  std::vector<double> mass;               ///< lumped mass [kg] (a full Voronoi cell)
+  std::vector<double> bend_stiffness;     ///< EI [N m²]
+  std::vector<double> twist_stiffness;    ///< GJ [N m²]
+  std::vector<double> rest_kappa1;        ///< integrated rest curvature (material frame)
+  std::vector<double> rest_kappa2;
+
+  /// @brief Build from a spec. @throws flowire::Error (usage) on invalid values.
+  static RodModel from_spec(const WireSpec& spec);
+  /// @brief Material coordinate (distance from the tip) of grid point k.
+  [[nodiscard]] double u(int k) const { return h * k; }
+};
+
+}  // namespace flowire::rod

@@ -1,0 +1,248 @@
+#pragma once
+/// @file simulator.hpp
+/// @brief The guidewire simulator: a discrete elastic rod stepped implicitly in O(n).
+///
+/// **Unknowns.** Vertex positions and one twist angle per edge, interleaved
+/// (x_0, θ_0, x_1, θ_1, …, x_n): 4n+3 unknowns, Hessian banded with half-width 10.
+/// Vertex 0 is the distal tip; the last two vertices are behind the entry point and held
+/// by the clamp (their positions and the angle of the edge between them are prescribed).
+///
+/// **Governing equations.** With M the lumped mass (and edge rotational inertia),
+/// E the elastic energy (energies.hpp), f the loads and external forces:
+/// - backward Euler: \f$ M (q_{n+1} - q_n - h v_n)/h^2 + \nabla E(q_{n+1}) = f(q_{n+1}, v_{n+1}) \f$,
+///   \f$ v_{n+1} = (q_{n+1}-q_n)/h \f$ — stable at any step, damps high frequencies;
+/// - implicit midpoint: a backward-Euler solve of h/2 to the midpoint z, then
+///   \f$ q_{n+1} = 2z - q_n \f$, \f$ v_{n+1} = 2(z-q_n)/(h/2) - v_n \f$ — second order,
+///   no numerical damping (for oscillation studies);
+/// - static: \f$ \nabla E(q) = f(q) \f$ (equilibrium), load steps optional.
+///
+/// Each solve is Newton's method with a backtracking line search on the incremental
+/// potential (external, non-conservative forces enter through the trapezoidal work along
+/// the search ray). Converged when the scaled residual is below
+/// `force_tolerance`·F (F: a force scale from stiffness and loads, plus a round-off floor),
+/// or when a full Newton step is below `step_tolerance`·h. Anything else is reported in the
+/// returned `StepReport` *and* through `flowire::warn` — never silently. Reference frames
+/// are re-transported after every accepted update so gradients and Hessians are exact.
+///
+/// **Feeding.** `set_insertion_speed` moves the entry point along the wire: grid points
+/// that pass the entry are released, new grid points are appended behind it, and points
+/// pulled back behind the entry are snapped onto the insertion line and clamped. Only the
+/// inserted part plus one clamped edge is simulated.
+///
+/// **Allocation.** Every buffer is sized for the whole wire at construction; `step` and
+/// `solve_static` do not allocate (the tip trace grows by amortized push_back only).
+///
+/// Usage:
+/// @code
+/// flowire::rod::WireSpec spec;  spec.length = 0.5;  spec.youngs_modulus = 5e9;
+/// flowire::rod::RodSimulator sim(spec);
+/// sim.set_gravity({0, 0, -9.81});
+/// sim.set_insertion_speed(0.05);
+/// for (int i = 0; i < 100; ++i) { auto r = sim.step(1e-3); if (!r.converged()) ...; }
+/// @endcode
+#include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "flowire/rod/banded.hpp"
+#include "flowire/rod/energies.hpp"
+#include "flowire/rod/external.hpp"
+#include "flowire/rod/model.hpp"
+
+namespace flowire::rod {
+
+enum class Integrator { ImplicitEuler, ImplicitMidpoint };
+enum class LinearSolver { Banded, SparseLDLT };
+
+enum class SolveStatus {
+  Converged,
+  MaxIterations,     ///< Newton hit max_iterations; the last iterate is kept
+  LineSearchFailed,  ///< no decrease along the Newton direction; the last iterate is kept
+  NonFinite,         ///< NaN/Inf appeared; the state is rolled back to the step start
+  SingularMatrix,    ///< the system could not be factorized even after regularization
+};
+
+[[nodiscard]] const char* to_string(SolveStatus s);
+
+/// @brief Outcome of one step or static solve.
+struct StepReport {
+  SolveStatus status = SolveStatus::Converged;
+  int newton_iterations = 0;
+  int line_search_cuts = 0;     ///< halvings summed over the iterations
+  int regularizations = 0;      ///< diagonal shifts added to indefinite matrices
+  double residual = 0.0;        ///< final scaled residual [N]
+  double tolerance = 0.0;       ///< the force tolerance it was compared with [N]
+  [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
+};
+
+/// @brief Newton and linear-solver settings.
+struct SolverSettings {
+  int max_iterations = 30;          ///< per dynamic step
+  int max_static_iterations = 400;  ///< per static load step
+  double force_tolerance = 1e-8;    ///< relative to the force scale
+  double step_tolerance = 1e-10;    ///< relative to the segment length
+  int max_line_search_cuts = 30;
+  LinearSolver linear_solver = LinearSolver::Banded;
+  Integrator integrator = Integrator::ImplicitEuler;
+  int static_load_steps = 1;        ///< loads ramped in this many increments
+  /// Newton updates of positions follow the rotation of each edge (lengths changed only to
+  /// first order): large rotations are taken in few iterations despite stiff stretching.
+  bool curvilinear_update = true;
+};
+
+/// @brief One sample of the tip trace.
+struct TipSample {
+  double time = 0.0;
+  double inserted_length = 0.0;
+  Eigen::Vector3d tip = Eigen::Vector3d::Zero();
+};
+
+/// @brief Energies of the current state [J].
+struct RodEnergy {
+  double kinetic = 0.0;
+  double stretching = 0.0;
+  double bending_twisting = 0.0;
+  [[nodiscard]] double total() const { return kinetic + stretching + bending_twisting; }
+};
+
+/// @brief The changing state (sizes in comments; vertex 0 = distal tip).
+struct RodState {
+  std::vector<Eigen::Vector3d> x;      ///< (n_vertices) positions [m]
+  std::vector<Eigen::Vector3d> v;      ///< (n_vertices) velocities [m/s]
+  std::vector<double> theta;           ///< (n_edges) material angle w.r.t. reference frame [rad]
+  std::vector<double> omega;           ///< (n_edges) dθ/dt [rad/s]
+  std::vector<EdgeFrame> frame;        ///< (n_edges) reference frames (time-parallel)
+  std::vector<double> ref_twist;       ///< (n_vertices) reference twist (interior vertices)
+  double time = 0.0;                   ///< [s]
+  double inserted_length = 0.0;        ///< [m] wire length in front of the entry point
+  double base_angle = 0.0;             ///< [rad] rotation of the clamp
+  [[nodiscard]] int vertex_count() const { return static_cast<int>(x.size()); }
+  [[nodiscard]] int edge_count() const { return static_cast<int>(x.size()) - 1; }
+};
+
+class RodSimulator {
+ public:
+  explicit RodSimulator(const WireSpec& spec);
+  ~RodSimulator();
+  RodSimulator(const RodSimulator&) = delete;
+  RodSimulator& operator=(const RodSimulator&) = delete;
+
+  // --- stepping -----------------------------------------------------------------------
+  /// @brief Advance by @p dt with the configured integrator.
+  StepReport step(double dt);
+  /// @brief Equilibrium under the current loads at the current base pose (velocities are
+  /// zeroed). Loads are ramped in `settings().static_load_steps` increments.
+  StepReport solve_static();
+
+  // --- controls and loads ---------------------------------------------------------------
+  void set_integrator(Integrator integrator) { settings_.integrator = integrator; }
+  /// @brief Feeding speed [m/s], > 0 pushes in, < 0 pulls back.
+  void set_insertion_speed(double speed) { insertion_speed_ = speed; }
+  /// @brief Clamp rotation speed about the insertion direction [rad/s].
+  void set_rotation_speed(double omega) { rotation_speed_ = omega; }
+  /// @brief Set the clamp rotation angle [rad] now (takes effect at the next step/solve).
+  void set_base_angle(double angle) { target_angle_ = angle; }
+  /// @brief Dead force on the distal tip vertex [N].
+  void set_tip_force(const Eigen::Vector3d& f) { tip_force_ = f; }
+  /// @brief Moment on the distal edge [N m]: the component along the edge twists it, the
+  /// rest acts as a force couple on its two vertices.
+  void set_tip_moment(const Eigen::Vector3d& m) { tip_moment_ = m; }
+  /// @brief Gravitational acceleration [m/s²].
+  void set_gravity(const Eigen::Vector3d& g) { gravity_ = g; }
+  /// @brief Dead force at arc length s from the entry (shared by the two nearest
+  /// vertices). Returns its index.
+  int add_point_force(double s, const Eigen::Vector3d& f);
+  void clear_point_forces() { point_forces_.clear(); }
+  /// @brief Register an external force provider (contact, drag); kept alive by the rod.
+  void add_external(std::shared_ptr<ExternalForce> force);
+  void clear_externals() { externals_.clear(); }
+  SolverSettings& settings() { return settings_; }
+  [[nodiscard]] const SolverSettings& settings() const { return settings_; }
+
+  // --- results ---------------------------------------------------------------------------
+  [[nodiscard]] const RodModel& model() const { return model_; }
+  [[nodiscard]] const RodState& state() const { return state_; }
+  [[nodiscard]] int vertex_count() const { return state_.vertex_count(); }
+  [[nodiscard]] std::span<const Eigen::Vector3d> positions() const { return state_.x; }
+  [[nodiscard]] std::span<const Eigen::Vector3d> velocities() const { return state_.v; }
+  /// @brief (n_vertices) arc length from the entry point [m]: > 0 inserted, ≤ 0 clamped.
+  [[nodiscard]] std::span<const double> arc_lengths() const { return arc_length_; }
+  /// @brief Index of the first clamped vertex (the one at or just behind the entry).
+  [[nodiscard]] int first_clamped_vertex() const { return first_clamped_; }
+  [[nodiscard]] const Eigen::Vector3d& tip_position() const { return state_.x.front(); }
+  [[nodiscard]] double inserted_length() const { return state_.inserted_length; }
+  [[nodiscard]] double time() const { return state_.time; }
+  /// @brief Material frame (m1, m2) of edge j.
+  [[nodiscard]] std::pair<Eigen::Vector3d, Eigen::Vector3d> material_frame(int edge) const;
+  /// @brief Force the clamp exerts on the wire in the last step/solve [N] (a haptic
+  /// device renders its negative).
+  [[nodiscard]] const Eigen::Vector3d& base_force() const { return base_force_; }
+  /// @brief Torque the clamp exerts on the wire about the entry point [N m].
+  [[nodiscard]] const Eigen::Vector3d& base_torque() const { return base_torque_; }
+  [[nodiscard]] const StepReport& last_report() const { return last_report_; }
+  [[nodiscard]] const std::vector<TipSample>& tip_trace() const { return trace_; }
+  [[nodiscard]] RodEnergy energy() const;
+  /// @brief max over free edges of |ℓ/ℓ̄ − 1|.
+  [[nodiscard]] double max_strain() const;
+  /// @brief |Σℓ − Σℓ̄| / Σℓ̄ over all simulated edges.
+  [[nodiscard]] double length_drift() const;
+  /// @brief Number of negative eigenvalues of the static Hessian (free unknowns) at the
+  /// current state — 0 means the equilibrium is stable.
+  [[nodiscard]] int static_hessian_negative_eigenvalues();
+
+ private:
+  struct Work;
+  enum class Mode { Static, Dynamic };
+
+  void build_initial_state(double inserted);
+  void update_vertex_set(double new_inserted);
+  void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x,
+                      std::vector<double>& theta) const;
+  void refresh_arc_lengths();
+  void vertex_params(int k, VertexParams& p) const;
+  StepReport newton(Mode mode, double h, double load_scale);
+  StepReport step_euler(double dt);
+  StepReport step_midpoint(double dt);
+  void gather(Eigen::Ref<Eigen::VectorXd> q) const;
+  void transport_frames_to(const std::vector<Eigen::Vector3d>& x_new,
+                           const std::vector<EdgeFrame>& frame_from,
+                           const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
+                           std::vector<double>& twist_to) const;
+  double assemble(Mode mode, double h, double load_scale, bool need_matrix);
+  void evaluate_loads(Mode mode, double h, double load_scale);
+  void compute_base_reaction();
+  [[nodiscard]] double force_scale(double load_scale) const;
+  [[nodiscard]] int dof_count() const { return 4 * state_.vertex_count() - 1; }
+  [[nodiscard]] bool is_prescribed_dof(int d) const;
+  void report(const StepReport& r, const char* what);
+  void record_trace();
+
+  RodModel model_;
+  RodState state_;
+  SolverSettings settings_;
+  std::unique_ptr<Work> work_;
+  std::vector<double> arc_length_;
+  std::vector<std::shared_ptr<ExternalForce>> externals_;
+  struct PointForce {
+    double s;
+    Eigen::Vector3d f;
+  };
+  std::vector<PointForce> point_forces_;
+  Eigen::Vector3d tip_force_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tip_moment_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d base_force_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d base_torque_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d base_d1_ = Eigen::Vector3d::Zero();  // clamp frame at zero rotation
+  Eigen::Vector3d base_d2_ = Eigen::Vector3d::Zero();
+  double insertion_speed_ = 0.0;
+  double rotation_speed_ = 0.0;
+  double target_angle_ = 0.0;
+  int first_clamped_ = 0;
+  StepReport last_report_;
+  std::vector<TipSample> trace_;
+};
+
+}  // namespace flowire::rod

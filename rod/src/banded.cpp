@@ -1,0 +1,139 @@
+#include "flowire/rod/banded.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+#include "flowire/common/error.hpp"
+
+namespace flowire::rod {
+
+void BandedMatrix::reserve(int max_n, int bandwidth) {
+  if (max_n < 0 || bandwidth < 0) throw_usage_error("BandedMatrix::reserve: negative size");
+  b_ = bandwidth;
+  data_.reserve(static_cast<size_t>(max_n) * (b_ + 1));
+}
+
+void BandedMatrix::resize(int n) {
+  n_ = n;
+  data_.assign(static_cast<size_t>(n) * (b_ + 1), 0.0);  // within capacity: no allocation
+}
+
+void BandedMatrix::set_zero() { std::fill(data_.begin(), data_.end(), 0.0); }
+
+double BandedMatrix::operator()(int i, int j) const {
+  if (i < j) std::swap(i, j);
+  if (i - j > b_) return 0.0;
+  return lower(i, j);
+}
+
+void BandedMatrix::set_identity_row(int i) {
+  for (int j = std::max(0, i - b_); j < i; ++j) lower(i, j) = 0.0;
+  for (int k = i + 1; k <= std::min(n_ - 1, i + b_); ++k) lower(k, i) = 0.0;
+  lower(i, i) = 1.0;
+}
+
+void BandedMatrix::multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
+                            Eigen::Ref<Eigen::VectorXd> y) const {
+  y.setZero();
+  for (int i = 0; i < n_; ++i) {
+    const double* row = &data_[static_cast<size_t>(i) * (b_ + 1)];
+    const int j0 = std::max(0, i - b_);
+    for (int j = j0; j < i; ++j) {
+      const double a = row[j - i + b_];
+      y(i) += a * x(j);
+      y(j) += a * x(i);
+    }
+    y(i) += row[b_] * x(i);
+  }
+}
+
+double BandedMatrix::max_diagonal() const {
+  double m = 0.0;
+  for (int i = 0; i < n_; ++i) m = std::max(m, std::abs(lower(i, i)));
+  return m;
+}
+
+void BandedMatrix::add_to_diagonal(double s) {
+  for (int i = 0; i < n_; ++i) lower(i, i) += s;
+}
+
+void BandedMatrix::to_sparse_lower(Eigen::SparseMatrix<double>& out) const {
+  out.resize(n_, n_);
+  out.reserve(Eigen::VectorXi::Constant(n_, b_ + 1));
+  for (int j = 0; j < n_; ++j)
+    for (int i = j; i <= std::min(n_ - 1, j + b_); ++i) out.insert(i, j) = lower(i, j);
+  out.makeCompressed();
+}
+
+void BandedLDLT::reserve(int max_n, int bandwidth) {
+  l_.reserve(max_n, bandwidth);
+  work_.reserve(static_cast<size_t>(bandwidth) + 1);
+}
+
+bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
+  const int n = a.size();
+  const int b = a.bandwidth();
+  if (l_.bandwidth() != b) l_.reserve(n, b);
+  l_.resize(n);
+  work_.assign(static_cast<size_t>(b) + 1, 0.0);
+  negative_ = 0;
+  modified_ = 0;
+  min_pivot_ = n > 0 ? std::abs(a.lower(0, 0)) : 0.0;
+  const double tiny = 1e-14 * std::max(a.max_diagonal(), 1e-300);
+  const size_t stride = static_cast<size_t>(b) + 1;
+  double* L = l_.data().data();
+  const double* A = a.data().data();
+  for (int i = 0; i < n; ++i) {
+    double* li = L + static_cast<size_t>(i) * stride;
+    const double* ai = A + static_cast<size_t>(i) * stride;
+    const int j0 = std::max(0, i - b);
+    // u_k = L(i,k) d_k for the part of row i already computed.
+    for (int j = j0; j <= i; ++j) {
+      const double* lj = L + static_cast<size_t>(j) * stride;
+      double s = ai[j - i + b];
+      // Σ_{k=j0}^{j-1} L(i,k) d_k L(j,k); row j holds columns j−b..j, k ≥ j0 ≥ j−b.
+      for (int k = j0; k < j; ++k) s -= work_[k - j0] * lj[k - j + b];
+      if (j < i) {
+        const double dj = lj[b];
+        li[j - i + b] = s / dj;
+        work_[j - j0] = s;  // = L(i,j) d_j
+      } else {
+        if (!std::isfinite(s)) return false;
+        if (s < 0.0) ++negative_;
+        min_pivot_ = i == 0 ? s : std::min(min_pivot_, s);
+        if (min_pivot > 0.0) {
+          if (s < min_pivot) {
+            s = std::max(std::abs(s), min_pivot);
+            ++modified_;
+          }
+        } else if (std::abs(s) <= tiny) {
+          return false;
+        }
+        li[b] = s;
+      }
+    }
+  }
+  return true;
+}
+
+void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const {
+  const int n = l_.size();
+  const int b = l_.bandwidth();
+  const size_t stride = static_cast<size_t>(b) + 1;
+  const double* L = l_.data().data();
+  for (int i = 0; i < n; ++i) {  // L y = rhs
+    const double* li = L + static_cast<size_t>(i) * stride;
+    double s = x(i);
+    for (int k = std::max(0, i - b); k < i; ++k) s -= li[k - i + b] * x(k);
+    x(i) = s;
+  }
+  for (int i = 0; i < n; ++i) x(i) /= L[static_cast<size_t>(i) * stride + b];  // D z = y
+  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z
+    const double* li = L + static_cast<size_t>(i) * stride;
+    const double xi = x(i);
+    for (int k = std::max(0, i - b); k < i; ++k) x(k) -= li[k - i + b] * xi;
+  }
+}
+
+}  // namespace flowire::rod

@@ -1,0 +1,904 @@
+#include "flowire/rod/simulator.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <cstdio>
+#include <cstdlib>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+
+namespace flowire::rod {
+
+namespace {
+constexpr int kBandwidth = 10;  // stencil (x_{k-1}, θ_{k-1}, x_k, θ_k, x_{k+1}) spans 11 unknowns
+
+Mat3 sym(const Mat3& a) { return 0.5 * (a + a.transpose()); }
+
+bool finite(const Eigen::Ref<const Eigen::VectorXd>& v) { return v.allFinite(); }
+}  // namespace
+
+const char* to_string(SolveStatus s) {
+  switch (s) {
+    case SolveStatus::Converged: return "converged";
+    case SolveStatus::MaxIterations: return "maximum Newton iterations reached";
+    case SolveStatus::LineSearchFailed: return "line search failed";
+    case SolveStatus::NonFinite: return "non-finite values";
+    case SolveStatus::SingularMatrix: return "singular matrix";
+  }
+  return "unknown";
+}
+
+/// Buffers sized once for the whole wire.
+struct RodSimulator::Work {
+  int max_dof = 0;
+  Eigen::VectorXd q, grad, rhs, dq, mass, damp, fext, fext_bk, q0, qhat, grad_bk;
+  BandedMatrix H;
+  BandedLDLT ldlt;
+  Eigen::SparseMatrix<double> sparse;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> sparse_ldlt;
+  int sparse_pattern_size = -1;
+  std::vector<Mat3> ext_k;  // (n_vertices) −∂f/∂x − ∂f/∂v / h, symmetrized
+  Mat3 moment_k = Mat3::Zero();  // −∂f₁/∂e of the tip couple, symmetrized
+  ForceAccumulator acc;
+  std::vector<Vec3> vel;      // vertex velocities at the iterate (for externals)
+  // step-start copy (for velocities and rollback)
+  std::vector<Vec3> x0, v0;
+  std::vector<double> theta0, omega0, twist0;
+  std::vector<EdgeFrame> frame0;
+  // accepted iterate during a line search
+  std::vector<Vec3> xb;
+  std::vector<double> thetab, twistb;
+  std::vector<EdgeFrame> frameb;
+  std::vector<Vec3> xz;
+  std::vector<double> tz;
+};
+
+RodSimulator::RodSimulator(const WireSpec& spec)
+    : model_(RodModel::from_spec(spec)), work_(std::make_unique<Work>()) {
+  const int nvmax = model_.grid_vertices;
+  const int max_dof = 4 * nvmax - 1;
+  Work& w = *work_;
+  w.max_dof = max_dof;
+  for (Eigen::VectorXd* v : {&w.q, &w.grad, &w.rhs, &w.dq, &w.mass, &w.damp, &w.fext, &w.fext_bk,
+                             &w.q0, &w.qhat, &w.grad_bk})
+    v->setZero(max_dof);
+  w.H.reserve(max_dof, kBandwidth);
+  w.ldlt.reserve(max_dof, kBandwidth);
+  w.ext_k.reserve(nvmax);
+  w.acc.reserve(nvmax);
+  for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz}) v->reserve(nvmax);
+  for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.thetab, &w.twistb, &w.tz}) v->reserve(nvmax);
+  w.frame0.reserve(nvmax);
+  w.frameb.reserve(nvmax);
+  state_.x.reserve(nvmax);
+  state_.v.reserve(nvmax);
+  state_.theta.reserve(nvmax);
+  state_.omega.reserve(nvmax);
+  state_.frame.reserve(nvmax);
+  state_.ref_twist.reserve(nvmax);
+  arc_length_.reserve(nvmax);
+  trace_.reserve(1 << 14);
+
+  const Vec3 t = -model_.base_direction;  // clamped edges point from tip side to holder
+  base_d2_ = model_.base_normal;
+  base_d1_ = base_d2_.cross(t);
+  double inserted = spec.inserted_length < 0.0 ? spec.length : spec.inserted_length;
+  if (inserted < 2.0 * model_.h || inserted > spec.length + 1e-12)
+    throw_usage_error(fmt::format(
+        "WireSpec: inserted_length {} m must be between two segments ({} m) and the length ({} m)",
+        inserted, 2.0 * model_.h, spec.length));
+  build_initial_state(inserted);
+}
+
+RodSimulator::~RodSimulator() = default;
+
+// -----------------------------------------------------------------------------------------
+// State construction and feeding
+// -----------------------------------------------------------------------------------------
+
+void RodSimulator::build_initial_state(double inserted) {
+  const double h = model_.h;
+  const int kc = static_cast<int>(std::ceil(inserted / h - 1e-9));
+  const int nv = kc + 2;
+  RodState& s = state_;
+  s.x.assign(nv, Vec3::Zero());
+  s.v.assign(nv, Vec3::Zero());
+  s.theta.assign(nv - 1, 0.0);
+  s.omega.assign(nv - 1, 0.0);
+  s.frame.assign(nv - 1, EdgeFrame{});
+  s.ref_twist.assign(nv, 0.0);
+  s.inserted_length = inserted;
+  s.base_angle = 0.0;
+  s.time = 0.0;
+  first_clamped_ = kc;
+  const Vec3& pb = model_.base_position;
+  const Vec3& db = model_.base_direction;
+  const Vec3 a = model_.base_normal;
+  for (int k = kc; k < nv; ++k) s.x[k] = pb - db * (model_.u(k) - inserted);
+  // Lay out the rest shape from the clamp to the tip (planar bends about the base normal).
+  Vec3 tf = -db;
+  for (int k = kc; k >= 1; --k) {
+    const double kappa = model_.rest_kappa1[k];
+    const double phi = 2.0 * std::atan(0.5 * kappa);
+    const Eigen::AngleAxisd rot(-phi, a);
+    const Vec3 te = k == kc && k == nv - 1 ? tf : (rot * tf).normalized();
+    s.x[k - 1] = s.x[k] - h * te;
+    tf = te;
+  }
+  for (int j = 0; j < nv - 1; ++j) {
+    const Vec3 t = (s.x[j + 1] - s.x[j]).normalized();
+    s.frame[j].d2 = (a - t * t.dot(a)).normalized();
+    s.frame[j].d1 = s.frame[j].d2.cross(t);
+  }
+  for (int k = 1; k < nv - 1; ++k)
+    s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(),
+                                     s.frame[k].d1, (s.x[k + 1] - s.x[k]).normalized(), 0.0);
+  target_angle_ = 0.0;
+  refresh_arc_lengths();
+  trace_.clear();
+  record_trace();
+}
+
+void RodSimulator::refresh_arc_lengths() {
+  arc_length_.resize(state_.x.size());
+  for (size_t k = 0; k < state_.x.size(); ++k)
+    arc_length_[k] = state_.inserted_length - model_.u(static_cast<int>(k));
+}
+
+void RodSimulator::update_vertex_set(double new_inserted) {
+  RodState& s = state_;
+  const double h = model_.h;
+  const int kc = static_cast<int>(std::ceil(new_inserted / h - 1e-9));
+  const int nv_new = std::min(kc + 2, model_.grid_vertices);
+  const int nv_old = s.vertex_count();
+  const Vec3& pb = model_.base_position;
+  const Vec3& db = model_.base_direction;
+  const double L = s.inserted_length;
+  const double angle = s.base_angle;
+  if (nv_new > nv_old) {
+    for (int k = nv_old; k < nv_new; ++k) {
+      s.x.push_back(pb - db * (model_.u(k) - L));
+      s.v.push_back(db * insertion_speed_);
+      s.theta.push_back(angle);
+      s.omega.push_back(rotation_speed_);
+      s.frame.push_back(EdgeFrame{base_d1_, base_d2_});
+      s.ref_twist.push_back(0.0);
+    }
+  } else if (nv_new < nv_old) {
+    s.x.resize(nv_new);
+    s.v.resize(nv_new);
+    s.theta.resize(nv_new - 1);
+    s.omega.resize(nv_new - 1);
+    s.frame.resize(nv_new - 1);
+    s.ref_twist.resize(nv_new);
+    s.ref_twist.back() = 0.0;
+  }
+  const int nv = s.vertex_count();
+  if (kc < first_clamped_) {
+    // Pulled back: vertices kc … first_clamped_−1 enter the clamp. Keep the material twist
+    // continuous at the vertices whose edges are reset.
+    const int k_lo = std::max(kc, 1);
+    for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k)
+      work_->tz.push_back(s.theta[k] - s.theta[k - 1] + s.ref_twist[k]);  // total twist
+    for (int k = kc; k < std::min(first_clamped_, nv); ++k) {
+      s.x[k] = pb - db * (model_.u(k) - L);
+      s.v[k] = db * insertion_speed_;
+    }
+    for (int j = kc; j < nv - 1; ++j) {
+      s.frame[j] = EdgeFrame{base_d1_, base_d2_};
+      s.theta[j] = angle;
+      s.omega[j] = rotation_speed_;
+    }
+    // Re-transport the free edge that touches the clamp, then rebuild reference twists.
+    if (kc >= 1) {
+      const int j = kc - 1;
+      const Vec3 t0 = s.frame[j].d1.cross(s.frame[j].d2);
+      const Vec3 t1 = (s.x[j + 1] - s.x[j]).normalized();
+      s.frame[j].d1 = parallel_transport(s.frame[j].d1, t0, t1);
+      s.frame[j].d1 = (s.frame[j].d1 - t1 * t1.dot(s.frame[j].d1)).normalized();
+      s.frame[j].d2 = t1.cross(s.frame[j].d1);
+    }
+    int idx = 0;
+    for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k, ++idx) {
+      const double m_old = work_->tz[idx];
+      const double previous = m_old - (s.theta[k] - s.theta[k - 1]);
+      s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(),
+                                       s.frame[k].d1, (s.x[k + 1] - s.x[k]).normalized(), previous);
+    }
+    work_->tz.clear();
+  }
+  first_clamped_ = std::min(kc, nv - 2);
+}
+
+void RodSimulator::set_prescribed(double inserted, double angle, std::vector<Vec3>& x,
+                                  std::vector<double>& theta) const {
+  const Vec3& pb = model_.base_position;
+  const Vec3& db = model_.base_direction;
+  const int nv = static_cast<int>(x.size());
+  for (int k = first_clamped_; k < nv; ++k) x[k] = pb - db * (model_.u(k) - inserted);
+  for (int j = first_clamped_; j < nv - 1; ++j) theta[j] = angle;
+}
+
+bool RodSimulator::is_prescribed_dof(int d) const { return d >= 4 * first_clamped_; }
+
+// -----------------------------------------------------------------------------------------
+// Frames
+// -----------------------------------------------------------------------------------------
+
+void RodSimulator::transport_frames_to(const std::vector<Vec3>& x_new,
+                                       const std::vector<EdgeFrame>& frame_from,
+                                       const std::vector<double>& twist_from,
+                                       std::vector<EdgeFrame>& frame_to,
+                                       std::vector<double>& twist_to) const {
+  const int nv = static_cast<int>(x_new.size());
+  for (int j = 0; j < nv - 1; ++j) {
+    const Vec3 t0 = frame_from[j].d1.cross(frame_from[j].d2);
+    const Vec3 t1 = (x_new[j + 1] - x_new[j]).normalized();
+    Vec3 d1 = parallel_transport(frame_from[j].d1, t0, t1);
+    d1 = (d1 - t1 * t1.dot(d1)).normalized();
+    frame_to[j].d1 = d1;
+    frame_to[j].d2 = t1.cross(d1);
+  }
+  for (int k = 1; k < nv - 1; ++k) {
+    const Vec3 te = frame_to[k - 1].d1.cross(frame_to[k - 1].d2);
+    const Vec3 tf = frame_to[k].d1.cross(frame_to[k].d2);
+    twist_to[k] = reference_twist(frame_to[k - 1].d1, te, frame_to[k].d1, tf, twist_from[k]);
+  }
+}
+
+std::pair<Vec3, Vec3> RodSimulator::material_frame(int edge) const {
+  const EdgeFrame& f = state_.frame.at(edge);
+  const double c = std::cos(state_.theta[edge]), s = std::sin(state_.theta[edge]);
+  return {c * f.d1 + s * f.d2, -s * f.d1 + c * f.d2};
+}
+
+// -----------------------------------------------------------------------------------------
+// Assembly
+// -----------------------------------------------------------------------------------------
+
+void RodSimulator::vertex_params(int k, VertexParams& p) const {
+  // The clamp vertex owns only the half cell in front of the entry: the wire behind it is
+  // held rigid, so its bending and twisting act over h/2 (this keeps the clamp exactly at
+  // the entry and the scheme second-order; a full cell would move the clamp back by h/2).
+  const double cell = k == first_clamped_ ? 0.5 : 1.0;
+  p.bend_stiffness1 = p.bend_stiffness2 = model_.bend_stiffness[k];
+  p.rest_kappa1 = cell * model_.rest_kappa1[k];
+  p.rest_kappa2 = cell * model_.rest_kappa2[k];
+  p.twist_stiffness = model_.twist_stiffness[k];
+  p.rest_twist = 0.0;
+  p.voronoi_length = cell * model_.h;
+}
+
+void RodSimulator::gather(Eigen::Ref<Eigen::VectorXd> q) const {
+  const int nv = state_.vertex_count();
+  for (int k = 0; k < nv; ++k) {
+    q.segment<3>(4 * k) = state_.x[k];
+    if (k < nv - 1) q(4 * k + 3) = state_.theta[k];
+  }
+}
+
+int RodSimulator::add_point_force(double s, const Vec3& f) {
+  point_forces_.push_back({s, f});
+  return static_cast<int>(point_forces_.size()) - 1;
+}
+
+void RodSimulator::add_external(std::shared_ptr<ExternalForce> force) {
+  if (!force) throw_usage_error("RodSimulator::add_external: null force");
+  externals_.push_back(std::move(force));
+}
+
+void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
+  Work& w = *work_;
+  const RodState& s = state_;
+  const int nv = s.vertex_count();
+  const int nd = dof_count();
+  w.fext.head(nd).setZero();
+  w.ext_k.assign(nv, Mat3::Zero());
+  w.moment_k.setZero();
+  if (gravity_.squaredNorm() > 0.0)
+    for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += model_.mass[k] * gravity_;
+  w.fext.segment<3>(0) += load_scale * tip_force_;
+  const double L = s.inserted_length;
+  for (const PointForce& pf : point_forces_) {
+    const double u = L - pf.s;
+    if (u < 0.0 || u > L) continue;
+    const int k = std::min(static_cast<int>(std::floor(u / model_.h)), nv - 2);
+    const double a = std::clamp(u / model_.h - k, 0.0, 1.0);
+    w.fext.segment<3>(4 * k) += load_scale * (1.0 - a) * pf.f;
+    w.fext.segment<3>(4 * (k + 1)) += load_scale * a * pf.f;
+  }
+  if (tip_moment_.squaredNorm() > 0.0) {
+    const Vec3 M = load_scale * tip_moment_;
+    const Vec3 e = s.x[1] - s.x[0];
+    const double l2 = e.squaredNorm();
+    const Vec3 t = e / std::sqrt(l2);
+    w.fext(3) += M.dot(t);
+    const Vec3 Mp = M - t * t.dot(M);
+    const Vec3 f1 = Mp.cross(e) / l2;  // couple: e × f1 = M⊥
+    w.fext.segment<3>(4) += f1;
+    w.fext.segment<3>(0) -= f1;
+    Mat3 skewM;
+    skewM << 0, -Mp.z(), Mp.y(), Mp.z(), 0, -Mp.x(), -Mp.y(), Mp.x(), 0;
+    w.moment_k = -sym(skewM / l2 - 2.0 * f1 * e.transpose() / l2);
+  }
+  if (!externals_.empty()) {
+    w.vel.resize(nv);
+    for (int k = 0; k < nv; ++k)
+      w.vel[k] = mode == Mode::Dynamic ? Vec3((s.x[k] - w.x0[k]) / h) : Vec3::Zero();
+    w.acc.reset(nv);
+    RodView view;
+    view.positions = s.x;
+    view.velocities = w.vel;
+    view.arc_length = std::span<const double>(arc_length_.data(), nv);
+    view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
+    view.first_clamped_vertex = first_clamped_;
+    view.time = s.time;
+    view.dt = mode == Mode::Dynamic ? h : 0.0;
+    for (auto& ext : externals_) ext->evaluate(view, w.acc);
+    for (int k = 0; k < nv; ++k) {
+      w.fext.segment<3>(4 * k) += w.acc.forces()[k];
+      w.ext_k[k] = -sym(w.acc.position_jacobians()[k]);
+      if (mode == Mode::Dynamic) w.ext_k[k] -= sym(w.acc.velocity_jacobians()[k]) / h;
+    }
+  }
+}
+
+double RodSimulator::assemble(Mode mode, double h, double load_scale, bool need_matrix) {
+  Work& w = *work_;
+  const RodState& s = state_;
+  const int nv = s.vertex_count();
+  const int nd = dof_count();
+  auto g = w.grad.head(nd);
+  g.setZero();
+  if (need_matrix) w.H.resize(nd);
+  double energy = 0.0;
+  // Stretching.
+  for (int j = 0; j < nv - 1; ++j) {
+    const double ks = model_.stretch_stiffness[j];
+    energy += stretch_energy(s.x[j], s.x[j + 1], ks, model_.h);
+    const Vec6 ge = stretch_gradient(s.x[j], s.x[j + 1], ks, model_.h);
+    g.segment<3>(4 * j) += ge.head<3>();
+    g.segment<3>(4 * j + 4) += ge.tail<3>();
+    if (need_matrix) {
+      const Mat6 he = stretch_hessian(s.x[j], s.x[j + 1], ks, model_.h);
+      const int idx[6] = {4 * j, 4 * j + 1, 4 * j + 2, 4 * j + 4, 4 * j + 5, 4 * j + 6};
+      w.H.add_block(he, idx, 6);
+    }
+  }
+  // Bending and twisting.
+  VertexStencil st;
+  VertexParams p;
+  Vec11 gs;
+  Mat11 hs;
+  for (int k = 1; k < nv - 1; ++k) {
+    st.x0 = s.x[k - 1];
+    st.x1 = s.x[k];
+    st.x2 = s.x[k + 1];
+    st.theta_e = s.theta[k - 1];
+    st.theta_f = s.theta[k];
+    st.frame_e = s.frame[k - 1];
+    st.frame_f = s.frame[k];
+    st.ref_twist = s.ref_twist[k];
+    vertex_params(k, p);
+    energy += bend_twist(st, p, &gs, need_matrix ? &hs : nullptr);
+    g.segment<11>(4 * (k - 1)) += gs;
+    if (need_matrix) w.H.add_block(hs, 4 * (k - 1));
+  }
+  evaluate_loads(mode, h, load_scale);
+  g -= w.fext.head(nd);
+  if (mode == Mode::Dynamic) {
+    // Inertia and damping: ½|q − q̂|²_M / h² + ½|q − q₀|²_C / h.
+    const double ih2 = 1.0 / (h * h), ih = 1.0 / h;
+    for (int d = 0; d < nd; ++d) {
+      const double a = w.q(d) - w.qhat(d);
+      const double b = w.q(d) - w.q0(d);
+      g(d) += w.mass(d) * a * ih2 + w.damp(d) * b * ih;
+      energy += 0.5 * (w.mass(d) * a * a * ih2 + w.damp(d) * b * b * ih);
+      if (need_matrix) w.H.lower(d, d) += w.mass(d) * ih2 + w.damp(d) * ih;
+    }
+  }
+  if (need_matrix) {
+    for (int k = 0; k < nv; ++k) {
+      if (w.ext_k[k].isZero(0.0)) continue;
+      const int idx[3] = {4 * k, 4 * k + 1, 4 * k + 2};
+      w.H.add_block(w.ext_k[k], idx, 3);
+    }
+    if (!w.moment_k.isZero(0.0)) {
+      Mat6 b;
+      b << w.moment_k, -w.moment_k, -w.moment_k, w.moment_k;
+      const int idx[6] = {0, 1, 2, 4, 5, 6};
+      w.H.add_block(b, idx, 6);
+    }
+  }
+  return energy;
+}
+
+double RodSimulator::force_scale(double load_scale) const {
+  const RodState& s = state_;
+  double total_mass = 0.0, ei = 0.0, ea = 0.0;
+  for (int k = 0; k < s.vertex_count(); ++k) {
+    total_mass += model_.mass[k];
+    ei = std::max(ei, model_.bend_stiffness[k]);
+  }
+  for (int j = 0; j < s.edge_count(); ++j) ea = std::max(ea, model_.stretch_stiffness[j]);
+  const double L = std::max(s.inserted_length, model_.h);
+  double f = std::max({ei / (L * L), total_mass * gravity_.norm(),
+                       load_scale * tip_force_.norm(), load_scale * tip_moment_.norm() / L});
+  for (const auto& pf : point_forces_) f = std::max(f, load_scale * pf.f.norm());
+  const double xscale = model_.base_position.norm() + L;
+  const double floor = 4.0 * std::numeric_limits<double>::epsilon() * ea * (1.0 + xscale / model_.h);
+  return settings_.force_tolerance * f + floor;
+}
+
+// -----------------------------------------------------------------------------------------
+// Newton
+// -----------------------------------------------------------------------------------------
+
+StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
+  Work& w = *work_;
+  RodState& s = state_;
+  const int nv = s.vertex_count();
+  const int nd = dof_count();
+  const int first_fixed = 4 * first_clamped_;
+  StepReport rep;
+  rep.tolerance = force_scale(load_scale);
+  const int max_it = mode == Mode::Static ? settings_.max_static_iterations : settings_.max_iterations;
+
+  auto residual_norm = [&]() {
+    double r = 0.0;
+    for (int d = 0; d < first_fixed; ++d) {
+      const double v = (d % 4 == 3) ? w.grad(d) / model_.h : w.grad(d);
+      r = std::max(r, std::abs(v));
+    }
+    return r;
+  };
+
+  gather(w.q);
+  double phi = assemble(mode, h, load_scale, true);
+  if (!std::isfinite(phi) || !finite(w.grad.head(nd))) {
+    rep.status = SolveStatus::NonFinite;
+    return rep;
+  }
+  rep.status = SolveStatus::MaxIterations;
+  for (int it = 0; it < max_it; ++it) {
+    rep.residual = residual_norm();
+    if (rep.residual <= rep.tolerance) {
+      rep.status = SolveStatus::Converged;
+      break;
+    }
+    rep.newton_iterations = it + 1;
+    // Linear solve on the free unknowns.
+    for (int d = first_fixed; d < nd; ++d) w.H.set_identity_row(d);
+    auto rhs = w.rhs.head(nd);
+    rhs = -w.grad.head(nd);
+    rhs.tail(nd - first_fixed).setZero();
+    bool ok = false;
+    double shift = 0.0;
+    const double scale = std::max(w.H.max_diagonal(), 1e-300);
+    for (int attempt = 0; attempt < 14 && !ok; ++attempt) {
+      if (attempt > 0) {
+        const double next = attempt == 1 ? 1e-10 * scale : shift * 10.0;
+        w.H.add_to_diagonal(next - shift);
+        shift = next;
+        ++rep.regularizations;
+      }
+      if (settings_.linear_solver == LinearSolver::Banded) {
+        // Modified LDLᵀ: indefinite directions get a positive pivot (descent guaranteed).
+        ok = w.ldlt.factorize(w.H, 1e-10 * scale);
+        if (w.ldlt.modified_pivots() > 0) ++rep.regularizations;
+        if (ok) {
+          w.dq.head(nd) = rhs;
+          w.ldlt.solve_in_place(w.dq.head(nd));
+        }
+      } else {
+        w.H.to_sparse_lower(w.sparse);
+        if (w.sparse_pattern_size != nd) {
+          w.sparse_ldlt.analyzePattern(w.sparse);
+          w.sparse_pattern_size = nd;
+        }
+        w.sparse_ldlt.factorize(w.sparse);
+        ok = w.sparse_ldlt.info() == Eigen::Success &&
+             (w.sparse_ldlt.vectorD().array() > 0.0).all();
+        if (ok) w.dq.head(nd) = w.sparse_ldlt.solve(rhs);
+      }
+    }
+    if (!ok || !finite(w.dq.head(nd))) {
+      rep.status = SolveStatus::SingularMatrix;
+      break;
+    }
+    auto dq = w.dq.head(nd);
+    const double slope = w.grad.head(nd).dot(dq);
+    // Backtracking line search on φ − W (W: trapezoidal work of the loads along the ray).
+    w.xb = s.x;
+    w.thetab = s.theta;
+    w.frameb = s.frame;
+    w.twistb = s.ref_twist;
+    w.fext_bk.head(nd) = w.fext.head(nd);
+    w.grad_bk.head(nd) = w.grad.head(nd);
+    const Eigen::VectorXd& qb = w.q;  // unchanged until accepted
+    double alpha = 1.0;
+    bool accepted = false;
+    double max_step = 0.0;
+    for (int cut = 0; cut <= settings_.max_line_search_cuts; ++cut) {
+      for (int k = 0; k < nv; ++k) {
+        s.x[k] = w.xb[k] + alpha * dq.segment<3>(4 * k);
+        if (k < nv - 1) s.theta[k] = w.thetab[k] + alpha * dq(4 * k + 3);
+      }
+      if (settings_.curvilinear_update) {
+        // Walk from the clamp to the tip keeping each free edge's updated direction but
+        // its linearized length: removes the O(α²) spurious stretch of a straight-line
+        // step through a rotation, so stiff stretching does not throttle the step.
+        Vec3 next_unprojected = s.x[first_clamped_];
+        for (int j = first_clamped_ - 1; j >= 0; --j) {
+          const Vec3 xn = s.x[j];
+          const Vec3 eb = w.xb[j + 1] - w.xb[j];
+          const double lb = eb.norm();
+          const double target =
+              lb + alpha * (eb / lb).dot(dq.segment<3>(4 * (j + 1)) - dq.segment<3>(4 * j));
+          const Vec3 d = next_unprojected - xn;
+          s.x[j] = s.x[j + 1] - std::max(target, 0.1 * lb) * d / d.norm();
+          next_unprojected = xn;
+        }
+      }
+      transport_frames_to(s.x, w.frameb, w.twistb, s.frame, s.ref_twist);
+      // Keep q consistent for the inertia terms while evaluating the trial.
+      w.rhs.head(nd) = qb.head(nd) + alpha * dq;  // trial unknowns
+      for (int k = 0; k < first_clamped_; ++k) w.rhs.segment<3>(4 * k) = s.x[k];
+      w.q.head(nd).swap(w.rhs.head(nd));
+      const double phi_t = assemble(mode, h, load_scale, true);
+      const double work =
+          0.5 * (w.fext_bk.head(nd) + w.fext.head(nd)).dot(w.q.head(nd) - w.rhs.head(nd));
+      const double merit0 = phi, merit_t = phi_t - work;
+      const bool good = std::isfinite(phi_t) && finite(w.grad.head(nd)) &&
+                        merit_t <= merit0 + 1e-4 * alpha * slope + 1e-14 * std::abs(merit0);
+      if (good) {
+        accepted = true;
+        phi = phi_t;
+        max_step = alpha * dq.head(first_fixed).cwiseAbs().maxCoeff();
+        break;
+      }
+      w.q.head(nd).swap(w.rhs.head(nd));  // restore q
+      alpha *= 0.5;
+      ++rep.line_search_cuts;
+    }
+    if (!accepted) {
+      // Restore the last accepted iterate and its derivatives.
+      s.x = w.xb;
+      s.theta = w.thetab;
+      s.frame = w.frameb;
+      s.ref_twist = w.twistb;
+      gather(w.q);
+      phi = assemble(mode, h, load_scale, true);
+      rep.residual = residual_norm();
+      rep.status = rep.residual <= rep.tolerance ? SolveStatus::Converged
+                                                 : SolveStatus::LineSearchFailed;
+      break;
+    }
+    const double previous = rep.residual;
+    rep.residual = residual_norm();
+    if (alpha == 1.0 && max_step <= settings_.step_tolerance * model_.h) {
+      rep.status = SolveStatus::Converged;
+      break;
+    }
+    // Round-off plateau: a full Newton step that no longer reduces a residual already
+    // within 100× the tolerance.
+    if (alpha == 1.0 && rep.residual <= 100.0 * rep.tolerance && rep.residual > 0.5 * previous) {
+      rep.status = SolveStatus::Converged;
+      break;
+    }
+  }
+  if (rep.status == SolveStatus::MaxIterations) rep.residual = residual_norm();
+  return rep;
+}
+
+void RodSimulator::compute_base_reaction() {
+  const Work& w = *work_;
+  const RodState& s = state_;
+  const int nv = s.vertex_count();
+  base_force_.setZero();
+  base_torque_.setZero();
+  for (int k = first_clamped_; k < nv; ++k) {
+    const Vec3 f = w.grad.segment<3>(4 * k);
+    base_force_ += f;
+    base_torque_ += (s.x[k] - model_.base_position).cross(f);
+    if (k < nv - 1) {
+      const Vec3 t = (s.x[k + 1] - s.x[k]).normalized();
+      base_torque_ += w.grad(4 * k + 3) * t;
+    }
+  }
+}
+
+void RodSimulator::report(const StepReport& r, const char* what) {
+  last_report_ = r;
+  if (r.converged()) return;
+  warn(fmt::format("rod: {} at t = {:.6g} s: {} after {} Newton iterations "
+                   "(residual {:.3g} N, tolerance {:.3g} N)",
+                   what, state_.time, to_string(r.status), r.newton_iterations, r.residual,
+                   r.tolerance));
+}
+
+void RodSimulator::record_trace() {
+  trace_.push_back({state_.time, state_.inserted_length, state_.x.front()});
+}
+
+// -----------------------------------------------------------------------------------------
+// Stepping
+// -----------------------------------------------------------------------------------------
+
+StepReport RodSimulator::step(double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
+  return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt)
+                                                              : step_euler(dt);
+}
+
+namespace {
+double clamp_inserted(double L, const RodModel& m, bool& clamped) {
+  const double lo = 2.0 * m.h, hi = m.length;
+  clamped = L < lo || L > hi;
+  return std::clamp(L, lo, hi);
+}
+}  // namespace
+
+StepReport RodSimulator::step_euler(double dt) {
+  Work& w = *work_;
+  RodState& s = state_;
+  bool clamped = false;
+  const double L_new = clamp_inserted(s.inserted_length + insertion_speed_ * dt, model_, clamped);
+  if (clamped && insertion_speed_ != 0.0) {
+    warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
+    insertion_speed_ = 0.0;
+  }
+  s.base_angle = target_angle_;
+  update_vertex_set(L_new);
+  const double angle_new = target_angle_ + rotation_speed_ * dt;
+
+  const int nv = s.vertex_count();
+  const int nd = dof_count();
+  w.x0 = s.x;
+  w.v0 = s.v;
+  w.theta0 = s.theta;
+  w.omega0 = s.omega;
+  w.frame0 = s.frame;
+  w.twist0 = s.ref_twist;
+  for (int k = 0; k < nv; ++k) {
+    w.q0.segment<3>(4 * k) = s.x[k];
+    w.qhat.segment<3>(4 * k) = s.x[k] + dt * s.v[k];
+    w.mass.segment<3>(4 * k).setConstant(model_.mass[k]);
+    w.damp.segment<3>(4 * k).setConstant(model_.damping * model_.h);
+    if (k < nv - 1) {
+      w.q0(4 * k + 3) = s.theta[k];
+      w.qhat(4 * k + 3) = s.theta[k] + dt * s.omega[k];
+      w.mass(4 * k + 3) = model_.twist_inertia[k];
+      w.damp(4 * k + 3) = 0.0;
+    }
+  }
+  // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
+  for (int k = 0; k < nv; ++k) {
+    s.x[k] += dt * s.v[k];
+    if (k < nv - 1) s.theta[k] += dt * s.omega[k];
+  }
+  set_prescribed(L_new, angle_new, s.x, s.theta);
+  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  s.time += dt;
+  s.inserted_length = L_new;
+  refresh_arc_lengths();
+
+  StepReport rep = newton(Mode::Dynamic, dt, 1.0);
+  if (rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix) {
+    s.x = w.x0;
+    s.v = w.v0;
+    s.theta = w.theta0;
+    s.omega = w.omega0;
+    s.frame = w.frame0;
+    s.ref_twist = w.twist0;
+    set_prescribed(L_new, angle_new, s.x, s.theta);
+    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  }
+  for (int k = 0; k < nv; ++k) {
+    s.v[k] = (s.x[k] - w.x0[k]) / dt;
+    if (k < nv - 1) s.omega[k] = (s.theta[k] - w.theta0[k]) / dt;
+  }
+  (void)nd;
+  target_angle_ = angle_new;
+  s.base_angle = angle_new;
+  compute_base_reaction();
+  report(rep, "implicit Euler step");
+  record_trace();
+  if (!externals_.empty()) {
+    RodView view;
+    view.positions = s.x;
+    view.velocities = s.v;
+    view.arc_length = arc_length_;
+    view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
+    view.first_clamped_vertex = first_clamped_;
+    view.time = s.time;
+    view.dt = dt;
+    for (auto& e : externals_) e->end_step(view);
+  }
+  return rep;
+}
+
+StepReport RodSimulator::step_midpoint(double dt) {
+  Work& w = *work_;
+  RodState& s = state_;
+  bool clamped = false;
+  const double L_start = s.inserted_length;
+  const double L_new = clamp_inserted(L_start + insertion_speed_ * dt, model_, clamped);
+  if (clamped && insertion_speed_ != 0.0) {
+    warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
+    insertion_speed_ = 0.0;
+  }
+  s.base_angle = target_angle_;
+  update_vertex_set(L_new);
+  const double hh = 0.5 * dt;
+  const double L_half = 0.5 * (L_start + L_new);
+  const double angle_half = target_angle_ + rotation_speed_ * hh;
+  const double angle_new = target_angle_ + rotation_speed_ * dt;
+
+  const int nv = s.vertex_count();
+  w.x0 = s.x;
+  w.v0 = s.v;
+  w.theta0 = s.theta;
+  w.omega0 = s.omega;
+  w.frame0 = s.frame;
+  w.twist0 = s.ref_twist;
+  for (int k = 0; k < nv; ++k) {
+    w.q0.segment<3>(4 * k) = s.x[k];
+    w.qhat.segment<3>(4 * k) = s.x[k] + hh * s.v[k];
+    w.mass.segment<3>(4 * k).setConstant(model_.mass[k]);
+    w.damp.segment<3>(4 * k).setConstant(model_.damping * model_.h);
+    if (k < nv - 1) {
+      w.q0(4 * k + 3) = s.theta[k];
+      w.qhat(4 * k + 3) = s.theta[k] + hh * s.omega[k];
+      w.mass(4 * k + 3) = model_.twist_inertia[k];
+      w.damp(4 * k + 3) = 0.0;
+    }
+  }
+  for (int k = 0; k < nv; ++k) {
+    s.x[k] += hh * s.v[k];
+    if (k < nv - 1) s.theta[k] += hh * s.omega[k];
+  }
+  set_prescribed(L_half, angle_half, s.x, s.theta);
+  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  s.time += hh;
+  s.inserted_length = L_half;
+  refresh_arc_lengths();
+
+  StepReport rep = newton(Mode::Dynamic, hh, 1.0);
+  const bool failed =
+      rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix;
+  compute_base_reaction();
+  if (failed) {
+    s.x = w.x0;
+    s.theta = w.theta0;
+    s.frame = w.frame0;
+    s.ref_twist = w.twist0;
+    for (auto& v : s.v) v.setZero();
+    for (auto& o : s.omega) o = 0.0;
+    set_prescribed(L_new, angle_new, s.x, s.theta);
+    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  } else {
+    // Extrapolate from the midpoint z: q₁ = 2z − q₀, v₁ = 2 (z − q₀)/(h/2) − v₀.
+    w.xz = s.x;
+    w.frameb = s.frame;
+    w.twistb = s.ref_twist;
+    for (int k = 0; k < nv; ++k) {
+      s.v[k] = 2.0 * (w.xz[k] - w.x0[k]) / hh - w.v0[k];
+      s.x[k] = 2.0 * w.xz[k] - w.x0[k];
+      if (k < nv - 1) {
+        const double tz = s.theta[k];
+        s.omega[k] = 2.0 * (tz - w.theta0[k]) / hh - w.omega0[k];
+        s.theta[k] = 2.0 * tz - w.theta0[k];
+      }
+    }
+    set_prescribed(L_new, angle_new, s.x, s.theta);
+    transport_frames_to(s.x, w.frameb, w.twistb, s.frame, s.ref_twist);
+  }
+  s.time += hh;
+  s.inserted_length = L_new;
+  refresh_arc_lengths();
+  target_angle_ = angle_new;
+  s.base_angle = angle_new;
+  report(rep, "implicit midpoint step");
+  record_trace();
+  if (!externals_.empty()) {
+    RodView view;
+    view.positions = s.x;
+    view.velocities = s.v;
+    view.arc_length = arc_length_;
+    view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
+    view.first_clamped_vertex = first_clamped_;
+    view.time = s.time;
+    view.dt = dt;
+    for (auto& e : externals_) e->end_step(view);
+  }
+  return rep;
+}
+
+StepReport RodSimulator::solve_static() {
+  RodState& s = state_;
+  s.base_angle = target_angle_;
+  set_prescribed(s.inserted_length, target_angle_, s.x, s.theta);
+  transport_frames_to(s.x, s.frame, s.ref_twist, s.frame, s.ref_twist);
+  for (auto& v : s.v) v.setZero();
+  for (auto& o : s.omega) o = 0.0;
+  refresh_arc_lengths();
+  const int steps = std::max(1, settings_.static_load_steps);
+  StepReport total;
+  for (int i = 1; i <= steps; ++i) {
+    const StepReport r = newton(Mode::Static, 1.0, static_cast<double>(i) / steps);
+    total.newton_iterations += r.newton_iterations;
+    total.line_search_cuts += r.line_search_cuts;
+    total.regularizations += r.regularizations;
+    total.residual = r.residual;
+    total.tolerance = r.tolerance;
+    total.status = r.status;
+    if (!r.converged()) break;
+  }
+  compute_base_reaction();
+  report(total, "static solve");
+  record_trace();
+  return total;
+}
+
+int RodSimulator::static_hessian_negative_eigenvalues() {
+  Work& w = *work_;
+  const int nd = dof_count();
+  gather(w.q);
+  assemble(Mode::Static, 1.0, 1.0, true);
+  for (int d = 4 * first_clamped_; d < nd; ++d) w.H.set_identity_row(d);
+  if (!w.ldlt.factorize(w.H)) return -1;
+  return w.ldlt.negative_pivots();
+}
+
+// -----------------------------------------------------------------------------------------
+// Diagnostics
+// -----------------------------------------------------------------------------------------
+
+RodEnergy RodSimulator::energy() const {
+  const RodState& s = state_;
+  RodEnergy e;
+  const int nv = s.vertex_count();
+  for (int k = 0; k < nv; ++k) {
+    e.kinetic += 0.5 * model_.mass[k] * s.v[k].squaredNorm();
+    if (k < nv - 1) e.kinetic += 0.5 * model_.twist_inertia[k] * s.omega[k] * s.omega[k];
+  }
+  for (int j = 0; j < nv - 1; ++j)
+    e.stretching += stretch_energy(s.x[j], s.x[j + 1], model_.stretch_stiffness[j], model_.h);
+  VertexStencil st;
+  VertexParams p;
+  for (int k = 1; k < nv - 1; ++k) {
+    st.x0 = s.x[k - 1];
+    st.x1 = s.x[k];
+    st.x2 = s.x[k + 1];
+    st.theta_e = s.theta[k - 1];
+    st.theta_f = s.theta[k];
+    st.frame_e = s.frame[k - 1];
+    st.frame_f = s.frame[k];
+    st.ref_twist = s.ref_twist[k];
+    vertex_params(k, p);
+    e.bending_twisting += bend_twist(st, p, nullptr, nullptr);
+  }
+  return e;
+}
+
+double RodSimulator::max_strain() const {
+  double m = 0.0;
+  for (int j = 0; j < first_clamped_; ++j)
+    m = std::max(m, std::abs((state_.x[j + 1] - state_.x[j]).norm() / model_.h - 1.0));
+  return m;
+}
+
+double RodSimulator::length_drift() const {
+  double l = 0.0;
+  const int ne = state_.edge_count();
+  for (int j = 0; j < ne; ++j) l += (state_.x[j + 1] - state_.x[j]).norm();
+  const double rest = ne * model_.h;
+  return std::abs(l - rest) / rest;
+}
+
+}  // namespace flowire::rod
