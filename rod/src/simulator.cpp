@@ -163,8 +163,8 @@ void RodSimulator::update_vertex_set(double new_inserted) {
     for (int k = nv_old; k < nv_new; ++k) {
       s.x.push_back(pb - db * (model_.u(k) - L));
       s.v.push_back(db * insertion_speed_);
-      s.theta.push_back(angle);
-      s.omega.push_back(rotation_speed_);
+      s.theta.push_back(-angle);
+      s.omega.push_back(-rotation_speed_);
       s.frame.push_back(EdgeFrame{base_d1_, base_d2_});
       s.ref_twist.push_back(0.0);
     }
@@ -190,8 +190,8 @@ void RodSimulator::update_vertex_set(double new_inserted) {
     }
     for (int j = kc; j < nv - 1; ++j) {
       s.frame[j] = EdgeFrame{base_d1_, base_d2_};
-      s.theta[j] = angle;
-      s.omega[j] = rotation_speed_;
+      s.theta[j] = -angle;
+      s.omega[j] = -rotation_speed_;
     }
     // Re-transport the free edge that touches the clamp, then rebuild reference twists.
     if (kc >= 1) {
@@ -220,7 +220,9 @@ void RodSimulator::set_prescribed(double inserted, double angle, std::vector<Vec
   const Vec3& db = model_.base_direction;
   const int nv = static_cast<int>(x.size());
   for (int k = first_clamped_; k < nv; ++k) x[k] = pb - db * (model_.u(k) - inserted);
-  for (int j = first_clamped_; j < nv - 1; ++j) theta[j] = angle;
+  // Clamped edges point from the tip side to the holder (−base_direction); the base angle
+  // is right-handed about +base_direction, hence the sign.
+  for (int j = first_clamped_; j < nv - 1; ++j) theta[j] = -angle;
 }
 
 bool RodSimulator::is_prescribed_dof(int d) const { return d >= 4 * first_clamped_; }

@@ -140,9 +140,10 @@ class RodSimulator {
   void set_integrator(Integrator integrator) { settings_.integrator = integrator; }
   /// @brief Feeding speed [m/s], > 0 pushes in, < 0 pulls back.
   void set_insertion_speed(double speed) { insertion_speed_ = speed; }
-  /// @brief Clamp rotation speed about the insertion direction [rad/s].
+  /// @brief Clamp rotation speed, right-handed about the insertion direction [rad/s].
   void set_rotation_speed(double omega) { rotation_speed_ = omega; }
-  /// @brief Set the clamp rotation angle [rad] now (takes effect at the next step/solve).
+  /// @brief Set the clamp rotation angle [rad], right-handed about the insertion direction
+  /// (takes effect at the next step/solve).
   void set_base_angle(double angle) { target_angle_ = angle; }
   /// @brief Dead force on the distal tip vertex [N].
   void set_tip_force(const Eigen::Vector3d& f) { tip_force_ = f; }
