@@ -118,6 +118,30 @@ void check_units(double r_max, double factor, const std::string& where) {
                    hint));
 }
 
+/// Refuses centerlines that would build an absurd number of segments (wrong unit, corrupt
+/// coordinates) before Network::build allocates them.
+void check_build_size(const Centerlines& c, const BuildOptions& opt) {
+  double total = 0.0;
+  for (size_t b = 0; b < c.branches.size(); ++b) {
+    const auto& p = c.branches[b];
+    double len = 0.0;
+    for (size_t i = 1; i < p.points.size(); ++i) len += (p.points[i] - p.points[i - 1]).norm();
+    if (!std::isfinite(len))
+      throw_input_error(c.source, fmt::format("branch {}: coordinates too large (its length is not finite)", b));
+    total += static_cast<double>(p.points.size());
+    if (opt.max_segment_length > 0.0) total += len / opt.max_segment_length;
+  }
+  if (total > 2e7)
+    throw_input_error(c.source, fmt::format("cutting the branches into segments of at most {} m would make about "
+                                            "{:.3g} segments; check length_unit and max_segment_length",
+                                            opt.max_segment_length, total));
+}
+
+Network build_checked(const Centerlines& c, const BuildOptions& opt) {
+  check_build_size(c, opt);
+  return Network::build(c, opt);
+}
+
 // ---------------------------------------------------------------------------------------
 // YAML network
 
@@ -527,6 +551,7 @@ Network deck_network(const std::string& path, const OneDDeck& deck, double f, co
   };
   std::vector<Segment> segs;
   std::vector<Branch> branches;
+  double total_pieces = 0.0;
   for (const auto& [name, list] : deck_branches(deck)) {
     Branch br;
     br.name = name;
@@ -543,6 +568,10 @@ Network deck_network(const std::string& path, const OneDDeck& deck, double f, co
       if (!(pieces <= 1e5))
         throw_input_error(fmt::format("{}:{}", path, s.line),
                           fmt::format("SEGMENT {} would be split into more than 1e5 pieces (length {} m)", s.name, len));
+      total_pieces += pieces;
+      if (total_pieces > 2e7)
+        throw_input_error(fmt::format("{}:{}", path, s.line),
+                          "the deck would make more than 2e7 segments; check max_segment_length");
       const int n = static_cast<int>(pieces);
       if (br.nodes.empty()) br.nodes.push_back(a);
       int prev = a;
@@ -649,7 +678,7 @@ Network read_network(const std::string& path, const ReadOptions& opt) {
       const double f = length_factor(opt, std::nullopt, path);
       auto c = detail::polydata_to_centerlines(pd, opt.merge_tolerance);
       scale(c, f);
-      return finish(Network::build(c, opt.build), opt, f, path);
+      return finish(build_checked(c, opt.build), opt, f, path);
     }
     case Format::Yaml: {
       const auto file = load_yaml(path);
@@ -657,7 +686,7 @@ Network read_network(const std::string& path, const ReadOptions& opt) {
       if (auto net = yaml_network(path, file, f)) return finish(std::move(*net), opt, f, path);
       auto c = yaml_centerlines(path, file);
       scale(c, f);
-      return finish(Network::build(c, opt.build), opt, f, path);
+      return finish(build_checked(c, opt.build), opt, f, path);
     }
     case Format::OneD: {
       const auto deck = parse_deck(path);

@@ -52,6 +52,9 @@ enum class PolyKind { FlowireNetwork, BranchSplitVmtk, SimVascularRom, Overlappi
 /// Read a .vtp / .vtk file with VTK (throws flowire::Error if VTK is not built in).
 [[nodiscard]] PolyData read_vtk_polydata(const std::string& path);
 
+/// Legacy VTK poly data (ASCII or BINARY) parsed without VTK; `text` is the whole file.
+[[nodiscard]] PolyData read_legacy_polydata(const std::string& path, const std::string& text);
+
 /// Overlapping inlet→outlet paths (file units) merged into one tree of branches.
 [[nodiscard]] std::vector<Polyline> merge_paths(std::vector<Polyline> paths, double merge_tolerance,
                                                 const std::string& source);

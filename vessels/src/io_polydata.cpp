@@ -484,8 +484,10 @@ std::vector<Polyline> simvascular_rom(const PolyData& pd, const std::vector<doub
   if (members.empty()) throw_input_error(pd.source, "no point has BranchId >= 0: no branch to read");
 
   std::vector<Polyline> out;
-  for (const auto& [b, pts] : members) {
-    auto in_branch = [&, b = b](long long w) { return branch_of(static_cast<size_t>(w)) == b; };
+  for (const auto& entry : members) {
+    const long long b = entry.first;
+    const std::vector<size_t>& pts = entry.second;
+    auto in_branch = [&](long long w) { return branch_of(static_cast<size_t>(w)) == b; };
     size_t start = pts.front();
     for (const size_t v : pts) {
       const auto n = std::count_if(adj[v].begin(), adj[v].end(), in_branch);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <string>
 
@@ -29,7 +30,6 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
-#include <vtkPolyDataReader.h>
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkXMLPolyDataReader.h>
@@ -54,7 +54,7 @@ std::string head_of(const std::string& path, size_t limit) {
 /// POINTS / LINES / POINT_DATA / CELL_DATA / FIELD array counts.
 void check_declared_sizes(const std::string& path, const std::string& text, uintmax_t size, bool xml) {
   // Compressed XML data can be small for many points; allow a generous ratio.
-  const double limit = xml ? 1e4 * static_cast<double>(size) + 1e6 : static_cast<double>(size) + 16.0;
+  const double limit = xml ? 1100.0 * static_cast<double>(size) + 1e4 : static_cast<double>(size) + 16.0;
   const std::regex pattern = xml ? std::regex(R"((Number\w*)\s*=\s*"\s*([-+0-9.eE]+))")
                                  : std::regex(R"((POINTS|LINES|POLYGONS|VERTICES|TRIANGLE_STRIPS|POINT_DATA|CELL_DATA)\s+([-+0-9]+))");
   for (std::sregex_iterator it(text.begin(), text.end(), pattern), end; it != end; ++it) {
@@ -79,7 +79,7 @@ namespace {
 class CaptureWindow : public vtkOutputWindow {
  public:
   static CaptureWindow* New();
-  vtkTypeMacro(CaptureWindow, vtkOutputWindow);
+  vtkTypeMacro(CaptureWindow, vtkOutputWindow)
   void DisplayText(const char* text) override { other.emplace_back(text ? text : ""); }
   void DisplayErrorText(const char* text) override { errors.emplace_back(text ? text : ""); }
   void DisplayWarningText(const char* text) override { other.emplace_back(text ? text : ""); }
@@ -230,23 +230,17 @@ PolyData read_vtk_polydata(const std::string& path) {
   check_declared_sizes(path, head, size, xml);
   if (xml && head.find("</VTKFile>") == std::string::npos && size <= head.size())
     throw_input_error(path, "the XML ends before </VTKFile> (truncated file)");
-#ifdef FLOWIRE_HAVE_VTK
-  if (xml) {
-    vtkNew<vtkXMLPolyDataReader> reader;
-    return run_reader(reader.GetPointer(), path, "VTK XML poly data");
+  if (legacy) {
+    std::ifstream in(path, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return read_legacy_polydata(path, text);
   }
-  vtkNew<vtkPolyDataReader> reader;
-  reader->ReadAllScalarsOn();
-  reader->ReadAllVectorsOn();
-  reader->ReadAllFieldsOn();
-  reader->ReadAllNormalsOn();
-  reader->ReadAllTensorsOn();
-  reader->ReadAllColorScalarsOn();
-  reader->ReadAllTCoordsOn();
-  return run_reader(reader.GetPointer(), path, "legacy VTK");
+#ifdef FLOWIRE_HAVE_VTK
+  vtkNew<vtkXMLPolyDataReader> reader;
+  return run_reader(reader.GetPointer(), path, "VTK XML poly data");
 #else
-  throw_input_error(path, "this flowire was built without VTK (FLOWIRE_WITH_VTK=OFF): it cannot read .vtp/.vtk "
-                          "files; convert the centerlines to flowire YAML");
+  throw_input_error(path, "this flowire was built without VTK (FLOWIRE_WITH_VTK=OFF): it cannot read .vtp "
+                          "files; convert the centerlines to legacy .vtk or flowire YAML");
 #endif
 }
 

@@ -1,0 +1,48 @@
+// libFuzzer target for the network readers: every input is written to a file with each
+// supported extension and read with read_network. A flowire::Error is the expected answer to
+// bad input; anything else (another exception, a crash, a sanitizer report) is a bug.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/vessels/io.hpp"
+
+namespace {
+
+const std::filesystem::path& work_dir() {
+  static const std::filesystem::path dir = [] {
+    auto d = std::filesystem::temp_directory_path() / ("flowire-fuzz-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(d);
+    flowire::set_warning_handler([](std::string_view) {});
+    return d;
+  }();
+  return dir;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  for (const char* ext : {".vtp", ".vtk", ".yaml", ".in"}) {
+    const auto path = (work_dir() / (std::string("input") + ext)).string();
+    {
+      std::ofstream out(path, std::ios::binary | std::ios::trunc);
+      out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+    }
+    for (const bool keep : {false, true}) {
+      flowire::vessels::ReadOptions opt;
+      opt.keep_inlet_piece = keep;
+      opt.build.max_segment_length = 0.5;
+      try {
+        (void)flowire::vessels::read_network(path, opt);
+      } catch (const flowire::Error&) {
+      }
+    }
+  }
+  return 0;
+}
