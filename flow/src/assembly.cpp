@@ -75,6 +75,7 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
     add_value(in.node, in.waveform, 1.0);
   }
   bool warned_rcr = false;
+  std::vector<char> dynamic_ground(nn, 0);  // RCR outlets of the dynamic model
   for (const auto& o : spec.outlets) {
     check_node(net, o.node, "outlet");
     ++bc_count[static_cast<size_t>(o.node)];
@@ -88,7 +89,10 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
       case OutletBC::Type::Resistance: {
         double r = o.resistance;
         if (o.type == OutletBC::Type::Rcr) {
-          if (!steady_rcr) break;  // handled by the dynamic model
+          if (!steady_rcr) {  // handled by the dynamic model
+            dynamic_ground[n] = 1;
+            break;
+          }
           r = o.rp + o.rd;
           if (!warned_rcr) {
             warn("flow: the quasi-steady Poiseuille model uses each RCR outlet's total resistance Rp + Rd to Pd "
@@ -127,7 +131,7 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
     if (dt && !df) grounded[static_cast<size_t>(seg.node_from)] = 1;
   }
   for (size_t i = 0; i < nn; ++i)
-    if (a.outlet_conductance[i] > 0.0) grounded[i] = 1;
+    if (a.outlet_conductance[i] > 0.0 || dynamic_ground[i]) grounded[i] = 1;
   std::vector<char> root_grounded(nn, 0);
   for (size_t i = 0; i < nn; ++i)
     if (!a.dirichlet[i] && grounded[i]) root_grounded[static_cast<size_t>(uf.find(static_cast<int>(i)))] = 1;

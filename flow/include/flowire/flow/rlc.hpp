@@ -1,0 +1,41 @@
+#pragma once
+/// @file rlc.hpp
+/// @brief The `flow.model: rlc` network model: resistance, inertance and compliance.
+///
+/// Governing equations (unknowns: node pressures p, segment flows Q, and the capacitor
+/// pressure p_c of every RCR outlet):
+/// - segment s: \f$ L_s \dot Q_s + R_s Q_s = p_{from} - p_{to} \f$ with
+///   \f$ R_s = 8\eta l/(\pi r^4) \f$ and \f$ L_s = \rho l/(\pi r^2) \f$ (Inertance::Poiseuille)
+///   or the Womersley-corrected \f$ L_s = 4\rho l/(3\pi r^2) \f$ (Inertance::Womersley; with
+///   R in series this reproduces the Womersley amplitude and phase within 1–4 % up to α ≈ 4);
+/// - node i: \f$ C_i \dot p_i = \sum Q_{in} - \sum Q_{out} + Q_{bc} \f$ with
+///   \f$ C_i = \sum_{s \ni i} C_s / 2 \f$, \f$ C_s = 3\pi r^3 l / (2 E h) \f$ (thin elastic wall,
+///   h = `wall_thickness_ratio`·r; `wall_youngs_modulus` ≤ 0 gives rigid walls, C = 0);
+/// - pressure BC: p_i = p(t); resistance outlet: Q_bc = −(p_i − P_d)/R;
+/// - RCR outlet: Q_bc = −(p_i − p_c)/R_p, \f$ C \dot p_c = (p_i - p_c)/R_p - (p_c - P_d)/R_d \f$.
+///
+/// Time stepping: generalized-α (second order, spectral radius `rho_infinity` at infinite
+/// step) with the matrix \f$ \alpha_m E + \alpha_f\gamma\Delta t F \f$ factored once for the
+/// fixed step `dt`. The initial state is the steady solution at t = 0. With a periodic inlet,
+/// setup runs whole cycles until two consecutive cycle starts differ by less than
+/// `periodic_tolerance` (relative), at most `max_cycles`, and that periodic state becomes
+/// t = 0. `advance(t)` steps the grid k·dt to t and interpolates linearly between steps.
+#include "flowire/flow/solver.hpp"
+
+namespace flowire::flow {
+
+/// @brief Cycles run during setup to reach the periodic state (0 for a steady inlet or
+/// another model), and whether the tolerance was met.
+struct PeriodicInfo {
+  int cycles = 0;
+  bool converged = true;
+  double last_change = 0.0;  ///< relative change between the last two cycle starts
+};
+[[nodiscard]] PeriodicInfo periodic_info(const FlowSolver& solver);
+
+/// @brief Inertance of a segment (kg/m⁴).
+[[nodiscard]] double segment_inertance(Inertance kind, double density, double length, double radius);
+/// @brief Compliance of a segment (m³/Pa), 0 when `youngs_modulus` ≤ 0.
+[[nodiscard]] double segment_compliance(double youngs_modulus, double thickness_ratio, double length, double radius);
+
+}  // namespace flowire::flow
