@@ -79,39 +79,42 @@ bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
   work_.assign(static_cast<size_t>(b) + 1, 0.0);
   negative_ = 0;
   modified_ = 0;
-  min_pivot_ = n > 0 ? std::abs(a.lower(0, 0)) : 0.0;
+  min_pivot_ = n > 0 ? a.lower(0, 0) : 0.0;
   const double tiny = 1e-14 * std::max(a.max_diagonal(), 1e-300);
   const size_t stride = static_cast<size_t>(b) + 1;
+  std::copy(a.data().begin(), a.data().begin() + static_cast<std::ptrdiff_t>(n * stride),
+            l_.data().begin());
   double* L = l_.data().data();
-  const double* A = a.data().data();
-  for (int i = 0; i < n; ++i) {
-    double* li = L + static_cast<size_t>(i) * stride;
-    const double* ai = A + static_cast<size_t>(i) * stride;
-    const int j0 = std::max(0, i - b);
-    // u_k = L(i,k) d_k for the part of row i already computed.
-    for (int j = j0; j <= i; ++j) {
-      const double* lj = L + static_cast<size_t>(j) * stride;
-      double s = ai[j - i + b];
-      // Σ_{k=j0}^{j-1} L(i,k) d_k L(j,k); row j holds columns j−b..j, k ≥ j0 ≥ j−b.
-      for (int k = j0; k < j; ++k) s -= work_[k - j0] * lj[k - j + b];
-      if (j < i) {
-        const double dj = lj[b];
-        li[j - i + b] = s / dj;
-        work_[j - j0] = s;  // = L(i,j) d_j
-      } else {
-        if (!std::isfinite(s)) return false;
-        if (s < 0.0) ++negative_;
-        min_pivot_ = i == 0 ? s : std::min(min_pivot_, s);
-        if (min_pivot > 0.0) {
-          if (s < min_pivot) {
-            s = std::max(std::abs(s), min_pivot);
-            ++modified_;
-          }
-        } else if (std::abs(s) <= tiny) {
-          return false;
-        }
-        li[b] = s;
+  double* w = work_.data();
+  // Right-looking: eliminate column j, then a rank-1 update of the trailing b×b triangle.
+  // The update runs along contiguous row segments without a reduction, so it vectorizes.
+  for (int j = 0; j < n; ++j) {
+    double* lj = L + static_cast<size_t>(j) * stride;
+    double d = lj[b];
+    if (!std::isfinite(d)) return false;
+    if (d < 0.0) ++negative_;
+    min_pivot_ = j == 0 ? d : std::min(min_pivot_, d);
+    if (min_pivot > 0.0) {
+      if (d < min_pivot) {
+        d = std::max(std::abs(d), min_pivot);
+        ++modified_;
       }
+    } else if (std::abs(d) <= tiny) {
+      return false;
+    }
+    lj[b] = d;
+    const int iend = std::min(n - 1, j + b);
+    const int m = iend - j;
+    for (int r = 0; r < m; ++r) {  // w_r = A(j+1+r, j) before scaling
+      double* li = L + static_cast<size_t>(j + 1 + r) * stride;
+      w[r] = li[j - (j + 1 + r) + b];
+      li[j - (j + 1 + r) + b] = w[r] / d;
+    }
+    for (int r = 0; r < m; ++r) {
+      const int i = j + 1 + r;
+      double* row = L + static_cast<size_t>(i) * stride + (j + 1 - i + b);  // columns j+1..i
+      const double c = w[r] / d;
+      for (int k = 0; k <= r; ++k) row[k] -= c * w[k];
     }
   }
   return true;
@@ -124,9 +127,9 @@ void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const {
   const double* L = l_.data().data();
   for (int i = 0; i < n; ++i) {  // L y = rhs
     const double* li = L + static_cast<size_t>(i) * stride;
-    double s = x(i);
-    for (int k = std::max(0, i - b); k < i; ++k) s -= li[k - i + b] * x(k);
-    x(i) = s;
+    const int k0 = std::max(0, i - b);
+    if (i > k0)
+      x(i) -= Eigen::Map<const Eigen::VectorXd>(li + (k0 - i + b), i - k0).dot(x.segment(k0, i - k0));
   }
   for (int i = 0; i < n; ++i) x(i) /= L[static_cast<size_t>(i) * stride + b];  // D z = y
   for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z

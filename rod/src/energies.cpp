@@ -11,8 +11,6 @@ namespace {
 using Vec8 = Eigen::Matrix<double, 8, 1>;
 using Mat8 = Eigen::Matrix<double, 8, 8>;
 using Mat36 = Eigen::Matrix<double, 3, 6>;
-using Mat38 = Eigen::Matrix<double, 3, 8>;
-using Mat8x11 = Eigen::Matrix<double, 8, 11>;
 
 Mat3 skew(const Vec3& v) {
   Mat3 m;
@@ -47,10 +45,12 @@ Local make_local(const VertexStencil& s, bool need_dkb) {
   L.tf = f / L.lf;
   const Vec3 te0 = s.frame_e.d1.cross(s.frame_e.d2);
   const Vec3 tf0 = s.frame_f.d1.cross(s.frame_f.d2);
-  const Vec3 d1e = parallel_transport(s.frame_e.d1, te0, L.te);
-  const Vec3 d2e = parallel_transport(s.frame_e.d2, te0, L.te);
-  const Vec3 d1f = parallel_transport(s.frame_f.d1, tf0, L.tf);
-  const Vec3 d2f = parallel_transport(s.frame_f.d2, tf0, L.tf);
+  // Frames already at the current tangents (the simulator's case): no transport needed.
+  const bool at_base = (te0 - L.te).squaredNorm() < 1e-26 && (tf0 - L.tf).squaredNorm() < 1e-26;
+  const Vec3 d1e = at_base ? s.frame_e.d1 : parallel_transport(s.frame_e.d1, te0, L.te);
+  const Vec3 d2e = at_base ? s.frame_e.d2 : parallel_transport(s.frame_e.d2, te0, L.te);
+  const Vec3 d1f = at_base ? s.frame_f.d1 : parallel_transport(s.frame_f.d1, tf0, L.tf);
+  const Vec3 d2f = at_base ? s.frame_f.d2 : parallel_transport(s.frame_f.d2, tf0, L.tf);
   const double ce = std::cos(s.theta_e), se = std::sin(s.theta_e);
   const double cf = std::cos(s.theta_f), sf = std::sin(s.theta_f);
   L.m1e = ce * d1e + se * d2e;
@@ -60,7 +60,7 @@ Local make_local(const VertexStencil& s, bool need_dkb) {
   L.chi = 1.0 + L.te.dot(L.tf);
   const Vec3 w = L.te.cross(L.tf);
   L.kb = 2.0 * w / L.chi;
-  L.ref_twist = reference_twist(d1e, L.te, d1f, L.tf, s.ref_twist);
+  L.ref_twist = at_base ? s.ref_twist : reference_twist(d1e, L.te, d1f, L.tf, s.ref_twist);
   if (need_dkb) {
     const double c = L.chi;
     L.dkb.leftCols<3>() = -(2.0 / c) * skew(L.tf) - (2.0 / (c * c)) * w * L.tf.transpose();
@@ -87,43 +87,44 @@ Mat6 hessian_v_dot_kb(const Local& L, const Vec3& v) {
          (2.0 * N / (c * c)) * Hc + (4.0 * N / (c * c * c)) * gc * gc.transpose();
 }
 
-/// g = (κb)·u where u is director d of edge `edge` (0: e, 1: f), transported in time with
-/// its edge; d' and d'' are its derivatives w.r.t. the edge's angle. Adds
-/// `scale` × (gradient, Hessian) in y = (te, tf, θe, θf).
-void add_director_term(const Local& L, const Vec3& d, const Vec3& dp, const Vec3& dpp, int edge,
-                       double scale, Vec8& g, Mat8* H) {
-  const int tcol = 3 * edge;
-  const int acol = 6 + edge;
-  const Vec3& t = edge == 0 ? L.te : L.tf;
-  g.head<6>() += scale * (L.dkb.transpose() * d);
-  g(acol) += scale * L.kb.dot(dp);
-  if (H == nullptr) return;
-  Mat8 h = Mat8::Zero();
-  h.topLeftCorner<6, 6>() = hessian_v_dot_kb(L, d);
-  Mat38 U = Mat38::Zero();
-  U.block<3, 3>(0, tcol) = -t * d.transpose();
-  U.col(acol) = dp;
-  Mat38 K = Mat38::Zero();
-  K.leftCols<6>() = L.dkb;
-  h += K.transpose() * U + U.transpose() * K;
-  h.block<3, 3>(tcol, tcol) -= 0.5 * (d * L.kb.transpose() + L.kb * d.transpose());
-  h(acol, acol) += L.kb.dot(dpp);
-  *H += scale * h;
+/// Gradient in y = (te, tf, θe, θf) of the material curvatures:
+/// κ₁ = ½ (m2e + m2f)·κb (m2' = −m1), κ₂ = −½ (m1e + m1f)·κb (m1' = m2).
+void curvature_gradients(const Local& L, Vec8& g1, Vec8& g2) {
+  g1.head<6>() = 0.5 * (L.dkb.transpose() * (L.m2e + L.m2f));
+  g1(6) = -0.5 * L.kb.dot(L.m1e);
+  g1(7) = -0.5 * L.kb.dot(L.m1f);
+  g2.head<6>() = -0.5 * (L.dkb.transpose() * (L.m1e + L.m1f));
+  g2(6) = -0.5 * L.kb.dot(L.m2e);
+  g2(7) = -0.5 * L.kb.dot(L.m2f);
 }
 
-/// Curvature (k = 0: κ1, k = 1: κ2) with gradient and Hessian in y.
-double curvature_y(const Local& L, int k, Vec8& g, Mat8* H) {
-  g.setZero();
-  if (H) H->setZero();
-  if (k == 0) {  // κ1 = ½ (m2e + m2f)·κb ; m2' = −m1, m2'' = −m2
-    add_director_term(L, L.m2e, -L.m1e, -L.m2e, 0, 0.5, g, H);
-    add_director_term(L, L.m2f, -L.m1f, -L.m2f, 1, 0.5, g, H);
-    return 0.5 * (L.m2e + L.m2f).dot(L.kb);
+/// Σ_k w_k ∇²κ_k in y. Every term g = κb·u(d) of a curvature is linear in its director d
+/// (transported in time with its edge; d'' = −d), so the weighted sum collapses to one
+/// director combination per edge:
+///   D_e = ½ w₁ m2e − ½ w₂ m1e,  D'_e = −½ w₁ m1e − ½ w₂ m2e  (likewise for f),
+/// and ∇²g = ∇²(v·κb)|_{v=D_e+D_f} + Kᵀ U + Uᵀ K + (transport terms), with U = ∂u/∂y.
+void add_curvature_hessians(const Local& L, double w1, double w2, Mat8& H) {
+  const Vec3 De = 0.5 * w1 * L.m2e - 0.5 * w2 * L.m1e;
+  const Vec3 Dpe = -0.5 * w1 * L.m1e - 0.5 * w2 * L.m2e;
+  const Vec3 Df = 0.5 * w1 * L.m2f - 0.5 * w2 * L.m1f;
+  const Vec3 Dpf = -0.5 * w1 * L.m1f - 0.5 * w2 * L.m2f;
+  H.topLeftCorner<6, 6>() += hessian_v_dot_kb(L, De + Df);
+  const Vec3* D[2] = {&De, &Df};
+  const Vec3* Dp[2] = {&Dpe, &Dpf};
+  const Vec3* T[2] = {&L.te, &L.tf};
+  for (int edge = 0; edge < 2; ++edge) {
+    const int tcol = 3 * edge, acol = 6 + edge;
+    const Vec6 p = L.dkb.transpose() * (*T[edge]);  // Kᵀ t
+    const Vec6 q = L.dkb.transpose() * (*Dp[edge]);  // Kᵀ d'
+    const Eigen::Matrix<double, 6, 3> pd = -p * D[edge]->transpose();
+    H.block<6, 3>(0, tcol) += pd;
+    H.block<3, 6>(tcol, 0) += pd.transpose();
+    H.block<6, 1>(0, acol) += q;
+    H.block<1, 6>(acol, 0) += q.transpose();
+    H.block<3, 3>(tcol, tcol) -=
+        0.5 * ((*D[edge]) * L.kb.transpose() + L.kb * D[edge]->transpose());
+    H(acol, acol) -= L.kb.dot(*D[edge]);  // κb·d'' with d'' = −d
   }
-  // κ2 = −½ (m1e + m1f)·κb ; m1' = m2, m1'' = −m1
-  add_director_term(L, L.m1e, L.m2e, -L.m1e, 0, -0.5, g, H);
-  add_director_term(L, L.m1f, L.m2f, -L.m1f, 1, -0.5, g, H);
-  return -0.5 * (L.m1e + L.m1f).dot(L.kb);
 }
 
 /// Second derivative of t = e/|e| contracted with p: Σ_k p_k ∂²t_k/∂e².
@@ -134,7 +135,8 @@ Mat3 tangent_curvature_term(const Vec3& p, const Vec3& t, double l) {
          (l * l);
 }
 
-/// Chain rule from y = (te, tf, θe, θf) to the stencil unknowns (x0, θe, x1, θf, x2).
+/// Chain rule from y = (te, tf, θe, θf) to the stencil unknowns (x0, θe, x1, θf, x2),
+/// with te depending on (x0, x1) through Pe = (I − te teᵀ)/le and tf on (x1, x2).
 void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11* Hx) {
   const Mat3 Pe = (Mat3::Identity() - L.te * L.te.transpose()) / L.le;
   const Mat3 Pf = (Mat3::Identity() - L.tf * L.tf.transpose()) / L.lf;
@@ -148,42 +150,55 @@ void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11
     gx->segment<3>(8) = gf;
   }
   if (Hx && Hy) {
-    Mat8x11 J = Mat8x11::Zero();
-    J.block<3, 3>(0, 0) = -Pe;
-    J.block<3, 3>(0, 4) = Pe;
-    J.block<3, 3>(3, 4) = -Pf;
-    J.block<3, 3>(3, 8) = Pf;
-    J(6, 3) = 1.0;
-    J(7, 7) = 1.0;
-    *Hx = J.transpose() * (*Hy) * J;
-    const Mat3 Qe = tangent_curvature_term(gy.segment<3>(0), L.te, L.le);
-    const Mat3 Qf = tangent_curvature_term(gy.segment<3>(3), L.tf, L.lf);
-    Hx->block<3, 3>(0, 0) += Qe;
-    Hx->block<3, 3>(0, 4) -= Qe;
-    Hx->block<3, 3>(4, 0) -= Qe;
-    Hx->block<3, 3>(4, 4) += Qe + Qf;
-    Hx->block<3, 3>(4, 8) -= Qf;
-    Hx->block<3, 3>(8, 4) -= Qf;
-    Hx->block<3, 3>(8, 8) += Qf;
+    const Mat8& h = *Hy;
+    const Mat3 Ee = Pe * h.block<3, 3>(0, 0) * Pe + tangent_curvature_term(gy.segment<3>(0), L.te, L.le);
+    const Mat3 Ef = Pe * h.block<3, 3>(0, 3) * Pf;
+    const Mat3 Ff = Pf * h.block<3, 3>(3, 3) * Pf + tangent_curvature_term(gy.segment<3>(3), L.tf, L.lf);
+    Mat11& H = *Hx;
+    H.block<3, 3>(0, 0) = Ee;
+    H.block<3, 3>(0, 4) = Ef - Ee;
+    H.block<3, 3>(0, 8) = -Ef;
+    H.block<3, 3>(4, 4) = Ee - Ef - Ef.transpose() + Ff;
+    H.block<3, 3>(4, 8) = Ef - Ff;
+    H.block<3, 3>(8, 8) = Ff;
+    H.block<3, 3>(4, 0) = H.block<3, 3>(0, 4).transpose();
+    H.block<3, 3>(8, 0) = H.block<3, 3>(0, 8).transpose();
+    H.block<3, 3>(8, 4) = H.block<3, 3>(4, 8).transpose();
+    const int acol[2] = {3, 7};
+    for (int a = 0; a < 2; ++a) {
+      const Vec3 ue = Pe * h.block<3, 1>(0, 6 + a);
+      const Vec3 uf = Pf * h.block<3, 1>(3, 6 + a);
+      const int c = acol[a];
+      H.block<3, 1>(0, c) = -ue;
+      H.block<3, 1>(4, c) = ue - uf;
+      H.block<3, 1>(8, c) = uf;
+      H.block<1, 3>(c, 0) = -ue.transpose();
+      H.block<1, 3>(c, 4) = (ue - uf).transpose();
+      H.block<1, 3>(c, 8) = uf.transpose();
+    }
+    H(3, 3) = h(6, 6);
+    H(3, 7) = H(7, 3) = h(6, 7);
+    H(7, 7) = h(7, 7);
   }
 }
 
 /// Bending energy with gradient/Hessian in y.
 double bend_y(const Local& L, const VertexParams& p, Vec8* gy, Mat8* Hy) {
-  const double B[2] = {p.bend_stiffness1, p.bend_stiffness2};
-  const double kbar[2] = {p.rest_kappa1, p.rest_kappa2};
-  double energy = 0.0;
-  Vec8 gk;
-  Mat8 Hk;
-  for (int k = 0; k < 2; ++k) {
-    const double kappa = curvature_y(L, k, gk, Hy ? &Hk : nullptr);
-    const double dk = kappa - kbar[k];
-    const double c = B[k] / p.voronoi_length;
-    energy += 0.5 * c * dk * dk;
-    if (gy) *gy += c * dk * gk;
-    if (Hy) *Hy += c * (gk * gk.transpose() + dk * Hk);
+  const double k1 = 0.5 * (L.m2e + L.m2f).dot(L.kb);
+  const double k2 = -0.5 * (L.m1e + L.m1f).dot(L.kb);
+  const double d1 = k1 - p.rest_kappa1, d2 = k2 - p.rest_kappa2;
+  const double c1 = p.bend_stiffness1 / p.voronoi_length;
+  const double c2 = p.bend_stiffness2 / p.voronoi_length;
+  if (gy || Hy) {
+    Vec8 g1, g2;
+    curvature_gradients(L, g1, g2);
+    if (gy) *gy += c1 * d1 * g1 + c2 * d2 * g2;
+    if (Hy) {
+      *Hy += c1 * g1 * g1.transpose() + c2 * g2 * g2.transpose();
+      add_curvature_hessians(L, c1 * d1, c2 * d2, *Hy);
+    }
   }
-  return energy;
+  return 0.5 * (c1 * d1 * d1 + c2 * d2 * d2);
 }
 
 /// Twisting energy with gradient/Hessian in y.
