@@ -4,7 +4,12 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <iterator>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -229,7 +234,7 @@ TEST_F(ReadersWithVtk, VmtkPathsWithTightToleranceJoinExactlyAtTheJunctions) {
   }
 }
 
-TEST_F(ReadersWithVtk, VmtkPathsAsLegacyVtkGiveTheSameTree) {
+TEST(ReadLegacyVtk, VmtkPathsAsLegacyVtkGiveTheSameTree) {
   const auto dir = scratch_dir("io_vmtk_legacy");
   const Aorta a;
   auto poly = a.vmtk();
@@ -409,7 +414,7 @@ TEST_F(ReadersWithVtk, TwoPointLineCellsAreChainedIntoBranches) {
   EXPECT_NEAR(c.total_length, 0.02, 1e-15);
 }
 
-TEST_F(ReadersWithVtk, LegacyVtkTreeWithRadii) {
+TEST(ReadLegacyVtk, TreeWithRadii) {
   // Like the BlueFern coronary files: lines between bifurcations sharing end-point ids, mm.
   TestPoly p;
   std::vector<double> r;
@@ -771,6 +776,51 @@ TEST(ReadBadInput, SvOneDErrorsNameFileAndLine) {
     EXPECT_CONTAINS(msg, c.name == "zero_area.in" ? std::string("zero_area.in:11: SEGMENT side_0: area 0 is not positive")
                                                   : c.expected);
     EXPECT_CONTAINS(msg, file);
+  }
+}
+
+/// Big-endian bytes of a value, as legacy BINARY files store them.
+template <class T>
+std::string big_endian(T v) {
+  std::string b(sizeof v, '\0');
+  std::memcpy(b.data(), &v, sizeof v);
+  if (std::endian::native == std::endian::little) std::reverse(b.begin(), b.end());
+  return b;
+}
+
+TEST(ReadLegacyVtk, BinaryFileWithOldCellLayout) {
+  std::string s = "# vtk DataFile Version 4.2\nbinary test\nBINARY\nDATASET POLYDATA\nPOINTS 3 double\n";
+  for (const double x : {0.0, 0.0, 0.0, 10.0, 0.0, 0.0, 10.0, 5.0, 0.0}) s += big_endian(x);
+  s += "\nLINES 1 4\n";
+  for (const int32_t v : {3, 0, 1, 2}) s += big_endian(v);
+  s += "\nPOINT_DATA 3\nSCALARS radius float 1\nLOOKUP_TABLE default\n";
+  for (const float r : {2.0F, 1.5F, 1.0F}) s += big_endian(r);
+  s += "\n";
+  const auto file = write_file(scratch_dir("io_legacy_binary"), "bin.vtk", s);
+  ReadOptions opt;
+  opt.length_unit = "mm";
+  const auto cl = read_centerlines(file, opt);
+  ASSERT_EQ(cl.branches.size(), 1u);
+  ASSERT_EQ(cl.branches[0].points.size(), 3u);
+  EXPECT_NEAR(cl.branches[0].points[2].y(), 5e-3, 1e-15);
+  EXPECT_NEAR(cl.branches[0].radii[1], 1.5e-3, 1e-15);
+  // Cut short inside the point coordinates: an error, not garbage.
+  const auto cut = write_file(scratch_dir("io_legacy_binary"), "cut.vtk", s.substr(0, 100));
+  EXPECT_CONTAINS(error_of([&] { (void)read_network(cut); }), "cut.vtk");
+}
+
+TEST_F(ReadersWithVtk, TruncatedFlowireVtpIsAnError) {
+  const auto dir = scratch_dir("io_truncated_vtp");
+  const auto file = (dir / "net.vtp").string();
+  write_network_vtp(sample_network(), file);
+  std::ifstream in(file, std::ios::binary);
+  const std::string full((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const double f : {0.1, 0.5, 0.9, 0.99}) {
+    const auto cut = write_file(dir, "cut.vtp", full.substr(0, static_cast<size_t>(f * static_cast<double>(full.size()))));
+    ::testing::internal::CaptureStderr();
+    const auto msg = error_of([&] { (void)read_network(cut); });
+    EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+    EXPECT_CONTAINS(msg, "cut.vtp");
   }
 }
 

@@ -1,4 +1,4 @@
-// .vtp (VTK XML) and .vtk (legacy) poly data read with VTK into the VTK-independent PolyData.
+// .vtp (VTK XML, read with VTK) and .vtk (legacy, see io_legacy.cpp) poly data into PolyData.
 // VTK reports problems through its output window and error events; while a file is read
 // both are captured, nothing reaches stderr, and the first error becomes one flowire::Error.
 #include <fmt/format.h>
@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <mutex>
 #include <regex>
 #include <string>
 
@@ -194,6 +195,9 @@ PolyData to_polydata(vtkPolyData* pd, const std::string& path) {
 
 template <class Reader>
 PolyData run_reader(Reader* reader, const std::string& path, const char* what) {
+  // The output window and the logger verbosity are global: one read at a time.
+  static std::mutex mutex;
+  const std::lock_guard lock(mutex);
   CaptureGuard guard;
   vtkNew<vtkCallbackCommand> cb;
   cb->SetCallback(on_vtk_event);

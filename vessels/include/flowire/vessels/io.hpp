@@ -3,7 +3,8 @@
 /// @brief Reading vessel networks from centerline files and writing them back.
 ///
 /// Formats read (chosen by extension, then by the arrays the file holds):
-/// - `.vtp` (VTK XML poly data) and `.vtk` (legacy VTK poly data), needs VTK:
+/// - `.vtp` (VTK XML poly data, read with VTK) and `.vtk` (legacy VTK poly data, ASCII or BINARY,
+///   parsed by flowire itself, also without VTK):
 ///   - flowire's own `.vtp` (field array `flowire_network`): read back to the identical network;
 ///   - VMTK `vmtkbranchextractor` output (cell arrays `GroupIds`, `Blanking`, `CenterlineIds`,
 ///     `TractIds`): one branch per group, junctions at the blanked bifurcation regions;
