@@ -1,0 +1,40 @@
+#pragma once
+/// @file sample.hpp
+/// @brief Evaluate a Taylor–Hood solution at arbitrary points of the curved mesh.
+///
+/// A uniform grid of buckets holds the tetrahedra by bounding box; a point is located by
+/// the straight (vertex) barycentric coordinates, then refined by Newton iterations on
+/// the quadratic map of the element, so points near the curved wall are found too.
+#include <optional>
+#include <vector>
+
+#include "flowire/fem/mesh.hpp"
+#include "flowire/fem/stokes.hpp"
+
+namespace flowire::fem {
+
+struct PointValue {
+  Vec3 velocity = Vec3::Zero();  ///< m/s (P2 interpolation)
+  double pressure = 0.0;         ///< Pa (P1 interpolation)
+  int tet = -1;
+};
+
+class FieldSampler {
+ public:
+  /// Both must outlive the sampler.
+  FieldSampler(const TetMesh& mesh, const StokesSolution& solution);
+  /// @brief Value at x, or nothing when x is outside the mesh (farther than
+  /// `tolerance` times the element size).
+  [[nodiscard]] std::optional<PointValue> at(const Vec3& x, double tolerance = 1e-8) const;
+  /// @brief Tetrahedron containing x and the reference coordinates, or -1.
+  [[nodiscard]] int locate(const Vec3& x, double tolerance, std::array<double, 3>& xi) const;
+
+ private:
+  const TetMesh& mesh_;
+  const StokesSolution& sol_;
+  Vec3 lo_, cell_;
+  std::array<int, 3> dims_{};
+  std::vector<int> offset_, items_;  // CSR: bucket -> tetrahedra
+};
+
+}  // namespace flowire::fem

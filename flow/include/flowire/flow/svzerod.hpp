@@ -1,0 +1,61 @@
+#pragma once
+/// @file svzerod.hpp
+/// @brief svZeroDSolver interop: read its JSON model, simulate it as svZeroDSolver does,
+/// write `svzerod_result.csv` in its format.
+///
+/// Supported blocks (others are refused naming the block and its type):
+/// - `BloodVessel` (R_poiseuille, C, L, stenosis_coefficient), unknowns P, Q at both ends:
+///   \f$ P_{in} - P_{out} - (R + S|Q_{in}|) Q_{in} - L \dot Q_{out} = 0 \f$,
+///   \f$ Q_{in} - Q_{out} - C \frac{d}{dt}\left(P_{in} - (R + S|Q_{in}|)Q_{in}\right) = 0 \f$;
+/// - `NORMAL_JUNCTION`: equal pressures, conserved flow;
+/// - boundary conditions `FLOW` (Q, t), `PRESSURE` (P, t), `RESISTANCE` (R, Pd):
+///   P − R Q − Pd = 0, and `RCR` (Rp, C, Rd, Pd): P − Rp Q − P_c = 0,
+///   \f$ R_d Q - P_c - R_d C \dot P_c + P_d = 0 \f$.
+/// A parameter is a number or a periodic table over `t` (linear interpolation).
+///
+/// Time integration as svZeroDSolver: generalized-α (`rho_infty`, default 0.5) on
+/// \f$ E\dot y + F y + c(y, \dot y, t) = 0 \f$ with Newton iterations to `absolute_tolerance`;
+/// a steady initial state (time tables replaced by their mean, RCR capacitors removed,
+/// 31 steps of one tenth of the period) unless `steady_initial: false`; the number of
+/// cycles from the largest RCR time constant when `use_cycle_to_cycle_error` is set;
+/// output of the last cycle (times from 0) or of all cycles, vessel- or variable-based,
+/// mean only, with derivatives, as its `simulation_parameters` ask.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace flowire::flow::svzerod {
+
+/// @brief A result table, one row per (vessel or variable, time), as svZeroDSolver writes it.
+struct Result {
+  std::vector<std::string> columns;       ///< e.g. name,time,flow_in,flow_out,pressure_in,pressure_out
+  std::vector<std::string> names;         ///< (rows) vessel or variable name
+  std::vector<double> times;              ///< (rows) NaN for mean-only rows (empty time field)
+  std::vector<std::vector<double>> data;  ///< (rows x columns−2) the numeric columns after name,time
+  bool variable_based = false;
+};
+
+/// @brief What a run did, for the CLI's summary.json.
+struct Summary {
+  std::string model;           ///< input file
+  std::string result_file;     ///< path of svzerod_result.csv
+  int vessels = 0, junctions = 0, boundary_conditions = 0, unknowns = 0;
+  int cycles = 0, steps = 0, rows = 0;
+  double period = 0.0, dt = 0.0;
+  double newton_iterations_per_step = 0.0;
+  double seconds = 0.0;
+};
+
+/// @brief Simulate an svZeroDSolver JSON model file.
+/// @throws flowire::Error: input (unreadable JSON, unsupported block, missing parameter,
+/// inconsistent period, naming the file and block), numerical (singular system, Newton
+/// not converging).
+Result simulate(const std::string& json_path, Summary* summary = nullptr);
+
+/// @brief Write a result as svZeroDSolver's CSV (scientific, 16 digits), atomically.
+void write_result_csv(const Result& result, const std::filesystem::path& path);
+
+/// @brief Simulate `json_path` and write `out_dir/svzerod_result.csv`; for `flowire run model.json`.
+Summary run(const std::string& json_path, const std::filesystem::path& out_dir);
+
+}  // namespace flowire::flow::svzerod
