@@ -1,0 +1,117 @@
+// FlowSpec from a validated scene (keys as the scene schema declares them).
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "flow_test_networks.hpp"
+#include "flowire/common/config.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/flow/spec.hpp"
+#include "flowire_test.hpp"
+
+namespace flowire::flow {
+namespace {
+
+using config::Key;
+using config::Type;
+using D = units::Dimension;
+
+config::Schema flow_schema() {
+  config::Schema s;
+  auto add = [&](std::string p, Type t, std::string def, D d, std::vector<std::string> choices = {}) {
+    s.add(Key{std::move(p), t, std::move(def), d, "", std::move(choices)});
+  };
+  add("flow", Type::Section, "", D::None);
+  add("flow.model", Type::Enum, "poiseuille", D::None, {"poiseuille", "rlc"});
+  add("flow.solver", Type::Enum, "superposition", D::None, {"superposition", "dense_inverse", "sparse", "petsc"});
+  add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity);
+  add("flow.density", Type::Number, "1060", D::Density);
+  add("flow.inlet", Type::Section, "{}", D::None);
+  add("flow.inlet.node", Type::StringOrInteger, "", D::None);
+  for (std::string w : {"pressure", "flow"}) {
+    const D d = w == "pressure" ? D::Pressure : D::FlowRate;
+    add("flow.inlet." + w, Type::NumberOrSection, "", d);
+    add("flow.inlet." + w + ".waveform", Type::Enum, "", D::None, {"sine", "constant", "table"});
+    add("flow.inlet." + w + ".systolic", Type::Number, "", d);
+    add("flow.inlet." + w + ".diastolic", Type::Number, "", d);
+    add("flow.inlet." + w + ".period", Type::Number, "", D::Time);
+    add("flow.inlet." + w + ".value", Type::Number, "", d);
+    add("flow.inlet." + w + ".file", Type::String, "", D::None);
+  }
+  add("flow.outlets", Type::Section, "{}", D::None);
+  add("flow.outlets.pressure", Type::Number, "", D::Pressure);
+  add("flow.outlets.resistance", Type::Number, "", D::Resistance);
+  add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure);
+  add("flow.outlets.scaling", Type::Enum, "none", D::None, {"none", "murray"});
+  add("flow.outlets.rcr", Type::Section, "", D::None);
+  add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance);
+  add("flow.outlets.rcr.C", Type::Number, "", D::Compliance);
+  add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance);
+  add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure);
+  return s;
+}
+
+TEST(FlowSpec, SineInletAndResistanceOutletsFromAScene) {
+  const Network net = test::murray_tree(2);
+  const auto cfg = config::load_config_text(R"(
+flow:
+  solver: sparse
+  viscosity: 4 cP
+  inlet:
+    pressure: {waveform: sine, systolic: 120 mmHg, diastolic: 80 mmHg, period: 0.75 s}
+  outlets:
+    resistance: 1.2 mmHg*s/mL
+    distal_pressure: 5 mmHg
+)", "scene.yaml", flow_schema());
+  const FlowSpec s = from_config(cfg, net);
+  EXPECT_EQ(s.solver, SolverKind::Sparse);
+  EXPECT_DOUBLE_EQ(s.viscosity, 4e-3);
+  ASSERT_EQ(s.inlets.size(), 1u);
+  EXPECT_EQ(s.inlets[0].node, net.widest_end());
+  EXPECT_EQ(s.inlets[0].waveform.kind, Waveform::Kind::Sine);
+  EXPECT_NEAR(s.inlets[0].waveform(0.75 / 4), 120 * units::mmHg, 1e-9);
+  EXPECT_NEAR(s.inlets[0].waveform.mean(), 100 * units::mmHg, 1e-9);
+  EXPECT_DOUBLE_EQ(s.cycle(), 0.75);
+  ASSERT_EQ(s.outlets.size(), 4u);
+  for (const auto& o : s.outlets) {
+    EXPECT_EQ(o.type, OutletBC::Type::Resistance);
+    EXPECT_NEAR(o.resistance, 1.2 * units::mmHg * 1e6, 1.0);
+    EXPECT_NEAR(o.distal_pressure, 5 * units::mmHg, 1e-9);
+  }
+}
+
+TEST(FlowSpec, ConstantTableFlowAndMurrayScaledRcr) {
+  const Network net = test::murray_tree(1);
+  const auto dir = flowire::testing::scratch_dir("flow_spec");
+  std::ofstream(dir / "q.csv") << "time,flow\n0,1e-6\n0.5,3e-6\n1.0,1e-6\n";
+  auto cfg = config::load_config_text(R"(
+flow:
+  inlet: {flow: {file: q.csv}}
+  outlets:
+    scaling: murray
+    rcr: {Rp: 1e8, C: 1e-9, Rd: 1e9}
+)", (dir / "scene.yaml").string(), flow_schema());
+  cfg.set_file((dir / "scene.yaml").string());
+  const FlowSpec s = from_config(cfg, net);
+  EXPECT_EQ(s.inlets[0].type, InletBC::Type::Flow);
+  EXPECT_EQ(s.inlets[0].waveform.kind, Waveform::Kind::Table);
+  EXPECT_NEAR(s.inlets[0].waveform(0.25), 2e-6, 1e-18);
+  EXPECT_NEAR(s.inlets[0].waveform(1.25), 2e-6, 1e-18);  // periodic
+  ASSERT_EQ(s.outlets.size(), 2u);
+  // Two equal daughters: each gets twice the total (parallel) values, half the compliance.
+  for (const auto& o : s.outlets) {
+    EXPECT_NEAR(o.rp, 2e8, 1e-3);
+    EXPECT_NEAR(o.rd, 2e9, 1e-2);
+    EXPECT_NEAR(o.c, 0.5e-9, 1e-21);
+  }
+  const auto cfg2 = config::load_config_text("flow:\n  inlet: {pressure: 13000, node: 5}\n", "s.yaml", flow_schema());
+  try {
+    (void)from_config(cfg2, net);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("node 5"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace flowire::flow
