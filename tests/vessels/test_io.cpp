@@ -247,6 +247,39 @@ TEST(ReadLegacyVtk, VmtkPathsAsLegacyVtkGiveTheSameTree) {
   EXPECT_EQ(c.junctions, 2);
 }
 
+TEST_F(ReadersWithVtk, VmtkPathsOfADeepTreeMergeLevelByLevel) {
+  // A planar binary tree of depth 6 (64 outlets), one VMTK-style path per outlet.
+  constexpr int depth = 6;
+  TestPoly p;
+  std::vector<double> radius;
+  for (int leaf = 0; leaf < (1 << depth); ++leaf) {
+    std::vector<long long> ids;
+    Vec3 x(0, 0, 0);
+    double angle = -std::numbers::pi / 2;
+    for (int level = 0; level <= depth; ++level) {
+      if (level > 0) angle += ((leaf >> (depth - level)) & 1 ? 1.0 : -1.0) * std::numbers::pi / 6;
+      const double len = 40.0 * std::pow(0.8, level), r = 5.0 * std::pow(0.8, level);
+      const Vec3 y = x + len * Vec3(std::cos(angle), std::sin(angle), 0);
+      for (const auto& q : line_points(x, y, 0.5, level == 0)) {
+        ids.push_back(static_cast<long long>(p.points.size()));
+        p.points.push_back(q);
+        radius.push_back(r);
+      }
+      x = y;
+    }
+    p.lines.push_back(ids);
+  }
+  p.point_data.push_back({"MaximumInscribedSphereRadius", radius});
+  const auto file = write_file(scratch_dir("io_vmtk_deep"), "tree.vtp", vtp_text(p));
+  ReadOptions opt;
+  opt.length_unit = "mm";
+  const auto c = read_network(file, opt).counts();
+  EXPECT_EQ(c.ends, (1 << depth) + 1);
+  EXPECT_EQ(c.junctions, (1 << depth) - 1);
+  EXPECT_EQ(c.branches, (1 << (depth + 1)) - 1);
+  EXPECT_EQ(c.loops, 0);
+}
+
 TEST_F(ReadersWithVtk, VmtkBranchSplitCenterlinesJoinAtTheBlankedRegion) {
   // Two centerlines: trunk (group 0), bifurcation region (group 1, blanked), daughters 2 and 3.
   TestPoly p;

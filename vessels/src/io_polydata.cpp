@@ -170,17 +170,45 @@ struct Location {
   double dist = std::numeric_limits<double>::infinity();
 };
 
+/// Closest point to x on segments [s0, s1) of branch b, if closer than `best`.
+void scan(const std::vector<Polyline>& tree, size_t b, size_t s0, size_t s1, const Vec3& x, Location& best) {
+  const auto& pts = tree[b].points;
+  s1 = std::min(s1, pts.size() - 1);
+  for (size_t s = s0; s < s1; ++s) {
+    const Vec3 d = pts[s + 1] - pts[s];
+    const double dd = d.squaredNorm();
+    const double t = std::clamp(dd > 0.0 ? (x - pts[s]).dot(d) / dd : 0.0, 0.0, 1.0);
+    const double dist = (pts[s] + t * d - x).norm();
+    if (dist < best.dist) best = {b, s, t, dist};
+  }
+}
+
 Location closest_on(const std::vector<Polyline>& tree, const Vec3& x) {
   Location best;
-  for (size_t b = 0; b < tree.size(); ++b) {
-    const auto& pts = tree[b].points;
-    for (size_t s = 0; s + 1 < pts.size(); ++s) {
-      const Vec3 d = pts[s + 1] - pts[s];
-      const double dd = d.squaredNorm();
-      double t = dd > 0.0 ? (x - pts[s]).dot(d) / dd : 0.0;
-      t = std::clamp(t, 0.0, 1.0);
-      const double dist = (pts[s] + t * d - x).norm();
-      if (dist < best.dist) best = {b, s, t, dist};
+  for (size_t b = 0; b < tree.size(); ++b) scan(tree, b, 0, tree[b].points.size(), x, best);
+  return best;
+}
+
+/// Closest point near the previous location: a few segments either side on its branch and,
+/// close to a branch end, on the branches that meet there.
+Location closest_near(const std::vector<Polyline>& tree, const Location& hint, const Vec3& x) {
+  constexpr size_t window = 4;
+  Location best;
+  const auto& own = tree[hint.branch].points;
+  const size_t nseg = own.size() - 1;
+  scan(tree, hint.branch, hint.seg > window ? hint.seg - window : 0, hint.seg + window + 1, x, best);
+  if (hint.seg + window >= nseg || hint.seg < window) {
+    for (size_t b = 0; b < tree.size(); ++b) {
+      if (b == hint.branch) continue;
+      const auto& p = tree[b].points;
+      if (hint.seg + window >= nseg && (p.front() == own.back() || p.back() == own.back())) {
+        scan(tree, b, 0, window, x, best);
+        scan(tree, b, p.size() > window + 1 ? p.size() - 1 - window : 0, p.size(), x, best);
+      }
+      if (hint.seg < window && (p.back() == own.front() || p.front() == own.front())) {
+        scan(tree, b, 0, window, x, best);
+        scan(tree, b, p.size() > window + 1 ? p.size() - 1 - window : 0, p.size(), x, best);
+      }
     }
   }
   return best;
@@ -609,7 +637,9 @@ std::vector<Polyline> merge_paths(std::vector<Polyline> paths, double merge_tole
     size_t d = 0;
     Location last;
     for (; d < p.points.size(); ++d) {
-      const auto loc = closest_on(tree, p.points[d]);
+      Location loc;
+      if (d > 0) loc = closest_near(tree, last, p.points[d]);
+      if (d == 0 || loc.dist > tol * radius_at(tree, loc)) loc = closest_on(tree, p.points[d]);
       if (loc.dist > tol * radius_at(tree, loc)) break;
       last = loc;
     }
