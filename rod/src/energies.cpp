@@ -137,7 +137,8 @@ Mat3 tangent_curvature_term(const Vec3& p, const Vec3& t, double l) {
 
 /// Chain rule from y = (te, tf, θe, θf) to the stencil unknowns (x0, θe, x1, θf, x2),
 /// with te depending on (x0, x1) through Pe = (I − te teᵀ)/le and tf on (x1, x2).
-void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11* Hx) {
+void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11* Hx,
+                bool first_order_only = false) {
   const Mat3 Pe = (Mat3::Identity() - L.te * L.te.transpose()) / L.le;
   const Mat3 Pf = (Mat3::Identity() - L.tf * L.tf.transpose()) / L.lf;
   if (gx) {
@@ -151,9 +152,13 @@ void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11
   }
   if (Hx && Hy) {
     const Mat8& h = *Hy;
-    const Mat3 Ee = Pe * h.block<3, 3>(0, 0) * Pe + tangent_curvature_term(gy.segment<3>(0), L.te, L.le);
+    Mat3 Ee = Pe * h.block<3, 3>(0, 0) * Pe;
     const Mat3 Ef = Pe * h.block<3, 3>(0, 3) * Pf;
-    const Mat3 Ff = Pf * h.block<3, 3>(3, 3) * Pf + tangent_curvature_term(gy.segment<3>(3), L.tf, L.lf);
+    Mat3 Ff = Pf * h.block<3, 3>(3, 3) * Pf;
+    if (!first_order_only) {
+      Ee += tangent_curvature_term(gy.segment<3>(0), L.te, L.le);
+      Ff += tangent_curvature_term(gy.segment<3>(3), L.tf, L.lf);
+    }
     Mat11& H = *Hx;
     H.block<3, 3>(0, 0) = Ee;
     H.block<3, 3>(0, 4) = Ef - Ee;
@@ -183,7 +188,7 @@ void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11
 }
 
 /// Bending energy with gradient/Hessian in y.
-double bend_y(const Local& L, const VertexParams& p, Vec8* gy, Mat8* Hy) {
+double bend_y(const Local& L, const VertexParams& p, Vec8* gy, Mat8* Hy, bool gn = false) {
   const double k1 = 0.5 * (L.m2e + L.m2f).dot(L.kb);
   const double k2 = -0.5 * (L.m1e + L.m1f).dot(L.kb);
   const double d1 = k1 - p.rest_kappa1, d2 = k2 - p.rest_kappa2;
@@ -195,21 +200,23 @@ double bend_y(const Local& L, const VertexParams& p, Vec8* gy, Mat8* Hy) {
     if (gy) *gy += c1 * d1 * g1 + c2 * d2 * g2;
     if (Hy) {
       *Hy += c1 * g1 * g1.transpose() + c2 * g2 * g2.transpose();
-      add_curvature_hessians(L, c1 * d1, c2 * d2, *Hy);
+      if (!gn) add_curvature_hessians(L, c1 * d1, c2 * d2, *Hy);
     }
   }
   return 0.5 * (c1 * d1 * d1 + c2 * d2 * d2);
 }
 
 /// Twisting energy with gradient/Hessian in y.
-double twist_y(const Local& L, const VertexStencil& s, const VertexParams& p, Vec8* gy, Mat8* Hy) {
+double twist_y(const Local& L, const VertexStencil& s, const VertexParams& p, Vec8* gy, Mat8* Hy,
+               bool gn = false) {
   const double m = s.theta_f - s.theta_e + L.ref_twist;
   const double dm = m - p.rest_twist;
   const double c = p.twist_stiffness / p.voronoi_length;
   Vec8 gm;
   gm << 0.5 * L.kb, 0.5 * L.kb, -1.0, 1.0;
   if (gy) *gy += c * dm * gm;
-  if (Hy) {
+  if (Hy && gn) *Hy += c * gm * gm.transpose();
+  if (Hy && !gn) {
     // m_ref = m⁰ − Ω₁(te⁰, te, tf) − Ω₂(te⁰, tf, tf⁰) at the base point te = te⁰, tf = tf⁰.
     const double D = 2.0 * L.chi;
     const Vec3 n = L.tf.cross(L.te);
@@ -272,12 +279,15 @@ Vec6 stretch_gradient(const Vec3& x0, const Vec3& x1, double ks, double rest_len
   return out;
 }
 
-Mat6 stretch_hessian(const Vec3& x0, const Vec3& x1, double ks, double rest_length) {
+Mat6 stretch_hessian(const Vec3& x0, const Vec3& x1, double ks, double rest_length,
+                     bool clamp_compression) {
   const Vec3 e = x1 - x0;
   const double l = e.norm();
   const Vec3 t = e / l;
   const Mat3 tt = t * t.transpose();
-  const Mat3 h = (ks / rest_length) * tt + ks * (1.0 / rest_length - 1.0 / l) * (Mat3::Identity() - tt);
+  double transverse = ks * (1.0 / rest_length - 1.0 / l);
+  if (clamp_compression) transverse = std::max(transverse, 0.0);
+  const Mat3 h = (ks / rest_length) * tt + transverse * (Mat3::Identity() - tt);
   Mat6 out;
   out << h, -h, -h, h;
   return out;
@@ -341,15 +351,16 @@ Mat11 twist_hessian(const VertexStencil& s, const VertexParams& p) {
   return H;
 }
 
-double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient, Mat11* hessian) {
+double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient, Mat11* hessian,
+                  bool gauss_newton) {
   const Local L = make_local(s, gradient != nullptr || hessian != nullptr);
   Vec8 gy = Vec8::Zero();
   Mat8 Hy = Mat8::Zero();
   Vec8* gp = (gradient || hessian) ? &gy : nullptr;
   Mat8* hp = hessian ? &Hy : nullptr;
-  double e = bend_y(L, p, gp, hp);
-  e += twist_y(L, s, p, gp, hp);
-  if (gradient || hessian) to_stencil(L, gy, hp, gradient, hessian);
+  double e = bend_y(L, p, gp, hp, gauss_newton);
+  e += twist_y(L, s, p, gp, hp, gauss_newton);
+  if (gradient || hessian) to_stencil(L, gy, hp, gradient, hessian, gauss_newton);
   return e;
 }
 

@@ -65,8 +65,10 @@ using Mat11 = Eigen::Matrix<double, 11, 11>;
 [[nodiscard]] Vec6 stretch_gradient(const Vec3& x0, const Vec3& x1, double ks, double rest_length);
 /// @brief Hessian of stretch_energy: blocks ±H_e with
 /// \f[ H_e = \frac{k_s}{\bar\ell}\, t t^T + k_s\Big(\frac{1}{\bar\ell} - \frac{1}{\ell}\Big)(I - t t^T). \f]
-/// Indefinite under compression (ℓ < ℓ̄), as the exact Hessian must be.
-[[nodiscard]] Mat6 stretch_hessian(const Vec3& x0, const Vec3& x1, double ks, double rest_length);
+/// Indefinite under compression (ℓ < ℓ̄), as the exact Hessian must be; with
+/// @p clamp_compression the transverse term is floored at 0 (positive semi-definite).
+[[nodiscard]] Mat6 stretch_hessian(const Vec3& x0, const Vec3& x1, double ks, double rest_length,
+                                   bool clamp_compression = false);
 
 // ---------------------------------------------------------------------------------------
 // Bending and twisting at an interior vertex
@@ -128,7 +130,11 @@ struct VertexParams {
 
 /// @brief Bending plus twisting, value, gradient and Hessian in one pass (what the
 /// simulator uses; same results as the separate functions).
+///
+/// With @p gauss_newton the Hessian keeps only the first-derivative products
+/// \f$ \sum_k c_k \nabla\kappa_k \nabla\kappa_k^T + c_t \nabla m \nabla m^T \f$ — positive
+/// semi-definite by construction, used by Newton when the exact Hessian is indefinite.
 double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient,
-                  Mat11* hessian);
+                  Mat11* hessian, bool gauss_newton = false);
 
 }  // namespace flowire::rod

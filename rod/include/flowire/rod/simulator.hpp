@@ -202,6 +202,7 @@ class RodSimulator {
   void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x,
                       std::vector<double>& theta) const;
   void refresh_arc_lengths();
+  void predict_feed(double fed, double h);
   void vertex_params(int k, VertexParams& p) const;
   StepReport newton(Mode mode, double h, double load_scale);
   StepReport step_euler(double dt);
@@ -211,7 +212,7 @@ class RodSimulator {
                            const std::vector<EdgeFrame>& frame_from,
                            const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
                            std::vector<double>& twist_to) const;
-  double assemble(Mode mode, double h, double load_scale, bool need_matrix);
+  double assemble(Mode mode, double h, double load_scale, bool need_matrix, bool psd = false);
   void evaluate_loads(Mode mode, double h, double load_scale);
   void compute_base_reaction();
   [[nodiscard]] double force_scale(double load_scale) const;
