@@ -1,27 +1,34 @@
+// The scene runner: builds only what a scene has (vessels, flow, wire) and steps it.
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
+#include <limits>
 #include <optional>
+#include <queue>
+#include <map>
+#include <numbers>
 #include <sstream>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/coupling/scene.hpp"
+#include "flowire/coupling/vessel_forces.hpp"
+#include "flowire/coupling/wire_output.hpp"
+#include "flowire/flow/solver.hpp"
+#include "flowire/rod/simulator.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/io.hpp"
+#include "flowire/vessels/spatial.hpp"
 
 namespace flowire::coupling {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 nlohmann::json resolved_scene(const config::Config& c) {
   nlohmann::json j = nlohmann::json::object();
@@ -42,11 +49,159 @@ nlohmann::json resolved_scene(const config::Config& c) {
 }
 
 nlohmann::json counts_json(const vessels::NetworkCounts& n) {
-  return {{"branches", n.branches}, {"nodes", n.nodes},       {"segments", n.segments},
-          {"junctions", n.junctions}, {"ends", n.ends},       {"loops", n.loops},
-          {"components", n.components}, {"total_length", n.total_length},
+  return {{"branches", n.branches},   {"nodes", n.nodes}, {"segments", n.segments},         {"junctions", n.junctions},
+          {"ends", n.ends},           {"loops", n.loops}, {"components", n.components},     {"total_length", n.total_length},
           {"radius_min", n.radius_min}, {"radius_max", n.radius_max}};
 }
+
+/// The network end farthest (along the vessels) from `from`: where a wire enters to be
+/// pushed against the flow towards the inlet, as in the published experiment.
+int farthest_end(const vessels::Network& net, int from) {
+  std::vector<double> dist(static_cast<size_t>(net.num_nodes()), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> q;
+  dist[static_cast<size_t>(from)] = 0;
+  q.emplace(0.0, from);
+  while (!q.empty()) {
+    auto [d, n] = q.top();
+    q.pop();
+    if (d > dist[static_cast<size_t>(n)]) continue;
+    auto [b, e] = net.node_segments(n);
+    for (const int* it = b; it != e; ++it) {
+      const auto& s = net.segment(*it);
+      const int m = s.node_from == n ? s.node_to : s.node_from;
+      if (d + s.length < dist[static_cast<size_t>(m)]) {
+        dist[static_cast<size_t>(m)] = d + s.length;
+        q.emplace(d + s.length, m);
+      }
+    }
+  }
+  int best = -1;
+  for (int e : net.ends())
+    if (e != from && std::isfinite(dist[static_cast<size_t>(e)]) &&
+        (best < 0 || dist[static_cast<size_t>(e)] > dist[static_cast<size_t>(best)] + 1e-12))
+      best = e;
+  return best;
+}
+
+rod::WireSpec wire_spec(const config::Config& c) {
+  rod::WireSpec w;
+  w.length = c.number("wire.length");
+  w.radius = c.number("wire.radius");
+  w.youngs_modulus = c.number("wire.youngs_modulus");
+  w.poisson_ratio = c.number("wire.poisson_ratio");
+  if (c.has("wire.shear_modulus")) w.shear_modulus = c.number("wire.shear_modulus");
+  w.density = c.number("wire.density");
+  if (c.has("wire.segment_length")) {
+    w.segments = 0;
+    w.segment_length = c.number("wire.segment_length");
+  } else {
+    w.segments = c.integer("wire.segments");
+  }
+  w.damping = c.number("wire.damping");
+  w.tip.length = 0.0;
+  if (c.has_section("wire.tip")) {
+    w.tip.length = c.number("wire.tip.length");
+    w.tip.youngs_modulus = c.number("wire.tip.youngs_modulus");
+    const auto& shape = c.string("wire.tip.shape");
+    w.tip.shape = shape == "j" ? rod::TipShape::J : shape == "angled" ? rod::TipShape::Angled : rod::TipShape::Straight;
+    w.tip.angle = c.number("wire.tip.angle");
+    w.tip.bend_radius = c.number("wire.tip.bend_radius");
+  }
+  if (c.has_section("wire.base")) {
+    w.base_position = c.vector3("wire.base.position");
+    w.base_direction = c.vector3("wire.base.direction");
+    if (!(w.base_direction.norm() > 0)) throw_input_error(c.where("wire.base.direction"), "direction must be non-zero");
+  }
+  if (c.has_section("insertion")) w.inserted_length = c.number("insertion.initial_length");
+  if (!(w.radius > 0) || !(w.length > 0) || !(w.youngs_modulus > 0) || !(w.density > 0))
+    throw_input_error(c.where("wire"), "length, radius, youngs_modulus and density must be positive");
+  return w;
+}
+
+void apply_loads(const config::Config& c, rod::RodSimulator& sim) {
+  for (int i = 0; i < c.count("loads"); ++i) {
+    const std::string p = fmt::format("loads[{}].", i);
+    if (!c.has(p + "type") || !c.has(p + "value")) throw_input_error(c.where(p + "type"), "a load needs type and value");
+    const auto& type = c.string(p + "type");
+    const Eigen::Vector3d v = c.vector3(p + "value");
+    if (type == "tip_force") sim.set_tip_force(v);
+    else if (type == "tip_moment") sim.set_tip_moment(v);
+    else if (type == "gravity") sim.set_gravity(v);
+    else {
+      if (!c.has(p + "s")) throw_input_error(c.where(p + "type"), "point_force needs s (arc length from the base)");
+      sim.add_point_force(c.number(p + "s"), v);
+    }
+  }
+}
+
+/// Buffers nodes.csv / segments.csv rows and writes network frames (VTK) of the flow.
+class FlowOutput {
+ public:
+  FlowOutput(const vessels::Network& net, std::filesystem::path dir, bool csv, bool vtk)
+      : net_(net), dir_(std::move(dir)), csv_(csv), vtk_(vtk) {
+    if (csv_) {
+      nodes_ = "time,node,x,y,z,pressure\n";
+      segments_ =
+          "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds\n";
+    }
+  }
+  void frame(const flow::FlowSolver& f, double t, bool series) {
+    const int nn = net_.num_nodes(), ns = net_.num_segments();
+    std::vector<double> p(static_cast<size_t>(nn));
+    f.node_pressures(p);
+    std::vector<double> q(static_cast<size_t>(ns)), v(q.size()), wss(q.size()), re(q.size());
+    for (int s = 0; s < ns; ++s) {
+      const auto st = f.segment_state(s);
+      q[static_cast<size_t>(s)] = st.flow_rate;
+      v[static_cast<size_t>(s)] = st.mean_velocity;
+      wss[static_cast<size_t>(s)] = st.wall_shear_stress;
+      re[static_cast<size_t>(s)] = st.reynolds;
+    }
+    if (csv_) {
+      for (int i = 0; i < nn; ++i) {
+        const auto& x = net_.node(i);
+        nodes_ += fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.12g}\n", t, i, x.x(), x.y(), x.z(), p[static_cast<size_t>(i)]);
+      }
+      for (int s = 0; s < ns; ++s) {
+        const auto& sg = net_.segment(s);
+        const auto k = static_cast<size_t>(s);
+        segments_ += fmt::format("{:.9g},{},{},{},{:.9g},{:.9g},{:.9g},{:.12g},{:.9g},{:.9g},{:.9g}\n", t, s, sg.node_from,
+                                 sg.node_to, sg.length, sg.radius, f.resistance(s), q[k], v[k], wss[k], re[k]);
+      }
+    }
+    if (vtk_) {
+      const std::vector<vessels::DataArray> pd{{"pressure", p, 1}};
+      const std::vector<vessels::DataArray> cd{{"flow_rate", q, 1}, {"mean_velocity", v, 1}, {"wall_shear_stress", wss, 1},
+                                               {"reynolds", re, 1}};
+      const std::string name = series ? fmt::format("network_{:05d}.vtp", static_cast<int>(files_.size())) : "network.vtp";
+      vessels::write_network_vtp(net_, (dir_ / name).string(), pd, cd);
+      if (series) files_.emplace_back(t, name);
+      last_p_ = p;
+      last_q_ = q;
+    }
+  }
+  void finish() {
+    if (csv_) {
+      write_text_atomically(dir_ / "nodes.csv", nodes_);
+      write_text_atomically(dir_ / "segments.csv", segments_);
+    }
+    if (vtk_ && !files_.empty()) {
+      write_pvd(dir_ / "network.pvd", files_);
+      // network.vtp: the last frame, for a quick look.
+      vessels::write_network_vtp(net_, (dir_ / "network.vtp").string(), {{"pressure", last_p_, 1}},
+                                 {{"flow_rate", last_q_, 1}});
+    }
+  }
+
+ private:
+  const vessels::Network& net_;
+  std::filesystem::path dir_;
+  bool csv_, vtk_;
+  std::string nodes_, segments_;
+  std::vector<std::pair<double, std::string>> files_;
+  std::vector<double> last_p_, last_q_;
+};
 
 }  // namespace
 
@@ -63,8 +218,7 @@ vessels::Network build_scene_network(const config::Config& c) {
   build.radius_change = c.number("vessels.radius_change");
   const bool has_file = c.has("vessels.file");
   const bool has_gen = c.has_section("vessels.generator");
-  if (has_file == has_gen)
-    throw_input_error(c.where("vessels"), "give exactly one of vessels.file or vessels.generator");
+  if (has_file == has_gen) throw_input_error(c.where("vessels"), "give exactly one of vessels.file or vessels.generator");
   if (has_file) {
     vessels::ReadOptions ro;
     ro.length_unit = c.string_or("vessels.length_unit", "");
@@ -74,25 +228,34 @@ vessels::Network build_scene_network(const config::Config& c) {
   }
   if (!c.has("vessels.generator.type")) throw_input_error(c.where("vessels.generator"), "generator.type is required");
   const std::string type = c.string("vessels.generator.type");
-  auto g = [&](const char* key) { return c.number(std::string("vessels.generator.") + key); };
-  if (type == "straight_tube")
-    return vessels::Network::build(vessels::straight_tube({.length = g("length"), .radius = g("radius")}), build);
-  if (type == "y_bifurcation")
-    return vessels::Network::build(vessels::y_bifurcation({.parent_radius = g("parent_radius"),
-                                                           .parent_length = g("parent_length"),
-                                                           .child_length = g("child_length"),
-                                                           .angle = g("angle"),
-                                                           .asymmetry = g("asymmetry")}),
-                                   build);
-  if (type == "aortic_arch") return vessels::Network::build(vessels::aortic_arch({.scale = g("scale")}), build);
-  if (type == "arterial_tree") return vessels::Network::build(vessels::arterial_tree({.scale = g("scale")}), build);
-  // binary_tree: one segment per vessel, built directly as a graph.
-  return vessels::binary_tree({.depth = c.integer("vessels.generator.depth"),
-                               .root_radius = g("root_radius"),
-                               .root_length = g("root_length"),
-                               .radius_ratio = g("radius_ratio"),
-                               .length_ratio = g("length_ratio"),
-                               .angle = g("angle")});
+  auto g = [&](const char* key) {
+    const std::string path = std::string("vessels.generator.") + key;
+    const double v = c.number(path);
+    if (!(v > 0.0) && std::string_view(key) != "asymmetry") throw_input_error(c.where(path), "must be positive");
+    return v;
+  };
+  try {
+    if (type == "straight_tube")
+      return vessels::Network::build(vessels::straight_tube({.length = g("length"), .radius = g("radius")}), build);
+    if (type == "y_bifurcation")
+      return vessels::Network::build(vessels::y_bifurcation({.parent_radius = g("parent_radius"),
+                                                             .parent_length = g("parent_length"),
+                                                             .child_length = g("child_length"),
+                                                             .angle = g("angle"),
+                                                             .asymmetry = c.number("vessels.generator.asymmetry")}),
+                                     build);
+    if (type == "aortic_arch") return vessels::Network::build(vessels::aortic_arch({.scale = g("scale")}), build);
+    if (type == "arterial_tree") return vessels::Network::build(vessels::arterial_tree({.scale = g("scale")}), build);
+    return vessels::binary_tree({.depth = c.integer("vessels.generator.depth"),
+                                 .root_radius = g("root_radius"),
+                                 .root_length = g("root_length"),
+                                 .radius_ratio = g("radius_ratio"),
+                                 .length_ratio = g("length_ratio"),
+                                 .angle = g("angle")});
+  } catch (const Error& e) {
+    if (e.kind() == ErrorKind::Usage) throw_input_error(c.where("vessels.generator"), e.what());
+    throw;
+  }
 }
 
 RunResult run_scene(const config::Config& c) {
@@ -110,36 +273,233 @@ RunResult run_scene(const config::Config& c) {
   nlohmann::json timings = {{"setup", 0.0}, {"flow", 0.0},   {"rod", 0.0},  {"contact", 0.0},
                             {"coupling", 0.0}, {"output", 0.0}, {"total", 0.0}};
   const std::filesystem::path out(result.out_dir);
+  const bool has_flow = c.has_section("flow");
+  const bool has_wire = c.has_section("wire");
+  if ((has_flow || c.has_section("contact") || c.has_section("fem")) && !c.has_section("vessels"))
+    throw_input_error(c.where("flow"), "flow, contact and fem need a vessels: section");
 
   auto finish = [&](const std::string& status) {
     s["status"] = status;
     timings["total"] = seconds_since(t_start);
     s["timings"] = timings;
-    s["warnings"] = take_warnings();
+    auto w = take_warnings();
+    // Repeated numerical warnings (one per step) are summarised, not listed thousands of times.
+    std::map<std::string, int> count;
+    for (const auto& x : w) ++count[x];
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& [msg, k] : count) list.push_back(k > 1 ? fmt::format("{} (x{})", msg, k) : msg);
+    s["warnings"] = list;
     write_text_atomically(out / "summary.json", s.dump(2) + "\n");
   };
 
   try {
+    // ---------------- setup: only what the scene has
     auto t0 = Clock::now();
     std::optional<vessels::Network> net;
     if (c.has_section("vessels")) {
       net = build_scene_network(c);
       s["network"] = counts_json(net->counts());
     }
+    std::unique_ptr<flow::FlowSolver> fsolver;
+    if (has_flow) {
+      fsolver = flow::make_solver(*net, flow::from_config(c, *net));
+      s["flow"] = {{"solver", std::string(fsolver->name())}, {"model", c.string("flow.model")}};
+    }
+    std::unique_ptr<rod::RodSimulator> sim;
+    std::optional<vessels::SpatialIndex> index;
+    std::shared_ptr<VesselForces> forces;
+    if (has_wire) {
+      auto spec = wire_spec(c);
+      if (net) {
+        const int inlet = net->widest_end();
+        int entry = -1;
+        const auto entry_key = c.string("wire.entry");
+        if (entry_key == "auto") {
+          entry = farthest_end(*net, inlet);
+        } else {
+          try {
+            entry = std::stoi(entry_key);
+          } catch (const std::exception&) {
+            throw_input_error(c.where("wire.entry"), fmt::format("'{}' is not a node id or auto", entry_key));
+          }
+          if (entry < 0 || entry >= net->num_nodes() || net->degree(entry) != 1)
+            throw_input_error(c.where("wire.entry"), fmt::format("node {} is not an end of the network", entry));
+        }
+        const auto& seg = net->segment(*net->node_segments(entry).first);
+        const int other = seg.node_from == entry ? seg.node_to : seg.node_from;
+        if (!c.has_section("wire.base")) {
+          spec.base_position = net->node(entry);
+          spec.base_direction = (net->node(other) - net->node(entry)).normalized();
+        }
+        if (spec.inserted_length < 0) spec.inserted_length = 0.02;
+        s["wire_entry_node"] = entry;
+      }
+      sim = std::make_unique<rod::RodSimulator>(spec);
+      sim->set_integrator(c.string("solve.integrator") == "implicit_midpoint" ? rod::Integrator::ImplicitMidpoint
+                                                                              : rod::Integrator::ImplicitEuler);
+      apply_loads(c, *sim);
+      if (c.has_section("insertion")) {
+        sim->set_insertion_speed(c.number("insertion.speed"));
+        sim->set_rotation_speed(c.number("insertion.rotation_speed"));
+      }
+      if (net) {
+        index.emplace(*net, 4);
+        ContactParams cp;
+        const double h = sim->model().h;
+        const double EI = spec.youngs_modulus * std::numbers::pi * std::pow(spec.radius, 4) / 4.0;
+        cp.stiffness = c.number_or("contact.stiffness", std::max(1e5, EI / (h * h * h)));
+        cp.friction = c.number_or("contact.friction", 0.1);
+        cp.tip_friction = c.number_or("contact.tip_friction", cp.friction);
+        cp.tip_length = c.has_section("wire.tip") ? c.number("wire.tip.length") : 0.0;
+        cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
+        DragParams dp;
+        const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "slender_body";
+        dp.law = !fsolver || law == "none" ? DragLaw::None
+                 : law == "velocity_offset" ? DragLaw::VelocityOffset
+                                            : DragLaw::SlenderBody;
+        dp.scale = c.number_or("coupling.drag_scale", 1.0);
+        dp.viscosity = c.number_or("flow.viscosity", 3.5e-3);
+        dp.wire_length = spec.length;
+        dp.mass_per_length = spec.density * std::numbers::pi * spec.radius * spec.radius;
+        VelocityField vf;
+        if (fsolver) {
+          flow::FlowSolver* fs = fsolver.get();
+          vf = [fs](int seg_id, const vessels::Vec3& p) { return fs->velocity_at(seg_id, p); };
+        }
+        forces = std::make_shared<VesselForces>(*index, spec.radius, cp, dp, vf);
+        sim->add_external(forces);
+      }
+    }
     timings["setup"] = seconds_since(t0);
 
-    t0 = Clock::now();
-    if (net && write_csv) {
-      std::ostringstream csv;
-      csv << "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds\n";
+    // ---------------- stepping
+    const double dt = c.number("solve.dt");
+    const double duration = c.number("solve.duration");
+    if (!(dt > 0)) throw_input_error(c.where("solve.dt"), "must be positive");
+    if (duration < 0) throw_input_error(c.where("solve.duration"), "must not be negative");
+    const double every = c.number("output.every");
+    const bool is_static = c.string("solve.mode") == "static";
+    const long steps = is_static ? 0 : static_cast<long>(std::llround(duration / dt));
+    const long out_every = every > 0 ? std::max(1L, static_cast<long>(std::llround(every / dt))) : 0;
+    const int flow_every = std::max(1, static_cast<int>(c.number_or("coupling.flow_every", 1)));
+    const bool series = out_every > 0;
+    const double max_length = c.number_or("insertion.max_length", std::numeric_limits<double>::infinity());
+
+    std::optional<FlowOutput> flow_out;
+    if (fsolver && (write_csv || write_vtk)) flow_out.emplace(*net, out, write_csv, write_vtk);
+    std::optional<WireOutput> wire_out;
+    if (sim && (write_csv || write_vtk)) wire_out.emplace(out, write_csv, write_vtk);
+
+    double t_flow = 0, t_rod = 0, t_out = 0;
+    auto record = [&](double t) {
+      const auto to = Clock::now();
+      if (flow_out) flow_out->frame(*fsolver, t, series);
+      if (wire_out) {
+        WireFrame f;
+        f.time = t;
+        const auto x = sim->positions();
+        const auto arc = sim->arc_lengths();
+        for (int i = sim->first_clamped_vertex(); i >= 0; --i) {  // base → tip
+          if (i >= sim->vertex_count()) continue;
+          f.x.push_back(x[static_cast<size_t>(i)]);
+          f.s.push_back(std::max(0.0, arc[static_cast<size_t>(i)]));
+          f.force.push_back(forces && i < static_cast<int>(forces->force().size()) ? forces->force()[static_cast<size_t>(i)]
+                                                                                   : Eigen::Vector3d::Zero());
+          f.flow_velocity.push_back(forces && i < static_cast<int>(forces->fluid_velocity().size())
+                                        ? forces->fluid_velocity()[static_cast<size_t>(i)]
+                                        : Eigen::Vector3d::Zero());
+        }
+        wire_out->add_frame(f);
+      }
+      t_out += seconds_since(to);
+    };
+
+    if (fsolver) {
+      const auto tf = Clock::now();
+      fsolver->advance(0.0);
+      t_flow += seconds_since(tf);
+    }
+    int failures = 0;
+    if (sim && is_static) {
+      const auto tr = Clock::now();
+      const auto rep = sim->solve_static();
+      t_rod += seconds_since(tr);
+      if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
+        throw_numerical_error(fmt::format("static solve failed: {}", rod::to_string(rep.status)));
+      if (!rep.converged()) ++failures;
+    }
+    if (series || steps == 0) record(0.0);
+    long step = 0;
+    for (; step < steps; ++step) {
+      const double t1 = (static_cast<double>(step) + 1.0) * dt;
+      if (fsolver && (step % flow_every == 0 || !sim)) {
+        const auto tf = Clock::now();
+        fsolver->advance(t1);
+        t_flow += seconds_since(tf);
+      }
+      if (sim) {
+        if (sim->inserted_length() >= max_length) sim->set_insertion_speed(0.0);
+        const auto tr = Clock::now();
+        const auto rep = sim->step(dt);
+        t_rod += seconds_since(tr);
+        if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
+          throw_numerical_error(fmt::format("rod step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(rep.status)));
+        if (!rep.converged()) ++failures;
+        if (wire_out) wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
+      }
+      if (series && (step + 1) % out_every == 0) record(t1);
+    }
+    if (!series && steps > 0) record(static_cast<double>(steps) * dt);
+    s["steps"] = steps;
+
+    const auto to = Clock::now();
+    if (flow_out) flow_out->finish();
+    if (wire_out) wire_out->finish();
+    if (net && !fsolver && write_csv) {
+      std::string csv =
+          "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds\n";
       for (int i = 0; i < net->num_segments(); ++i) {
         const auto& seg = net->segment(i);
-        csv << fmt::format("0,{},{},{},{:.17g},{:.17g},,,,,\n", i, seg.node_from, seg.node_to, seg.length, seg.radius);
+        csv += fmt::format("0,{},{},{},{:.17g},{:.17g},,,,,\n", i, seg.node_from, seg.node_to, seg.length, seg.radius);
       }
-      write_text_atomically(out / "segments.csv", csv.str());
+      write_text_atomically(out / "segments.csv", csv);
     }
-    if (net && write_vtk) vessels::write_network_vtp(*net, (out / "network.vtp").string());
-    timings["output"] = seconds_since(t0);
+    if (net && !fsolver && write_vtk) vessels::write_network_vtp(*net, (out / "network.vtp").string());
+    t_out += seconds_since(to);
+
+    // ---------------- summary
+    if (fsolver) {
+      const auto& ft = fsolver->timings();
+      s["flow"]["assemble_seconds"] = ft.assemble;
+      s["flow"]["factor_seconds"] = ft.factor;
+      s["flow"]["frames"] = ft.frame_count;
+      s["flow"]["seconds_per_frame"] = ft.frame_count ? ft.frames / static_cast<double>(ft.frame_count) : 0.0;
+    }
+    double t_contact = 0, t_coupling = 0;
+    if (sim) {
+      s["wire"] = {{"vertices", sim->vertex_count()},
+                   {"inserted_length", sim->inserted_length()},
+                   {"tip", {sim->tip_position().x(), sim->tip_position().y(), sim->tip_position().z()}},
+                   {"base_force", {sim->base_force().x(), sim->base_force().y(), sim->base_force().z()}},
+                   {"base_torque", {sim->base_torque().x(), sim->base_torque().y(), sim->base_torque().z()}},
+                   {"length_drift", sim->length_drift()},
+                   {"unconverged_steps", failures}};
+      if (forces) {
+        const auto& st = forces->stats();
+        s["lookup"] = {{"window_hits", index->stats().window_hits}, {"fallbacks", index->stats().fallbacks}};
+        s["contact"] = {{"max_penetration", st.max_penetration},
+                        {"max_outside", st.max_outside},
+                        {"max_outside_over_wire_radius", st.max_outside / sim->model().edge_radius.front()},
+                        {"contact_evaluations", st.contacts}};
+        t_contact = st.seconds_lookup + st.seconds_contact;
+        t_coupling = st.seconds_drag;
+      }
+    }
+    timings["flow"] = t_flow;
+    timings["rod"] = std::max(0.0, t_rod - t_contact - t_coupling);
+    timings["contact"] = t_contact;
+    timings["coupling"] = t_coupling;
+    timings["output"] = t_out;
   } catch (const Error& e) {
     if (e.kind() == ErrorKind::Numerical) {
       s["error"] = e.what();

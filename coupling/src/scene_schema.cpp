@@ -2,6 +2,8 @@
 // (`flowire help scene`).
 #include "flowire/coupling/scene.hpp"
 
+#include <string_view>
+
 namespace flowire::coupling {
 
 namespace {
@@ -55,24 +57,34 @@ config::Schema make_schema() {
   add("flow.density", Type::Number, "1060", D::Density, "blood density");
   add("flow.inertance", Type::Enum, "poiseuille", D::None,
       "rlc: inertance per segment, poiseuille = rho*l/(pi*r^2), womersley = 4*rho*l/(3*pi*r^2)", {"poiseuille", "womersley"});
-  add("flow.wall_youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus (compliance)");
-  add("flow.wall_thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
+  add("flow.wall", Type::Section, "", D::None, "rlc: the vessel wall (compliance C = 3 pi r^3 l / (2 E h))");
+  add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus");
+  add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
   add("flow.profile", Type::Enum, "laminar", D::None, "velocity profile across a segment", {"laminar", "womersley"});
   add("flow.inlet", Type::Section, "{}", D::None, "inlet boundary condition");
   add("flow.inlet.node", Type::StringOrInteger, "", D::None, "inlet node id (default: the network end with the largest radius)");
-  add("flow.inlet.pressure", Type::NumberOrSection, "", D::Pressure, "constant pressure, or a waveform section");
-  add("flow.inlet.pressure.waveform", Type::Enum, "sine", D::None, "sine: (P1-P2)/2 sin(wt) + (P1+P2)/2 | constant | table",
-      {"sine", "constant", "table"});
-  add("flow.inlet.pressure.systolic", Type::Number, "120 mmHg", D::Pressure, "sine: P1");
-  add("flow.inlet.pressure.diastolic", Type::Number, "80 mmHg", D::Pressure, "sine: P2");
-  add("flow.inlet.pressure.period", Type::Number, "0.8 s", D::Time, "sine/table: cardiac period");
-  add("flow.inlet.pressure.value", Type::Number, "", D::Pressure, "constant: value");
-  add("flow.inlet.pressure.file", Type::String, "", D::None, "table: CSV with columns time,pressure (SI)");
-  add("flow.inlet.flow", Type::Number, "", D::FlowRate, "prescribed inlet flow rate instead of a pressure");
+  for (const char* what : {"pressure", "flow"}) {
+    const bool p = std::string_view(what) == "pressure";
+    const D dim = p ? D::Pressure : D::FlowRate;
+    const std::string base = std::string("flow.inlet.") + what;
+    add(base, Type::NumberOrSection, "", dim,
+        p ? "inlet pressure: a constant, or a waveform section (default: the 120/80 mmHg sine)"
+          : "prescribed inlet flow instead of a pressure: a constant or a waveform section");
+    add(base + ".waveform", Type::Enum, "", D::None,
+        "sine: (P1-P2)/2 sin(2 pi t/T) + (P1+P2)/2 | constant | table (default: table if file is given, else sine)",
+        {"sine", "constant", "table"});
+    add(base + ".systolic", Type::Number, "", dim, "sine: P1 (default 120 mmHg)");
+    add(base + ".diastolic", Type::Number, "", dim, "sine: P2 (default 80 mmHg)");
+    add(base + ".period", Type::Number, "", D::Time, "sine: period T (default 0.8 s)");
+    add(base + ".value", Type::Number, "", dim, "constant: the value");
+    add(base + ".file", Type::String, "", D::None, "table: CSV with a header and columns time,value (SI), periodic");
+  }
   add("flow.outlets", Type::Section, "{}", D::None, "boundary condition at every other network end");
   add("flow.outlets.pressure", Type::Number, "", D::Pressure, "fixed outlet pressure (default 0 when nothing else is given)");
   add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure");
   add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
+  add("flow.outlets.scaling", Type::Enum, "none", D::None,
+      "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so each outlet flow is proportional to r^3", {"none", "murray"});
   add("flow.outlets.rcr", Type::Section, "", D::None, "RCR windkessel at every outlet");
   add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance");
   add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance");

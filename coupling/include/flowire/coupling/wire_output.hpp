@@ -1,0 +1,46 @@
+#pragma once
+/// @file wire_output.hpp
+/// @brief Wire outputs: wire.csv (time,vertex,s,x,y,z), tip_trace.csv
+/// (time,inserted_length,x,y,z), and a ParaView series wire.pvd + wire_NNNNN.vtp with point
+/// data s, force and flow_velocity. Rows are buffered in memory and every file is written
+/// atomically, so a failed run leaves no half-written file.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace flowire::coupling {
+
+/// @brief One output frame of the wire, vertices ordered from the base (s = 0) to the tip.
+struct WireFrame {
+  double time = 0.0;
+  std::vector<Eigen::Vector3d> x;
+  std::vector<double> s;
+  std::vector<Eigen::Vector3d> force;          ///< interaction force per vertex (N)
+  std::vector<Eigen::Vector3d> flow_velocity;  ///< blood velocity at each vertex (m/s)
+};
+
+class WireOutput {
+ public:
+  WireOutput(std::filesystem::path dir, bool csv, bool vtk);
+  /// @brief Record a frame (the VTK file of the frame is written now).
+  void add_frame(const WireFrame& frame);
+  /// @brief Record a tip-trace sample (every step).
+  void add_tip(double time, double inserted_length, const Eigen::Vector3d& tip);
+  /// @brief Write wire.csv, tip_trace.csv and wire.pvd.
+  void finish();
+  [[nodiscard]] int frames() const { return frame_count_; }
+
+ private:
+  std::filesystem::path dir_;
+  bool csv_, vtk_;
+  std::string wire_csv_, tip_csv_;
+  std::vector<std::pair<double, std::string>> vtk_files_;
+  int frame_count_ = 0;
+};
+
+/// @brief Write a ParaView collection (.pvd) listing (time, file) pairs, atomically.
+void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& files);
+
+}  // namespace flowire::coupling

@@ -1,0 +1,140 @@
+#include "flowire/coupling/vessel_forces.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace flowire::coupling {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+VesselForces::VesselForces(const vessels::SpatialIndex& index, double wire_radius, ContactParams contact,
+                           DragParams drag, VelocityField velocity)
+    : index_(index), wire_radius_(wire_radius), contact_(contact), drag_(drag), velocity_(std::move(velocity)) {
+  if (drag_.law == DragLaw::SlenderBody)
+    drag_cn_ = slender_body_normal_coefficient(drag_.viscosity, drag_.wire_length, wire_radius_);
+}
+
+void VesselForces::ensure_size(int n) {
+  if (static_cast<int>(segment_.size()) < n) {
+    segment_.resize(static_cast<size_t>(n), -1);
+    fluid_.resize(static_cast<size_t>(n), Vec3::Zero());
+    force_.resize(static_cast<size_t>(n), Vec3::Zero());
+  }
+}
+
+void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) {
+  const int n = rod.vertex_count();
+  const int free = std::min(rod.first_clamped_vertex, n);
+  ensure_size(n);
+  ++stats_.evaluations;
+  const auto& net = index_.network();
+
+  // 1) Lookup: hint = the same vertex's segment at the previous evaluation, else the
+  //    neighbour towards the base (vertices are found from the base towards the tip).
+  auto t0 = Clock::now();
+  for (int i = free - 1; i >= 0; --i) {
+    int hint = segment_[static_cast<size_t>(i)];
+    if (hint < 0 && i + 1 < n) hint = segment_[static_cast<size_t>(i + 1)];
+    segment_[static_cast<size_t>(i)] = index_.locate(rod.position(i), hint).segment;
+    ++stats_.lookups;
+  }
+  stats_.seconds_lookup += since(t0);
+
+  // 2) Wall contact and friction.
+  t0 = Clock::now();
+  const double a = wire_radius_;
+  const double tip_s = rod.arc_length.empty() ? 0.0 : rod.arc_length[0];
+  for (int i = 0; i < free; ++i) {
+    force_[static_cast<size_t>(i)].setZero();
+    if (!contact_.enabled) continue;
+    const int s = segment_[static_cast<size_t>(i)];
+    const auto& seg = net.segment(s);
+    const Vec3& x = rod.position(i);
+    const Vec3& A = net.node(seg.node_from);
+    const Vec3& B = net.node(seg.node_to);
+    Vec3 g_cap;
+    Mat3 H_cap;
+    const double d_cap = capsule_distance(x, A, B, seg.radius, &g_cap, &H_cap);
+    // The union's distance is at most this capsule's: deep inside it, no wall is near.
+    if (d_cap + a < 0.0) continue;
+    Vec3 n_wall;
+    const double d = index_.wall_distance(x, s, &n_wall);
+    const auto pen = wall_penalty(d, n_wall, H_cap, a, contact_.stiffness);
+    if (pen.penetration <= 0.0) continue;
+    ++stats_.contacts;
+    Vec3 f = -pen.gradient;
+    out.add_force(i, f);
+    out.add_position_jacobian(i, -pen.hessian);
+    const double normal_force = contact_.stiffness * pen.penetration;
+    const double mu = (tip_s - rod.arc_length[static_cast<size_t>(i)] <= contact_.tip_length) ? contact_.tip_friction
+                                                                                              : contact_.friction;
+    const auto fr = coulomb_friction(rod.velocity(i), n_wall, normal_force, mu, contact_.slip_speed);
+    out.add_force(i, fr.force);
+    out.add_velocity_jacobian(i, fr.dfdv);
+    f += fr.force;
+    if (contact_.viscous_friction > 0.0) {
+      const double ell = 0.5 * ((i > 0 ? (x - rod.position(i - 1)).norm() : 0.0) +
+                                (i + 1 < n ? (rod.position(i + 1) - x).norm() : 0.0));
+      const Mat3 P = Mat3::Identity() - n_wall * n_wall.transpose();
+      const Mat3 C = contact_.viscous_friction * ell * P;
+      out.add_force(i, -C * rod.velocity(i));
+      out.add_velocity_jacobian(i, -C);
+      f -= C * rod.velocity(i);
+    }
+    force_[static_cast<size_t>(i)] = f;
+  }
+  stats_.seconds_contact += since(t0);
+
+  // 3) Blood drag from the local velocity profile.
+  t0 = Clock::now();
+  if (drag_.law != DragLaw::None && velocity_) {
+    for (int i = 0; i < free; ++i) {
+      const Vec3& x = rod.position(i);
+      const Vec3 u = velocity_(segment_[static_cast<size_t>(i)], x);
+      fluid_[static_cast<size_t>(i)] = u;
+      const Vec3 prev = i > 0 ? rod.position(i - 1) : x;
+      const Vec3 next = i + 1 < n ? rod.position(i + 1) : x;
+      const double ell = 0.5 * ((x - prev).norm() + (next - x).norm());
+      if (drag_.law == DragLaw::SlenderBody) {
+        Vec3 t = prev - next;
+        const double tn = t.norm();
+        t = tn > 0.0 ? Vec3(t / tn) : Vec3::UnitX();
+        const Mat3 tt = t * t.transpose();
+        const Mat3 C = drag_.scale * ell * drag_cn_ * (Mat3::Identity() - 0.5 * tt);
+        const Vec3 f = C * (u - rod.velocity(i));
+        out.add_force(i, f);
+        out.add_velocity_jacobian(i, -C);
+        force_[static_cast<size_t>(i)] += f;
+      } else if (rod.dt > 0.0) {
+        // The published form (eq. 10): the blood velocity is added to the velocity update,
+        // Δv += u, i.e. an impulse m·u per step, which as a force is m·u/Δt.
+        const Vec3 f = drag_.scale * drag_.mass_per_length * ell * u / rod.dt;
+        out.add_force(i, f);
+        force_[static_cast<size_t>(i)] += f;
+      }
+    }
+  }
+  stats_.seconds_drag += since(t0);
+}
+
+void VesselForces::end_step(const rod::RodView& rod) {
+  const int free = std::min(rod.first_clamped_vertex, rod.vertex_count());
+  for (int i = 0; i < free; ++i) {
+    const int s = segment_[static_cast<size_t>(i)];
+    if (s < 0) continue;
+    const auto& seg = index_.network().segment(s);
+    const auto& net = index_.network();
+    // Deep inside the located capsule the union's wall is farther still: nothing to record.
+    if (capsule_distance(rod.position(i), net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr,
+                         nullptr) + wire_radius_ < 0.0)
+      continue;
+    const double d = index_.wall_distance(rod.position(i), s);
+    stats_.max_outside = std::max(stats_.max_outside, d);
+    stats_.max_penetration = std::max(stats_.max_penetration, d + wire_radius_);
+  }
+}
+
+}  // namespace flowire::coupling

@@ -1,0 +1,101 @@
+#include "flowire/coupling/wire_output.hpp"
+
+#include <fmt/format.h>
+
+#include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
+
+#ifdef FLOWIRE_HAVE_VTK
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyLine.h>
+#include <vtkXMLPolyDataWriter.h>
+#endif
+
+namespace flowire::coupling {
+
+WireOutput::WireOutput(std::filesystem::path dir, bool csv, bool vtk) : dir_(std::move(dir)), csv_(csv), vtk_(vtk) {
+  if (csv_) {
+    wire_csv_ = "time,vertex,s,x,y,z\n";
+    tip_csv_ = "time,inserted_length,x,y,z\n";
+  }
+}
+
+void WireOutput::add_tip(double time, double inserted_length, const Eigen::Vector3d& tip) {
+  if (!csv_) return;
+  tip_csv_ += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", time, inserted_length, tip.x(), tip.y(), tip.z());
+}
+
+void WireOutput::add_frame(const WireFrame& f) {
+  ++frame_count_;
+  if (csv_)
+    for (size_t i = 0; i < f.x.size(); ++i)
+      wire_csv_ += fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g}\n", f.time, i, f.s[i], f.x[i].x(), f.x[i].y(),
+                               f.x[i].z());
+#ifdef FLOWIRE_HAVE_VTK
+  if (!vtk_) return;
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToDouble();
+  const auto n = static_cast<vtkIdType>(f.x.size());
+  pts->SetNumberOfPoints(n);
+  vtkNew<vtkPolyLine> line;
+  line->GetPointIds()->SetNumberOfIds(n);
+  for (vtkIdType i = 0; i < n; ++i) {
+    const auto& p = f.x[static_cast<size_t>(i)];
+    pts->SetPoint(i, p.x(), p.y(), p.z());
+    line->GetPointIds()->SetId(i, i);
+  }
+  vtkNew<vtkCellArray> cells;
+  cells->InsertNextCell(line);
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(pts);
+  poly->SetLines(cells);
+  auto add = [&](const char* name, int comps, auto&& value) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name);
+    a->SetNumberOfComponents(comps);
+    a->SetNumberOfTuples(n);
+    for (vtkIdType i = 0; i < n; ++i) value(static_cast<size_t>(i), a->GetPointer(i * comps));
+    poly->GetPointData()->AddArray(a);
+  };
+  add("s", 1, [&](size_t i, double* out) { out[0] = f.s[i]; });
+  auto vec = [&](const std::vector<Eigen::Vector3d>& v) {
+    return [&v](size_t i, double* out) {
+      const Eigen::Vector3d w = i < v.size() ? v[i] : Eigen::Vector3d::Zero();
+      out[0] = w.x(), out[1] = w.y(), out[2] = w.z();
+    };
+  };
+  add("force", 3, vec(f.force));
+  add("flow_velocity", 3, vec(f.flow_velocity));
+  const std::string name = fmt::format("wire_{:05d}.vtp", frame_count_ - 1);
+  write_atomically(dir_ / name, [&](const std::filesystem::path& tmp) {
+    vtkNew<vtkXMLPolyDataWriter> w;
+    w->SetFileName(tmp.string().c_str());
+    w->SetInputData(poly);
+    w->SetDataModeToAppended();
+    if (w->Write() != 1) throw_input_error((dir_ / name).string(), "VTK could not write the file");
+  });
+  vtk_files_.emplace_back(f.time, name);
+#endif
+}
+
+void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& files) {
+  std::string x = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  for (const auto& [t, f] : files) x += fmt::format("    <DataSet timestep=\"{:.9g}\" file=\"{}\"/>\n", t, f);
+  x += "  </Collection>\n</VTKFile>\n";
+  write_text_atomically(path, x);
+}
+
+void WireOutput::finish() {
+  if (csv_) {
+    write_text_atomically(dir_ / "wire.csv", wire_csv_);
+    write_text_atomically(dir_ / "tip_trace.csv", tip_csv_);
+  }
+  if (vtk_ && !vtk_files_.empty()) write_pvd(dir_ / "wire.pvd", vtk_files_);
+}
+
+}  // namespace flowire::coupling
