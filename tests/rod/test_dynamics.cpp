@@ -127,6 +127,26 @@ TEST(RodDynamics, FeedingAddsAndRemovesVertices) {
   EXPECT_EQ(sim.tip_trace().size(), 1001u);
 }
 
+TEST(RodDynamics, ImplicitMidpointFeedsAndSpins) {
+  WireSpec spec;
+  spec.length = 0.2;
+  spec.inserted_length = 0.1;
+  spec.segment_length = 1e-3;
+  spec.youngs_modulus = 67e9;
+  spec.tip.length = 0.03;
+  spec.tip.youngs_modulus = 10e9;
+  spec.tip.shape = TipShape::Angled;
+  spec.damping = 1e-3;
+  RodSimulator sim(spec);
+  sim.set_integrator(Integrator::ImplicitMidpoint);
+  sim.set_insertion_speed(0.1);
+  sim.set_rotation_speed(2.0 * std::numbers::pi);
+  for (int i = 0; i < 200; ++i) ASSERT_TRUE(sim.step(1e-3).converged());
+  EXPECT_NEAR(sim.inserted_length(), 0.12, 1e-9);
+  EXPECT_LT(sim.length_drift(), 1e-3);
+  for (const auto& x : sim.positions()) EXPECT_TRUE(x.allFinite());
+}
+
 TEST(RodDynamics, ExternalSpringWithJacobianMatchesTheory) {
   // Tip spring k: small-deflection tip δ = P / (3EI/L³ + k).
   RodSimulator sim(unit_rod_spec(60));

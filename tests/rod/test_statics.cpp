@@ -88,6 +88,31 @@ TEST(RodStatics, SmallDeflectionMatchesEulerBernoulli) {
   EXPECT_NEAR(-sim.tip_position().y(), 0.044003, tol(0.044003 * 0.005));
 }
 
+TEST(RodStatics, GravityAndPointForceMatchBeamTheory) {
+  // Small deflections of the unit cantilever (EI = ρA = L = 1): a uniform load q gives a
+  // tip deflection qL⁴/(8EI); a point load P at distance a from the clamp gives
+  // P a² (3L − a)/(6EI) at the tip.
+  {
+    RodSimulator sim(unit_rod_spec(100));
+    const double g = 1e-3;
+    sim.set_gravity({0.0, -g, 0.0});
+    ASSERT_TRUE(sim.solve_static().converged());
+    EXPECT_NEAR(-sim.tip_position().y(), g / 8.0, tol(0.002 * g / 8.0));
+    // The clamp carries the weight of every simulated vertex (the free wire and the stub).
+    double mass = 0.0;
+    for (int k = 0; k < sim.vertex_count(); ++k) mass += sim.model().mass[k];
+    EXPECT_NEAR(sim.base_force().y(), g * mass, 1e-6 * g);
+  }
+  {
+    RodSimulator sim(unit_rod_spec(100));
+    const double P = 1e-3, a = 0.4;
+    sim.add_point_force(a, {0.0, P, 0.0});  // s measured from the entry
+    ASSERT_TRUE(sim.solve_static().converged());
+    EXPECT_NEAR(sim.tip_position().y(), P * a * a * (3.0 - a) / 6.0,
+                tol(0.002 * P * a * a * (3.0 - a) / 6.0));
+  }
+}
+
 TEST(RodStatics, EndMomentClosesACircle) {
   const int n = 100;
   RodSimulator sim(unit_rod_spec(n));
