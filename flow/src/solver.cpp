@@ -188,6 +188,34 @@ double ResponseSolver::segment_flow_at(int segment, double t) const {
   return dp * a_.conductance[static_cast<size_t>(segment)];
 }
 
+void ResponseSolver::node_pressures(std::span<double> out) const {
+  if (out.size() != static_cast<size_t>(net_.num_nodes())) throw_usage_error("node_pressures: span size != num_nodes");
+  const auto kk = static_cast<size_t>(k_);
+  if (kk == 1) {
+    for (size_t i = 0; i < out.size(); ++i) out[i] = coef_[0] * p_[i];
+    return;
+  }
+  for (size_t i = 0; i < out.size(); ++i) {
+    const double* row = p_.data() + i * kk;
+    double v = 0.0;
+    for (size_t k = 0; k < kk; ++k) v += coef_[k] * row[k];
+    out[i] = v;
+  }
+}
+
+void ResponseSolver::segment_flows(std::span<double> out) const {
+  if (out.size() != static_cast<size_t>(net_.num_segments())) throw_usage_error("segment_flows: span size != num_segments");
+  const auto kk = static_cast<size_t>(k_);
+  for (size_t s = 0; s < out.size(); ++s) {
+    const auto& seg = net_.segment(static_cast<int>(s));
+    const double* a = p_.data() + static_cast<size_t>(seg.node_from) * kk;
+    const double* b = p_.data() + static_cast<size_t>(seg.node_to) * kk;
+    double dp = 0.0;
+    for (size_t k = 0; k < kk; ++k) dp += coef_[k] * (a[k] - b[k]);
+    out[s] = dp * a_.conductance[s];
+  }
+}
+
 /// Superposition: the responses solved with one CHOLMOD factorization.
 class SuperpositionSolver final : public ResponseSolver {
  public:

@@ -17,6 +17,8 @@ class ResponseSolver : public FlowSolver {
  public:
   [[nodiscard]] double node_pressure(int node) const override;
   [[nodiscard]] double segment_flow_at(int segment, double t) const override;
+  void node_pressures(std::span<double> out) const override;
+  void segment_flows(std::span<double> out) const override;
   [[nodiscard]] int num_sources() const { return k_; }
 
  protected:

@@ -1,0 +1,218 @@
+// Flow solver benchmarks.
+//
+// 1. Per-frame cost on a network of the published size (2,477 vessels, 2,478 nodes,
+//    2,488 edges: 11 loops): the published dense K⁻¹ product against superposition
+//    (full frame, and the lazy frame that evaluates only the 100 segments a wire touches)
+//    and a sparse direct solve per frame. BM_FrameRatio measures both in one run.
+// 2. Setup (assembly + CHOLMOD factorization + per-source solves) of binary trees from
+//    10³ to 10⁶ segments with superposition: time, retained memory, full-frame cost.
+//
+// Run: build-flow/bench/bench_flow --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <unistd.h>
+
+#include "flowire/common/units.hpp"
+#include "flowire/flow/solver.hpp"
+#include "flowire/vessels/generators.hpp"
+
+namespace {
+
+using namespace flowire;
+using flow::FlowSpec;
+using flow::Network;
+using flow::Vec3;
+
+/// A random tree of `vessels` segments plus `loops` segments closing loops (fixed seed).
+Network published_size_network(int vessels = 2477, int loops = 11) {
+  std::mt19937 rng(2024);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> nodes = {Vec3::Zero(), Vec3(0.01, 0, 0)};
+  std::vector<int> degree = {1, 1};
+  std::vector<vessels::Segment> segs = {{0, 1, 12e-3, 0.0, -1}};
+  std::vector<double> radius_at = {12e-3, 12e-3};
+  for (int i = 1; i < vessels; ++i) {
+    int parent = 0;
+    do parent = 1 + static_cast<int>(u(rng) * static_cast<double>(nodes.size() - 1));
+    while (parent >= static_cast<int>(nodes.size()) || degree[static_cast<size_t>(parent)] >= 3);
+    const double r = std::max(0.4e-3, radius_at[static_cast<size_t>(parent)] * (0.75 + 0.2 * u(rng)));
+    nodes.push_back(nodes[static_cast<size_t>(parent)] + 5e-3 * Vec3(u(rng) - 0.3, u(rng) - 0.5, u(rng) - 0.5));
+    degree.push_back(1);
+    radius_at.push_back(r);
+    ++degree[static_cast<size_t>(parent)];
+    segs.push_back({parent, static_cast<int>(nodes.size()) - 1, r, 0.0, -1});
+  }
+  for (int k = 0; k < loops; ++k) {
+    int a = 0, b = 0;
+    do {
+      a = 1 + static_cast<int>(u(rng) * static_cast<double>(nodes.size() - 2));
+      b = 1 + static_cast<int>(u(rng) * static_cast<double>(nodes.size() - 2));
+    } while (a == b || degree[static_cast<size_t>(a)] < 2 || degree[static_cast<size_t>(b)] < 2);
+    segs.push_back({a, b, 1e-3, 0.0, -1});
+  }
+  return Network::from_graph(nodes, segs, {}, "published-size benchmark network");
+}
+
+FlowSpec spec_for(const Network& net, flow::SolverKind kind) {
+  FlowSpec s = flow::default_spec(net, flow::Waveform::sine(120 * units::mmHg, 80 * units::mmHg, 60.0 / 72.0));
+  for (auto& o : s.outlets) {
+    o.type = flow::OutletBC::Type::Resistance;
+    o.resistance = 5e9;
+  }
+  s.solver = kind;
+  return s;
+}
+
+const Network& published() {
+  static const Network net = published_size_network();
+  return net;
+}
+
+flow::FlowSolver& solver(flow::SolverKind kind) {
+  static std::unique_ptr<flow::FlowSolver> cache[4];
+  auto& s = cache[static_cast<int>(kind)];
+  if (!s) s = flow::make_solver(published(), spec_for(published(), kind));
+  return *s;
+}
+
+/// The segments a 100-vertex wire would touch: a path of consecutive segments.
+std::vector<int> wire_segments() {
+  std::vector<int> s;
+  for (int i = 0; i < 100; ++i) s.push_back((i * 7) % published().num_segments());
+  return s;
+}
+
+void full_frame(flow::FlowSolver& s, double t, std::vector<double>& p, std::vector<double>& q) {
+  s.solve_at(t, p, q);
+  benchmark::DoNotOptimize(p.data());
+  benchmark::DoNotOptimize(q.data());
+}
+
+void BM_Frame(benchmark::State& state) {
+  const auto kind = static_cast<flow::SolverKind>(state.range(0));
+  auto& s = solver(kind);
+  std::vector<double> p(static_cast<size_t>(published().num_nodes())), q(static_cast<size_t>(published().num_segments()));
+  double t = 0.0;
+  for (auto _ : state) {
+    full_frame(s, t, p, q);
+    t += 1e-3;
+  }
+  state.SetLabel(std::string(s.name()) + " (all pressures and flows)");
+  state.counters["setup_s"] = s.timings().assemble + s.timings().factor;
+  state.counters["segments"] = published().num_segments();
+}
+BENCHMARK(BM_Frame)
+    ->Arg(static_cast<int>(flow::SolverKind::DenseInverse))
+    ->Arg(static_cast<int>(flow::SolverKind::Superposition))
+    ->Arg(static_cast<int>(flow::SolverKind::Sparse))
+    ->Unit(benchmark::kMicrosecond);
+
+void BM_FrameLazy100Segments(benchmark::State& state) {
+  auto& s = solver(flow::SolverKind::Superposition);
+  const auto segs = wire_segments();
+  double t = 0.0, sum = 0.0;
+  for (auto _ : state) {
+    s.advance(t);
+    for (int k : segs) sum += s.segment_flow(k);
+    benchmark::DoNotOptimize(sum);
+    t += 1e-3;
+  }
+  state.SetLabel("superposition, advance + 100 segment flows");
+}
+BENCHMARK(BM_FrameLazy100Segments)->Unit(benchmark::kMicrosecond);
+
+void BM_VelocityQuery(benchmark::State& state) {
+  auto& s = solver(flow::SolverKind::Superposition);
+  s.advance(0.1);
+  const auto& net = published();
+  double sum = 0.0;
+  int k = 0;
+  for (auto _ : state) {
+    const auto& seg = net.segment(k);
+    const Vec3 p = 0.5 * (net.node(seg.node_from) + net.node(seg.node_to));
+    sum += s.velocity_at(k, p).x();
+    benchmark::DoNotOptimize(sum);
+    k = (k + 1) % net.num_segments();
+  }
+  state.SetLabel("velocity_at(segment, point), laminar");
+}
+BENCHMARK(BM_VelocityQuery);
+
+/// Both methods timed in the same run: dense_inverse frame vs superposition frame.
+void BM_FrameRatio(benchmark::State& state) {
+  auto& dense = solver(flow::SolverKind::DenseInverse);
+  auto& sup = solver(flow::SolverKind::Superposition);
+  const auto segs = wire_segments();
+  std::vector<double> p(static_cast<size_t>(published().num_nodes())), q(static_cast<size_t>(published().num_segments()));
+  using Clock = std::chrono::steady_clock;
+  double dense_s = 0.0, full_s = 0.0, lazy_s = 0.0, sum = 0.0;
+  long n = 0;
+  for (auto _ : state) {
+    const double t = 1e-3 * static_cast<double>(n);
+    auto a = Clock::now();
+    full_frame(dense, t, p, q);
+    auto b = Clock::now();
+    for (int r = 0; r < 100; ++r) full_frame(sup, t + r * 1e-6, p, q);
+    auto c = Clock::now();
+    for (int r = 0; r < 1000; ++r) {
+      sup.advance(t + r * 1e-7);
+      for (int k : segs) sum += sup.segment_flow(k);
+    }
+    auto d = Clock::now();
+    benchmark::DoNotOptimize(sum);
+    dense_s += std::chrono::duration<double>(b - a).count();
+    full_s += std::chrono::duration<double>(c - b).count() / 100.0;
+    lazy_s += std::chrono::duration<double>(d - c).count() / 1000.0;
+    ++n;
+  }
+  state.counters["dense_ms"] = 1e3 * dense_s / static_cast<double>(n);
+  state.counters["superposition_full_us"] = 1e6 * full_s / static_cast<double>(n);
+  state.counters["superposition_100seg_us"] = 1e6 * lazy_s / static_cast<double>(n);
+  state.counters["ratio_full"] = dense_s / full_s;
+  state.counters["ratio_100seg"] = dense_s / lazy_s;
+}
+BENCHMARK(BM_FrameRatio)->Unit(benchmark::kMillisecond)->Iterations(20);
+
+double rss_mb() {
+  std::ifstream in("/proc/self/statm");
+  long pages = 0, resident = 0;
+  in >> pages >> resident;
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1e6;
+}
+
+/// Setup and frame cost of superposition on binary trees of 2^(depth+1) − 1 segments.
+void BM_TreeSetup(benchmark::State& state) {
+  vessels::BinaryTreeParams bp;
+  bp.depth = static_cast<int>(state.range(0));
+  const Network net = vessels::binary_tree(bp);
+  FlowSpec spec = flow::default_spec(net, flow::Waveform::sine(16000.0, 10666.0, 0.8));
+  double setup = 0.0, mem = 0.0, frame = 0.0;
+  long n = 0;
+  for (auto _ : state) {
+    const double before = rss_mb();
+    const auto t0 = std::chrono::steady_clock::now();
+    auto s = flow::make_solver(net, spec);
+    const auto t1 = std::chrono::steady_clock::now();
+    mem = rss_mb() - before;
+    std::vector<double> p(static_cast<size_t>(net.num_nodes())), q(static_cast<size_t>(net.num_segments()));
+    const auto t2 = std::chrono::steady_clock::now();
+    s->solve_at(0.2, p, q);
+    const auto t3 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(q.data());
+    setup += std::chrono::duration<double>(t1 - t0).count();
+    frame += std::chrono::duration<double>(t3 - t2).count();
+    ++n;
+  }
+  state.SetComplexityN(net.num_segments());
+  state.counters["segments"] = net.num_segments();
+  state.counters["setup_s"] = setup / static_cast<double>(n);
+  state.counters["full_frame_ms"] = 1e3 * frame / static_cast<double>(n);
+  state.counters["retained_MB"] = mem;
+}
+BENCHMARK(BM_TreeSetup)->DenseRange(9, 19, 1)->Unit(benchmark::kMillisecond)->Iterations(1)->Complexity(benchmark::oN);
+
+}  // namespace
