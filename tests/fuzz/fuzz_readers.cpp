@@ -15,14 +15,24 @@
 
 namespace {
 
-const std::filesystem::path& work_dir() {
-  static const std::filesystem::path dir = [] {
-    auto d = std::filesystem::temp_directory_path() / ("flowire-fuzz-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(d);
+/// A scratch directory for this process, removed at exit.
+struct WorkDir {
+  std::filesystem::path path;
+  WorkDir() : path(std::filesystem::temp_directory_path() / ("flowire-fuzz-" + std::to_string(::getpid()))) {
+    std::filesystem::create_directories(path);
     flowire::set_warning_handler([](std::string_view) {});
-    return d;
-  }();
-  return dir;
+  }
+  ~WorkDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  WorkDir(const WorkDir&) = delete;
+  WorkDir& operator=(const WorkDir&) = delete;
+};
+
+const std::filesystem::path& work_dir() {
+  static const WorkDir dir;
+  return dir.path;
 }
 
 }  // namespace

@@ -186,6 +186,20 @@ TEST(RealData, MillimetreFileReadAsMetresWarnsNamingTheUnit) {
   EXPECT_TRUE(w.contains("probably in mm")) << w.warnings()[0];
 }
 
+TEST(RealData, LumenSurfacesAreNotCenterlines) {
+  FLOWIRE_REQUIRE_SHARED("data/real/simvascular-demo-aorta-iliac/model_surface.vtp");
+  for (const char* rel : {"simvascular-demo-aorta-iliac/model_surface.vtp", "aneurisk-c0015-ica-vampy/artery.vtp",
+                          "vmtk-abdominal-aorta-bifurcation/aorta-surface.vtp"}) {
+    SCOPED_TRACE(rel);
+    try {
+      (void)read_network(real(rel));
+      ADD_FAILURE() << "a surface is not a network";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("no line cells"), std::string::npos) << e.what();
+    }
+  }
+}
+
 #endif  // FLOWIRE_HAVE_VTK
 
 TEST(RealData, SvOneDAortoFemoralDeckHasNineOutlets) {

@@ -82,12 +82,17 @@ bool is_vmtk(const PolyData& pd) { return find_array(pd.point_data, "MaximumInsc
 
 /// Checks every line cell (ids in range, at least two points) and every point the cells use
 /// (finite coordinates, finite positive radius).
+void require_lines(const PolyData& pd) {
+  if (!pd.lines.empty()) return;
+  if (pd.points.empty()) throw_input_error(pd.source, "no points and no line cells: the file is empty");
+  throw_input_error(pd.source, fmt::format("no line cells (centerline polylines) among {} points{}", pd.points.size(),
+                                           pd.other_cells > 0 ? fmt::format(" and {} other cells (a surface?)",
+                                                                            pd.other_cells)
+                                                              : std::string{}));
+}
+
 void validate(const PolyData& pd, const std::vector<double>& radii) {
-  if (pd.lines.empty()) {
-    if (pd.points.empty()) throw_input_error(pd.source, "no points and no line cells: the file is empty");
-    throw_input_error(pd.source, fmt::format("no line cells (polylines) among {} points{}", pd.points.size(),
-                                             pd.other_cells > 0 ? " (only vertices or polygons)" : ""));
-  }
+  require_lines(pd);
   const auto np = static_cast<long long>(pd.points.size());
   std::vector<char> checked(pd.points.size(), 0);
   for (size_t c = 0; c < pd.lines.size(); ++c) {
@@ -700,6 +705,7 @@ Centerlines polydata_to_centerlines(const PolyData& pd, double merge_tolerance) 
     }
     return c;
   }
+  require_lines(pd);
   const auto radii = point_radii(pd);
   validate(pd, radii);
   const bool vmtk = is_vmtk(pd);
