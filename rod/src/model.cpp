@@ -25,6 +25,22 @@ double shaft_fraction(const TipSpec& tip, double u) {
 
 }  // namespace
 
+TipShape parse_tip_shape(std::string_view name) {
+  if (name == "straight") return TipShape::Straight;
+  if (name == "angled") return TipShape::Angled;
+  if (name == "j" || name == "J") return TipShape::J;
+  throw_usage_error("tip shape '" + std::string(name) + "': use straight, angled or j");
+}
+
+const char* to_string(TipShape shape) {
+  switch (shape) {
+    case TipShape::Straight: return "straight";
+    case TipShape::Angled: return "angled";
+    case TipShape::J: return "j";
+  }
+  return "straight";
+}
+
 RodModel RodModel::from_spec(const WireSpec& s) {
   require(s.length > 0.0, "length must be > 0");
   require(s.radius > 0.0 || (s.bending_stiffness > 0 && s.stretch_stiffness > 0 &&

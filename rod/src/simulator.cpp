@@ -30,6 +30,16 @@ const char* to_string(SolveStatus s) {
   return "unknown";
 }
 
+Integrator parse_integrator(std::string_view name) {
+  if (name == "implicit_euler") return Integrator::ImplicitEuler;
+  if (name == "implicit_midpoint") return Integrator::ImplicitMidpoint;
+  throw_usage_error(fmt::format("integrator '{}': use implicit_euler or implicit_midpoint", name));
+}
+
+const char* to_string(Integrator integrator) {
+  return integrator == Integrator::ImplicitMidpoint ? "implicit_midpoint" : "implicit_euler";
+}
+
 /// Buffers sized once for the whole wire.
 struct RodSimulator::Work {
   int max_dof = 0;

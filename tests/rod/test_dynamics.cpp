@@ -199,6 +199,10 @@ TEST(RodDynamics, InvalidInputIsAnError) {
   EXPECT_THROW(RodSimulator{spec}, flowire::Error);
   RodSimulator sim(unit_rod_spec(10));
   EXPECT_THROW(sim.step(0.0), flowire::Error);
+  EXPECT_THROW((void)parse_tip_shape("hook"), flowire::Error);
+  EXPECT_EQ(parse_tip_shape("j"), TipShape::J);
+  EXPECT_EQ(parse_integrator("implicit_midpoint"), Integrator::ImplicitMidpoint);
+  EXPECT_THROW((void)parse_integrator("rk4"), flowire::Error);
 }
 
 }  // namespace

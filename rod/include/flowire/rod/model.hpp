@@ -26,11 +26,16 @@
 ///   the tip (default 2 mm);
 /// - j: as angled with default angle 180° and offset 0 (the arc reaches the tip).
 #include <Eigen/Core>
+#include <string_view>
 #include <vector>
 
 namespace flowire::rod {
 
 enum class TipShape { Straight, Angled, J };
+
+/// @brief "straight" | "angled" | "j" (scene files). @throws flowire::Error (usage) otherwise.
+[[nodiscard]] TipShape parse_tip_shape(std::string_view name);
+[[nodiscard]] const char* to_string(TipShape shape);
 
 /// @brief The distal part of the wire: softer, optionally thinner, optionally pre-shaped.
 struct TipSpec {

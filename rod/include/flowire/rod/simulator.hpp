@@ -44,6 +44,7 @@
 #include <Eigen/SparseCholesky>
 #include <memory>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "flowire/rod/banded.hpp"
@@ -65,6 +66,9 @@ enum class SolveStatus {
 };
 
 [[nodiscard]] const char* to_string(SolveStatus s);
+/// @brief "implicit_euler" | "implicit_midpoint" (scene files). @throws flowire::Error (usage).
+[[nodiscard]] Integrator parse_integrator(std::string_view name);
+[[nodiscard]] const char* to_string(Integrator integrator);
 
 /// @brief Outcome of one step or static solve.
 struct StepReport {
