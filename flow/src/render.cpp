@@ -66,9 +66,19 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   vtkNew<vtkPoints> pts;
   pts->SetNumberOfPoints(net.num_nodes());
   for (int i = 0; i < net.num_nodes(); ++i) pts->SetPoint(i, net.node(i).data());
+  // One polyline per branch (tubes then join smoothly inside a branch); segments that no
+  // branch lists are drawn alone.
   vtkNew<vtkCellArray> lines;
-  for (const auto& s : net.segments()) {
-    const vtkIdType ids[2] = {s.node_from, s.node_to};
+  std::vector<char> drawn(static_cast<size_t>(net.num_segments()), 0);
+  for (const auto& b : net.branches()) {
+    if (b.nodes.size() < 2 || b.nodes.size() != b.segments.size() + 1) continue;
+    lines->InsertNextCell(static_cast<vtkIdType>(b.nodes.size()));
+    for (int n : b.nodes) lines->InsertCellPoint(n);
+    for (int s : b.segments) drawn[static_cast<size_t>(s)] = 1;
+  }
+  for (int s = 0; s < net.num_segments(); ++s) {
+    if (drawn[static_cast<size_t>(s)]) continue;
+    const vtkIdType ids[2] = {net.segment(s).node_from, net.segment(s).node_to};
     lines->InsertNextCell(2, ids);
   }
   vtkNew<vtkDoubleArray> scalars;
@@ -143,6 +153,7 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   bar->SetLookupTable(lut);
   bar->SetTitle(opt.scalar_name.c_str());
   bar->SetNumberOfLabels(5);
+  bar->SetLabelFormat(hi - lo < 10.0 ? "%.2f" : "%.0f");
   bar->GetTitleTextProperty()->SetColor(0, 0, 0);
   bar->GetLabelTextProperty()->SetColor(0, 0, 0);
   bar->SetWidth(0.1);
