@@ -146,7 +146,7 @@ if(SHARED_DIR AND EXISTS ${SHARED_DIR}/data/real)
 endif()
 
 execute_process(
-  COMMAND ${FUZZER} ${corpus} -max_total_time=${SECONDS} -max_len=8192 -timeout=20 -rss_limit_mb=3072 -detect_leaks=0
+  COMMAND ${CMAKE_COMMAND} -E env ASAN_OPTIONS=detect_leaks=0 ${FUZZER} ${corpus} -max_total_time=${SECONDS} -max_len=8192 -timeout=20 -rss_limit_mb=3072 -detect_leaks=0
           -artifact_prefix=${WORK_DIR}/artifacts/ -print_final_stats=1
   WORKING_DIRECTORY ${WORK_DIR}
   RESULT_VARIABLE rc)
