@@ -186,3 +186,23 @@ TEST(Cli, VesselsOnlySceneWritesSummaryAndSegments) {
   for (const auto& e : fs::directory_iterator(dir / "out"))
     EXPECT_EQ(e.path().extension(), e.path().extension() == ".partial" ? ".none" : e.path().extension());
 }
+
+TEST(Cli, RunsAnSvZeroDSolverModel) {
+  FLOWIRE_REQUIRE_SHARED("peers/svzerodsolver/cases/pulsatileFlow_R_RCR.json");
+  const auto dir = flowire::testing::scratch_dir("cli-svzerod");
+  const auto model = (flowire::testing::shared_dir() / "peers/svzerodsolver/cases/pulsatileFlow_R_RCR.json").string();
+  const auto r = run("run " + model + " --out " + (dir / "o").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream csv(dir / "o" / "svzerod_result.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "name,time,flow_in,flow_out,pressure_in,pressure_out");
+  std::ifstream in(dir / "o" / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["status"], "ok");
+  // A model that is not JSON is one clear error.
+  std::ofstream(dir / "bad.json") << "{\"vessels\": [";
+  const auto b = run("run " + (dir / "bad.json").string() + " --out " + (dir / "b").string());
+  EXPECT_EQ(b.status, 2) << b.err;
+  EXPECT_NE(b.err.find("bad.json"), std::string::npos) << b.err;
+  EXPECT_FALSE(fs::exists(dir / "b" / "svzerod_result.csv"));
+}
