@@ -40,15 +40,18 @@ void run_steps(benchmark::State& state, LinearSolver solver) {
   sim.set_rotation_speed(2.0);
   const double dt = 1e-3;
   for (int i = 0; i < 3; ++i) sim.step(dt);  // leave the initial transient
-  long iterations = 0;
+  long iterations = 0, fallbacks = 0;
   for (auto _ : state) {
     const auto r = sim.step(dt);
     iterations += r.newton_iterations;
+    fallbacks += r.regularizations;
     benchmark::DoNotOptimize(sim.tip_position());
   }
   state.counters["vertices"] = sim.vertex_count();
   state.counters["newton_per_step"] =
       benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
+  state.counters["psd_fallbacks_per_step"] =
+      benchmark::Counter(static_cast<double>(fallbacks), benchmark::Counter::kAvgIterations);
   state.SetComplexityN(n);
 }
 

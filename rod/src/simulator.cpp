@@ -500,6 +500,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
 
   gather(w.q);
   double phi = assemble(mode, h, load_scale, true);
+  bool matrix_current = true;  // trial points are evaluated without the matrix
   if (!std::isfinite(phi) || !finite(w.grad.head(nd))) {
     rep.status = SolveStatus::NonFinite;
     return rep;
@@ -512,6 +513,10 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       break;
     }
     rep.newton_iterations = it + 1;
+    if (!matrix_current) {
+      phi = assemble(mode, h, load_scale, true);
+      matrix_current = true;
+    }
     // Linear solve on the free unknowns: the exact Hessian first; if it is indefinite
     // (strongly bent or compressed states), the Gauss–Newton matrix of the same residual,
     // which is positive semi-definite, with a modified factorization as last resort.
@@ -596,7 +601,8 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       w.rhs.head(nd) = qb.head(nd) + alpha * dq;  // trial unknowns
       for (int k = 0; k < first_clamped_; ++k) w.rhs.segment<3>(4 * k) = s.x[k];
       w.q.head(nd).swap(w.rhs.head(nd));
-      const double phi_t = assemble(mode, h, load_scale, true);
+      const double phi_t = assemble(mode, h, load_scale, false);
+      matrix_current = false;
       const double work =
           0.5 * (w.fext_bk.head(nd) + w.fext.head(nd)).dot(w.q.head(nd) - w.rhs.head(nd));
       const double merit0 = phi, merit_t = phi_t - work;
@@ -620,6 +626,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       s.ref_twist = w.twistb;
       gather(w.q);
       phi = assemble(mode, h, load_scale, true);
+      matrix_current = true;
       rep.residual = residual_norm();
       // No decrease left along a descent direction: at the round-off level of the
       // stretching forces (within 100× the floor-based tolerance) that is convergence.
