@@ -597,7 +597,7 @@ Network sample_network() {
   c.source = "sample";
   c.branches.push_back({"aorta", {Vec3(0, 0, 0), Vec3(0, 0, -0.03), Vec3(0.001, 0, -0.06)}, {0.012, 0.011, 0.010}});
   c.branches.push_back({"left <iliac>", {Vec3(0.001, 0, -0.06), Vec3(-0.02, 0, -0.09)}, {0.005, 0.004}});
-  c.branches.push_back({"right \"iliac\"", {Vec3(0.001, 0, -0.06), Vec3(0.0234567891234, 1e-7, -0.0912)}, {0.0051, 0.0037}});
+  c.branches.push_back({"right \"iliac\"\n\\2", {Vec3(0.001, 0, -0.06), Vec3(0.0234567891234, 1e-7, -0.0912)}, {0.0051, 0.0037}});
   BuildOptions b;
   b.max_segment_length = 7e-3;
   return Network::build(c, b);
@@ -653,7 +653,7 @@ TEST(WriteNetwork, YamlRoundTripIsExact) {
   expect_identical(net, read_network(file));
   const auto cl = read_centerlines(file);  // the branches alone are a valid network file too
   ASSERT_EQ(cl.branches.size(), 3u);
-  EXPECT_EQ(cl.branches[2].name, "right \"iliac\"");
+  EXPECT_EQ(cl.branches[2].name, "right \"iliac\"\n\\2");
   EXPECT_EQ(cl.branches[0].points.size(), net.branch(0).nodes.size());
 }
 

@@ -198,11 +198,20 @@ void write_network_yaml(const Network& net, const std::string& path) {
     return s + "]";
   };
   for (const auto& b : net.branches()) {
-    std::string name = b.name;
     std::string quoted = "\"";
-    for (const char c : name) {
-      if (c == '"' || c == '\\') quoted += '\\';
-      quoted += c;
+    for (const char c : b.name) {
+      switch (c) {
+        case '"': quoted += "\\\""; break;
+        case '\\': quoted += "\\\\"; break;
+        case '\n': quoted += "\\n"; break;
+        case '\t': quoted += "\\t"; break;
+        default:
+          if (static_cast<unsigned char>(c) < 0x20) {
+            quoted += fmt::format("\\x{:02x}", static_cast<int>(c));
+          } else {
+            quoted += c;
+          }
+      }
     }
     quoted += "\"";
     y += fmt::format("  - name: {}\n    points:\n", quoted);
