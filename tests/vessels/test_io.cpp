@@ -480,6 +480,30 @@ TEST(ReadLegacyVtk, TreeWithRadii) {
   EXPECT_NEAR(c.radius_min, (1.0 * 7 + 2.0 * 0) / 7 * 1e-3, 0.2e-3);
 }
 
+TEST_F(ReadersWithVtk, ClosedRingIsALoopOfTwoBranches) {
+  // One closed polyline cell (last id = first id) plus a feeding vessel: one loop.
+  TestPoly p;
+  std::vector<double> r;
+  for (int i = 0; i < 12; ++i) {
+    const double a = 2 * std::numbers::pi * i / 12;
+    p.points.emplace_back(0.01 * std::cos(a), 0.01 * std::sin(a), 0);
+    r.push_back(0.001);
+  }
+  p.points.emplace_back(0.03, 0, 0);
+  r.push_back(0.002);
+  std::vector<long long> ring;
+  for (long long i = 0; i < 12; ++i) ring.push_back(i);
+  ring.push_back(0);
+  p.lines = {ring, {12, 0}};
+  p.point_data.push_back({"radius", r});
+  const auto file = write_file(scratch_dir("io_ring"), "ring.vtp", vtp_text(p));
+  const auto c = read_network(file).counts();
+  EXPECT_EQ(c.loops, 1);
+  EXPECT_EQ(c.ends, 1);
+  EXPECT_EQ(c.branches, 3);
+  EXPECT_EQ(c.components, 1);
+}
+
 TEST_F(ReadersWithVtk, LengthUnitScalesCoordinatesAndRadii) {
   TestPoly p;
   p.points = {Vec3(0, 0, 0), Vec3(10, 0, 0)};
@@ -528,6 +552,24 @@ branches:
   EXPECT_EQ(c.junctions, 1);
   EXPECT_EQ(c.ends, 3);
   EXPECT_EQ(net.branch(0).name, "trunk");
+}
+
+TEST(ReadYaml, TwoBranchesBetweenTheSameEndsMakeALoop) {
+  const auto file = write_file(scratch_dir("io_yaml_loop"), "loop.yaml", R"(length_unit: mm
+branches:
+  - name: in
+    points: [[0, 0, 0, 2], [10, 0, 0, 2]]
+  - name: upper
+    points: [[10, 0, 0, 1], [15, 5, 0, 1], [20, 0, 0, 1]]
+  - name: lower
+    points: [[10, 0, 0, 1], [15, -5, 0, 1], [20, 0, 0, 1]]
+  - name: out
+    points: [[20, 0, 0, 2], [30, 0, 0, 2]]
+)");
+  const auto c = read_network(file).counts();
+  EXPECT_EQ(c.loops, 1);
+  EXPECT_EQ(c.junctions, 2);
+  EXPECT_EQ(c.ends, 2);
 }
 
 TEST(ReadYaml, DeclaredUnitWinsOverTheOptionWithAWarning) {
