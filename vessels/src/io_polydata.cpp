@@ -661,7 +661,8 @@ std::vector<Polyline> merge_paths(std::vector<Polyline> paths, double merge_tole
     tail.points.push_back(x);
     tail.radii.push_back(r);
     for (size_t i = d; i < p.points.size(); ++i) {
-      if (p.points[i] == tail.points.back()) continue;
+      // Points closer than rounding to the junction would make a zero-length piece.
+      if ((p.points[i] - tail.points.back()).norm() <= 1e-9 * std::max(1.0, p.points[i].norm())) continue;
       tail.points.push_back(p.points[i]);
       tail.radii.push_back(p.radii[i]);
     }
