@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <cmath>
+#include <unistd.h>
 
 #include "assembly.hpp"
 #include "flowire/common/diagnostics.hpp"
@@ -332,12 +333,13 @@ class DenseInverseSolver final : public FrameSolver {
     const auto ne = static_cast<Eigen::Index>(net_.num_segments());
     const Eigen::Index m = nn + ne;
     const double bytes = dense_inverse_bytes(net_.num_nodes(), net_.num_segments());
-    if (bytes > spec_.dense_memory_limit)
+    const double limit = spec_.dense_memory_limit > 0.0 ? spec_.dense_memory_limit : 0.5 * physical_memory_bytes();
+    if (bytes > limit)
       throw_input_error("flow.solver: dense_inverse",
                         fmt::format("the published dense K⁻¹ of this network ({} nodes + {} segments = {}² entries) "
                                     "needs {:.3g} GB, above the limit of {:.3g} GB; use flow.solver: superposition "
                                     "(same answer, factored sparse)",
-                                    nn, ne, m, bytes / 1e9, spec_.dense_memory_limit / 1e9));
+                                    nn, ne, m, bytes / 1e9, limit / 1e9));
     Stopwatch sw;
     a_ = assemble(net_, spec_, resistance_);
     Eigen::MatrixXd k = Eigen::MatrixXd::Zero(m, m);
@@ -391,6 +393,11 @@ class DenseInverseSolver final : public FrameSolver {
   mutable std::vector<double> coef_;
   mutable Eigen::VectorXd rhs_, y_;
 };
+
+double physical_memory_bytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+  return pages > 0 && size > 0 ? static_cast<double>(pages) * static_cast<double>(size) : 8e9;
+}
 
 double dense_inverse_bytes(int nodes, int segments) {
   const double m = static_cast<double>(nodes) + static_cast<double>(segments);

@@ -36,6 +36,8 @@ class ResponseSolver : public FlowSolver {
 
 /// Bytes the dense_inverse solver needs for K and K⁻¹.
 double dense_inverse_bytes(int nodes, int segments);
+/// Physical memory of the machine (bytes).
+double physical_memory_bytes();
 /// The rlc (resistance–inertance–compliance) model, rlc.cpp.
 std::unique_ptr<FlowSolver> make_rlc_solver(const Network& net, FlowSpec spec);
 /// PETSc solver (petsc_solver.cpp), or an input error when PETSc is not built in.

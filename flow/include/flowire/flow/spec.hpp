@@ -108,8 +108,9 @@ struct FlowSpec {
   double periodic_tolerance = 1e-6;    ///< rlc: relative change between cycles taken as periodic
   int max_cycles = 50;                 ///< rlc: cycles run at most when looking for the periodic state
 
-  /// dense_inverse refuses above this many bytes for K and K⁻¹ (≈ 2·8·(N+E)² bytes).
-  double dense_memory_limit = 8e9;
+  /// dense_inverse refuses when K and K⁻¹ (2·8·(N+E)² bytes) exceed this many bytes;
+  /// 0: half of the machine's physical memory.
+  double dense_memory_limit = 0.0;
   /// petsc: preconditioner "gamg" or "hypre"; relative tolerance of CG.
   std::string petsc_pc = "gamg";
   double petsc_rtol = 1e-14;
