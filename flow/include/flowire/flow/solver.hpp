@@ -20,7 +20,7 @@
 /// - `petsc`: the nodal system distributed with PETSc (KSPCG + GAMG or hypre), solved once
 ///   per source like superposition; every MPI rank ends with the whole answer.
 /// Model::Rlc: segments also carry inertance and nodes compliance; `advance` integrates
-/// in time (see rlc.hpp).
+/// in time (see rlc.hpp); it has its own sparse LU and ignores `spec.solver`.
 #include <chrono>
 #include <memory>
 #include <span>
