@@ -231,6 +231,20 @@ void RodSimulator::set_prescribed(double inserted, double angle, std::vector<Vec
   // Clamped edges point from the tip side to the holder (−base_direction); the base angle
   // is right-handed about +base_direction, hence the sign.
   for (int j = first_clamped_; j < nv - 1; ++j) theta[j] = -angle;
+  if (tip_clamped_) {
+    x[0] = tip_clamp_x0_;
+    x[1] = tip_clamp_x1_;
+    theta[0] = tip_clamp_theta_;
+  }
+}
+
+void RodSimulator::clamp_tip(const Vec3& tip, const Vec3& next) {
+  if (first_clamped_ < 3) throw_usage_error("RodSimulator::clamp_tip: the wire is too short");
+  if ((next - tip).norm() <= 0.0) throw_usage_error("RodSimulator::clamp_tip: tip and next coincide");
+  tip_clamped_ = true;
+  tip_clamp_x0_ = tip;
+  tip_clamp_x1_ = next;
+  tip_clamp_theta_ = state_.theta[0];
 }
 
 void RodSimulator::predict_feed(double fed, double h) {
@@ -301,10 +315,10 @@ std::pair<Vec3, Vec3> RodSimulator::material_frame(int edge) const {
 // -----------------------------------------------------------------------------------------
 
 void RodSimulator::vertex_params(int k, VertexParams& p) const {
-  // The clamp vertex owns only the half cell in front of the entry: the wire behind it is
+  // A clamp vertex owns only the half cell on its free side: the wire behind it is
   // held rigid, so its bending and twisting act over h/2 (this keeps the clamp exactly at
   // the entry and the scheme second-order; a full cell would move the clamp back by h/2).
-  const double cell = k == first_clamped_ ? 0.5 : 1.0;
+  const double cell = (k == first_clamped_ || (tip_clamped_ && k == 1)) ? 0.5 : 1.0;
   p.bend_stiffness1 = p.bend_stiffness2 = model_.bend_stiffness[k];
   p.rest_kappa1 = cell * model_.rest_kappa1[k];
   p.rest_kappa2 = cell * model_.rest_kappa2[k];
@@ -485,13 +499,14 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
   const int nv = s.vertex_count();
   const int nd = dof_count();
   const int first_fixed = 4 * first_clamped_;
+  const int first_free = tip_clamped_ ? 7 : 0;  // x0, θ0, x1 held by a tip clamp
   StepReport rep;
   rep.tolerance = force_scale(load_scale);
   const int max_it = mode == Mode::Static ? settings_.max_static_iterations : settings_.max_iterations;
 
   auto residual_norm = [&]() {
     double r = 0.0;
-    for (int d = 0; d < first_fixed; ++d) {
+    for (int d = first_free; d < first_fixed; ++d) {
       const double v = (d % 4 == 3) ? w.grad(d) / model_.h : w.grad(d);
       r = std::max(r, std::abs(v));
     }
@@ -523,6 +538,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     auto rhs = w.rhs.head(nd);
     rhs = -w.grad.head(nd);
     rhs.tail(nd - first_fixed).setZero();
+    rhs.head(first_free).setZero();
     bool ok = false;
     for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
       if (attempt == 1) {
@@ -530,6 +546,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
         ++rep.regularizations;
       }
       for (int d = first_fixed; d < nd; ++d) w.H.set_identity_row(d);
+      for (int d = 0; d < first_free; ++d) w.H.set_identity_row(d);
       const double scale = std::max(w.H.max_diagonal(), 1e-300);
       if (settings_.linear_solver == LinearSolver::Banded) {
         ok = attempt == 0 ? (w.ldlt.factorize(w.H) && w.ldlt.negative_pivots() == 0)
@@ -580,7 +597,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
         s.x[k] = w.xb[k] + alpha * dq.segment<3>(4 * k);
         if (k < nv - 1) s.theta[k] = w.thetab[k] + alpha * dq(4 * k + 3);
       }
-      if (settings_.curvilinear_update) {
+      if (settings_.curvilinear_update && !tip_clamped_) {
         // Walk from the clamp to the tip keeping each free edge's updated direction but
         // its linearized length: removes the O(α²) spurious stretch of a straight-line
         // step through a rotation, so stiff stretching does not throttle the step.
@@ -611,7 +628,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       if (good) {
         accepted = true;
         phi = phi_t;
-        max_step = alpha * dq.head(first_fixed).cwiseAbs().maxCoeff();
+        max_step = alpha * dq.segment(first_free, first_fixed - first_free).cwiseAbs().maxCoeff();
         break;
       }
       w.q.head(nd).swap(w.rhs.head(nd));  // restore q
@@ -912,6 +929,8 @@ int RodSimulator::static_hessian_negative_eigenvalues() {
   gather(w.q);
   assemble(Mode::Static, 1.0, 1.0, true);
   for (int d = 4 * first_clamped_; d < nd; ++d) w.H.set_identity_row(d);
+  if (tip_clamped_)
+    for (int d = 0; d < 7; ++d) w.H.set_identity_row(d);
   if (!w.ldlt.factorize(w.H)) return -1;
   return w.ldlt.negative_pivots();
 }

@@ -173,5 +173,57 @@ TEST(RodStatics, EulerBucklingLoadClampedFree) {
   EXPECT_NEAR(0.5 * (lo + hi), P_cr, tol(0.01 * P_cr));
 }
 
+TEST(RodStatics, EulerBucklingClampedClampedWithTipClamp) {
+  // Both ends clamped, the tip clamp moved toward the base by δ: the axial force
+  // N = EA δ / L reaches P_cr = 4π² EI / ℓ² (K = 0.5) when the straight state turns
+  // unstable; ℓ = L − h is the span between the clamp vertices (the tip clamp holds the
+  // distal edge).
+  const int n = 40;
+  const double EA = 1e7;
+  const double span = 1.0 - 1.0 / n;
+  const double P_cr = 4.0 * std::numbers::pi * std::numbers::pi / (span * span);
+  auto unstable = [&](double N) {
+    RodSimulator sim(unit_rod_spec(n));
+    const double delta = N / EA;
+    const double h = 1.0 / n;
+    sim.clamp_tip({1.0 - delta, 0.0, 0.0}, {1.0 - delta - h * (1.0 - delta), 0.0, 0.0});
+    EXPECT_TRUE(sim.solve_static().converged());
+    EXPECT_NEAR(sim.base_force().x(), N, 1e-6 * N);  // the clamp pushes back with N
+    return sim.static_hessian_negative_eigenvalues() > 0;
+  };
+  double lo = 0.5 * P_cr, hi = 1.5 * P_cr;
+  ASSERT_FALSE(unstable(lo));
+  ASSERT_TRUE(unstable(hi));
+  for (int i = 0; i < 25; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (unstable(mid) ? hi : lo) = mid;
+  }
+  EXPECT_NEAR(0.5 * (lo + hi), P_cr, tol(0.01 * P_cr));
+}
+
+TEST(RodStatics, TorsionalBucklingClampedClamped) {
+  // A straight rod clamped at both ends and twisted by Φ carries the torque M = GJ Φ / ℓ;
+  // it buckles when M reaches 8.9868 B / ℓ (both ends clamped; Greenhill's hinged value
+  // is 2π B / ℓ). Couples twist and bending through the reference twist and frames.
+  const int n = 100;
+  const double span = 1.0 - 1.0 / n;  // the tip clamp holds the distal edge
+  auto unstable = [&](double phi) {
+    RodSimulator sim(unit_rod_spec(n));
+    sim.clamp_tip({1.0, 0.0, 0.0}, {1.0 - 1.0 / n, 0.0, 0.0});
+    sim.set_base_angle(phi);
+    EXPECT_TRUE(sim.solve_static().converged());
+    return sim.static_hessian_negative_eigenvalues() > 0;
+  };
+  double lo = 1.0, hi = 20.0;
+  ASSERT_FALSE(unstable(lo));
+  ASSERT_TRUE(unstable(hi));
+  for (int i = 0; i < 30; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (unstable(mid) ? hi : lo) = mid;
+  }
+  const double M_cr = 0.5 * (lo + hi) / span;  // GJ = 1
+  EXPECT_NEAR(M_cr * span, 8.9868, tol(0.01 * 8.9868));
+}
+
 }  // namespace
 }  // namespace flowire::rod

@@ -163,6 +163,12 @@ class RodSimulator {
   /// @brief Register an external force provider (contact, drag); kept alive by the rod.
   void add_external(std::shared_ptr<ExternalForce> force);
   void clear_externals() { externals_.clear(); }
+  /// @brief Hold the distal edge: vertex 0 at @p tip, vertex 1 at @p next (|next − tip|
+  /// should be the segment length), its twist angle at the current value. For rods
+  /// clamped at both ends (test cases); feeding still works at the base.
+  void clamp_tip(const Eigen::Vector3d& tip, const Eigen::Vector3d& next);
+  void release_tip() { tip_clamped_ = false; }
+  [[nodiscard]] bool tip_clamped() const { return tip_clamped_; }
   SolverSettings& settings() { return settings_; }
   [[nodiscard]] const SolverSettings& settings() const { return settings_; }
 
@@ -247,6 +253,10 @@ class RodSimulator {
   double rotation_speed_ = 0.0;
   double target_angle_ = 0.0;
   int first_clamped_ = 0;
+  bool tip_clamped_ = false;
+  Eigen::Vector3d tip_clamp_x0_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tip_clamp_x1_ = Eigen::Vector3d::Zero();
+  double tip_clamp_theta_ = 0.0;
   StepReport last_report_;
   std::vector<TipSample> trace_;
 };
