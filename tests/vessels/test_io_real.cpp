@@ -87,6 +87,9 @@ TEST(RealData, AneuriskCarotidSiphonHasOneInletTwoOutlets) {
   expect_physiological(c);
 }
 
+#endif  // FLOWIRE_HAVE_VTK
+
+// Legacy .vtk files are parsed without VTK.
 TEST(RealData, FeelppAorticArchHasThreeSupraAorticBranches) {
   FLOWIRE_REQUIRE_SHARED("data/real/feelpp-aortic-arch/centerlinesAORTA.vtk");
   const auto net = read_real("feelpp-aortic-arch/centerlinesAORTA.vtk", "cm");
@@ -105,6 +108,7 @@ TEST(RealData, FeelppAorticArchHasThreeSupraAorticBranches) {
   expect_physiological(c);
 }
 
+#ifdef FLOWIRE_HAVE_VTK
 TEST(RealData, SimVascularRomCenterlinesGiveAortaAndIliac) {
   FLOWIRE_REQUIRE_SHARED("data/real/simvascular-demo-aorta-iliac/rom-centerlines.vtp");
   const auto net = read_real("simvascular-demo-aorta-iliac/rom-centerlines.vtp", "cm");
@@ -134,6 +138,8 @@ TEST(RealData, SimVascularDemoBranchSplitCenterlines) {
   EXPECT_GE(c.radius_min, 4.4e-3);
   EXPECT_LE(c.radius_max, 12.7e-3);
 }
+
+#endif  // FLOWIRE_HAVE_VTK
 
 TEST(RealData, BluefernCoronaryTree227AHasThreeBifurcations) {
   FLOWIRE_REQUIRE_SHARED("data/real/bluefern-coronary-centerlines/227A_Centreline.vtk");
@@ -175,6 +181,7 @@ TEST(RealData, BluefernCoronaryTree721AHasOneBifurcation) {
   EXPECT_LE(c.radius_max, 2.563e-3);
 }
 
+#ifdef FLOWIRE_HAVE_VTK
 TEST(RealData, MillimetreFileReadAsMetresWarnsNamingTheUnit) {
   FLOWIRE_REQUIRE_SHARED("data/real/vmtk-abdominal-aorta-bifurcation/aorta-centerline.vtp");
   flowire::testing::ExpectWarnings w;
