@@ -113,8 +113,10 @@ RodModel RodModel::from_spec(const WireSpec& s) {
                                              : (j_shape ? std::numbers::pi : std::numbers::pi / 4.0);
     require(angle < 2.0 * std::numbers::pi, "tip angle must be < 2π");
     const double offset = s.tip.bend_offset >= 0.0 ? s.tip.bend_offset : (j_shape ? 0.0 : 0.002);
-    arc_begin = offset;
-    arc_end = offset + angle * R;
+    // The distal half segment cannot bend (no vertex there): start the arc at h/2 at the
+    // earliest so the whole angle is kept.
+    arc_begin = std::max(offset, 0.5 * m.h);
+    arc_end = arc_begin + angle * R;
   }
   m.mass.assign(nv, 0.0);
   m.bend_stiffness.assign(nv, 0.0);
