@@ -11,7 +11,9 @@
 ///   - SimVascular ROM centerlines (point arrays `BranchId`, `BifurcationId`): one branch per
 ///     `BranchId`, each bifurcation region (`BranchId` = -1) collapsed into one junction;
 ///   - VMTK `vmtkcenterlines` output (one polyline per inlet→outlet path, paths overlapping
-///     along shared trunks): the paths are merged into one tree from their common inlet;
+///     along shared trunks): the paths are merged into one tree from their common inlet; a
+///     path stays on the tree while its points are within `merge_tolerance` × local radius
+///     of it, and the last such point becomes the junction;
 ///   - any other set of polylines: cells sharing points (or coinciding end points) are joined,
 ///     one branch per chain between junctions and ends.
 ///   The radius comes from the point array `radius` / `radii` (any case),
@@ -19,8 +21,11 @@
 /// - `.yaml` / `.yml`: flowire's network file,
 ///   `branches: [{name, points: [[x, y, z, r], ...]}]` with an optional `length_unit`
 ///   (and, as written by `write_network_yaml`, optional exact `nodes` / `segments`).
-/// - `.in`: svOneDSolver input deck (`NODE`, `SEGMENT`, `JOINT` cards, CGS units):
-///   radius = sqrt(area / pi), daughters joined to the parent at every `JOINT`.
+/// - `.in`: svOneDSolver input deck (`NODE`, `SEGMENT`, `JOINT` cards, CGS units): each deck
+///   segment keeps its length and gets the mean of its end radii sqrt(area / pi) (pieces cut by
+///   `BuildOptions` interpolate the taper); the daughters of every `JOINT` start at the outlet
+///   node of its inlet segment; branches are the runs of one vessel between junctions.
+/// Files with another extension are recognised by their content.
 ///
 /// Every reader reports bad input (missing radius array, non-positive or non-finite radius
 /// or coordinate, empty or truncated file, duplicate points, self-loops, a network in several
