@@ -734,12 +734,15 @@ TEST_F(ReadersWithVtk, BadVtkInputGivesOneErrorNamingFileAndPoint) {
   loop.lines.push_back({2, 2});
   auto out_of_range = tube({1, 1, 1});
   out_of_range.lines[0].push_back(7);
-  auto vmtk_dup = tube({1, 1, 1}, "MaximumInscribedSphereRadius");
+  auto nan_point = tube({1, 1, 1});
+  nan_point.points[2].y() = std::nan("");
   const std::string valid = vtp_text(tube({1, 1, 1}));
   std::vector<Case> cases{
       {"noradius.vtp", vtp_text(tube({1, 1, 1}, "Scalars_")), "no radius array"},
       {"zero.vtp", vtp_text(tube({1, 0, 1})), "point 1 (line cell 0): radius 0 is not positive"},
       {"negative.vtp", vtp_text(tube({1, 1, -2})), "point 2 (line cell 0): radius -2 is not positive"},
+      {"nan.vtp", vtp_text(tube({1, std::nan(""), 1})), "point 1 (line cell 0): radius is not finite"},
+      {"nanx.vtk", legacy_text(nan_point), "point 2 (line cell 0): coordinate is not finite"},
       {"empty.vtp", "", "the file is empty"},
       {"empty.vtk", "", "the file is empty"},
       {"truncated.vtp", valid.substr(0, valid.size() / 2), "truncated"},
