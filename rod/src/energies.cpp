@@ -35,6 +35,8 @@ struct Local {
   double ref_twist = 0.0;
 };
 
+void finish_local(Local& L, bool need_dkb);
+
 Local make_local(const VertexStencil& s, bool need_dkb) {
   Local L;
   const Vec3 e = s.x1 - s.x0;
@@ -57,16 +59,20 @@ Local make_local(const VertexStencil& s, bool need_dkb) {
   L.m2e = -se * d1e + ce * d2e;
   L.m1f = cf * d1f + sf * d2f;
   L.m2f = -sf * d1f + cf * d2f;
+  L.ref_twist = at_base ? s.ref_twist : reference_twist(d1e, L.te, d1f, L.tf, s.ref_twist);
+  finish_local(L, need_dkb);
+  return L;
+}
+
+void finish_local(Local& L, bool need_dkb) {
   L.chi = 1.0 + L.te.dot(L.tf);
   const Vec3 w = L.te.cross(L.tf);
   L.kb = 2.0 * w / L.chi;
-  L.ref_twist = at_base ? s.ref_twist : reference_twist(d1e, L.te, d1f, L.tf, s.ref_twist);
   if (need_dkb) {
     const double c = L.chi;
     L.dkb.leftCols<3>() = -(2.0 / c) * skew(L.tf) - (2.0 / (c * c)) * w * L.tf.transpose();
     L.dkb.rightCols<3>() = (2.0 / c) * skew(L.te) - (2.0 / (c * c)) * w * L.te.transpose();
   }
-  return L;
 }
 
 /// Hessian of s = v·(κb) w.r.t. (te, tf) for a fixed vector v.
@@ -207,9 +213,9 @@ double bend_y(const Local& L, const VertexParams& p, Vec8* gy, Mat8* Hy, bool gn
 }
 
 /// Twisting energy with gradient/Hessian in y.
-double twist_y(const Local& L, const VertexStencil& s, const VertexParams& p, Vec8* gy, Mat8* Hy,
-               bool gn = false) {
-  const double m = s.theta_f - s.theta_e + L.ref_twist;
+double twist_y(const Local& L, double theta_e, double theta_f, const VertexParams& p, Vec8* gy,
+               Mat8* Hy, bool gn = false) {
+  const double m = theta_f - theta_e + L.ref_twist;
   const double dm = m - p.rest_twist;
   const double c = p.twist_stiffness / p.voronoi_length;
   Vec8 gm;
@@ -329,13 +335,13 @@ double twist(const VertexStencil& s) {
 
 double twist_energy(const VertexStencil& s, const VertexParams& p) {
   const Local L = make_local(s, false);
-  return twist_y(L, s, p, nullptr, nullptr);
+  return twist_y(L, s.theta_e, s.theta_f, p, nullptr, nullptr);
 }
 
 Vec11 twist_gradient(const VertexStencil& s, const VertexParams& p) {
   const Local L = make_local(s, false);
   Vec8 gy = Vec8::Zero();
-  twist_y(L, s, p, &gy, nullptr);
+  twist_y(L, s.theta_e, s.theta_f, p, &gy, nullptr);
   Vec11 g;
   to_stencil(L, gy, nullptr, &g, nullptr);
   return g;
@@ -345,7 +351,7 @@ Mat11 twist_hessian(const VertexStencil& s, const VertexParams& p) {
   const Local L = make_local(s, false);
   Vec8 gy = Vec8::Zero();
   Mat8 Hy = Mat8::Zero();
-  twist_y(L, s, p, &gy, &Hy);
+  twist_y(L, s.theta_e, s.theta_f, p, &gy, &Hy);
   Mat11 H;
   to_stencil(L, gy, &Hy, nullptr, &H);
   return H;
@@ -359,9 +365,45 @@ double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient
   Vec8* gp = (gradient || hessian) ? &gy : nullptr;
   Mat8* hp = hessian ? &Hy : nullptr;
   double e = bend_y(L, p, gp, hp, gauss_newton);
-  e += twist_y(L, s, p, gp, hp, gauss_newton);
+  e += twist_y(L, s.theta_e, s.theta_f, p, gp, hp, gauss_newton);
   if (gradient || hessian) to_stencil(L, gy, hp, gradient, hessian, gauss_newton);
   return e;
+}
+
+EdgeGeometry edge_geometry(const Vec3& x0, const Vec3& x1, const EdgeFrame& frame, double theta) {
+  EdgeGeometry g;
+  const Vec3 e = x1 - x0;
+  g.length = e.norm();
+  g.t = e / g.length;
+  const double c = std::cos(theta), s = std::sin(theta);
+  g.m1 = c * frame.d1 + s * frame.d2;
+  g.m2 = -s * frame.d1 + c * frame.d2;
+  return g;
+}
+
+double bend_twist(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f,
+                  double ref_twist, const VertexParams& p, Vec11* gradient, Mat11* hessian,
+                  bool gauss_newton) {
+  Local L;
+  L.te = e.t;
+  L.tf = f.t;
+  L.le = e.length;
+  L.lf = f.length;
+  L.m1e = e.m1;
+  L.m2e = e.m2;
+  L.m1f = f.m1;
+  L.m2f = f.m2;
+  L.ref_twist = ref_twist;
+  const bool derivatives = gradient != nullptr || hessian != nullptr;
+  finish_local(L, derivatives);
+  Vec8 gy = Vec8::Zero();
+  Mat8 Hy = Mat8::Zero();
+  Vec8* gp = derivatives ? &gy : nullptr;
+  Mat8* hp = hessian ? &Hy : nullptr;
+  double energy = bend_y(L, p, gp, hp, gauss_newton);
+  energy += twist_y(L, theta_e, theta_f, p, gp, hp, gauss_newton);
+  if (derivatives) to_stencil(L, gy, hp, gradient, hessian, gauss_newton);
+  return energy;
 }
 
 }  // namespace flowire::rod

@@ -50,6 +50,8 @@ struct RodSimulator::Work {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> sparse_ldlt;
   int sparse_pattern_size = -1;
   std::vector<Mat3> ext_k;  // (n_vertices) −∂f/∂x − ∂f/∂v / h, symmetrized
+  bool has_ext_k = false;
+  std::vector<EdgeGeometry> edges;  // (n_edges) tangent, length, material frame
   Mat3 moment_k = Mat3::Zero();  // −∂f₁/∂e of the tip couple, symmetrized
   ForceAccumulator acc;
   std::vector<Vec3> vel;      // vertex velocities at the iterate (for externals)
@@ -77,6 +79,7 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   w.H.reserve(max_dof, kBandwidth);
   w.ldlt.reserve(max_dof, kBandwidth);
   w.ext_k.reserve(nvmax);
+  w.edges.reserve(nvmax);
   w.acc.reserve(nvmax);
   for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz}) v->reserve(nvmax);
   for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.thetab, &w.twistb, &w.tz}) v->reserve(nvmax);
@@ -351,7 +354,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   const int nv = s.vertex_count();
   const int nd = dof_count();
   w.fext.head(nd).setZero();
-  w.ext_k.assign(nv, Mat3::Zero());
+  w.has_ext_k = false;
   w.moment_k.setZero();
   if (gravity_.squaredNorm() > 0.0)
     for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += model_.mass[k] * gravity_;
@@ -393,6 +396,8 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
     view.time = s.time;
     view.dt = mode == Mode::Dynamic ? h : 0.0;
     for (auto& ext : externals_) ext->evaluate(view, w.acc);
+    w.ext_k.resize(nv);
+    w.has_ext_k = true;
     for (int k = 0; k < nv; ++k) {
       w.fext.segment<3>(4 * k) += w.acc.forces()[k];
       w.ext_k[k] = -sym(w.acc.position_jacobians()[k]);
@@ -424,22 +429,17 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, bool need_
       w.H.add_block(he, idx, 6);
     }
   }
-  // Bending and twisting.
-  VertexStencil st;
+  // Bending and twisting: per-edge geometry once, then one stencil per interior vertex.
+  w.edges.resize(nv - 1);
+  for (int j = 0; j < nv - 1; ++j)
+    w.edges[j] = edge_geometry(s.x[j], s.x[j + 1], s.frame[j], s.theta[j]);
   VertexParams p;
   Vec11 gs;
   Mat11 hs;
   for (int k = 1; k < nv - 1; ++k) {
-    st.x0 = s.x[k - 1];
-    st.x1 = s.x[k];
-    st.x2 = s.x[k + 1];
-    st.theta_e = s.theta[k - 1];
-    st.theta_f = s.theta[k];
-    st.frame_e = s.frame[k - 1];
-    st.frame_f = s.frame[k];
-    st.ref_twist = s.ref_twist[k];
     vertex_params(k, p);
-    energy += bend_twist(st, p, &gs, need_matrix ? &hs : nullptr, psd);
+    energy += bend_twist(w.edges[k - 1], w.edges[k], s.theta[k - 1], s.theta[k], s.ref_twist[k], p,
+                         &gs, need_matrix ? &hs : nullptr, psd);
     g.segment<11>(4 * (k - 1)) += gs;
     if (need_matrix) w.H.add_block(hs, 4 * (k - 1));
   }
@@ -457,7 +457,7 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, bool need_
     }
   }
   if (need_matrix) {
-    for (int k = 0; k < nv; ++k) {
+    for (int k = 0; w.has_ext_k && k < nv; ++k) {
       if (w.ext_k[k].isZero(0.0)) continue;
       const int idx[3] = {4 * k, 4 * k + 1, 4 * k + 2};
       w.H.add_block(w.ext_k[k], idx, 3);

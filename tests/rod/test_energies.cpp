@@ -136,6 +136,15 @@ void check_stencil(const VertexStencil& s, const VertexParams& p, double h, doub
   EXPECT_NEAR(e, bend_energy(s, p) + twist_energy(s, p), 1e-12 * (1.0 + std::abs(e)));
   EXPECT_LE((g - gb - gt).norm(), 1e-10 * (1.0 + g.norm()));
   EXPECT_LE((H - Hb - Ht).norm(), 1e-10 * (1.0 + H.norm()));
+  // The simulator's path from precomputed edge geometry gives the same results.
+  const EdgeGeometry ge = edge_geometry(s.x0, s.x1, s.frame_e, s.theta_e);
+  const EdgeGeometry gf = edge_geometry(s.x1, s.x2, s.frame_f, s.theta_f);
+  Vec11 g2;
+  Mat11 H2;
+  const double e2 = bend_twist(ge, gf, s.theta_e, s.theta_f, s.ref_twist, p, &g2, &H2);
+  EXPECT_NEAR(e2, e, 1e-12 * (1.0 + std::abs(e)));
+  EXPECT_LE((g2 - g).norm(), 1e-10 * (1.0 + g.norm()));
+  EXPECT_LE((H2 - H).norm(), 1e-10 * (1.0 + H.norm()));
   // Hessians are symmetric.
   EXPECT_LE((H - H.transpose()).norm(), 1e-10 * (1.0 + H.norm()));
 }

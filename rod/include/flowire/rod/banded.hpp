@@ -7,6 +7,8 @@
 /// Storage is the lower band by rows: row i holds columns i−b … i contiguously, so the
 /// factorization and both triangular solves run over contiguous memory. All storage is
 /// reserved up front (`reserve`); `resize` within that capacity does not allocate.
+#include <cassert>
+
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <vector>
@@ -41,8 +43,12 @@ class BandedMatrix {
   template <typename Derived>
   void add_block(const Eigen::MatrixBase<Derived>& block, int first) {
     const int m = static_cast<int>(block.rows());
-    for (int a = 0; a < m; ++a)
-      for (int c = 0; c <= a; ++c) lower(first + a, first + c) += block(a, c);
+    assert(m <= b_ + 1 && first + m <= n_);
+    for (int a = 0; a < m; ++a) {
+      // Row first+a holds columns first … first+a contiguously from offset b − a.
+      double* row = &data_[static_cast<size_t>(first + a) * (b_ + 1) + (b_ - a)];
+      for (int c = 0; c <= a; ++c) row[c] += block(a, c);
+    }
   }
   /// @brief Replace row and column @p i by those of the identity (a prescribed unknown).
   void set_identity_row(int i);

@@ -137,4 +137,22 @@ struct VertexParams {
 double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient,
                   Mat11* hessian, bool gauss_newton = false);
 
+/// @brief Geometry of one edge at the base point, shared by the two stencils around it.
+struct EdgeGeometry {
+  Vec3 t = Vec3::UnitX();  ///< unit tangent
+  double length = 1.0;     ///< |e|
+  Vec3 m1 = Vec3::UnitY(), m2 = Vec3::UnitZ();  ///< material directors
+};
+
+/// @brief Edge geometry from its end points, reference frame (at this tangent) and angle.
+[[nodiscard]] EdgeGeometry edge_geometry(const Vec3& x0, const Vec3& x1, const EdgeFrame& frame,
+                                         double theta);
+
+/// @brief bend_twist at the base point from precomputed edge geometry (the simulator's
+/// path: frames are up to date, each edge's tangent and material frame computed once).
+/// Same results as bend_twist(VertexStencil) when the stencil's frames are at the base.
+double bend_twist(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f,
+                  double ref_twist, const VertexParams& p, Vec11* gradient, Mat11* hessian,
+                  bool gauss_newton = false);
+
 }  // namespace flowire::rod
