@@ -22,9 +22,13 @@
 ///
 /// Tip shapes (the pre-shaped, softer distal part):
 /// - straight: no rest curvature;
-/// - angled: an arc of radius `bend_radius` turning by `angle`, ending `bend_offset` from
+/// - angled: an arc of radius `bend_radius` turning by `angle`, starting `bend_offset` from
 ///   the tip (default 2 mm);
-/// - j: as angled with default angle 180° and offset 0 (the arc reaches the tip).
+/// - j: as angled with default angle 180° and offset 0 (the arc reaches the tip; it starts
+///   half a segment in, since the distal half segment has no vertex to bend).
+///
+/// Curvature is integrated over each vertex's cell, κ̄ = 2 tan(Φ/2) with Φ the turning
+/// angle of the cell, so the discrete rest shape turns by exactly `angle`.
 #include <Eigen/Core>
 #include <string_view>
 #include <vector>

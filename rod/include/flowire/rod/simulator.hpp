@@ -18,11 +18,22 @@
 ///
 /// Each solve is Newton's method with a backtracking line search on the incremental
 /// potential (external, non-conservative forces enter through the trapezoidal work along
-/// the search ray). Converged when the scaled residual is below
-/// `force_tolerance`·F (F: a force scale from stiffness and loads, plus a round-off floor),
-/// or when a full Newton step is below `step_tolerance`·h. Anything else is reported in the
-/// returned `StepReport` *and* through `flowire::warn` — never silently. Reference frames
-/// are re-transported after every accepted update so gradients and Hessians are exact.
+/// the search ray). The matrix is the exact Hessian; where it is indefinite (strong bends
+/// far from rest, compressed edges) that iteration uses the Gauss–Newton matrix of the
+/// same residual, which is positive semi-definite. Position updates follow the rotation of
+/// each edge (`curvilinear_update`) so stiff stretching does not throttle large rotations.
+/// Converged when the scaled residual (forces, torques / h) is below
+/// `force_tolerance`·F + a round-off floor of the stretching forces (F: a force scale from
+/// stiffness and loads), when a full Newton step is below `step_tolerance`·h, or when
+/// progress stops within 100× that tolerance (round-off plateau). Anything else is reported
+/// in the returned `StepReport` *and* through `flowire::warn` — never silently. Reference
+/// frames are re-transported after every accepted update so gradients and Hessians are
+/// exact in the time-parallel chart.
+///
+/// **Clamps.** The base clamp holds the last two vertices on the insertion line and the
+/// angle of the edge between them; the clamp vertex owns only the half cell in front of
+/// the entry, which keeps the clamp exactly at the entry and the scheme second order.
+/// `clamp_tip` optionally holds the distal edge too (rods clamped at both ends).
 ///
 /// **Feeding.** `set_insertion_speed` moves the entry point along the wire: grid points
 /// that pass the entry are released, new grid points are appended behind it, and points
