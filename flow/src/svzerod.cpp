@@ -44,7 +44,7 @@ struct Param {
   }
 };
 
-enum class Kind { Vessel, Junction, Flow, Pressure, Resistance, Rcr };
+enum class Kind { Vessel, Junction, Flow, Pressure, Resistance, Rcr, Coronary };
 
 struct Node {
   std::string name;
@@ -56,8 +56,11 @@ struct Block {
   std::string name;
   std::vector<int> in, out;  // node indices
   std::vector<Param> par;
-  int internal = -1;  // P_c of an RCR
+  int internal = -1;  // P_c of an RCR, V_im of a coronary
   bool zero_capacitance = false;  // RCR in the steady initial phase
+  bool steady = false;            // coronary: steady equations in the steady initial phase
+  double pim0 = 0.0, pcim0 = 0.0;  // coronary: initial-state dependent constants
+  int vessel_type = 0;            // vessel: 1 inlet BC, 2 outlet BC, 3 both
 };
 
 struct SimParams {
@@ -191,8 +194,15 @@ Model read_model(const json& cfg, const std::string& file) {
       m.vessels.push_back(add_block(std::move(b)));
       if (v.contains("boundary_conditions")) {
         const json& bc = v.at("boundary_conditions");
-        if (bc.contains("inlet")) connections.emplace_back(bc.at("inlet").get<std::string>(), name);
-        if (bc.contains("outlet")) connections.emplace_back(name, bc.at("outlet").get<std::string>());
+        auto& vt = m.blocks.back().vessel_type;
+        if (bc.contains("inlet")) {
+          connections.emplace_back(bc.at("inlet").get<std::string>(), name);
+          vt = bc.contains("outlet") ? 3 : 1;
+        }
+        if (bc.contains("outlet")) {
+          connections.emplace_back(name, bc.at("outlet").get<std::string>());
+          vt = 2;  // as the peer: an outlet BC marks the vessel as an outlet vessel
+        }
       }
     }
   }
@@ -221,9 +231,18 @@ Model read_model(const json& cfg, const std::string& file) {
                read_param(m, vals, "Rd", name, false), read_param(m, vals, "Pd", name, true)};
       m.has_rcr = true;
       m.max_tau = std::max(m.max_tau, b.par[2].get(0.0) * b.par[1].get(0.0));
+    } else if (type == "CORONARY") {
+      check_keys(m, vals, name, {"Ra1", "Rv1", "Ca", "Cc", "t", "Pim", "P_v", "Ra2", "closed_loop_outlet"});
+      if (vals.value("closed_loop_outlet", false)) bad(m, fmt::format("'{}': closed-loop coronary outlets are not supported", name));
+      b.kind = Kind::Coronary;
+      b.par = {read_param(m, vals, "Ra1", name, false), read_param(m, vals, "Rv1", name, false),
+               read_param(m, vals, "Ca", name, false),  read_param(m, vals, "Cc", name, false),
+               read_param(m, vals, "Pim", name, false), read_param(m, vals, "P_v", name, false),
+               read_param(m, vals, "Ra2", name, false)};
     } else {
-      bad(m, fmt::format("boundary condition '{}': type '{}' is not supported (supported: FLOW, PRESSURE, RESISTANCE, RCR)",
-                         name, type));
+      bad(m, fmt::format(
+                 "boundary condition '{}': type '{}' is not supported (supported: FLOW, PRESSURE, RESISTANCE, RCR, CORONARY)",
+                 name, type));
     }
     for (const auto& p : b.par) note_period(m, p);
     add_block(std::move(b));
@@ -290,11 +309,15 @@ Model read_model(const json& cfg, const std::string& file) {
         break;
     }
   }
-  for (auto& b : m.blocks)
+  for (auto& b : m.blocks) {
     if (b.kind == Kind::Rcr) {
       b.internal = m.n++;
       m.dofs.push_back("pressure_c:" + b.name);
+    } else if (b.kind == Kind::Coronary) {
+      b.internal = m.n++;
+      m.dofs.push_back("volume_im:" + b.name);
     }
+  }
   return m;
 }
 
@@ -354,6 +377,39 @@ class System {
             f[row] -= y[m_.nodes[static_cast<size_t>(k)].q];
             dy(row, m_.nodes[static_cast<size_t>(k)].q, -1.0);
           }
+          ++row;
+          break;
+        }
+        case Kind::Coronary: {
+          // Open-loop coronary: Ra, Ca, Ram, Cim (intramyocardial volume V_im), Rv to P_v.
+          const auto& nd = m_.nodes[static_cast<size_t>(b.in.empty() ? b.out[0] : b.in[0])];
+          const double ra = b.par[0].get(t), rv = b.par[1].get(t), ca = b.par[2].get(t), cim = b.par[3].get(t);
+          const double pim = b.par[4].get(t), pv = b.par[5].get(t), ram = b.par[6].get(t);
+          const int v = b.internal;
+          if (b.steady) {
+            f[row] = y[v];
+            dy(row, v, 1.0);
+            ++row;
+            f[row] = -y[nd.p] + (ra + ram + rv) * y[nd.q] + pv;
+            dy(row, nd.p, -1.0);
+            dy(row, nd.q, ra + ram + rv);
+            ++row;
+            break;
+          }
+          f[row] = cim * rv * y[nd.q] - y[v] - ca * cim * rv * yd[nd.p] + ra * ca * cim * rv * yd[nd.q] -
+                   cim * rv * yd[v] + cim * (-pim + pv + b.pim0 - b.pcim0);
+          dy(row, nd.q, cim * rv);
+          dy(row, v, -1.0);
+          dyd(row, nd.p, -ca * cim * rv);
+          dyd(row, nd.q, ra * ca * cim * rv);
+          dyd(row, v, -cim * rv);
+          ++row;
+          f[row] = cim * rv * y[nd.p] - cim * rv * ra * y[nd.q] - (rv + ram) * y[v] - cim * rv * ram * yd[v] +
+                   ram * cim * pv - cim * (rv + ram) * (pim + b.pcim0 - b.pim0);
+          dy(row, nd.p, cim * rv);
+          dy(row, nd.q, -cim * rv * ra);
+          dy(row, v, -(rv + ram));
+          dyd(row, v, -cim * rv * ram);
           ++row;
           break;
         }
@@ -515,13 +571,27 @@ Result simulate(const std::string& json_path, Summary* summary) {
     for (auto& b : m.blocks) {
       for (auto& p : b.par) p.steady = true;
       if (b.kind == Kind::Rcr) b.zero_capacitance = true;
+      b.steady = b.kind == Kind::Coronary;
     }
     Integrator steady(m, m.period / 10.0, sp.rho, sp.atol, sp.max_iter);
     for (int i = 0; i < 31; ++i) state = steady.step(state, m.period / 10.0 * i);
     for (auto& b : m.blocks) {
       for (auto& p : b.par) p.steady = false;
       b.zero_capacitance = false;
+      b.steady = false;
     }
+  }
+  // Constants that depend on the initial state (coronary: pressure behind Ram at t = 0).
+  for (auto& b : m.blocks) {
+    if (b.kind != Kind::Coronary) continue;
+    const auto& nd = m.nodes[static_cast<size_t>(b.in.empty() ? b.out[0] : b.in[0])];
+    const auto& pim = b.par[4];
+    const double ra = b.par[0].get(0.0), ca = b.par[2].get(0.0), ram = b.par[6].get(0.0);
+    const double p_ca = state.y[nd.p] - ra * state.y[nd.q];
+    const double p_ca_dot = state.yd[nd.p] - ra * state.yd[nd.q];
+    const double q_am = state.y[nd.q] - ca * p_ca_dot;
+    b.pcim0 = p_ca - ram * q_am;
+    b.pim0 = pim.constant ? pim.value : (sp.steady_initial ? pim.mean : pim.get(0.0));
   }
   Integrator integ(m, dt, sp.rho, sp.atol, sp.max_iter);
   std::vector<double> times;
@@ -533,9 +603,14 @@ Result simulate(const std::string& json_path, Summary* summary) {
     states.push_back(state);
   }
   int counter = 0;
+  std::vector<State> last_states;  // the states of the last two cycles (cycle-to-cycle error)
+  const int keep_from = num_steps - (2 * (sp.pts - 1) + 1);
+  if (sp.cycle_error && keep_from <= 0) last_states.push_back(state);
   auto run_steps = [&](int from, int to) {
     for (int i = from; i < to; ++i) {
+      if (sp.cycle_error && i == keep_from + 1 && keep_from > 0) last_states.push_back(state);
       state = integ.step(state, time);
+      if (sp.cycle_error && i > keep_from) last_states.push_back(state);
       ++counter;
       time = dt * i;
       if (counter == sp.output_interval || (!sp.all_cycles && i == start_last)) {
@@ -550,28 +625,47 @@ Result simulate(const std::string& json_path, Summary* summary) {
   run_steps(1, num_steps);
   int cycles = sp.cycles;
   if (sp.cycle_error && !m.has_rcr) {
-    // Extra cycles until the mean flow and pressure at the vessel caps change by less than
-    // the tolerance between two cycles.
-    auto cycle_means = [&](const std::vector<State>& cyc) {
-      Eigen::VectorXd mean = Eigen::VectorXd::Zero(m.n);
-      for (const auto& s : cyc) mean += s.y;
-      return Eigen::VectorXd(mean / static_cast<double>(cyc.size()));
+    // Extra cycles until the mean flow and pressure at the vessel caps (inlet node of
+    // inlet vessels, outlet node of outlet vessels) change by less than the tolerance.
+    std::vector<std::pair<int, int>> caps;
+    for (int vi : m.vessels) {
+      const auto& b = m.blocks[static_cast<size_t>(vi)];
+      if (b.vessel_type == 1 || b.vessel_type == 3)
+        caps.emplace_back(m.nodes[static_cast<size_t>(b.in[0])].q, m.nodes[static_cast<size_t>(b.in[0])].p);
+      else if (b.vessel_type == 2)
+        caps.emplace_back(m.nodes[static_cast<size_t>(b.out[0])].q, m.nodes[static_cast<size_t>(b.out[0])].p);
+    }
+    const auto two = static_cast<size_t>(2 * (sp.pts - 1) + 1);
+    auto converged = [&]() {
+      if (last_states.size() < two) return true;
+      const size_t base = last_states.size() - two;
+      for (const auto& [qd, pd] : caps) {
+        double q0 = 0, p0 = 0, q1 = 0, p1 = 0;
+        for (int i = 0; i < sp.pts; ++i) {
+          q0 += last_states[base + static_cast<size_t>(i)].y[qd];
+          p0 += last_states[base + static_cast<size_t>(i)].y[pd];
+          q1 += last_states[base + static_cast<size_t>(sp.pts - 1 + i)].y[qd];
+          p1 += last_states[base + static_cast<size_t>(sp.pts - 1 + i)].y[pd];
+        }
+        if (std::abs((q1 - q0) / q0) > sp.cycle_error_value || std::abs((p1 - p0) / p0) > sp.cycle_error_value)
+          return false;
+      }
+      return true;
     };
-    for (int extra = 0; extra < 1000; ++extra) {
-      if (static_cast<int>(states.size()) < 2 * sp.pts - 1) break;
-      const std::vector<State> last(states.end() - sp.pts, states.end());
-      const std::vector<State> prev(states.end() - (2 * sp.pts - 1), states.end() - (sp.pts - 1));
-      const Eigen::VectorXd a = cycle_means(prev), b = cycle_means(last);
-      bool ok = true;
-      for (int i = 0; i < m.n; ++i)
-        if (std::abs((b[i] - a[i]) / a[i]) > sp.cycle_error_value) ok = false;
-      if (ok) break;
+    for (int extra = 0; extra < 10000 && !converged(); ++extra) {
       ++cycles;
       for (int i = 1; i < sp.pts; ++i) {
         state = integ.step(state, time);
+        last_states.push_back(state);
+        ++counter;
         time = dt * i;
-        times.push_back(time);
-        states.push_back(state);
+        if (counter == sp.output_interval || (!sp.all_cycles && i == start_last)) {
+          if (sp.all_cycles || i >= start_last) {
+            times.push_back(time);
+            states.push_back(state);
+          }
+          counter = 0;
+        }
       }
     }
   }

@@ -10,14 +10,17 @@
 /// - `NORMAL_JUNCTION`: equal pressures, conserved flow;
 /// - boundary conditions `FLOW` (Q, t), `PRESSURE` (P, t), `RESISTANCE` (R, Pd):
 ///   P − R Q − Pd = 0, and `RCR` (Rp, C, Rd, Pd): P − Rp Q − P_c = 0,
-///   \f$ R_d Q - P_c - R_d C \dot P_c + P_d = 0 \f$.
+///   \f$ R_d Q - P_c - R_d C \dot P_c + P_d = 0 \f$, and the open-loop `CORONARY` (Ra1, Ca,
+///   Ra2, Cc with intramyocardial pressure Pim(t), Rv1 to P_v; unknown V_im; in the steady
+///   initial phase V_im = 0 and P = (Ra1 + Ra2 + Rv1) Q + P_v).
 /// A parameter is a number or a periodic table over `t` (linear interpolation).
 ///
 /// Time integration as svZeroDSolver: generalized-α (`rho_infty`, default 0.5) on
 /// \f$ E\dot y + F y + c(y, \dot y, t) = 0 \f$ with Newton iterations to `absolute_tolerance`;
 /// a steady initial state (time tables replaced by their mean, RCR capacitors removed,
 /// 31 steps of one tenth of the period) unless `steady_initial: false`; the number of
-/// cycles from the largest RCR time constant when `use_cycle_to_cycle_error` is set;
+/// cycles from the largest RCR time constant when `use_cycle_to_cycle_error` is set (without
+/// RCR: extra cycles until the mean cap flows and pressures change by less than the tolerance);
 /// output of the last cycle (times from 0) or of all cycles, vessel- or variable-based,
 /// mean only, with derivatives, as its `simulation_parameters` ask.
 #include <filesystem>
