@@ -55,6 +55,9 @@ struct RodSimulator::Work {
   Mat3 moment_k = Mat3::Zero();  // −∂f₁/∂e of the tip couple, symmetrized
   ForceAccumulator acc;
   std::vector<Vec3> vel;      // vertex velocities at the iterate (for externals)
+  std::vector<double> spin;   // edge spin rates at the iterate (for externals)
+  std::vector<Vec3> tangent;  // edge tangents at the iterate (for externals)
+  std::vector<double> ext_spin_k;  // (n_edges) −∂τ/∂ω / h
   // step-start copy (for velocities and rollback)
   std::vector<Vec3> x0, v0;
   std::vector<double> theta0, omega0, twist0;
@@ -81,7 +84,9 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   w.ext_k.reserve(nvmax);
   w.edges.reserve(nvmax);
   w.acc.reserve(nvmax);
-  for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz}) v->reserve(nvmax);
+  for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz, &w.tangent}) v->reserve(nvmax);
+  w.spin.reserve(nvmax);
+  w.ext_spin_k.reserve(nvmax);
   for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.thetab, &w.twistb, &w.tz}) v->reserve(nvmax);
   w.frame0.reserve(nvmax);
   w.frameb.reserve(nvmax);
@@ -384,20 +389,34 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   }
   if (!externals_.empty()) {
     w.vel.resize(nv);
+    w.spin.resize(nv - 1);
+    w.tangent.resize(nv - 1);
     for (int k = 0; k < nv; ++k)
       w.vel[k] = mode == Mode::Dynamic ? Vec3((s.x[k] - w.x0[k]) / h) : Vec3::Zero();
+    for (int j = 0; j < nv - 1; ++j) {
+      w.spin[j] = mode == Mode::Dynamic ? (s.theta[j] - w.theta0[j]) / h : 0.0;
+      w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
+    }
     w.acc.reset(nv);
     RodView view;
     view.positions = s.x;
     view.velocities = w.vel;
     view.arc_length = std::span<const double>(arc_length_.data(), nv);
     view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
+    view.spin_rates = w.spin;
+    view.tangents = w.tangent;
     view.first_clamped_vertex = first_clamped_;
     view.time = s.time;
     view.dt = mode == Mode::Dynamic ? h : 0.0;
     for (auto& ext : externals_) ext->evaluate(view, w.acc);
     w.ext_k.resize(nv);
+    w.ext_spin_k.resize(nv - 1);
     w.has_ext_k = true;
+    for (int j = 0; j < nv - 1; ++j) {
+      w.fext(4 * j + 3) += w.acc.twist_torques()[j];
+      w.ext_spin_k[j] =
+          mode == Mode::Dynamic ? -w.acc.twist_torque_spin_derivatives()[j] / h : 0.0;
+    }
     for (int k = 0; k < nv; ++k) {
       w.fext.segment<3>(4 * k) += w.acc.forces()[k];
       w.ext_k[k] = -sym(w.acc.position_jacobians()[k]);
@@ -462,6 +481,7 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, bool need_
       const int idx[3] = {4 * k, 4 * k + 1, 4 * k + 2};
       w.H.add_block(w.ext_k[k], idx, 3);
     }
+    for (int j = 0; w.has_ext_k && j < nv - 1; ++j) w.H.lower(4 * j + 3, 4 * j + 3) += w.ext_spin_k[j];
     if (!psd && !w.moment_k.isZero(0.0)) {
       Mat6 b;
       b << w.moment_k, -w.moment_k, -w.moment_k, w.moment_k;
@@ -791,6 +811,10 @@ StepReport RodSimulator::step_euler(double dt) {
     view.velocities = s.v;
     view.arc_length = arc_length_;
     view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
+    w.tangent.resize(nv - 1);
+    for (int j = 0; j < nv - 1; ++j) w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
+    view.spin_rates = s.omega;
+    view.tangents = w.tangent;
     view.first_clamped_vertex = first_clamped_;
     view.time = s.time;
     view.dt = dt;
@@ -889,6 +913,10 @@ StepReport RodSimulator::step_midpoint(double dt) {
     view.velocities = s.v;
     view.arc_length = arc_length_;
     view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
+    w.tangent.resize(nv - 1);
+    for (int j = 0; j < nv - 1; ++j) w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
+    view.spin_rates = s.omega;
+    view.tangents = w.tangent;
     view.first_clamped_vertex = first_clamped_;
     view.time = s.time;
     view.dt = dt;

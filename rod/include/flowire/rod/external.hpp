@@ -34,6 +34,10 @@ struct RodView {
   std::span<const Eigen::Vector3d> velocities;  ///< (vertex_count) [m/s] at this iterate
   std::span<const double> arc_length;           ///< (vertex_count) [m] from the entry, >0 inserted
   std::span<const double> radius;               ///< (vertex_count − 1) per edge [m]
+  /// (vertex_count − 1) spin rate of each edge's material frame about its tangent [rad/s]
+  std::span<const double> spin_rates;
+  /// (vertex_count − 1) unit tangent of each edge, pointing from the tip toward the base
+  std::span<const Eigen::Vector3d> tangents;
   int first_clamped_vertex = 0;  ///< vertices with index ≥ this are held by the clamp
   double time = 0.0;             ///< [s] end of the step (implicit evaluation time)
   double dt = 0.0;               ///< [s] step size (0 in a static solve)
@@ -50,22 +54,41 @@ class ForceAccumulator {
   void add_position_jacobian(int vertex, const Eigen::Matrix3d& dfdx) { dfdx_[vertex] += dfdx; }
   /// @brief Add ∂f_i/∂v_i (e.g. −c·I for viscous drag).
   void add_velocity_jacobian(int vertex, const Eigen::Matrix3d& dfdv) { dfdv_[vertex] += dfdv; }
+  /// @brief Add a torque about edge @p edge's tangent [N m] (e.g. rotational friction or
+  /// drag resisting the wire's spin), with optionally its derivative w.r.t. the edge's spin
+  /// rate (e.g. −c for a drag torque −c·ω), kept implicit like the force Jacobians.
+  void add_twist_torque(int edge, double torque, double dtorque_dspin = 0.0) {
+    torque_[edge] += torque;
+    dtorque_[edge] += dtorque_dspin;
+  }
 
   // Used by the simulator.
-  void reserve(int n) { force_.reserve(n); dfdx_.reserve(n); dfdv_.reserve(n); }
+  void reserve(int n) {
+    force_.reserve(n);
+    dfdx_.reserve(n);
+    dfdv_.reserve(n);
+    torque_.reserve(n);
+    dtorque_.reserve(n);
+  }
   void reset(int n) {
     force_.assign(n, Eigen::Vector3d::Zero());
     dfdx_.assign(n, Eigen::Matrix3d::Zero());
     dfdv_.assign(n, Eigen::Matrix3d::Zero());
+    torque_.assign(n > 0 ? n - 1 : 0, 0.0);
+    dtorque_.assign(n > 0 ? n - 1 : 0, 0.0);
   }
   [[nodiscard]] const std::vector<Eigen::Vector3d>& forces() const { return force_; }
   [[nodiscard]] const std::vector<Eigen::Matrix3d>& position_jacobians() const { return dfdx_; }
   [[nodiscard]] const std::vector<Eigen::Matrix3d>& velocity_jacobians() const { return dfdv_; }
+  [[nodiscard]] const std::vector<double>& twist_torques() const { return torque_; }
+  [[nodiscard]] const std::vector<double>& twist_torque_spin_derivatives() const { return dtorque_; }
 
  private:
   std::vector<Eigen::Vector3d> force_;
   std::vector<Eigen::Matrix3d> dfdx_;
   std::vector<Eigen::Matrix3d> dfdv_;
+  std::vector<double> torque_;
+  std::vector<double> dtorque_;
 };
 
 /// @brief A source of external forces on the rod's vertices.
