@@ -112,7 +112,7 @@ void check_units(double r_max, double factor, const std::string& where) {
   if (!plausible.empty()) {
     hint = fmt::format("the file is probably in {}", plausible[0].second);
     if (plausible.size() > 1) hint += fmt::format(" (or {})", plausible[1].second);
-    hint += fmt::format(": set length_unit: {}", plausible[0].second);
+    hint += fmt::format(": set length_unit: {0} (command line: --length-unit {0})", plausible[0].second);
   }
   warn(fmt::format("{}: the largest radius is {:.4g} m, not a blood vessel in the length unit used; {}", where, r_max,
                    hint));
