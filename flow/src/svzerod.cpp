@@ -44,7 +44,7 @@ struct Param {
   }
 };
 
-enum class Kind { Vessel, Junction, Flow, Pressure, Resistance, Rcr, Coronary };
+enum class Kind { Vessel, VesselCrl, Junction, VesselJunction, Flow, Pressure, Resistance, Rcr, Coronary };
 
 struct Node {
   std::string name;
@@ -180,12 +180,13 @@ Model read_model(const json& cfg, const std::string& file) {
     for (const auto& v : cfg.at("vessels")) {
       const std::string name = v.at("vessel_name").get<std::string>();
       const std::string type = v.value("zero_d_element_type", std::string("BloodVessel"));
-      if (type != "BloodVessel")
-        bad(m, fmt::format("vessel '{}': block type '{}' is not supported (supported: BloodVessel)", name, type));
+      if (type != "BloodVessel" && type != "BloodVesselCRL")
+        bad(m, fmt::format("vessel '{}': block type '{}' is not supported (supported: BloodVessel, BloodVesselCRL)",
+                           name, type));
       const json& vals = v.at("zero_d_element_values");
       check_keys(m, vals, name, {"R_poiseuille", "C", "L", "stenosis_coefficient"});
       Block b;
-      b.kind = Kind::Vessel;
+      b.kind = type == "BloodVessel" ? Kind::Vessel : Kind::VesselCrl;
       b.name = name;
       b.par = {read_param(m, vals, "R_poiseuille", name, false), read_param(m, vals, "C", name, true),
                read_param(m, vals, "L", name, true), read_param(m, vals, "stenosis_coefficient", name, true)};
@@ -252,11 +253,25 @@ Model read_model(const json& cfg, const std::string& file) {
     for (const auto& j : cfg.at("junctions")) {
       const std::string name = j.at("junction_name").get<std::string>();
       const std::string type = j.at("junction_type").get<std::string>();
-      if (type != "NORMAL_JUNCTION")
-        bad(m, fmt::format("junction '{}': type '{}' is not supported (supported: NORMAL_JUNCTION)", name, type));
+      if (type != "NORMAL_JUNCTION" && type != "BloodVesselJunction")
+        bad(m, fmt::format("junction '{}': type '{}' is not supported (supported: NORMAL_JUNCTION, BloodVesselJunction)",
+                           name, type));
       Block b;
-      b.kind = Kind::Junction;
+      b.kind = type == "NORMAL_JUNCTION" ? Kind::Junction : Kind::VesselJunction;
       b.name = name;
+      if (b.kind == Kind::VesselJunction) {
+        // One R, L, stenosis coefficient per outlet: parameters [R..., L..., S...].
+        const json vals = j.value("junction_values", json::object());
+        check_keys(m, vals, name, {"R_poiseuille", "L", "stenosis_coefficient"});
+        for (const char* key : {"R_poiseuille", "L", "stenosis_coefficient"}) {
+          if (!vals.contains(key)) bad(m, fmt::format("junction '{}': list '{}' is missing", name, key));
+          for (const auto& x : vals.at(key)) {
+            Param p;
+            p.value = x.get<double>();
+            b.par.push_back(p);
+          }
+        }
+      }
       add_block(std::move(b));
       ++m.junctions;
       if (j.contains("inlet_vessels") && j.contains("outlet_vessels")) {
@@ -296,7 +311,14 @@ Model read_model(const json& cfg, const std::string& file) {
   for (auto& b : m.blocks) {
     const size_t nodes = b.in.size() + b.out.size();
     switch (b.kind) {
+      case Kind::VesselJunction:
+        if (b.in.size() != 1) bad(m, fmt::format("junction '{}': a BloodVesselJunction has exactly one inlet", b.name));
+        if (b.par.size() != 3 * b.out.size())
+          bad(m, fmt::format("junction '{}': R_poiseuille, L and stenosis_coefficient need one value per outlet ({})",
+                             b.name, b.out.size()));
+        break;
       case Kind::Vessel:
+      case Kind::VesselCrl:
         if (b.in.size() != 1 || b.out.size() != 1)
           bad(m, fmt::format("vessel '{}' must have one inlet and one outlet connection (has {} and {})", b.name,
                              b.in.size(), b.out.size()));
@@ -356,6 +378,50 @@ class System {
           dyd(row, a.p, -c);
           dyd(row, a.q, c * r + 2.0 * s * aq * c);
           ++row;
+          break;
+        }
+        case Kind::VesselCrl: {
+          // C at the inlet, then R and L: P_in − R Q_out − P_out − L Q̇_out − S|Q_out|Q_out = 0,
+          // Q_in − Q_out − C Ṗ_in = 0.
+          const auto& a = m_.nodes[static_cast<size_t>(b.in[0])];
+          const auto& o = m_.nodes[static_cast<size_t>(b.out[0])];
+          const double r = b.par[0].get(t), c = b.par[1].get(t), l = b.par[2].get(t), s = b.par[3].get(t);
+          const double qo = y[o.q], aq = std::abs(qo);
+          f[row] = y[a.p] - r * qo - y[o.p] - l * yd[o.q] - s * aq * qo;
+          dy(row, a.p, 1.0);
+          dy(row, o.q, -r - 2.0 * s * aq);
+          dy(row, o.p, -1.0);
+          dyd(row, o.q, -l);
+          ++row;
+          f[row] = y[a.q] - qo - c * yd[a.p];
+          dy(row, a.q, 1.0);
+          dy(row, o.q, -1.0);
+          dyd(row, a.p, -c);
+          ++row;
+          break;
+        }
+        case Kind::VesselJunction: {
+          // Q_in = sum Q_out; per outlet i: P_in − P_i − R_i Q_i − L_i Q̇_i − S_i|Q_i|Q_i = 0.
+          const auto& a = m_.nodes[static_cast<size_t>(b.in[0])];
+          const size_t n = b.out.size();
+          f[row] = y[a.q];
+          dy(row, a.q, 1.0);
+          for (int k : b.out) {
+            f[row] -= y[m_.nodes[static_cast<size_t>(k)].q];
+            dy(row, m_.nodes[static_cast<size_t>(k)].q, -1.0);
+          }
+          ++row;
+          for (size_t i = 0; i < n; ++i) {
+            const auto& o = m_.nodes[static_cast<size_t>(b.out[i])];
+            const double r = b.par[i].get(t), l = b.par[n + i].get(t), s = b.par[2 * n + i].get(t);
+            const double qo = y[o.q], aq = std::abs(qo);
+            f[row] = y[a.p] - y[o.p] - r * qo - l * yd[o.q] - s * aq * qo;
+            dy(row, a.p, 1.0);
+            dy(row, o.p, -1.0);
+            dy(row, o.q, -r - 2.0 * s * aq);
+            dyd(row, o.q, -l);
+            ++row;
+          }
           break;
         }
         case Kind::Junction: {

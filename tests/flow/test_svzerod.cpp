@@ -23,13 +23,16 @@ using nlohmann::json;
 std::set<std::string> unsupported_blocks(const json& cfg) {
   std::set<std::string> out;
   for (const auto& v : cfg.value("vessels", json::array()))
-    if (v.value("zero_d_element_type", "BloodVessel") != "BloodVessel") out.insert(v["zero_d_element_type"]);
+    if (v.value("zero_d_element_type", "BloodVessel") != "BloodVessel" &&
+        v.value("zero_d_element_type", "BloodVessel") != "BloodVesselCRL")
+      out.insert(v["zero_d_element_type"]);
   for (const auto& b : cfg.value("boundary_conditions", json::array())) {
     const std::string t = b["bc_type"];
     if (t != "FLOW" && t != "PRESSURE" && t != "RESISTANCE" && t != "RCR" && t != "CORONARY") out.insert(t);
   }
   for (const auto& j : cfg.value("junctions", json::array()))
-    if (j["junction_type"] != "NORMAL_JUNCTION") out.insert(j["junction_type"]);
+    if (j["junction_type"] != "NORMAL_JUNCTION" && j["junction_type"] != "BloodVesselJunction")
+      out.insert(j["junction_type"]);
   for (const char* k : {"closed_loop_blocks", "valves", "chambers", "external_solver_coupling_blocks"})
     if (cfg.contains(k)) out.insert(k);
   if (!cfg.contains("simulation_parameters")) out.insert("(no simulation_parameters: calibration input)");

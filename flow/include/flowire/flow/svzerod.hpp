@@ -7,7 +7,11 @@
 /// - `BloodVessel` (R_poiseuille, C, L, stenosis_coefficient), unknowns P, Q at both ends:
 ///   \f$ P_{in} - P_{out} - (R + S|Q_{in}|) Q_{in} - L \dot Q_{out} = 0 \f$,
 ///   \f$ Q_{in} - Q_{out} - C \frac{d}{dt}\left(P_{in} - (R + S|Q_{in}|)Q_{in}\right) = 0 \f$;
-/// - `NORMAL_JUNCTION`: equal pressures, conserved flow;
+/// - `BloodVesselCRL` (C at the inlet, then R and L): \f$ P_{in} - P_{out} - (R + S|Q_{out}|)Q_{out}
+///   - L\dot Q_{out} = 0 \f$, \f$ Q_{in} - Q_{out} - C\dot P_{in} = 0 \f$;
+/// - `NORMAL_JUNCTION`: equal pressures, conserved flow; `BloodVesselJunction`: one inlet,
+///   lists R_poiseuille, L, stenosis_coefficient per outlet, \f$ P_{in} - P_i - (R_i + S_i|Q_i|)Q_i
+///   - L_i\dot Q_i = 0 \f$;
 /// - boundary conditions `FLOW` (Q, t), `PRESSURE` (P, t), `RESISTANCE` (R, Pd):
 ///   P − R Q − Pd = 0, and `RCR` (Rp, C, Rd, Pd): P − Rp Q − P_c = 0,
 ///   \f$ R_d Q - P_c - R_d C \dot P_c + P_d = 0 \f$, and the open-loop `CORONARY` (Ra1, Ca,
