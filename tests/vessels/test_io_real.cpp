@@ -193,6 +193,27 @@ TEST(RealData, MillimetreFileReadAsMetresWarnsNamingTheUnit) {
   EXPECT_TRUE(w.contains("probably in mm")) << w.warnings()[0];
 }
 
+TEST(RealData, EveryFileReadWithoutItsUnitWarnsNamingTheRightUnit) {
+  FLOWIRE_REQUIRE_SHARED("data/real/feelpp-aortic-arch/centerlinesAORTA.vtk");
+  const std::vector<std::pair<std::string, std::string>> files{
+      {"aneurisk-c0015-ica-vampy/artery_centerlines.vtp", "mm"},
+      {"simvascular-demo-aorta-iliac/demo-centerlines.vtp", "cm"},
+      {"simvascular-demo-aorta-iliac/rom-centerlines.vtp", "cm"},
+      {"vmtk-abdominal-aorta-bifurcation/aorta-centerline-branches.vtp", "mm"},
+      {"bluefern-coronary-centerlines/227A_Centreline.vtk", "mm"},
+      {"bluefern-coronary-centerlines/721A_Centreline.vtk", "mm"},
+      {"feelpp-aortic-arch/centerlinesAORTA.vtk", "cm"}};
+  for (const auto& [rel, unit] : files) {
+    SCOPED_TRACE(rel);
+    flowire::testing::ExpectWarnings w;
+    ReadOptions opt;
+    opt.build.max_segment_length = 1.0;
+    (void)read_network(real(rel), opt);
+    ASSERT_EQ(w.warnings().size(), 1u);
+    EXPECT_TRUE(w.contains("probably in " + unit)) << w.warnings()[0];
+  }
+}
+
 TEST(RealData, LumenSurfacesAreNotCenterlines) {
   FLOWIRE_REQUIRE_SHARED("data/real/simvascular-demo-aorta-iliac/model_surface.vtp");
   for (const char* rel : {"simvascular-demo-aorta-iliac/model_surface.vtp", "aneurisk-c0015-ica-vampy/artery.vtp",

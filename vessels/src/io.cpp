@@ -105,7 +105,7 @@ void check_units(double r_max, double factor, const std::string& where) {
   std::vector<std::pair<double, const char*>> plausible;
   for (const Cand c : {Cand{"m", 1.0}, Cand{"cm", 1e-2}, Cand{"mm", 1e-3}, Cand{"um", 1e-6}}) {
     const double r = raw * c.f;
-    if (r >= 1e-4 && r <= 0.05) plausible.emplace_back(std::abs(std::log10(r / 8e-3)), c.name);
+    if (r >= 1e-4 && r <= 0.05) plausible.emplace_back(std::abs(std::log10(r / 5e-3)), c.name);  // typical: 5 mm
   }
   std::sort(plausible.begin(), plausible.end());
   std::string hint = "check length_unit";
