@@ -751,6 +751,8 @@ TEST_F(ReadersWithVtk, BadVtkInputGivesOneErrorNamingFileAndPoint) {
       {"range.vtp", vtp_text(out_of_range), "line cell 0: point id 7 is out of range"},
       {"garbage.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"2\">&&&<<</VTKFile>", "cannot read"},
       {"notvtk.vtp", "hello", "not a VTK file"},
+      {"huge.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"99999999999\"></Piece></PolyData></VTKFile>",
+       "NumberOfPoints=\"99999999999\" does not fit"},
       {"legacy_bad.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 99999999999 float\n", "POINTS"},
       {"surface.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 float\n0 0 0\n",
        "POLYDATA"},

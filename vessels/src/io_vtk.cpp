@@ -9,7 +9,8 @@
 #include <fstream>
 #include <iterator>
 #include <mutex>
-#include <regex>
+#include <cctype>
+#include <cstdlib>
 #include <string>
 
 #include "flowire/common/error.hpp"
@@ -50,24 +51,29 @@ std::string head_of(const std::string& path, size_t limit) {
   return s;
 }
 
-/// Counts declared in the file must fit in it: a corrupt header must not make VTK allocate
-/// gigabytes. XML: NumberOfPoints / NumberOfLines / NumberOfTuples attributes; legacy:
-/// POINTS / LINES / POINT_DATA / CELL_DATA / FIELD array counts.
-void check_declared_sizes(const std::string& path, const std::string& text, uintmax_t size, bool xml) {
-  // Compressed XML data can be small for many points; allow a generous ratio.
-  const double limit = xml ? 1100.0 * static_cast<double>(size) + 1e4 : static_cast<double>(size) + 16.0;
-  const std::regex pattern = xml ? std::regex(R"((Number\w*)\s*=\s*"\s*([-+0-9.eE]+))")
-                                 : std::regex(R"((POINTS|LINES|POLYGONS|VERTICES|TRIANGLE_STRIPS|POINT_DATA|CELL_DATA)\s+([-+0-9]+))");
-  for (std::sregex_iterator it(text.begin(), text.end(), pattern), end; it != end; ++it) {
-    double n = 0.0;
-    try {
-      n = std::stod((*it)[2].str());
-    } catch (...) {
-      throw_input_error(path, fmt::format("bad count '{}' after {}", (*it)[2].str(), (*it)[1].str()));
-    }
-    if (n < 0 || n > limit)
-      throw_input_error(path, fmt::format("{} {} does not fit in a file of {} bytes (corrupt or truncated file)",
-                                          (*it)[1].str(), (*it)[2].str(), size));
+/// Counts declared in an XML file (NumberOfPoints, NumberOfLines, NumberOfTuples, ...) must fit
+/// in it: a corrupt header must not make VTK allocate gigabytes. Compressed data can be small
+/// for many values, hence the generous ratio.
+void check_declared_sizes(const std::string& path, const std::string& text, uintmax_t size) {
+  const double limit = 1100.0 * static_cast<double>(size) + 1e4;
+  for (size_t p = text.find("Number"); p != std::string::npos; p = text.find("Number", p + 1)) {
+    size_t q = p;
+    while (q < text.size() && std::isalpha(static_cast<unsigned char>(text[q]))) ++q;
+    const std::string name = text.substr(p, q - p);
+    while (q < text.size() && text[q] == ' ') ++q;
+    if (q >= text.size() || text[q] != '=') continue;
+    ++q;
+    while (q < text.size() && text[q] == ' ') ++q;
+    if (q >= text.size() || text[q] != '"') continue;
+    ++q;
+    const size_t b = q;
+    while (q < text.size() && q - b < 32 && text[q] != '"') ++q;
+    const std::string value = text.substr(b, q - b);
+    char* end = nullptr;
+    const double n = std::strtod(value.c_str(), &end);
+    if (end == value.c_str() || !(n >= 0.0) || n > limit)
+      throw_input_error(path, fmt::format("{}=\"{}\" does not fit in a file of {} bytes (corrupt or truncated file)",
+                                          name, value, size));
   }
 }
 
@@ -231,7 +237,7 @@ PolyData read_vtk_polydata(const std::string& path) {
     throw_input_error(path, "the VTK XML file does not hold PolyData (centerlines are poly data)");
   if (legacy && head.find("POLYDATA") == std::string::npos)
     throw_input_error(path, "the legacy VTK file does not hold POLYDATA (centerlines are poly data)");
-  check_declared_sizes(path, head, size, xml);
+  if (xml) check_declared_sizes(path, head, size);
   if (xml && head.find("</VTKFile>") == std::string::npos && size <= head.size())
     throw_input_error(path, "the XML ends before </VTKFile> (truncated file)");
   if (legacy) {
