@@ -285,8 +285,6 @@ void RodSimulator::predict_feed(double fed, double h) {
   }
 }
 
-bool RodSimulator::is_prescribed_dof(int d) const { return d >= 4 * first_clamped_; }
-
 // -----------------------------------------------------------------------------------------
 // Frames
 // -----------------------------------------------------------------------------------------
@@ -753,7 +751,6 @@ StepReport RodSimulator::step_euler(double dt) {
   const double angle_new = target_angle_ + rotation_speed_ * dt;
 
   const int nv = s.vertex_count();
-  const int nd = dof_count();
   w.x0 = s.x;
   w.v0 = s.v;
   w.theta0 = s.theta;
@@ -799,7 +796,6 @@ StepReport RodSimulator::step_euler(double dt) {
     s.v[k] = (s.x[k] - w.x0[k]) / dt;
     if (k < nv - 1) s.omega[k] = (s.theta[k] - w.theta0[k]) / dt;
   }
-  (void)nd;
   target_angle_ = angle_new;
   s.base_angle = angle_new;
   compute_base_reaction();

@@ -238,7 +238,6 @@ class RodSimulator {
   void compute_base_reaction();
   [[nodiscard]] double force_scale(double load_scale) const;
   [[nodiscard]] int dof_count() const { return 4 * state_.vertex_count() - 1; }
-  [[nodiscard]] bool is_prescribed_dof(int d) const;
   void report(const StepReport& r, const char* what);
   void record_trace();
 
