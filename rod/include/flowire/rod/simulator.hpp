@@ -32,7 +32,9 @@
 ///
 /// **Clamps.** The base clamp holds the last two vertices on the insertion line and the
 /// angle of the edge between them; the clamp vertex owns only the half cell in front of
-/// the entry, which keeps the clamp exactly at the entry and the scheme second order.
+/// it, which puts the clamp exactly at that vertex and keeps the scheme second order.
+/// The clamp vertex is the first grid point at or behind the entry, so while feeding the
+/// effective clamp sits up to one segment behind the entry point.
 /// `clamp_tip` optionally holds the distal edge too (rods clamped at both ends).
 ///
 /// **Feeding.** `set_insertion_speed` moves the entry point along the wire: grid points
