@@ -17,6 +17,7 @@
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/wire_output.hpp"
+#include "flowire/flow/output.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/rod/simulator.hpp"
 #include "flowire/vessels/generators.hpp"
@@ -135,73 +136,27 @@ void apply_loads(const config::Config& c, rod::RodSimulator& sim) {
   }
 }
 
-/// Buffers nodes.csv / segments.csv rows and writes network frames (VTK) of the flow.
-class FlowOutput {
- public:
-  FlowOutput(const vessels::Network& net, std::filesystem::path dir, bool csv, bool vtk)
-      : net_(net), dir_(std::move(dir)), csv_(csv), vtk_(vtk) {
-    if (csv_) {
-      nodes_ = "time,node,x,y,z,pressure\n";
-      segments_ =
-          "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds\n";
-    }
+/// output.png: the network coloured by pressure (or plain, without flow) with the wire over
+/// it, seen from the front and from the side.
+void render_pictures(const config::Config& c, const vessels::Network& net, const flow::FlowSolver* fs,
+                     const rod::RodSimulator* sim, const std::filesystem::path& out) {
+  std::vector<double> p(static_cast<size_t>(net.num_nodes()), 0.0);
+  if (fs) fs->node_pressures(p);
+  flow::RenderOptions ro;
+  ro.title = c.string_or("name", "flowire");
+  if (!fs) ro.scalar_name = "no flow";
+  if (sim) {
+    flow::RenderOverlay wire;
+    const auto x = sim->positions();
+    for (int i = 0; i <= std::min(sim->first_clamped_vertex(), sim->vertex_count() - 1); ++i)
+      wire.points.push_back(x[static_cast<size_t>(i)]);
+    wire.radius = std::max(sim->model().edge_radius.front(), 0.6e-3);
+    ro.overlays.push_back(std::move(wire));
   }
-  void frame(const flow::FlowSolver& f, double t, bool series) {
-    const int nn = net_.num_nodes(), ns = net_.num_segments();
-    std::vector<double> p(static_cast<size_t>(nn));
-    f.node_pressures(p);
-    std::vector<double> q(static_cast<size_t>(ns)), v(q.size()), wss(q.size()), re(q.size());
-    for (int s = 0; s < ns; ++s) {
-      const auto st = f.segment_state(s);
-      q[static_cast<size_t>(s)] = st.flow_rate;
-      v[static_cast<size_t>(s)] = st.mean_velocity;
-      wss[static_cast<size_t>(s)] = st.wall_shear_stress;
-      re[static_cast<size_t>(s)] = st.reynolds;
-    }
-    if (csv_) {
-      for (int i = 0; i < nn; ++i) {
-        const auto& x = net_.node(i);
-        nodes_ += fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.12g}\n", t, i, x.x(), x.y(), x.z(), p[static_cast<size_t>(i)]);
-      }
-      for (int s = 0; s < ns; ++s) {
-        const auto& sg = net_.segment(s);
-        const auto k = static_cast<size_t>(s);
-        segments_ += fmt::format("{:.9g},{},{},{},{:.9g},{:.9g},{:.9g},{:.12g},{:.9g},{:.9g},{:.9g}\n", t, s, sg.node_from,
-                                 sg.node_to, sg.length, sg.radius, f.resistance(s), q[k], v[k], wss[k], re[k]);
-      }
-    }
-    if (vtk_) {
-      const std::vector<vessels::DataArray> pd{{"pressure", p, 1}};
-      const std::vector<vessels::DataArray> cd{{"flow_rate", q, 1}, {"mean_velocity", v, 1}, {"wall_shear_stress", wss, 1},
-                                               {"reynolds", re, 1}};
-      const std::string name = series ? fmt::format("network_{:05d}.vtp", static_cast<int>(files_.size())) : "network.vtp";
-      vessels::write_network_vtp(net_, (dir_ / name).string(), pd, cd);
-      if (series) files_.emplace_back(t, name);
-      last_p_ = p;
-      last_q_ = q;
-    }
-  }
-  void finish() {
-    if (csv_) {
-      write_text_atomically(dir_ / "nodes.csv", nodes_);
-      write_text_atomically(dir_ / "segments.csv", segments_);
-    }
-    if (vtk_ && !files_.empty()) {
-      write_pvd(dir_ / "network.pvd", files_);
-      // network.vtp: the last frame, for a quick look.
-      vessels::write_network_vtp(net_, (dir_ / "network.vtp").string(), {{"pressure", last_p_, 1}},
-                                 {{"flow_rate", last_q_, 1}});
-    }
-  }
-
- private:
-  const vessels::Network& net_;
-  std::filesystem::path dir_;
-  bool csv_, vtk_;
-  std::string nodes_, segments_;
-  std::vector<std::pair<double, std::string>> files_;
-  std::vector<double> last_p_, last_q_;
-};
+  flow::render_network_png(net, p, out / "network.png", ro);
+  ro.view_direction = vessels::Vec3(1.0, 0.0, 0.0);
+  flow::render_network_png(net, p, out / "network_side.png", ro);
+}
 
 }  // namespace
 
@@ -341,13 +296,12 @@ RunResult run_scene(const config::Config& c) {
       if (c.has_section("insertion")) {
         sim->set_insertion_speed(c.number("insertion.speed"));
         sim->set_rotation_speed(c.number("insertion.rotation_speed"));
+        sim->set_base_angle(c.number("insertion.rotation_angle"));
       }
       if (net) {
         index.emplace(*net, 4);
         ContactParams cp;
-        const double h = sim->model().h;
-        const double EI = spec.youngs_modulus * std::numbers::pi * std::pow(spec.radius, 4) / 4.0;
-        cp.stiffness = c.number_or("contact.stiffness", std::max(1e5, EI / (h * h * h)));
+        cp.stiffness = c.number_or("contact.stiffness", 3e4);
         cp.friction = c.number_or("contact.friction", 0.1);
         cp.tip_friction = c.number_or("contact.tip_friction", cp.friction);
         cp.tip_length = c.has_section("wire.tip") ? c.number("wire.tip.length") : 0.0;
@@ -385,15 +339,15 @@ RunResult run_scene(const config::Config& c) {
     const bool series = out_every > 0;
     const double max_length = c.number_or("insertion.max_length", std::numeric_limits<double>::infinity());
 
-    std::optional<FlowOutput> flow_out;
-    if (fsolver && (write_csv || write_vtk)) flow_out.emplace(*net, out, write_csv, write_vtk);
+    std::vector<flow::FlowFrame> flow_frames;  // captured at output times, written at the end
+    const bool flow_out = fsolver && (write_csv || write_vtk);
     std::optional<WireOutput> wire_out;
     if (sim && (write_csv || write_vtk)) wire_out.emplace(out, write_csv, write_vtk);
 
     double t_flow = 0, t_rod = 0, t_out = 0;
     auto record = [&](double t) {
       const auto to = Clock::now();
-      if (flow_out) flow_out->frame(*fsolver, t, series);
+      if (flow_out) flow_frames.push_back(flow::capture_frame(*fsolver));
       if (wire_out) {
         WireFrame f;
         f.time = t;
@@ -453,7 +407,17 @@ RunResult run_scene(const config::Config& c) {
     s["steps"] = steps;
 
     const auto to = Clock::now();
-    if (flow_out) flow_out->finish();
+    if (flow_out) {
+      if (write_csv) {
+        flow::write_nodes_csv(*net, flow_frames, out / "nodes.csv");
+        flow::write_segments_csv(*fsolver, flow_frames, out / "segments.csv");
+      }
+      if (write_vtk) {
+        if (series) flow::write_network_series(*fsolver, flow_frames, out, "network");
+        else flow::write_network_vtp(*fsolver, flow_frames.back(), out / "network.vtp");
+      }
+    }
+    if (c.boolean("output.png") && net) render_pictures(c, *net, fsolver.get(), sim.get(), out);
     if (wire_out) wire_out->finish();
     if (net && !fsolver && write_csv) {
       std::string csv =

@@ -121,13 +121,15 @@ config::Schema make_schema() {
   add("insertion", Type::Section, "", D::None, "pushing and turning the wire at its base");
   add("insertion.speed", Type::Number, "0", D::Velocity, "insertion speed (negative: pull back)");
   add("insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "base rotation speed");
+  add("insertion.rotation_angle", Type::Number, "0", D::Angle, "base rotation at the start (turns a pre-shaped tip)");
   add("insertion.initial_length", Type::Number, "2 cm", D::Length, "length inside at t = 0");
   add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length");
 
   add("contact", Type::Section, "", D::None, "wall contact (present by default when a wire moves in vessels)");
   add("contact.friction", Type::Number, "0.1", D::None, "Coulomb friction coefficient (shaft)");
   add("contact.tip_friction", Type::Number, "", D::None, "Coulomb friction coefficient of the tip (default: friction)");
-  add("contact.stiffness", Type::Number, "", D::None, "penalty stiffness (N/m per vertex; default from the wire's bending stiffness)");
+  add("contact.stiffness", Type::Number, "3e4", D::None,
+      "penalty stiffness per vertex (N/m): a vertex pressed with force F sinks F/k into the wall");
   add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
 
   add("coupling", Type::Section, "", D::None, "how blood acts on the wire");

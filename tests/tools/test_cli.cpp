@@ -21,7 +21,10 @@ struct Result {
 };
 
 Result run(const std::string& args) {
-  const auto dir = flowire::testing::scratch_dir("cli-capture");
+  // One capture folder per test and call: CTest runs the tests of this file in parallel.
+  static int calls = 0;
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const auto dir = flowire::testing::scratch_dir(std::string("cli-capture-") + info->name() + "-" + std::to_string(calls++));
   const std::string cmd = std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire " + args + " >" + (dir / "o").string() +
                           " 2>" + (dir / "e").string();
   const int raw = std::system(cmd.c_str());

@@ -79,7 +79,7 @@ struct Arch {
   static constexpr double h_asc = 0.05;   // ascending aorta height
   static constexpr double R_arch = 0.028; // arch radius of curvature
   [[nodiscard]] Vec3 arch(double theta) const {
-    return s * Vec3(0.012 * theta / kPi, -R_arch + R_arch * std::cos(theta), h_asc + R_arch * std::sin(theta));
+    return s * Vec3(0.025 * theta / kPi, -R_arch + R_arch * std::cos(theta), h_asc + R_arch * std::sin(theta));
   }
   [[nodiscard]] double arch_radius(double theta) const { return s * (0.0140 - 0.0025 * theta / kPi); }
   // Descending + abdominal aorta: from the arch end (theta = pi) down to the iliac bifurcation.
