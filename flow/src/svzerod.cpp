@@ -61,7 +61,25 @@ struct Block {
   bool steady = false;            // coronary: steady equations in the steady initial phase
   double pim0 = 0.0, pcim0 = 0.0;  // coronary: initial-state dependent constants
   int vessel_type = 0;            // vessel: 1 inlet BC, 2 outlet BC, 3 both
+  bool varres = false;            // coronary: Ram varies over the cycle (CORONARY_VAR_RES)
 };
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Coronary microvascular resistance Ram at time t: constant, or for CORONARY_VAR_RES
+/// √Ram = √Ram_min + (√Ram_max − √Ram_min)·e(t) with the contraction/relaxation cosine
+/// ramps e(t) of durations T_vc and T_vr within each cycle (parameters [6..9]).
+double coronary_ram(const Block& b, double t, double period) {
+  if (!b.varres) return b.par[6].get(t);
+  const double lo = std::sqrt(b.par[6].get(t)), hi = std::sqrt(b.par[7].get(t));
+  const double tvc = b.par[8].get(t), tvr = b.par[9].get(t);
+  const double tc = std::fmod(t, period);
+  double e = 0.0;
+  if (tc <= tvc) e = 0.5 * (1.0 - std::cos(kPi * tc / tvc));
+  else if (tc <= tvc + tvr) e = 0.5 * (1.0 + std::cos(kPi * (tc - tvc) / tvr));
+  const double r = lo + (hi - lo) * e;
+  return r * r;
+}
 
 struct SimParams {
   int cycles = 1, pts = 2;
@@ -232,6 +250,17 @@ Model read_model(const json& cfg, const std::string& file) {
                read_param(m, vals, "Rd", name, false), read_param(m, vals, "Pd", name, true)};
       m.has_rcr = true;
       m.max_tau = std::max(m.max_tau, b.par[2].get(0.0) * b.par[1].get(0.0));
+    } else if (type == "CORONARY_VAR_RES") {
+      check_keys(m, vals, name, {"Ra1", "Rv1", "Ca", "Cc", "t", "Pim", "P_v", "Ra2_min", "Ra2_max", "T_vc", "T_vr",
+                                 "closed_loop_outlet"});
+      if (vals.value("closed_loop_outlet", false)) bad(m, fmt::format("'{}': closed-loop coronary outlets are not supported", name));
+      b.kind = Kind::Coronary;
+      b.varres = true;
+      b.par = {read_param(m, vals, "Ra1", name, false),     read_param(m, vals, "Rv1", name, false),
+               read_param(m, vals, "Ca", name, false),      read_param(m, vals, "Cc", name, false),
+               read_param(m, vals, "Pim", name, false),     read_param(m, vals, "P_v", name, false),
+               read_param(m, vals, "Ra2_min", name, false), read_param(m, vals, "Ra2_max", name, false),
+               read_param(m, vals, "T_vc", name, false),    read_param(m, vals, "T_vr", name, false)};
     } else if (type == "CORONARY") {
       check_keys(m, vals, name, {"Ra1", "Rv1", "Ca", "Cc", "t", "Pim", "P_v", "Ra2", "closed_loop_outlet"});
       if (vals.value("closed_loop_outlet", false)) bad(m, fmt::format("'{}': closed-loop coronary outlets are not supported", name));
@@ -242,7 +271,8 @@ Model read_model(const json& cfg, const std::string& file) {
                read_param(m, vals, "Ra2", name, false)};
     } else {
       bad(m, fmt::format(
-                 "boundary condition '{}': type '{}' is not supported (supported: FLOW, PRESSURE, RESISTANCE, RCR, CORONARY)",
+                 "boundary condition '{}': type '{}' is not supported (supported: FLOW, PRESSURE, RESISTANCE, RCR, CORONARY, "
+                 "CORONARY_VAR_RES)",
                  name, type));
     }
     for (const auto& p : b.par) note_period(m, p);
@@ -450,9 +480,10 @@ class System {
           // Open-loop coronary: Ra, Ca, Ram, Cim (intramyocardial volume V_im), Rv to P_v.
           const auto& nd = m_.nodes[static_cast<size_t>(b.in.empty() ? b.out[0] : b.in[0])];
           const double ra = b.par[0].get(t), rv = b.par[1].get(t), ca = b.par[2].get(t), cim = b.par[3].get(t);
-          const double pim = b.par[4].get(t), pv = b.par[5].get(t), ram = b.par[6].get(t);
+          const double pim = b.par[4].get(t), pv = b.par[5].get(t);
           const int v = b.internal;
           if (b.steady) {
+            const double ram = coronary_ram(b, 0.0, m_.period);
             f[row] = y[v];
             dy(row, v, 1.0);
             ++row;
@@ -462,6 +493,7 @@ class System {
             ++row;
             break;
           }
+          const double ram = coronary_ram(b, t, m_.period);
           f[row] = cim * rv * y[nd.q] - y[v] - ca * cim * rv * yd[nd.p] + ra * ca * cim * rv * yd[nd.q] -
                    cim * rv * yd[v] + cim * (-pim + pv + b.pim0 - b.pcim0);
           dy(row, nd.q, cim * rv);
@@ -652,7 +684,7 @@ Result simulate(const std::string& json_path, Summary* summary) {
     if (b.kind != Kind::Coronary) continue;
     const auto& nd = m.nodes[static_cast<size_t>(b.in.empty() ? b.out[0] : b.in[0])];
     const auto& pim = b.par[4];
-    const double ra = b.par[0].get(0.0), ca = b.par[2].get(0.0), ram = b.par[6].get(0.0);
+    const double ra = b.par[0].get(0.0), ca = b.par[2].get(0.0), ram = coronary_ram(b, 0.0, m.period);
     const double p_ca = state.y[nd.p] - ra * state.y[nd.q];
     const double p_ca_dot = state.yd[nd.p] - ra * state.yd[nd.q];
     const double q_am = state.y[nd.q] - ca * p_ca_dot;

@@ -373,11 +373,17 @@ void assemble_rhs(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, std
       for (int k = 0; k < 6; ++k)
         for (int c = 0; c < 3; ++c) vals[3 * k + c] -= p * q.weight * phi[k] * nds[c];
     }
+    // Vectors do not skip negative (wall) indices: pass only the free unknowns.
+    PetscInt count = 0;
     for (int k = 0; k < 6; ++k) {
       const PetscInt d = num.vdof[static_cast<size_t>(tri[static_cast<size_t>(k)])];
-      for (int c = 0; c < 3; ++c) rows[3 * k + c] = d >= 0 ? d + c : -1;
+      if (d < 0) continue;
+      for (int c = 0; c < 3; ++c) {
+        rows[count] = d + c;
+        vals[count++] = vals[3 * k + c];
+      }
     }
-    FLOWIRE_PETSC(VecSetValues(b, 18, rows, vals, ADD_VALUES));
+    if (count > 0) FLOWIRE_PETSC(VecSetValues(b, count, rows, vals, ADD_VALUES));
   }
   FLOWIRE_PETSC(VecAssemblyBegin(b));
   FLOWIRE_PETSC(VecAssemblyEnd(b));

@@ -16,7 +16,8 @@
 ///   P − R Q − Pd = 0, and `RCR` (Rp, C, Rd, Pd): P − Rp Q − P_c = 0,
 ///   \f$ R_d Q - P_c - R_d C \dot P_c + P_d = 0 \f$, and the open-loop `CORONARY` (Ra1, Ca,
 ///   Ra2, Cc with intramyocardial pressure Pim(t), Rv1 to P_v; unknown V_im; in the steady
-///   initial phase V_im = 0 and P = (Ra1 + Ra2 + Rv1) Q + P_v).
+///   initial phase V_im = 0 and P = (Ra1 + Ra2 + Rv1) Q + P_v), also as `CORONARY_VAR_RES`
+///   whose Ra2 varies over the cycle between Ra2_min and Ra2_max (ramps T_vc, T_vr).
 /// A parameter is a number or a periodic table over `t` (linear interpolation).
 ///
 /// Time integration as svZeroDSolver: generalized-α (`rho_infty`, default 0.5) on
