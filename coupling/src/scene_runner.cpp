@@ -144,13 +144,14 @@ void render_pictures(const config::Config& c, const vessels::Network& net, const
   if (fs) fs->node_pressures(p);
   flow::RenderOptions ro;
   ro.title = c.string_or("name", "flowire");
+  ro.view_direction = vessels::Vec3(0.35, -1.0, 0.0).normalized();  // front, slightly oblique: the arch opens up
   if (!fs) ro.scalar_name = "no flow";
   if (sim) {
     flow::RenderOverlay wire;
     const auto x = sim->positions();
     for (int i = 0; i <= std::min(sim->first_clamped_vertex(), sim->vertex_count() - 1); ++i)
       wire.points.push_back(x[static_cast<size_t>(i)]);
-    wire.radius = std::max(sim->model().edge_radius.front(), 0.6e-3);
+    wire.radius = std::max(3.0 * sim->model().edge_radius.front(), 1.2e-3);  // drawn thicker to be seen
     ro.overlays.push_back(std::move(wire));
   }
   flow::render_network_png(net, p, out / "network.png", ro);

@@ -128,6 +128,8 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   mapper->ScalarVisibilityOn();
   vtkNew<vtkActor> vessels_actor;
   vessels_actor->SetMapper(mapper);
+  // Translucent vessels when something is drawn inside them (the wire).
+  if (!opt.overlays.empty()) vessels_actor->GetProperty()->SetOpacity(0.35);
 
   vtkNew<vtkRenderer> ren;
   ren->SetBackground(1.0, 1.0, 1.0);
