@@ -360,7 +360,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   w.has_ext_k = false;
   w.moment_k.setZero();
   if (gravity_.squaredNorm() > 0.0)
-    for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += model_.mass[k] * gravity_;
+    for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += load_scale * model_.mass[k] * gravity_;
   w.fext.segment<3>(0) += load_scale * tip_force_;
   const double L = s.inserted_length;
   for (const PointForce& pf : point_forces_) {
@@ -499,7 +499,7 @@ double RodSimulator::force_scale(double load_scale) const {
   }
   for (int j = 0; j < s.edge_count(); ++j) ea = std::max(ea, model_.stretch_stiffness[j]);
   const double L = std::max(s.inserted_length, model_.h);
-  double f = std::max({ei / (L * L), total_mass * gravity_.norm(),
+  double f = std::max({ei / (L * L), load_scale * total_mass * gravity_.norm(),
                        load_scale * tip_force_.norm(), load_scale * tip_moment_.norm() / L});
   for (const auto& pf : point_forces_) f = std::max(f, load_scale * pf.f.norm());
   const double xscale = model_.base_position.norm() + L;

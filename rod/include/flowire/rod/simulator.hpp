@@ -150,7 +150,8 @@ class RodSimulator {
   /// @brief Advance by @p dt with the configured integrator.
   StepReport step(double dt);
   /// @brief Equilibrium under the current loads at the current base pose (velocities are
-  /// zeroed). Loads are ramped in `settings().static_load_steps` increments.
+  /// zeroed). Loads (tip force and moment, point forces, gravity; not external forces)
+  /// are ramped in `settings().static_load_steps` increments.
   StepReport solve_static();
 
   // --- controls and loads ---------------------------------------------------------------
