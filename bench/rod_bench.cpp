@@ -103,6 +103,34 @@ void BM_FactorSolveSparse(benchmark::State& state) {
   }
 }
 
+/// One bend/twist stencil: value, gradient and exact Hessian (the assembly's kernel).
+void BM_BendTwistKernel(benchmark::State& state) {
+  using namespace flowire::rod;
+  const Vec3 x0(0, 0, 0), x1(1e-3, 1e-5, 0), x2(2e-3, 4e-5, 1e-5);
+  EdgeFrame fe, ff;
+  const Vec3 te = (x1 - x0).normalized(), tf = (x2 - x1).normalized();
+  fe.d1 = te.cross(Vec3::UnitZ()).normalized();
+  fe.d2 = te.cross(fe.d1);
+  ff.d1 = parallel_transport(fe.d1, te, tf);
+  ff.d2 = tf.cross(ff.d1);
+  VertexParams p;
+  p.voronoi_length = 1e-3;
+  const bool hessian = state.range(0) != 0;
+  Vec11 g;
+  Mat11 H;
+  double theta = 0.0;
+  for (auto _ : state) {
+    theta += 1e-9;
+    const EdgeGeometry a = edge_geometry(x0, x1, fe, theta);
+    const EdgeGeometry b = edge_geometry(x1, x2, ff, 0.3);
+    const double e = bend_twist(a, b, theta, 0.3, 0.0, p, &g, hessian ? &H : nullptr);
+    benchmark::DoNotOptimize(e);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::DoNotOptimize(H.data());
+  }
+}
+BENCHMARK(BM_BendTwistKernel)->Arg(0)->Arg(1)->Unit(benchmark::kNanosecond);
+
 // 4·1700 − 1 unknowns: the 1,700-vertex wire.
 BENCHMARK(BM_FactorSolveBanded)->Arg(6799)->Arg(39999)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FactorSolveSparse)->Arg(6799)->Arg(39999)->Unit(benchmark::kMicrosecond);
