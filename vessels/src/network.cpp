@@ -107,7 +107,10 @@ std::vector<double> cut_positions(const ArcLength& al, const BuildOptions& opt) 
   const double hmax = opt.max_segment_length > 0.0 ? opt.max_segment_length : std::numeric_limits<double>::infinity();
   for (size_t k = 0; k + 1 < coarse.size(); ++k) {
     const double len = coarse[k + 1] - coarse[k];
-    const int pieces = std::isfinite(hmax) ? std::max(1, static_cast<int>(std::ceil(len / hmax - 1e-9))) : 1;
+    const double want = std::isfinite(hmax) ? std::ceil(len / hmax - 1e-9) : 1.0;
+    if (want > 1e7)
+      throw_input_error(al.p.name, fmt::format("branch of length {} m would need {:.3g} segments of at most {} m", len, want, hmax));
+    const int pieces = std::max(1, static_cast<int>(want));
     for (int j = 1; j <= pieces; ++j) cuts.push_back(coarse[k] + len * j / pieces);
   }
   return cuts;
@@ -134,18 +137,25 @@ Network Network::build(const Centerlines& c, const BuildOptions& opt) {
   }
   UnionFind uf(ends.size());
   {
-    auto key = [&](const Eigen::Vector3i& k) {
+    using Cell = Eigen::Matrix<int64_t, 3, 1>;
+    auto key = [&](const Cell& k) {
       return (static_cast<uint64_t>(k.x() & 0x1FFFFF) << 42) ^ (static_cast<uint64_t>(k.y() & 0x1FFFFF) << 21) ^
              static_cast<uint64_t>(k.z() & 0x1FFFFF);
+    };
+    // Cell of a point; clamped so that absurd coordinate/tolerance ratios stay defined
+    // (far-apart points may then share a cell: the distance test below still decides).
+    auto cell = [&](const Vec3& x) {
+      const Eigen::Array3d f = (x / tol).array().floor().max(-4e18).min(4e18);
+      return Cell(static_cast<int64_t>(f.x()), static_cast<int64_t>(f.y()), static_cast<int64_t>(f.z()));
     };
     std::unordered_multimap<uint64_t, int> grid;
     grid.reserve(ends.size());
     for (size_t i = 0; i < ends.size(); ++i) {
-      const Eigen::Vector3i k = (ends[i] / tol).array().floor().cast<int>();
+      const Cell k = cell(ends[i]);
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
-            auto range = grid.equal_range(key(k + Eigen::Vector3i(dx, dy, dz)));
+            auto range = grid.equal_range(key(k + Cell(dx, dy, dz)));
             for (auto it = range.first; it != range.second; ++it)
               if ((ends[static_cast<size_t>(it->second)] - ends[i]).norm() <= tol)
                 uf.unite(static_cast<int>(i), it->second);
