@@ -7,6 +7,10 @@
 /// diagonal). The rod adds −∂f/∂x − ∂f/∂v / Δt to its system matrix, so stiff contact
 /// penalties and drag stay implicit. The blocks are symmetrized; forces whose Jacobian is
 /// not negative semi-definite (not dissipative, not a convex penalty) may slow Newton.
+/// Give the whole Jacobian: for a penalty −k(r − R)n on a curved wall that includes the
+/// tangential term −k(r − R)/r (P − n nᵀ); with only −k n nᵀ Newton converges linearly
+/// and stiff contacts then exhaust the iteration budget. Start from a consistent state
+/// (no deep initial penetration): a large initial overlap is a large impulsive load.
 ///
 /// rod/ knows nothing about vessels or blood: implementations live in coupling/.
 ///
