@@ -209,3 +209,14 @@ TEST(Cli, RunsAnSvZeroDSolverModel) {
   EXPECT_NE(b.err.find("bad.json"), std::string::npos) << b.err;
   EXPECT_FALSE(fs::exists(dir / "b" / "svzerod_result.csv"));
 }
+
+TEST(Cli, SceneKeyReferenceIsUpToDate) {
+  // docs/scene-keys.md is generated from the one declaration: `flowire help scene > docs/scene-keys.md`.
+  std::ifstream in(std::string(FLOWIRE_SOURCE_DIR) + "/docs/scene-keys.md");
+  ASSERT_TRUE(in) << "docs/scene-keys.md is missing";
+  std::stringstream doc;
+  doc << in.rdbuf();
+  const auto r = run("help scene");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_EQ(doc.str(), r.out) << "regenerate it: flowire help scene > docs/scene-keys.md";
+}
