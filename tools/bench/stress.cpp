@@ -1,0 +1,266 @@
+// The stability stress matrix: one aortic-arch co-simulation per point, watched step by step.
+#include "stress.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <queue>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/coupling/scene.hpp"
+#include "flowire/coupling/vessel_forces.hpp"
+#include "flowire/flow/solver.hpp"
+#include "flowire/flow/spec.hpp"
+#include "flowire/rod/simulator.hpp"
+#include "flowire/vessels/spatial.hpp"
+
+namespace flowire::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// The network end farthest along the vessels from the inlet (the scene's `wire.entry: auto`).
+int farthest_end(const vessels::Network& net, int from) {
+  std::vector<double> dist(static_cast<size_t>(net.num_nodes()), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> q;
+  dist[static_cast<size_t>(from)] = 0;
+  q.emplace(0.0, from);
+  while (!q.empty()) {
+    auto [d, n] = q.top();
+    q.pop();
+    if (d > dist[static_cast<size_t>(n)]) continue;
+    auto [b, e] = net.node_segments(n);
+    for (const int* it = b; it != e; ++it) {
+      const auto& s = net.segment(*it);
+      const int m = s.node_from == n ? s.node_to : s.node_from;
+      if (d + s.length < dist[static_cast<size_t>(m)]) {
+        dist[static_cast<size_t>(m)] = d + s.length;
+        q.emplace(d + s.length, m);
+      }
+    }
+  }
+  int best = -1;
+  for (int e : net.ends())
+    if (e != from && std::isfinite(dist[static_cast<size_t>(e)]) &&
+        (best < 0 || dist[static_cast<size_t>(e)] > dist[static_cast<size_t>(best)] + 1e-12))
+      best = e;
+  return best;
+}
+
+rod::WireSpec wire_spec(const config::Config& c) {
+  rod::WireSpec w;
+  w.length = c.number("wire.length");
+  w.radius = c.number("wire.radius");
+  w.youngs_modulus = c.number("wire.youngs_modulus");
+  w.poisson_ratio = c.number("wire.poisson_ratio");
+  w.density = c.number("wire.density");
+  if (c.has("wire.segment_length")) {
+    w.segments = 0;
+    w.segment_length = c.number("wire.segment_length");
+  } else {
+    w.segments = c.integer("wire.segments");
+  }
+  w.damping = c.number("wire.damping");
+  w.tip.length = 0.0;
+  if (c.has_section("wire.tip")) {
+    w.tip.length = c.number("wire.tip.length");
+    w.tip.youngs_modulus = c.number("wire.tip.youngs_modulus");
+    w.tip.shape = rod::parse_tip_shape(c.string("wire.tip.shape"));
+    w.tip.angle = c.number("wire.tip.angle");
+    w.tip.bend_radius = c.number("wire.tip.bend_radius");
+  }
+  w.inserted_length = c.number("insertion.initial_length");
+  return w;
+}
+
+std::string num(double v) { return fmt::format("{:.9g}", v); }
+
+}  // namespace
+
+std::string stress_point_id(const StressPoint& p) {
+  return fmt::format("dt={:g}ms,E={:g}GPa,L={:g}m,v={:g}cm/s,rot={:g}turn/s,flow=x{:g},mu={:g}", p.dt * 1e3,
+                     p.youngs_modulus * 1e-9, p.wire_length, p.speed * 1e2, p.rotation, p.flow_scale, p.friction);
+}
+
+StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
+  StressResult r;
+  r.point = p;
+  const auto t_start = Clock::now();
+  (void)take_warnings();
+  const std::vector<std::string> sets = {
+      "solve.dt=" + num(p.dt),
+      "solve.duration=" + num(p.duration),
+      "wire.youngs_modulus=" + num(p.youngs_modulus),
+      "wire.length=" + num(p.wire_length),
+      "insertion.speed=" + num(p.speed),
+      "insertion.rotation_speed=" + num(2.0 * std::numbers::pi * p.rotation),
+      "coupling.drag_scale=" + num(p.flow_scale),
+      "contact.friction=" + num(p.friction),
+      "contact.tip_friction=" + num(p.friction),
+      "output.vtk=false",
+      "output.csv=false",
+      "output.every=0",
+  };
+  const config::Config c = coupling::load_scene(scene, sets);
+
+  const vessels::Network net = coupling::build_scene_network(c);
+  std::unique_ptr<flow::FlowSolver> fs;
+  if (c.has_section("flow")) fs = flow::make_solver(net, flow::from_config(c, net));
+
+  rod::WireSpec spec = wire_spec(c);
+  const int entry = farthest_end(net, net.widest_end());
+  const auto& seg = net.segment(*net.node_segments(entry).first);
+  const int other = seg.node_from == entry ? seg.node_to : seg.node_from;
+  spec.base_position = net.node(entry);
+  spec.base_direction = (net.node(other) - net.node(entry)).normalized();
+  rod::RodSimulator sim(spec);
+  sim.set_integrator(rod::parse_integrator(c.string("solve.integrator")));
+  sim.set_insertion_speed(c.number("insertion.speed"));
+  sim.set_rotation_speed(c.number("insertion.rotation_speed"));
+  sim.set_base_angle(c.number("insertion.rotation_angle"));
+
+  const vessels::SpatialIndex index(net, 4);
+  coupling::ContactParams cp;
+  cp.stiffness = c.number_or("contact.stiffness", 3e4);
+  cp.friction = c.number("contact.friction");
+  cp.tip_friction = c.number("contact.tip_friction");
+  cp.tip_length = spec.tip.length;
+  cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
+  coupling::DragParams dp;
+  const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "slender_body";
+  dp.law = !fs || law == "none"          ? coupling::DragLaw::None
+           : law == "velocity_offset" ? coupling::DragLaw::VelocityOffset
+                                      : coupling::DragLaw::SlenderBody;
+  dp.scale = c.number_or("coupling.drag_scale", 1.0);
+  dp.viscosity = c.number_or("flow.viscosity", 3.5e-3);
+  dp.wire_length = spec.length;
+  dp.mass_per_length = spec.density * std::numbers::pi * spec.radius * spec.radius;
+  coupling::VelocityField vf;
+  if (fs) {
+    flow::FlowSolver* f = fs.get();
+    vf = [f](int s, const vessels::Vec3& x) { return f->velocity_at(s, x); };
+  }
+  auto forces = std::make_shared<coupling::VesselForces>(index, spec.radius, cp, dp, vf);
+  sim.add_external(forces);
+
+  const double dt = c.number("solve.dt");
+  const long steps = std::lround(c.number("solve.duration") / dt);
+  const double max_length = c.number_or("insertion.max_length", std::numeric_limits<double>::infinity());
+  const double rho_a = dp.mass_per_length;
+  const double radius = spec.radius;
+  if (fs) fs->advance(0.0);
+  double elastic_prev = sim.energy().total() - sim.energy().kinetic;
+
+  auto fail = [&](long step, std::string why) {
+    if (r.first_bad_step < 0) {
+      r.first_bad_step = step;
+      r.reason = std::move(why);
+    }
+  };
+  for (long step = 1; step <= steps; ++step) {
+    const double t1 = static_cast<double>(step) * dt;
+    if (fs) fs->advance(t1);
+    if (sim.inserted_length() >= max_length) sim.set_insertion_speed(0.0);
+    rod::StepReport rep;
+    try {
+      rep = sim.step(dt);
+    } catch (const Error& e) {
+      fail(step, fmt::format("exception: {}", e.what()));
+      r.steps = step;
+      break;
+    }
+    r.steps = step;
+    if (!rep.converged()) ++r.unconverged_steps;
+    if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix) {
+      fail(step, fmt::format("state not finite ({})", rod::to_string(rep.status)));
+      break;
+    }
+    bool finite = true;
+    for (const auto& x : sim.positions()) finite = finite && x.allFinite();
+    if (!finite) {
+      fail(step, "non-finite position");
+      break;
+    }
+    const double outside = forces->stats().max_outside / radius;
+    r.max_outside_over_radius = std::max(r.max_outside_over_radius, outside);
+    if (outside > 0.1) fail(step, fmt::format("outside the lumen by {:.3g} wire radii", outside));
+    const double drift = sim.length_drift();
+    r.max_length_drift = std::max(r.max_length_drift, drift);
+    if (!(drift < 1e-3)) fail(step, fmt::format("length drift {:.3g}", drift));
+    const auto e = sim.energy();
+    const double simulated_length = std::max(sim.inserted_length(), 1e-3) + 2.0 * sim.model().h;
+    const double ke_bound = 0.5 * rho_a * simulated_length * 1.0;  // ½ m (1 m/s)²
+    r.max_kinetic_ratio = std::max(r.max_kinetic_ratio, e.kinetic / ke_bound);
+    if (!(e.kinetic <= ke_bound)) fail(step, fmt::format("kinetic energy {:.3g} J above {:.3g} J", e.kinetic, ke_bound));
+    const double elastic = e.stretching + e.bending_twisting;
+    if (!std::isfinite(elastic) || (elastic > 1e-3 && elastic > 10.0 * elastic_prev))
+      fail(step, fmt::format("elastic energy jumped from {:.3g} J to {:.3g} J", elastic_prev, elastic));
+    elastic_prev = elastic;
+    if (step % 256 == 0) (void)take_warnings();  // unconverged steps are counted above
+  }
+  (void)take_warnings();
+  r.pass = r.first_bad_step < 0;
+  r.inserted_length = sim.inserted_length();
+  r.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+  return r;
+}
+
+std::vector<StressPoint> stress_matrix(bool reduced) {
+  std::vector<StressPoint> m;
+  if (reduced) {
+    // The corners that stress each axis, at a short duration.
+    const StressPoint base{.dt = 0.01, .youngs_modulus = 60e9, .wire_length = 0.8, .speed = 0.05, .rotation = 0.0,
+                           .flow_scale = 1.0, .friction = 0.2, .duration = 0.6};
+    auto add = [&](auto edit) {
+      StressPoint p = base;
+      edit(p);
+      m.push_back(p);
+    };
+    add([](StressPoint&) {});
+    add([](StressPoint& p) { p.dt = 1.0 / 30.0; p.youngs_modulus = 200e9; p.speed = 0.1; });
+    add([](StressPoint& p) { p.youngs_modulus = 5e9; p.flow_scale = 10.0; p.friction = 1.0; });
+    add([](StressPoint& p) { p.dt = 1e-3; p.wire_length = 1.7; p.rotation = 2.0; p.duration = 0.3; });
+    add([](StressPoint& p) { p.dt = 1.0 / 30.0; p.youngs_modulus = 5e9; p.friction = 0.05; p.flow_scale = 0.0; p.rotation = 2.0; });
+    add([](StressPoint& p) { p.youngs_modulus = 200e9; p.wire_length = 1.7; p.speed = 0.1; p.flow_scale = 10.0; p.friction = 1.0; });
+    return m;
+  }
+  for (double dt : {1e-3, 1e-2, 1.0 / 30.0})
+    for (double E : {5e9, 67e9, 200e9})
+      for (double L : {0.8, 1.7})
+        for (double v : {0.01, 0.1})
+          for (double rot : {0.0, 2.0})
+            for (double flow : {0.0, 1.0, 10.0})
+              for (double mu : {0.05, 1.0}) {
+                StressPoint p{.dt = dt, .youngs_modulus = E, .wire_length = L, .speed = v, .rotation = rot,
+                              .flow_scale = flow, .friction = mu, .duration = 1.0};
+                m.push_back(p);
+              }
+  return m;
+}
+
+std::string stress_csv_header() {
+  return "dt,youngs_modulus,wire_length,speed,rotation_turns_per_s,flow_scale,friction,duration,pass,reason,"
+         "first_bad_step,steps,unconverged_steps,max_outside_over_radius,max_length_drift,max_kinetic_ratio,"
+         "inserted_length,seconds\n";
+}
+
+std::string stress_csv_row(const StressResult& r) {
+  const auto& p = r.point;
+  std::string reason = r.reason;
+  for (char& ch : reason)
+    if (ch == ',' || ch == '\n') ch = ';';
+  return fmt::format("{:g},{:g},{:g},{:g},{:g},{:g},{:g},{:g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g}\n", p.dt,
+                     p.youngs_modulus, p.wire_length, p.speed, p.rotation, p.flow_scale, p.friction, p.duration,
+                     r.pass ? 1 : 0, reason, r.first_bad_step, r.steps, r.unconverged_steps, r.max_outside_over_radius,
+                     r.max_length_drift, r.max_kinetic_ratio, r.inserted_length, r.seconds);
+}
+
+}  // namespace flowire::bench
