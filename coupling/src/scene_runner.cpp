@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <limits>
 #include <optional>
-#include <queue>
 #include <map>
 #include <numbers>
 #include <sstream>
@@ -53,36 +52,6 @@ nlohmann::json counts_json(const vessels::NetworkCounts& n) {
   return {{"branches", n.branches},   {"nodes", n.nodes}, {"segments", n.segments},         {"junctions", n.junctions},
           {"ends", n.ends},           {"loops", n.loops}, {"components", n.components},     {"total_length", n.total_length},
           {"radius_min", n.radius_min}, {"radius_max", n.radius_max}};
-}
-
-/// The network end farthest (along the vessels) from `from`: where a wire enters to be
-/// pushed against the flow towards the inlet, as in the published experiment.
-int farthest_end(const vessels::Network& net, int from) {
-  std::vector<double> dist(static_cast<size_t>(net.num_nodes()), std::numeric_limits<double>::infinity());
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> q;
-  dist[static_cast<size_t>(from)] = 0;
-  q.emplace(0.0, from);
-  while (!q.empty()) {
-    auto [d, n] = q.top();
-    q.pop();
-    if (d > dist[static_cast<size_t>(n)]) continue;
-    auto [b, e] = net.node_segments(n);
-    for (const int* it = b; it != e; ++it) {
-      const auto& s = net.segment(*it);
-      const int m = s.node_from == n ? s.node_to : s.node_from;
-      if (d + s.length < dist[static_cast<size_t>(m)]) {
-        dist[static_cast<size_t>(m)] = d + s.length;
-        q.emplace(d + s.length, m);
-      }
-    }
-  }
-  int best = -1;
-  for (int e : net.ends())
-    if (e != from && std::isfinite(dist[static_cast<size_t>(e)]) &&
-        (best < 0 || dist[static_cast<size_t>(e)] > dist[static_cast<size_t>(best)] + 1e-12))
-      best = e;
-  return best;
 }
 
 rod::WireSpec wire_spec(const config::Config& c) {
@@ -271,7 +240,7 @@ RunResult run_scene(const config::Config& c) {
         int entry = -1;
         const auto entry_key = c.string("wire.entry");
         if (entry_key == "auto") {
-          entry = farthest_end(*net, inlet);
+          entry = net->farthest_end(inlet);
         } else {
           try {
             entry = std::stoi(entry_key);

@@ -177,3 +177,14 @@ TEST(Generators, RejectBadParameters) {
   EXPECT_THROW(y_bifurcation({.parent_radius = -1.0}), flowire::Error);
   EXPECT_THROW(binary_tree({.depth = 40}), flowire::Error);
 }
+
+TEST(Network, FarthestEndFollowsTheVessels) {
+  const auto net = Network::build(aortic_arch(), {.max_segment_length = 5e-3});
+  const int root = net.widest_end();
+  const int far = net.farthest_end(root);
+  // A femoral end: farther along the vessels than any supra-aortic end.
+  EXPECT_LT(net.node(far).z(), -0.4);
+  const auto d = net.path_lengths_from(root);
+  EXPECT_GT(d[static_cast<size_t>(far)], 0.6);
+  EXPECT_NEAR(d[static_cast<size_t>(root)], 0.0, 0.0);
+}

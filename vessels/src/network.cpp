@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <queue>
 #include <unordered_map>
 
 #include "flowire/common/error.hpp"
@@ -310,6 +311,39 @@ NetworkCounts Network::counts() const {
     c.radius_max = std::max(c.radius_max, s.radius);
   }
   return c;
+}
+
+std::vector<double> Network::path_lengths_from(int from) const {
+  std::vector<double> dist(nodes_.size(), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  dist[static_cast<size_t>(from)] = 0.0;
+  queue.emplace(0.0, from);
+  while (!queue.empty()) {
+    const auto [d, n] = queue.top();
+    queue.pop();
+    if (d > dist[static_cast<size_t>(n)]) continue;
+    auto [b, e] = node_segments(n);
+    for (const int* it = b; it != e; ++it) {
+      const auto& s = segments_[static_cast<size_t>(*it)];
+      const int m = s.node_from == n ? s.node_to : s.node_from;
+      if (d + s.length < dist[static_cast<size_t>(m)]) {
+        dist[static_cast<size_t>(m)] = d + s.length;
+        queue.emplace(d + s.length, m);
+      }
+    }
+  }
+  return dist;
+}
+
+int Network::farthest_end(int from) const {
+  const auto dist = path_lengths_from(from);
+  int best = -1;
+  for (int e : ends())
+    if (e != from && std::isfinite(dist[static_cast<size_t>(e)]) &&
+        (best < 0 || dist[static_cast<size_t>(e)] > dist[static_cast<size_t>(best)] + 1e-12))
+      best = e;
+  return best;
 }
 
 Network Network::keep_component(int keep) const {

@@ -102,6 +102,12 @@ class Network {
   [[nodiscard]] std::vector<int> components(int* count = nullptr) const;
   [[nodiscard]] NetworkCounts counts() const;
 
+  /// @brief Distance along the vessels from node `from` to every node (infinity if unreachable).
+  [[nodiscard]] std::vector<double> path_lengths_from(int from) const;
+  /// @brief The end farthest along the vessels from node `from` (−1 if none): where a wire
+  /// enters to be pushed against the flow towards the inlet, as in the published experiment.
+  [[nodiscard]] int farthest_end(int from) const;
+
   /// @brief A copy keeping only the connected piece that holds node `keep`; ids renumbered.
   [[nodiscard]] Network keep_component(int keep) const;
 
