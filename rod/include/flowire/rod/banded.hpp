@@ -24,6 +24,11 @@ class BandedMatrix {
   void reserve(int max_n, int bandwidth);
   /// @brief Set the size (≤ reserved) and zero the entries.
   void resize(int n);
+  /// @brief Set the size (≤ reserved) leaving the entries unspecified (to be overwritten).
+  void resize_for_overwrite(int n) {
+    n_ = n;
+    data_.resize(static_cast<size_t>(n) * (b_ + 1));
+  }
   void set_zero();
   [[nodiscard]] int size() const { return n_; }
   [[nodiscard]] int bandwidth() const { return b_; }
