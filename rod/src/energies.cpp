@@ -75,22 +75,24 @@ void finish_local(Local& L, bool need_dkb) {
   }
 }
 
-/// Hessian of s = v·(κb) w.r.t. (te, tf) for a fixed vector v.
-Mat6 hessian_v_dot_kb(const Local& L, const Vec3& v) {
+/// Add the Hessian of s = v·(κb) w.r.t. (te, tf), for a fixed vector v, to the top-left
+/// 6×6 block of @p H. With N = v·(te × tf), χ = 1 + te·tf, gN = ∇N, gc = ∇χ:
+/// ∇²s = (2/χ)∇²N − (2/χ²)(gN gcᵀ + gc gNᵀ) − (2N/χ²)∇²χ + (4N/χ³) gc gcᵀ
+///     = u gcᵀ + gc uᵀ + (off-diagonal blocks), u = −(2/χ²) gN + (2N/χ³) gc.
+void add_hessian_v_dot_kb(const Local& L, const Vec3& v, Mat8& H) {
   const double c = L.chi;
   const double N = v.dot(L.te.cross(L.tf));
-  Vec6 gN;
-  gN << L.tf.cross(v), v.cross(L.te);
+  const double ic = 1.0 / c, ic2 = ic * ic;
   Vec6 gc;
   gc << L.tf, L.te;
-  Mat6 HN = Mat6::Zero();
-  HN.block<3, 3>(0, 3) = -skew(v);
-  HN.block<3, 3>(3, 0) = skew(v);
-  Mat6 Hc = Mat6::Zero();
-  Hc.block<3, 3>(0, 3).setIdentity();
-  Hc.block<3, 3>(3, 0).setIdentity();
-  return (2.0 / c) * HN - (2.0 / (c * c)) * (gN * gc.transpose() + gc * gN.transpose()) -
-         (2.0 * N / (c * c)) * Hc + (4.0 * N / (c * c * c)) * gc * gc.transpose();
+  Vec6 u;
+  u << -2.0 * ic2 * L.tf.cross(v), -2.0 * ic2 * v.cross(L.te);
+  u += (2.0 * N * ic2 * ic) * gc;
+  H.topLeftCorner<6, 6>().noalias() += u * gc.transpose() + gc * u.transpose();
+  // (2/χ) ∇²N: ∂²N/∂te∂tf = −[v]×; −(2N/χ²) ∇²χ: ∂²χ/∂te∂tf = I.
+  const Mat3 off = -(2.0 * ic) * skew(v) - (2.0 * N * ic2) * Mat3::Identity();
+  H.block<3, 3>(0, 3) += off;
+  H.block<3, 3>(3, 0) += off.transpose();
 }
 
 /// Gradient in y = (te, tf, θe, θf) of the material curvatures:
@@ -114,7 +116,7 @@ void add_curvature_hessians(const Local& L, double w1, double w2, Mat8& H) {
   const Vec3 Dpe = -0.5 * w1 * L.m1e - 0.5 * w2 * L.m2e;
   const Vec3 Df = 0.5 * w1 * L.m2f - 0.5 * w2 * L.m1f;
   const Vec3 Dpf = -0.5 * w1 * L.m1f - 0.5 * w2 * L.m2f;
-  H.topLeftCorner<6, 6>() += hessian_v_dot_kb(L, De + Df);
+  add_hessian_v_dot_kb(L, De + Df, H);
   const Vec3* D[2] = {&De, &Df};
   const Vec3* Dp[2] = {&Dpe, &Dpf};
   const Vec3* T[2] = {&L.te, &L.tf};
@@ -224,21 +226,21 @@ double twist_y(const Local& L, double theta_e, double theta_f, const VertexParam
   if (Hy && gn) *Hy += c * gm * gm.transpose();
   if (Hy && !gn) {
     // m_ref = m⁰ − Ω₁(te⁰, te, tf) − Ω₂(te⁰, tf, tf⁰) at the base point te = te⁰, tf = tf⁰.
+    // With D = 2χ, n = tf × te, gD = te + tf, the Hessian of m_ref is −H_A,
+    // H_A = (2/D) ∇²N₁ − (2/D²)(∇N₁ ∇D₁ᵀ + ∇D₁ ∇N₁ᵀ) − (2/D²)(n gDᵀ + gD nᵀ) on (tf, tf),
+    // ∇N₁ = (n, 0), ∇D₁ = (gD, 2te), ∂²N₁/∂te∂tf = −[te]×; added as c·dm·(−H_A).
+    *Hy += c * gm * gm.transpose();
     const double D = 2.0 * L.chi;
+    const double s = c * dm;
+    const double beta = 2.0 * s / (D * D);
     const Vec3 n = L.tf.cross(L.te);
-    Vec6 gN1;
-    gN1 << n, Vec3::Zero();
-    Vec6 gD1;
-    gD1 << L.te + L.tf, 2.0 * L.te;
-    Mat6 HN1 = Mat6::Zero();
-    HN1.block<3, 3>(0, 3) = -skew(L.te);
-    HN1.block<3, 3>(3, 0) = skew(L.te);
-    Mat6 HA = (2.0 / D) * HN1 - (2.0 / (D * D)) * (gN1 * gD1.transpose() + gD1 * gN1.transpose());
-    const Vec3 gD2 = L.te + L.tf;
-    HA.block<3, 3>(3, 3) -= (2.0 / (D * D)) * (n * gD2.transpose() + gD2 * n.transpose());
-    Mat8 Hm = Mat8::Zero();
-    Hm.topLeftCorner<6, 6>() = -HA;
-    *Hy += c * (gm * gm.transpose() + dm * Hm);
+    const Vec3 gD = L.te + L.tf;
+    const Mat3 sym_n_gD = beta * (n * gD.transpose() + gD * n.transpose());
+    const Mat3 cross = (2.0 * beta) * n * L.te.transpose() + (2.0 * s / D) * skew(L.te);
+    Hy->block<3, 3>(0, 0) += sym_n_gD;
+    Hy->block<3, 3>(3, 3) += sym_n_gD;
+    Hy->block<3, 3>(0, 3) += cross;
+    Hy->block<3, 3>(3, 0) += cross.transpose();
   }
   return 0.5 * c * dm * dm;
 }
