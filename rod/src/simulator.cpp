@@ -44,6 +44,9 @@ const char* to_string(Integrator integrator) {
 struct RodSimulator::Work {
   int max_dof = 0;
   Eigen::VectorXd q, grad, rhs, dq, mass, damp, fext, fext_bk, q0, qhat, grad_bk;
+  Eigen::VectorXd fcons, fcons_bk;  // conservative part of fext (has a potential)
+  double ext_energy = 0.0;          // potential energy of the conservative external forces
+  double elastic_inertial = 0.0;    // last assembly's potential without ext_energy
   BandedMatrix H;
   BandedLDLT ldlt;
   Eigen::SparseMatrix<double> sparse;
@@ -77,7 +80,7 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   Work& w = *work_;
   w.max_dof = max_dof;
   for (Eigen::VectorXd* v : {&w.q, &w.grad, &w.rhs, &w.dq, &w.mass, &w.damp, &w.fext, &w.fext_bk,
-                             &w.q0, &w.qhat, &w.grad_bk})
+                             &w.q0, &w.qhat, &w.grad_bk, &w.fcons, &w.fcons_bk})
     v->setZero(max_dof);
   w.H.reserve(max_dof, kBandwidth);
   w.ldlt.reserve(max_dof, kBandwidth);
@@ -357,6 +360,8 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   const int nv = s.vertex_count();
   const int nd = dof_count();
   w.fext.head(nd).setZero();
+  w.fcons.head(nd).setZero();
+  w.ext_energy = 0.0;
   w.has_ext_k = false;
   w.moment_k.setZero();
   if (gravity_.squaredNorm() > 0.0)
@@ -415,7 +420,9 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
       w.ext_spin_k[j] =
           mode == Mode::Dynamic ? -w.acc.twist_torque_spin_derivatives()[j] / h : 0.0;
     }
+    w.ext_energy = w.acc.energy();
     for (int k = 0; k < nv; ++k) {
+      w.fcons.segment<3>(4 * k) = w.acc.conservative_forces()[k];
       w.fext.segment<3>(4 * k) += w.acc.forces()[k];
       w.ext_k[k] = -sym(w.acc.position_jacobians()[k]);
       if (mode == Mode::Dynamic) w.ext_k[k] -= sym(w.acc.velocity_jacobians()[k]) / h;
@@ -423,27 +430,46 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   }
 }
 
-double RodSimulator::assemble(Mode mode, double h, double load_scale, bool need_matrix,
-                              bool psd) {
+double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need, bool psd,
+                              bool reuse_loads) {
   Work& w = *work_;
   const RodState& s = state_;
   const int nv = s.vertex_count();
   const int nd = dof_count();
+  const bool need_grad = need != Need::Value;
+  const bool need_matrix = need == Need::Matrix;
   auto g = w.grad.head(nd);
-  g.setZero();
+  if (need_grad) g.setZero();
   if (need_matrix) w.H.resize(nd);
   double energy = 0.0;
-  // Stretching.
+  // Stretching: E = ½ ks ℓ̄ (ℓ/ℓ̄ − 1)², one length and tangent per edge.
+  const double lbar = model_.h;
   for (int j = 0; j < nv - 1; ++j) {
     const double ks = model_.stretch_stiffness[j];
-    energy += stretch_energy(s.x[j], s.x[j + 1], ks, model_.h);
-    const Vec6 ge = stretch_gradient(s.x[j], s.x[j + 1], ks, model_.h);
-    g.segment<3>(4 * j) += ge.head<3>();
-    g.segment<3>(4 * j + 4) += ge.tail<3>();
+    const Vec3 e = s.x[j + 1] - s.x[j];
+    const double l = e.norm();
+    const double strain = l / lbar - 1.0;
+    energy += 0.5 * ks * lbar * strain * strain;
+    if (!need_grad) continue;
+    const Vec3 t = e / l;
+    const Vec3 ge = ks * strain * t;
+    g.segment<3>(4 * j) -= ge;
+    g.segment<3>(4 * j + 4) += ge;
     if (need_matrix) {
-      const Mat6 he = stretch_hessian(s.x[j], s.x[j + 1], ks, model_.h, psd);
-      const int idx[6] = {4 * j, 4 * j + 1, 4 * j + 2, 4 * j + 4, 4 * j + 5, 4 * j + 6};
-      w.H.add_block(he, idx, 6);
+      // Same matrix as stretch_hessian(): (ks/ℓ̄) t tᵀ + ks (1/ℓ̄ − 1/ℓ)(I − t tᵀ).
+      double transverse = ks * (1.0 / lbar - 1.0 / l);
+      if (psd) transverse = std::max(transverse, 0.0);
+      const Mat3 tt = t * t.transpose();
+      const Mat3 he = (ks / lbar - transverse) * tt + transverse * Mat3::Identity();
+      // Blocks (x_j, x_j) = (x_{j+1}, x_{j+1}) = he, (x_{j+1}, x_j) = −he; lower band only.
+      const int r0 = 4 * j, r1 = 4 * j + 4;
+      for (int a = 0; a < 3; ++a) {
+        for (int c = 0; c <= a; ++c) {
+          w.H.lower(r0 + a, r0 + c) += he(a, c);
+          w.H.lower(r1 + a, r1 + c) += he(a, c);
+        }
+        for (int c = 0; c < 3; ++c) w.H.lower(r1 + a, r0 + c) -= he(a, c);
+      }
     }
   }
   // Bending and twisting: per-edge geometry once, then one stencil per interior vertex.
@@ -456,20 +482,20 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, bool need_
   for (int k = 1; k < nv - 1; ++k) {
     vertex_params(k, p);
     energy += bend_twist(w.edges[k - 1], w.edges[k], s.theta[k - 1], s.theta[k], s.ref_twist[k], p,
-                         &gs, need_matrix ? &hs : nullptr, psd);
-    g.segment<11>(4 * (k - 1)) += gs;
+                         need_grad ? &gs : nullptr, need_matrix ? &hs : nullptr, psd);
+    if (need_grad) g.segment<11>(4 * (k - 1)) += gs;
     if (need_matrix) w.H.add_block(hs, 4 * (k - 1));
   }
-  evaluate_loads(mode, h, load_scale);
-  g -= w.fext.head(nd);
+  if (!reuse_loads) evaluate_loads(mode, h, load_scale);
+  if (need_grad) g -= w.fext.head(nd);
   if (mode == Mode::Dynamic) {
     // Inertia and damping: ½|q − q̂|²_M / h² + ½|q − q₀|²_C / h.
     const double ih2 = 1.0 / (h * h), ih = 1.0 / h;
     for (int d = 0; d < nd; ++d) {
       const double a = w.q(d) - w.qhat(d);
       const double b = w.q(d) - w.q0(d);
-      g(d) += w.mass(d) * a * ih2 + w.damp(d) * b * ih;
       energy += 0.5 * (w.mass(d) * a * a * ih2 + w.damp(d) * b * b * ih);
+      if (need_grad) g(d) += w.mass(d) * a * ih2 + w.damp(d) * b * ih;
       if (need_matrix) w.H.lower(d, d) += w.mass(d) * ih2 + w.damp(d) * ih;
     }
   }
@@ -487,7 +513,8 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, bool need_
       w.H.add_block(b, idx, 6);
     }
   }
-  return energy;
+  // External forces that derive from a potential enter the merit through that potential.
+  return energy + w.ext_energy;
 }
 
 double RodSimulator::force_scale(double load_scale) const {
@@ -532,7 +559,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
   };
 
   gather(w.q);
-  double phi = assemble(mode, h, load_scale, true);
+  double phi = assemble(mode, h, load_scale, Need::Matrix);
   bool matrix_current = true;  // trial points are evaluated without the matrix
   if (!std::isfinite(phi) || !finite(w.grad.head(nd))) {
     rep.status = SolveStatus::NonFinite;
@@ -547,7 +574,8 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     }
     rep.newton_iterations = it + 1;
     if (!matrix_current) {
-      phi = assemble(mode, h, load_scale, true);
+      // Same configuration as the accepted trial: its loads and external forces are kept.
+      phi = assemble(mode, h, load_scale, Need::Matrix, false, /*reuse_loads=*/true);
       matrix_current = true;
     }
     // Linear solve on the free unknowns: the exact Hessian first; if it is indefinite
@@ -560,7 +588,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     bool ok = false;
     for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
       if (attempt == 1) {
-        assemble(mode, h, load_scale, true, /*psd=*/true);
+        assemble(mode, h, load_scale, Need::Matrix, /*psd=*/true, /*reuse_loads=*/true);
         ++rep.regularizations;
       }
       for (int d = first_fixed; d < nd; ++d) w.H.set_identity_row(d);
@@ -599,12 +627,14 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     }
     auto dq = w.dq.head(nd);
     const double slope = w.grad.head(nd).dot(dq);
-    // Backtracking line search on φ − W (W: trapezoidal work of the loads along the ray).
+    // Backtracking line search on φ + E_ext − W: φ the incremental potential, E_ext the
+    // potential of conservative external forces (penalty contact), W the trapezoidal work
+    // of the remaining loads (dead loads, friction, drag) along the ray.
     w.xb = s.x;
     w.thetab = s.theta;
     w.frameb = s.frame;
     w.twistb = s.ref_twist;
-    w.fext_bk.head(nd) = w.fext.head(nd);
+    w.fext_bk.head(nd) = w.fext.head(nd) - w.fcons.head(nd);
     w.grad_bk.head(nd) = w.grad.head(nd);
     const Eigen::VectorXd& qb = w.q;  // unchanged until accepted
     double alpha = 1.0;
@@ -636,13 +666,20 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       w.rhs.head(nd) = qb.head(nd) + alpha * dq;  // trial unknowns
       for (int k = 0; k < first_clamped_; ++k) w.rhs.segment<3>(4 * k) = s.x[k];
       w.q.head(nd).swap(w.rhs.head(nd));
-      const double phi_t = assemble(mode, h, load_scale, false);
+      // The full step is usually accepted: evaluate its gradient with the value. Shorter
+      // trials are evaluated for the merit only; the gradient follows on acceptance.
+      const bool with_gradient = cut == 0;
+      const double phi_t =
+          assemble(mode, h, load_scale, with_gradient ? Need::Gradient : Need::Value);
       matrix_current = false;
-      const double work =
-          0.5 * (w.fext_bk.head(nd) + w.fext.head(nd)).dot(w.q.head(nd) - w.rhs.head(nd));
+      const double work = 0.5 * (w.fext_bk.head(nd) + w.fext.head(nd) - w.fcons.head(nd))
+                                    .dot(w.q.head(nd) - w.rhs.head(nd));
       const double merit0 = phi, merit_t = phi_t - work;
-      const bool good = std::isfinite(phi_t) && finite(w.grad.head(nd)) &&
-                        merit_t <= merit0 + 1e-4 * alpha * slope + 1e-14 * std::abs(merit0);
+      bool good = std::isfinite(phi_t) &&
+                  merit_t <= merit0 + 1e-4 * alpha * slope + 1e-14 * std::abs(merit0);
+      if (good && !with_gradient)
+        assemble(mode, h, load_scale, Need::Gradient, false, /*reuse_loads=*/true);
+      good = good && finite(w.grad.head(nd));
       if (good) {
         accepted = true;
         phi = phi_t;
@@ -660,7 +697,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       s.frame = w.frameb;
       s.ref_twist = w.twistb;
       gather(w.q);
-      phi = assemble(mode, h, load_scale, true);
+      phi = assemble(mode, h, load_scale, Need::Matrix);
       matrix_current = true;
       rep.residual = residual_norm();
       // No decrease left along a descent direction: at the round-off level of the
@@ -951,7 +988,7 @@ int RodSimulator::static_hessian_negative_eigenvalues() {
   Work& w = *work_;
   const int nd = dof_count();
   gather(w.q);
-  assemble(Mode::Static, 1.0, 1.0, true);
+  assemble(Mode::Static, 1.0, 1.0, Need::Matrix);
   for (int d = 4 * first_clamped_; d < nd; ++d) w.H.set_identity_row(d);
   if (tip_clamped_)
     for (int d = 0; d < 7; ++d) w.H.set_identity_row(d);

@@ -12,6 +12,11 @@
 /// and stiff contacts then exhaust the iteration budget. Start from a consistent state
 /// (no deep initial penetration): a large initial overlap is a large impulsive load.
 ///
+/// Forces that derive from a potential (penalty contact) should be added with
+/// `add_conservative_force` and their energy with `add_energy`: the Newton line search then
+/// uses the exact incremental potential for them and the trapezoidal work along the search
+/// ray only for the rest (friction, drag), which keeps stiff contacts from stalling it.
+///
 /// rod/ knows nothing about vessels or blood: implementations live in coupling/.
 ///
 /// Example — a floor z ≥ 0 as a stiff penalty:
@@ -20,7 +25,11 @@
 ///   void evaluate(const RodView& rod, ForceAccumulator& out) override {
 ///     for (int i = 0; i < rod.vertex_count(); ++i) {
 ///       const double d = rod.position(i).z();
-///       if (d < 0) { out.add_force(i, {0, 0, -k * d}); out.add_position_jacobian(i, -k * e_z e_zᵀ); }
+///       if (d < 0) {
+///         out.add_conservative_force(i, {0, 0, -k * d});
+///         out.add_energy(0.5 * k * d * d);
+///         out.add_position_jacobian(i, -k * e_z e_zᵀ);
+///       }
 ///     }
 ///   }
 /// };
@@ -53,7 +62,20 @@ struct RodView {
 /// @brief Where forces and Jacobians are accumulated (sized by the rod; no allocation).
 class ForceAccumulator {
  public:
+  /// @brief Add a force that is not (or not declared as) the gradient of an energy
+  /// (friction, drag, follower loads). The line search accounts for it by the trapezoidal
+  /// work along the search ray.
   void add_force(int vertex, const Eigen::Vector3d& f) { force_[vertex] += f; }
+  /// @brief Add a conservative force f = −∂E/∂x_i whose potential E is reported through
+  /// `add_energy` (e.g. a penalty contact). The line search then measures it by E exactly
+  /// instead of by the trapezoidal work, which is what keeps stiff penalties robust.
+  /// Forces added here without their energy make the line-search merit wrong.
+  void add_conservative_force(int vertex, const Eigen::Vector3d& f) {
+    force_[vertex] += f;
+    conservative_[vertex] += f;
+  }
+  /// @brief Add potential energy [J] of the conservative forces (see add_conservative_force).
+  void add_energy(double e) { energy_ += e; }
   /// @brief Add ∂f_i/∂x_i (e.g. −k n nᵀ for a penalty contact of stiffness k).
   void add_position_jacobian(int vertex, const Eigen::Matrix3d& dfdx) { dfdx_[vertex] += dfdx; }
   /// @brief Add ∂f_i/∂v_i (e.g. −c·I for viscous drag).
@@ -73,6 +95,7 @@ class ForceAccumulator {
     dfdv_.reserve(n);
     torque_.reserve(n);
     dtorque_.reserve(n);
+    conservative_.reserve(n);
   }
   void reset(int n) {
     force_.assign(n, Eigen::Vector3d::Zero());
@@ -80,8 +103,15 @@ class ForceAccumulator {
     dfdv_.assign(n, Eigen::Matrix3d::Zero());
     torque_.assign(n > 0 ? n - 1 : 0, 0.0);
     dtorque_.assign(n > 0 ? n - 1 : 0, 0.0);
+    conservative_.assign(n, Eigen::Vector3d::Zero());
+    energy_ = 0.0;
   }
+  /// @brief All forces per vertex (conservative ones included).
   [[nodiscard]] const std::vector<Eigen::Vector3d>& forces() const { return force_; }
+  /// @brief The conservative part of forces() (added by add_conservative_force).
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& conservative_forces() const { return conservative_; }
+  /// @brief Potential energy of the conservative forces [J].
+  [[nodiscard]] double energy() const { return energy_; }
   [[nodiscard]] const std::vector<Eigen::Matrix3d>& position_jacobians() const { return dfdx_; }
   [[nodiscard]] const std::vector<Eigen::Matrix3d>& velocity_jacobians() const { return dfdv_; }
   [[nodiscard]] const std::vector<double>& twist_torques() const { return torque_; }
@@ -93,6 +123,8 @@ class ForceAccumulator {
   std::vector<Eigen::Matrix3d> dfdv_;
   std::vector<double> torque_;
   std::vector<double> dtorque_;
+  std::vector<Eigen::Vector3d> conservative_;
+  double energy_ = 0.0;
 };
 
 /// @brief A source of external forces on the rod's vertices.

@@ -17,8 +17,10 @@
 /// - static: \f$ \nabla E(q) = f(q) \f$ (equilibrium), load steps optional.
 ///
 /// Each solve is Newton's method with a backtracking line search on the incremental
-/// potential (external, non-conservative forces enter through the trapezoidal work along
-/// the search ray). The matrix is the exact Hessian; where it is indefinite (strong bends
+/// potential plus the potential energy external forces report (`add_energy`, e.g. penalty
+/// contact); the other loads (dead loads, friction, drag) enter through the trapezoidal
+/// work along the search ray. The full step is evaluated with its gradient; shorter trials
+/// for the merit only. Loads and external forces are evaluated once per configuration. The matrix is the exact Hessian; where it is indefinite (strong bends
 /// far from rest, compressed edges) that iteration uses the Gauss–Newton matrix of the
 /// same residual, which is positive semi-definite. Position updates follow the rotation of
 /// each edge (`curvilinear_update`) so stiff stretching does not throttle large rotations.
@@ -236,7 +238,14 @@ class RodSimulator {
                            const std::vector<EdgeFrame>& frame_from,
                            const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
                            std::vector<double>& twist_to) const;
-  double assemble(Mode mode, double h, double load_scale, bool need_matrix, bool psd = false);
+  /// What an assembly computes: the incremental potential only (line-search trials), its
+  /// gradient too, or gradient and Newton matrix.
+  enum class Need { Value, Gradient, Matrix };
+  /// Incremental potential (elastic + inertial + external potential energy) at the
+  /// current state; @p reuse_loads keeps the loads and external forces of the previous
+  /// assembly (same configuration), so externals are evaluated once per configuration.
+  double assemble(Mode mode, double h, double load_scale, Need need, bool psd = false,
+                  bool reuse_loads = false);
   void evaluate_loads(Mode mode, double h, double load_scale);
   void compute_base_reaction();
   [[nodiscard]] double force_scale(double load_scale) const;
