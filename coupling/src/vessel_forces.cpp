@@ -65,8 +65,11 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     const auto pen = wall_penalty(d, n_wall, H_cap, a, contact_.stiffness);
     if (pen.penetration <= 0.0) continue;
     ++stats_.contacts;
+    // The penalty has a potential (k/2 δ₊²): reported, the rod's line search measures the
+    // contact exactly instead of by the work along its search ray.
     Vec3 f = -pen.gradient;
-    out.add_force(i, f);
+    out.add_conservative_force(i, f);
+    out.add_energy(pen.energy);
     out.add_position_jacobian(i, -pen.hessian);
     const double normal_force = contact_.stiffness * pen.penetration;
     const double mu = (tip_s - rod.arc_length[static_cast<size_t>(i)] <= contact_.tip_length) ? contact_.tip_friction

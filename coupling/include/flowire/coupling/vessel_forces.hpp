@@ -4,6 +4,8 @@
 /// locate every free vertex in a segment (window search seeded by the same vertex's
 /// previous segment, fallback AABB tree), wall contact (penalty, implicit), Coulomb
 /// friction (smooth stick/slip, implicit in velocity), blood drag from the local velocity.
+/// The penalty is reported as a conservative force with its energy k/2·δ₊², so the rod's
+/// line search uses the exact contact potential; friction and drag are non-conservative.
 ///
 /// Vertices are indexed from the distal tip (rod convention), so a vertex keeps its index,
 /// and its lookup hint, while the wire is fed in at the base.
