@@ -1,0 +1,32 @@
+# cmake -DBINARY_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -P install_and_consume.cmake
+# Installs the build to a scratch prefix, then configures, builds and runs an outside project
+# that uses find_package(flowire).
+file(REMOVE_RECURSE "${WORK_DIR}")
+execute_process(COMMAND "${CMAKE_COMMAND}" --install "${BINARY_DIR}" --prefix "${WORK_DIR}/prefix"
+                RESULT_VARIABLE rc OUTPUT_QUIET)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "cmake --install failed (${rc})")
+endif()
+foreach(f bin/flowire include/flowire/vessels/network.hpp lib/cmake/flowire/flowireConfig.cmake)
+  if(NOT EXISTS "${WORK_DIR}/prefix/${f}")
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+execute_process(COMMAND "${CMAKE_COMMAND}" -S "${SOURCE_DIR}/outside" -B "${WORK_DIR}/consumer" -G Ninja
+                "-DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "find_package(flowire) from an outside project failed:\n${out}\n${err}")
+endif()
+execute_process(COMMAND "${CMAKE_COMMAND}" --build "${WORK_DIR}/consumer" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "building the outside project failed:\n${out}\n${err}")
+endif()
+execute_process(COMMAND "${WORK_DIR}/consumer/consumer" RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the outside program failed: ${out}")
+endif()
+execute_process(COMMAND "${WORK_DIR}/prefix/bin/flowire" --version RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "flowire")
+  message(FATAL_ERROR "installed flowire --version failed: ${out}")
+endif()
+message(STATUS "installed and consumed: ${out}")
