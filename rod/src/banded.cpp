@@ -99,15 +99,18 @@ bool factorize_band(double* L, int n, int b_runtime, double tiny, double min_piv
     const double inv_d = 1.0 / d;
     const int m = std::min(n - 1, j + b) - j;
     if (B > 0 && m == B) {
-      // Interior column: fixed trip counts.
+      // Interior column: fixed trip counts, fully unrolled.
+#pragma GCC unroll 16
       for (int r = 0; r < B; ++r) {  // w_r = A(j+1+r, j) before scaling
         double* li = L + static_cast<size_t>(j + 1 + r) * stride;
         w[r] = li[B - 1 - r];
         li[B - 1 - r] = w[r] * inv_d;
       }
+#pragma GCC unroll 16
       for (int r = 0; r < B; ++r) {
         double* row = L + static_cast<size_t>(j + 1 + r) * stride + (B - r);  // columns j+1..i
         const double c = w[r] * inv_d;
+#pragma GCC unroll 16
         for (int k = 0; k <= r; ++k) row[k] -= c * w[k];
       }
       continue;
