@@ -14,6 +14,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/coupling/scene.hpp"
+#include "flowire/coupling/tip_forces.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/wire_output.hpp"
 #include "flowire/flow/output.hpp"
@@ -87,6 +88,43 @@ rod::WireSpec wire_spec(const config::Config& c) {
   if (!(w.radius > 0) || !(w.length > 0) || !(w.youngs_modulus > 0) || !(w.density > 0))
     throw_input_error(c.where("wire"), "length, radius, youngs_modulus and density must be positive");
   return w;
+}
+
+/// Obstacles (clot resistance) and steering, if the scene has them.
+std::shared_ptr<TipForces> make_tip_forces(const config::Config& c, const vessels::Network* net) {
+  std::vector<Obstacle> obstacles;
+  for (int i = 0; i < c.count("obstacles"); ++i) {
+    const std::string p = fmt::format("obstacles[{}].", i);
+    for (const char* k : {"center", "radius", "force"})
+      if (!c.has(p + k)) throw_input_error(c.where(p.substr(0, p.size() - 1)), fmt::format("an obstacle needs {}", k));
+    obstacles.push_back({c.vector3(p + "center"), c.number(p + "radius"), c.number(p + "force")});
+  }
+  Steering steer;
+  if (c.has_section("coupling.steering")) {
+    if (!net) throw_input_error(c.where("coupling.steering"), "steering needs a vessels: section");
+    if (!c.has("coupling.steering.branch")) throw_input_error(c.where("coupling.steering"), "steering needs branch");
+    const auto& name = c.string("coupling.steering.branch");
+    const vessels::Branch* target = nullptr;
+    std::string names;
+    for (const auto& b : net->branches()) {
+      if (b.name == name) target = &b;
+      names += (names.empty() ? "" : ", ") + b.name;
+    }
+    if (!target)
+      throw_input_error(c.where("coupling.steering.branch"), fmt::format("no branch '{}' (branches: {})", name, names));
+    // The point `offset` along the branch from its first node.
+    double left = c.number("coupling.steering.offset");
+    vessels::Vec3 p = net->node(target->nodes.front());
+    for (size_t k = 0; k + 1 < target->nodes.size() && left > 0; ++k) {
+      const vessels::Vec3 a = net->node(target->nodes[k]), b = net->node(target->nodes[k + 1]);
+      const double len = (b - a).norm();
+      p = left >= len ? b : vessels::Vec3(a + (left / len) * (b - a));
+      left -= len;
+    }
+    steer = {true, p, c.number("coupling.steering.force"), c.number("coupling.steering.range")};
+  }
+  if (obstacles.empty() && !steer.enabled) return nullptr;
+  return std::make_shared<TipForces>(std::move(obstacles), steer);
 }
 
 void apply_loads(const config::Config& c, rod::RodSimulator& sim) {
@@ -233,6 +271,7 @@ RunResult run_scene(const config::Config& c) {
     std::unique_ptr<rod::RodSimulator> sim;
     std::optional<vessels::SpatialIndex> index;
     std::shared_ptr<VesselForces> forces;
+    std::shared_ptr<TipForces> tip_forces;
     if (has_wire) {
       auto spec = wire_spec(c);
       if (net) {
@@ -293,6 +332,8 @@ RunResult run_scene(const config::Config& c) {
         forces = std::make_shared<VesselForces>(*index, spec.radius, cp, dp, vf);
         sim->add_external(forces);
       }
+      tip_forces = make_tip_forces(c, net ? &*net : nullptr);
+      if (tip_forces) sim->add_external(tip_forces);
     }
     timings["setup"] = seconds_since(t0);
 
@@ -418,6 +459,9 @@ RunResult run_scene(const config::Config& c) {
                    {"base_torque", {sim->base_torque().x(), sim->base_torque().y(), sim->base_torque().z()}},
                    {"length_drift", sim->length_drift()},
                    {"unconverged_steps", failures}};
+      if (tip_forces)
+        s["tip_forces"] = {{"obstacle_steps", tip_forces->obstacle_steps()},
+                           {"steering_steps", tip_forces->steering_steps()}};
       if (forces) {
         const auto& st = forces->stats();
         s["lookup"] = {{"window_hits", index->stats().window_hits}, {"fallbacks", index->stats().fallbacks}};

@@ -132,11 +132,21 @@ config::Schema make_schema() {
       "penalty stiffness per vertex (N/m): a vertex pressed with force F sinks F/k into the wall");
   add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
 
+  add("obstacles", Type::List, "", D::None, "regions that resist the tip (a clot, a tight lesion)");
+  add("obstacles[].center", Type::Vector3, "", D::Length, "centre of the spherical region");
+  add("obstacles[].radius", Type::Number, "", D::Length, "radius of the region");
+  add("obstacles[].force", Type::Number, "", D::Force, "resistance opposing the tip's advance while it is inside");
+
   add("coupling", Type::Section, "", D::None, "how blood acts on the wire");
   add("coupling.drag", Type::Enum, "slender_body", D::None,
       "slender_body | velocity_offset (the published form) | none", {"slender_body", "velocity_offset", "none"});
   add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force");
   add("coupling.flow_every", Type::Integer, "1", D::None, "evaluate the flow every this many rod steps");
+  add("coupling.steering", Type::Section, "", D::None, "a lateral force on the tip towards a chosen branch");
+  add("coupling.steering.branch", Type::String, "", D::None, "name of the branch to steer into");
+  add("coupling.steering.force", Type::Number, "5 mN", D::Force, "steering force");
+  add("coupling.steering.range", Type::Number, "2 cm", D::Length, "active while the tip is this close to the target");
+  add("coupling.steering.offset", Type::Number, "1 cm", D::Length, "target: this far along the branch from its start");
 
   add("solve", Type::Section, "{}", D::None, "time stepping (also drives flow-only scenes: one flow frame per step)");
   add("solve.mode", Type::Enum, "dynamic", D::None, "static: equilibrium; dynamic: time stepping", {"static", "dynamic"});

@@ -139,3 +139,47 @@ output: {vtk: false}
   ASSERT_GT(n, 10);
   EXPECT_GT(dx / n, 0.0) << "mean x(on) - x(off) = " << dx / n;
 }
+
+TEST(CoSim, SteeringChoosesTheBranch) {
+  const auto dir = flowire::testing::scratch_dir("cosim-steer");
+  const std::string scene = R"(
+vessels: {generator: {type: y_bifurcation, parent_radius: 4 mm, parent_length: 60 mm, child_length: 50 mm}, max_segment_length: 4 mm}
+wire: {length: 0.3, radius: 0.3 mm, youngs_modulus: 20 GPa, segment_length: 2 mm, entry: 0,
+       base: {position: [0.002, 0, 0], direction: [1, 0, 0]}}
+insertion: {speed: 2 cm/s, initial_length: 1 cm}
+contact: {friction: 0.1}
+coupling: {steering: {branch: daughter_1, force: 10 mN}}
+solve: {dt: 5 ms, duration: 4 s}
+output: {csv: false, vtk: false}
+)";
+  for (const char* branch : {"daughter_1", "daughter_2"}) {
+    const std::vector<std::string> sets{"output.dir=" + (dir / branch).string(),
+                                        std::string("coupling.steering.branch=") + branch};
+    const auto s = run_scene(config::load_config_text(scene, "scene.yaml", scene_schema(), sets)).summary;
+    ASSERT_EQ(s["status"], "ok");
+    const double y = s["wire"]["tip"][1].get<double>();
+    // daughter_1 leaves towards +y, daughter_2 towards −y; the tip is well inside it.
+    EXPECT_GT(std::string(branch) == "daughter_1" ? y : -y, 0.01) << branch;
+    EXPECT_GT(s["tip_forces"]["steering_steps"].get<long>(), 0);
+  }
+}
+
+TEST(CoSim, AnObstacleHoldsTheTipBackWithItsForce) {
+  // Quasi-static push into a resisting region, no friction: the clamp supplies the obstacle's
+  // resistance along the insertion direction.
+  const auto dir = flowire::testing::scratch_dir("cosim-obstacle");
+  const auto s = run_text(R"(
+vessels: {generator: {type: straight_tube, length: 0.2, radius: 3 mm}, max_segment_length: 5 mm}
+wire: {length: 0.3, radius: 0.3 mm, youngs_modulus: 20 GPa, segment_length: 2 mm}
+obstacles: [{center: [0.105, 0, 0], radius: 10 mm, force: 20 mN}]
+insertion: {speed: 2 mm/s, initial_length: 9 cm}
+contact: {friction: 0}
+solve: {dt: 10 ms, duration: 1 s}
+output: {csv: false, vtk: false}
+)",
+                          dir.string());
+  ASSERT_EQ(s["status"], "ok");
+  EXPECT_GT(s["tip_forces"]["obstacle_steps"].get<long>(), 50);
+  // The wire enters at x = 0.2 going −x; the clamp pushes it towards −x with the obstacle's force.
+  EXPECT_NEAR(s["wire"]["base_force"][0].get<double>(), -0.02, 0.002);
+}
