@@ -1,0 +1,414 @@
+// Network vs FEM: sampling along the centerlines, outlet flows, branch drops, and the
+// output files (CSV, Markdown, VTU, PNG).
+#include "flowire/fem/compare.hpp"
+
+#include <fmt/format.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <queue>
+#include <sstream>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
+#include "flowire/fem/element.hpp"
+#include "flowire/fem/sample.hpp"
+#include "flowire/flow/solver.hpp"
+
+namespace flowire::fem {
+namespace {
+
+int mpi_rank() {
+  int up = 0, done = 0, rank = 0;
+  MPI_Initialized(&up);
+  MPI_Finalized(&done);
+  if (up && !done) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank;
+}
+
+double outlet_pressure_of(const BoundaryValues& bv, int node) {
+  for (const auto& [n, p] : bv.outlet_pressures)
+    if (n == node) return p;
+  return bv.outlet_pressure;
+}
+
+int inlet_of(const Network& net, const BoundaryValues& bv) {
+  return bv.inlet_node >= 0 ? bv.inlet_node : net.widest_end();
+}
+
+/// Distance along the network from `source` to every node (Dijkstra).
+std::vector<double> path_distances(const Network& net, int source) {
+  std::vector<double> d(static_cast<size_t>(net.num_nodes()), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> pq;
+  d[static_cast<size_t>(source)] = 0.0;
+  pq.push({0.0, source});
+  while (!pq.empty()) {
+    const auto [du, u] = pq.top();
+    pq.pop();
+    if (du > d[static_cast<size_t>(u)]) continue;
+    const auto [b, e] = net.node_segments(u);
+    for (const int* s = b; s != e; ++s) {
+      const auto& seg = net.segment(*s);
+      const int v = seg.node_from == u ? seg.node_to : seg.node_from;
+      if (du + seg.length < d[static_cast<size_t>(v)]) {
+        d[static_cast<size_t>(v)] = du + seg.length;
+        pq.push({d[static_cast<size_t>(v)], v});
+      }
+    }
+  }
+  return d;
+}
+
+/// FEM pressure over a disk of 0.95 r normal to `axis` at `c`: (mean, centre, found).
+std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r) {
+  const Vec3 t = axis.normalized();
+  const Vec3 a = (std::abs(t.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(t).normalized();
+  const Vec3 b = t.cross(a);
+  // Equal-area rings (midpoints in ρ²) times 12 angles, plus the centre.
+  constexpr int kRings = 4, kAngles = 12;
+  const double rmax = 0.95 * r;
+  double sum = 0.0, weight = 0.0, centre = std::numeric_limits<double>::quiet_NaN();
+  const double tol = 1e-6;
+  if (auto v = fs.at(c, tol)) centre = v->pressure;
+  for (int i = 0; i < kRings; ++i) {
+    const double rho = rmax * std::sqrt((i + 0.5) / kRings);
+    for (int k = 0; k < kAngles; ++k) {
+      const double phi = 2.0 * std::numbers::pi * (k + 0.5 * (i % 2)) / kAngles;
+      const Vec3 x = c + rho * (std::cos(phi) * a + std::sin(phi) * b);
+      if (auto v = fs.at(x, tol)) {
+        sum += v->pressure;
+        weight += 1.0;
+      }
+    }
+  }
+  if (weight == 0.0 && std::isnan(centre)) return {0.0, 0.0, false};
+  const double mean = weight > 0.0 ? sum / weight : centre;
+  return {mean, std::isnan(centre) ? mean : centre, true};
+}
+
+double pressure_at_node(const TetMesh& mesh, const StokesSolution& sol, size_t n, const std::vector<std::array<int, 2>>& ev) {
+  const int v = mesh.vertex_index[n];
+  if (v >= 0) return sol.pressure[static_cast<size_t>(v)];
+  return 0.5 * (sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(ev[n][0])])] +
+                sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(ev[n][1])])]);
+}
+
+std::string branch_label(const Network& net, int b) {
+  const auto& n = net.branch(b).name;
+  return n.empty() ? fmt::format("branch_{}", b) : n;
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+void write_vtu(const std::filesystem::path& path, const TetMesh& mesh, const StokesSolution& sol) {
+  // Edge nodes take the mean pressure of their two vertices (the P1 field).
+  std::vector<std::array<int, 2>> ev(mesh.nodes.size(), {-1, -1});
+  for (const auto& t : mesh.tets)
+    for (size_t e = 0; e < 6; ++e) ev[static_cast<size_t>(t[4 + e])] = {t[static_cast<size_t>(kTetEdges[e][0])], t[static_cast<size_t>(kTetEdges[e][1])]};
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp);
+    if (!f) throw_input_error(path.string(), "cannot write");
+    f.precision(10);
+    f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.tets.size()
+      << "\">\n<PointData Scalars=\"pressure\" Vectors=\"velocity\">\n"
+      << "<DataArray type=\"Float64\" Name=\"pressure\" format=\"ascii\">\n";
+    for (size_t n = 0; n < mesh.nodes.size(); ++n) f << pressure_at_node(mesh, sol, n, ev) << '\n';
+    f << "</DataArray>\n<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (const Vec3& u : sol.velocity) f << u.x() << ' ' << u.y() << ' ' << u.z() << '\n';
+    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (const Vec3& x : mesh.nodes) f << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+    f << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+    // VTK_QUADRATIC_TETRA edge order: (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — the same as ours.
+    for (const auto& t : mesh.tets) {
+      for (int k = 0; k < 10; ++k) f << t[static_cast<size_t>(k)] << (k == 9 ? '\n' : ' ');
+    }
+    f << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+    for (size_t e = 0; e < mesh.tets.size(); ++e) f << 10 * (e + 1) << '\n';
+    f << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (size_t e = 0; e < mesh.tets.size(); ++e) f << "24\n";
+    f << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+    if (!f) throw_input_error(path.string(), "write failed");
+  });
+}
+
+std::string plot_script() {
+  if (const char* env = std::getenv("FLOWIRE_FEM_PLOT_SCRIPT")) return env;
+  for (const char* dir : {FLOWIRE_FEM_SCRIPT_DIR, FLOWIRE_FEM_INSTALLED_SCRIPT_DIR}) {
+    const auto p = std::filesystem::path(dir) / "plot_fem_compare.py";
+    if (std::filesystem::exists(p)) return p.string();
+  }
+  return {};
+}
+
+void write_png(const std::filesystem::path& png, const std::filesystem::path& csv) {
+  const std::string script = plot_script();
+  if (script.empty()) {
+    warn("fem: plot_fem_compare.py not found; fem_compare.png not written");
+    return;
+  }
+  try {
+    write_atomically(png, [&](const std::filesystem::path& tmp) {
+      // The system interpreter has Debian's python3-matplotlib; a python3 earlier in PATH
+      // (pyenv, venv) may not. FLOWIRE_PYTHON overrides.
+      std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+      if (const char* env = std::getenv("FLOWIRE_PYTHON")) python = env;
+      const std::string cmd =
+          fmt::format("'{}' '{}' '{}' '{}' > /dev/null 2>&1", python, script, csv.string(), tmp.string());
+      if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(tmp))
+        throw_input_error(png.string(), "the plot script failed (python3 with matplotlib needed)");
+    });
+  } catch (const Error& e) {
+    warn(fmt::format("fem: fem_compare.png not written: {}", e.what()));
+  }
+}
+
+}  // namespace
+
+NetworkFlow network_flow(const Network& net, const BoundaryValues& bv) {
+  flow::FlowSpec spec;
+  spec.solver = flow::SolverKind::Sparse;
+  spec.viscosity = bv.viscosity;
+  spec.density = bv.density;
+  const int inlet = inlet_of(net, bv);
+  flow::InletBC in;
+  in.node = inlet;
+  in.type = flow::InletBC::Type::Pressure;
+  in.waveform = flow::Waveform::constant(bv.inlet_pressure);
+  spec.inlets.push_back(in);
+  for (int e : net.ends()) {
+    if (e == inlet) continue;
+    flow::OutletBC out;
+    out.node = e;
+    out.type = flow::OutletBC::Type::Pressure;
+    out.pressure = outlet_pressure_of(bv, e);
+    spec.outlets.push_back(out);
+  }
+  auto solver = flow::make_solver(net, spec);
+  NetworkFlow nf;
+  nf.node_pressure.resize(static_cast<size_t>(net.num_nodes()));
+  nf.segment_flow.resize(static_cast<size_t>(net.num_segments()));
+  solver->solve_at(0.0, nf.node_pressure, nf.segment_flow);
+  return nf;
+}
+
+std::vector<double> group_pressures(const TetMesh& mesh, const BoundaryValues& bv) {
+  std::vector<double> p(mesh.groups.size(), 0.0);
+  for (size_t g = 0; g < mesh.groups.size(); ++g) {
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Inlet) p[g] = bv.inlet_pressure;
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Outlet) p[g] = outlet_pressure_of(bv, mesh.groups[g].node);
+  }
+  return p;
+}
+
+CompareResult compare_fields(const Network& net, const TetMesh& mesh, const StokesSolution& sol,
+                             const NetworkFlow& flow, int inlet_node, int samples_per_branch) {
+  if (samples_per_branch < 2) throw_usage_error("fem.samples_per_branch must be at least 2");
+  if (flow.node_pressure.size() != static_cast<size_t>(net.num_nodes()) ||
+      flow.segment_flow.size() != static_cast<size_t>(net.num_segments()))
+    throw_usage_error("fem: the network flow does not match the network");
+  const int inlet = inlet_node >= 0 ? inlet_node : net.widest_end();
+  CompareResult res;
+  res.tets = mesh.num_tets();
+  res.unknowns = sol.unknowns;
+  const FieldSampler fs(mesh, sol);
+  const std::vector<double> dist = path_distances(net, inlet);
+  double pmin_out = std::numeric_limits<double>::infinity();
+  for (int e : net.ends())
+    if (e != inlet) pmin_out = std::min(pmin_out, flow.node_pressure[static_cast<size_t>(e)]);
+  const double drive = std::abs(flow.node_pressure[static_cast<size_t>(inlet)] - pmin_out);
+  const double pscale = drive > 0.0 ? drive : 1.0;
+  // Junctions: nodes with three or more segments, and their largest radius.
+  std::vector<std::pair<Vec3, double>> junctions;
+  for (int n = 0; n < net.num_nodes(); ++n) {
+    if (net.degree(n) < 3) continue;
+    double r = 0.0;
+    const auto [b, e] = net.node_segments(n);
+    for (const int* s = b; s != e; ++s) r = std::max(r, net.segment(*s).radius);
+    junctions.push_back({net.node(n), r});
+  }
+  for (int b = 0; b < net.num_branches(); ++b) {
+    const auto& br = net.branch(b);
+    if (br.segments.empty()) continue;
+    std::vector<double> s_at(br.nodes.size(), 0.0);
+    for (size_t k = 0; k + 1 < br.nodes.size(); ++k)
+      s_at[k + 1] = s_at[k] + (net.node(br.nodes[k + 1]) - net.node(br.nodes[k])).norm();
+    const double len = s_at.back();
+    auto sample = [&](double s, SamplePoint& sp) {
+      size_t k = 0;
+      while (k + 2 < br.nodes.size() && s > s_at[k + 1]) ++k;
+      const Vec3 a = net.node(br.nodes[k]), c = net.node(br.nodes[k + 1]);
+      const double seg_len = s_at[k + 1] - s_at[k];
+      const double w = seg_len > 0.0 ? std::clamp((s - s_at[k]) / seg_len, 0.0, 1.0) : 0.0;
+      sp.branch = b;
+      sp.s = s;
+      sp.x = a + w * (c - a);
+      const double pa = flow.node_pressure[static_cast<size_t>(br.nodes[k])];
+      const double pc = flow.node_pressure[static_cast<size_t>(br.nodes[k + 1])];
+      sp.pressure_network = pa + w * (pc - pa);
+      const double da = dist[static_cast<size_t>(br.nodes[k])], dc = dist[static_cast<size_t>(br.nodes[k + 1])];
+      sp.path_distance = da + w * (dc - da);
+      const double r = net.segment(br.segments[k]).radius;
+      auto [mean, centre, found] = section_pressure(fs, sp.x, c - a, r);
+      sp.found = found;
+      sp.pressure_fem = mean;
+      sp.pressure_fem_centre = centre;
+      const double diff = mean - sp.pressure_network;
+      sp.rel_diff = std::abs(sp.pressure_network) > 1e-12 * pscale ? diff / std::abs(sp.pressure_network) : 0.0;
+      sp.rel_diff_drop = diff / pscale;
+      for (const auto& [jx, jr] : junctions)
+        if ((sp.x - jx).norm() < 2.0 * jr) sp.near_junction = true;
+    };
+    for (int i = 0; i < samples_per_branch; ++i) {
+      SamplePoint sp;
+      sample(len * i / (samples_per_branch - 1), sp);
+      if (!sp.found) {
+        warn(fmt::format("fem: sample at s = {:.4g} m of {} is outside the mesh", sp.s, branch_label(net, b)));
+        continue;
+      }
+      res.samples.push_back(sp);
+      const double a = std::abs(sp.rel_diff_drop);
+      if (sp.near_junction)
+        res.max_rel_diff_drop_junction = std::max(res.max_rel_diff_drop_junction, a);
+      else
+        res.max_rel_diff_drop_away = std::max(res.max_rel_diff_drop_away, a);
+    }
+    SamplePoint first, last;
+    sample(0.0, first);
+    sample(len, last);
+    res.branches.push_back({b, first.pressure_network - last.pressure_network, first.pressure_fem - last.pressure_fem});
+  }
+  double qn_total = 0.0, qf_total = 0.0;
+  for (int e : net.ends()) {
+    if (e == inlet) continue;
+    const int s = *net.node_segments(e).first;
+    const double qn = net.segment(s).node_to == e ? flow.segment_flow[static_cast<size_t>(s)]
+                                                  : -flow.segment_flow[static_cast<size_t>(s)];
+    const int g = mesh.group_of_node(e);
+    const double qf = g >= 0 ? sol.group_flow[static_cast<size_t>(g)] : 0.0;
+    res.outlets.push_back({e, qn, qf});
+    qn_total += qn;
+    qf_total += qf;
+  }
+  for (const auto& o : res.outlets) {
+    if (qn_total != 0.0 && qf_total != 0.0)
+      res.max_flow_split_error = std::max(res.max_flow_split_error, std::abs(o.flow_fem / qf_total - o.flow_network / qn_total));
+    if (o.flow_network != 0.0) res.max_flow_error = std::max(res.max_flow_error, std::abs(o.flow_fem / o.flow_network - 1.0));
+  }
+  res.mesh_seconds = mesh.mesh_seconds;
+  res.assemble_seconds = sol.assemble_seconds;
+  res.solve_seconds = sol.solve_seconds;
+  return res;
+}
+
+void write_outputs(const std::string& out_dir, const Network& net, const TetMesh& mesh, const StokesSolution& sol,
+                   const CompareResult& res, const FemOptions& opt) {
+  if (mpi_rank() != 0) return;
+  const std::filesystem::path dir(out_dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw_input_error(out_dir, fmt::format("cannot create the output folder: {}", ec.message()));
+  {
+    std::ostringstream o;
+    o.precision(10);
+    o << "branch,s,x,y,z,pressure_network,pressure_fem,rel_diff,pressure_fem_centre,rel_diff_drop,path_distance,"
+         "near_junction\n";
+    for (const auto& sp : res.samples)
+      o << csv_field(branch_label(net, sp.branch)) << ',' << sp.s << ',' << sp.x.x() << ',' << sp.x.y() << ','
+        << sp.x.z() << ',' << sp.pressure_network << ',' << sp.pressure_fem << ',' << sp.rel_diff << ','
+        << sp.pressure_fem_centre << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ','
+        << (sp.near_junction ? 1 : 0) << '\n';
+    write_text_atomically(dir / "fem_compare.csv", o.str());
+  }
+  {
+    std::ostringstream o;
+    o.precision(10);
+    o << "outlet,flow_network,flow_fem,rel_diff\n";
+    for (const auto& q : res.outlets)
+      o << q.node << ',' << q.flow_network << ',' << q.flow_fem << ','
+        << (q.flow_network != 0.0 ? q.flow_fem / q.flow_network - 1.0 : 0.0) << '\n';
+    write_text_atomically(dir / "fem_outlets.csv", o.str());
+  }
+  {
+    std::ostringstream o;
+    o << "# Network model vs 3D finite elements\n\n"
+      << fmt::format("Taylor–Hood P2/P1 {} on {} quadratic tetrahedra ({} unknowns), solver {}.\n\n",
+                     opt.equations == Equations::Stokes ? "Stokes" : "Navier–Stokes", res.tets, res.unknowns,
+                     opt.solver == LinearSolver::Mumps ? "MUMPS" : "fieldsplit Schur")
+      << "Pressures in kPa at points equally spaced along each branch centerline (FEM: cross-section mean). "
+         "Difference: (FEM − network) / network; in brackets, as a fraction of the driving pressure drop. "
+         "`*`: within two radii of a junction.\n\n";
+    for (int b = 0; b < net.num_branches(); ++b) {
+      std::vector<const SamplePoint*> pts;
+      for (const auto& sp : res.samples)
+        if (sp.branch == b) pts.push_back(&sp);
+      if (pts.empty()) continue;
+      o << "## " << branch_label(net, b) << "\n\n| Sampling |";
+      for (size_t i = 0; i < pts.size(); ++i) o << " #" << i + 1 << (pts[i]->near_junction ? "*" : "") << " |";
+      o << "\n|---|";
+      for (size_t i = 0; i < pts.size(); ++i) o << "---|";
+      o << "\n| s (mm) |";
+      for (const auto* p : pts) o << fmt::format(" {:.2f} |", p->s * 1e3);
+      o << "\n| Network |";
+      for (const auto* p : pts) o << fmt::format(" {:.4f} |", p->pressure_network * 1e-3);
+      o << "\n| FEM |";
+      for (const auto* p : pts) o << fmt::format(" {:.4f} |", p->pressure_fem * 1e-3);
+      o << "\n| Difference |";
+      for (const auto* p : pts) o << fmt::format(" {:+.2f}% ({:+.2f}%) |", 100 * p->rel_diff, 100 * p->rel_diff_drop);
+      o << "\n\n";
+    }
+    o << "## Outlet flows\n\n| outlet node | network (mL/s) | FEM (mL/s) | difference |\n|---|---|---|---|\n";
+    for (const auto& q : res.outlets)
+      o << fmt::format("| {} | {:.5g} | {:.5g} | {:+.2f}% |\n", q.node, q.flow_network * 1e6, q.flow_fem * 1e6,
+                       q.flow_network != 0.0 ? 100 * (q.flow_fem / q.flow_network - 1.0) : 0.0);
+    o << "\n## Pressure drop per branch\n\n| branch | network (Pa) | FEM (Pa) | difference |\n|---|---|---|---|\n";
+    for (const auto& d : res.branches)
+      o << fmt::format("| {} | {:.5g} | {:.5g} | {:+.2f}% |\n", branch_label(net, d.branch), d.drop_network, d.drop_fem,
+                       d.drop_network != 0.0 ? 100 * (d.drop_fem / d.drop_network - 1.0) : 0.0);
+    o << fmt::format("\nLargest difference away from junctions: {:.2f}% of the drop; near junctions: {:.2f}%. "
+                     "Largest flow-split difference: {:.3f}%.\n\nTimings: mesh {:.2f} s, assembly {:.2f} s, solve "
+                     "{:.2f} s.\n",
+                     100 * res.max_rel_diff_drop_away, 100 * res.max_rel_diff_drop_junction,
+                     100 * res.max_flow_split_error, res.mesh_seconds, res.assemble_seconds, res.solve_seconds);
+    write_text_atomically(dir / "fem_compare.md", o.str());
+  }
+  if (opt.write_vtu) write_vtu(dir / "fem.vtu", mesh, sol);
+  if (opt.write_png) write_png(dir / "fem_compare.png", dir / "fem_compare.csv");
+}
+
+CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir) {
+  const auto t0 = std::chrono::steady_clock::now();
+  MeshOptions mo;
+  mo.mesh_size = opt.mesh_size;
+  mo.size_factor = opt.size_factor;
+  mo.inlet_node = bv.inlet_node;
+  const TetMesh mesh = build_mesh(net, mo);
+  StokesOptions so;
+  so.viscosity = bv.viscosity;
+  so.density = bv.density;
+  so.equations = opt.equations;
+  so.solver = opt.solver;
+  so.velocity_pc = opt.velocity_pc;
+  const StokesSolution sol = solve_stokes(mesh, group_pressures(mesh, bv), so);
+  const NetworkFlow nf = network_flow(net, bv);
+  CompareResult res = compare_fields(net, mesh, sol, nf, inlet_of(net, bv), opt.samples_per_branch);
+  res.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!out_dir.empty()) write_outputs(out_dir, net, mesh, sol, res, opt);
+  return res;
+}
+
+}  // namespace flowire::fem
