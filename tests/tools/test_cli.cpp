@@ -220,3 +220,27 @@ TEST(Cli, SceneKeyReferenceIsUpToDate) {
   ASSERT_EQ(r.status, 0);
   EXPECT_EQ(doc.str(), r.out) << "regenerate it: flowire help scene > docs/scene-keys.md";
 }
+
+TEST(Cli, CompareTipTracesPrintsTheTableAndPlots) {
+  const auto dir = flowire::testing::scratch_dir("cli-compare");
+  std::ofstream a(dir / "a.csv"), b(dir / "b.csv");
+  a << "time,inserted_length,x,y,z\n";
+  b << "time,inserted_length,x,y,z\n";
+  for (int i = 0; i <= 100; ++i) {
+    const double L = 0.002 * i;
+    a << i << "," << L << "," << L << ",0,0\n";
+    b << i << "," << L << "," << L << ",0.003,0\n";  // 3 mm apart everywhere
+  }
+  a.close();
+  b.close();
+  const auto r = run("compare " + (dir / "a.csv").string() + " " + (dir / "b.csv").string() + " --out " +
+                     (dir / "t.csv").string() + " --plot " + (dir / "t.png").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("3.000"), std::string::npos) << r.out;  // RMS mean of a constant 3 mm offset
+  EXPECT_TRUE(fs::exists(dir / "t.csv"));
+  EXPECT_GT(fs::file_size(dir / "t.png"), 1000u);
+  std::ofstream(dir / "bad.csv") << "time,inserted_length,x,y,z\n0,0,0,0\n";
+  const auto bad = run("compare " + (dir / "a.csv").string() + " " + (dir / "bad.csv").string());
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("bad.csv:2"), std::string::npos) << bad.err;
+}

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -116,8 +117,32 @@ int cmd_convert(const std::string& in, const std::string& out, const std::string
   return 0;
 }
 
+/// The plotting script: next to an installed flowire, or in the source tree of a build.
+std::filesystem::path plot_script() {
+  namespace fs = std::filesystem;
+  if (const char* env = std::getenv("FLOWIRE_DATA_DIR")) return fs::path(env) / "plot_traces.py";
+  const fs::path installed = fs::path(FLOWIRE_INSTALL_DATADIR) / "plot_traces.py";
+  if (fs::exists(installed)) return installed;
+  return fs::path(FLOWIRE_SOURCE_DATADIR) / "plot_traces.py";
+}
+
+void plot_compare(const std::string& a, const std::string& b, const std::string& csv_path, const std::string& png) {
+  const auto script = plot_script();
+  if (!std::filesystem::exists(script))
+    throw flowire::Error(ErrorKind::Input, fmt::format("--plot: the plotting script {} is missing", script.string()));
+  const std::string tmp = png + ".partial.png";
+  const std::string cmd = fmt::format("/usr/bin/python3 '{}' '{}' 'A={}' 'B={}' --compare '{}' >/dev/null 2>&1",
+                                      script.string(), tmp, a, b, csv_path);
+  if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(tmp)) {
+    std::filesystem::remove(tmp);
+    throw flowire::Error(ErrorKind::Input,
+                         fmt::format("--plot {}: plotting failed (needs /usr/bin/python3 with python3-matplotlib)", png));
+  }
+  std::filesystem::rename(tmp, png);
+}
+
 int cmd_compare(const std::string& a, const std::string& b, const std::string& out, const std::string& spacing,
-                const std::string& row) {
+                const std::string& row, const std::string& plot) {
   using flowire::units::Dimension;
   const double h = flowire::units::parse_quantity(spacing, Dimension::Length, "--spacing");
   const double H = flowire::units::parse_quantity(row, Dimension::Length, "--rows");
@@ -126,6 +151,11 @@ int cmd_compare(const std::string& a, const std::string& b, const std::string& o
   if (r.samples == 0) throw flowire::Error(ErrorKind::Input, fmt::format("{} and {}: the traces share no inserted length", a, b));
   const auto csv = flowire::coupling::compare_csv(r);
   if (!out.empty()) flowire::write_text_atomically(out, csv);
+  if (!plot.empty()) {
+    const std::string table = out.empty() ? plot + ".csv" : out;
+    if (out.empty()) flowire::write_text_atomically(table, csv);
+    plot_compare(a, b, table, plot);
+  }
   std::printf("%-18s %8s %22s %14s %14s\n", "inserted length mm", "samples", "RMS (1/2 sum)^1/2 mm", "RMS mean mm",
               "max mm");
   for (const auto& row_ : r.rows)
@@ -166,11 +196,12 @@ int main(int argc, char** argv) {
   convert->add_option("--length-unit", unit, "unit of the input's coordinates: m, cm, mm, um");
   convert->add_option("--max-segment-length", max_seg, "split branches into segments no longer than this (m)");
 
-  std::string ta, tb, cmp_out, spacing = "5 mm", rows = "50 mm";
+  std::string ta, tb, cmp_out, cmp_plot, spacing = "5 mm", rows = "50 mm";
   auto* compare = app.add_subcommand("compare", "RMS distance between two tip traces by inserted length");
   compare->add_option("a", ta, "tip_trace.csv")->required();
   compare->add_option("b", tb, "tip_trace.csv")->required();
   compare->add_option("--out", cmp_out, "write the table as CSV");
+  compare->add_option("--plot", cmp_plot, "draw both traces and the RMS by inserted length to a PNG");
   compare->add_option("--spacing", spacing, "sample spacing of inserted length (default 5 mm)");
   compare->add_option("--rows", rows, "table row spacing (default 50 mm)");
 
@@ -194,7 +225,7 @@ int main(int argc, char** argv) {
     if (*run) return cmd_run(scene, out, sets);
     if (*info) return cmd_info(file, unit, max_seg, json);
     if (*convert) return cmd_convert(in, outfile, unit, max_seg);
-    if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows);
+    if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows, cmp_plot);
     if (*help) {
       if (help_topic.empty()) {
         std::cout << app.help();
