@@ -1,0 +1,73 @@
+// Run with `mpirun -n N`: the Y bifurcation comparison (MUMPS and fieldsplit) with the
+// unknowns distributed over the ranks. Writes the outlet flows and sampled pressures to
+// argv[1]; if argv[2] is given (the same run on one rank), checks that every value
+// agrees to 1e-8 relative. Exit status 0 on success.
+#include <mpi.h>
+
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <fstream>
+#include <stdexcept>
+#include <vector>
+
+#include "fem_test_cases.hpp"
+#include "flowire/fem/compare.hpp"
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  int failures = 0;
+  try {
+    using namespace flowire::fem;
+    if (argc < 2) throw std::runtime_error("usage: fem_mpi OUT [REFERENCE]");
+    const auto net = test::y_small(0.3);
+    BoundaryValues bv;
+    bv.inlet_pressure = 12850.0;
+    bv.outlet_pressure = 12800.0;
+    std::vector<double> values;
+    for (LinearSolver s : {LinearSolver::Mumps, LinearSolver::Fieldsplit}) {
+      FemOptions opt;
+      opt.size_factor = 0.5;
+      opt.solver = s;
+      const CompareResult r = compare(net, bv, opt, "");
+      // Flows as fractions of the total, pressures as fractions of the drop.
+      double total = 0.0;
+      for (const auto& o : r.outlets) total += o.flow_fem;
+      for (const auto& o : r.outlets) values.push_back(o.flow_fem / total);
+      for (const auto& p : r.samples)
+        values.push_back((p.pressure_fem - bv.outlet_pressure) / (bv.inlet_pressure - bv.outlet_pressure));
+    }
+    if (rank == 0) {
+      std::ofstream out(argv[1]);
+      out.precision(17);
+      for (double v : values) out << v << '\n';
+    }
+    if (argc > 2) {
+      std::ifstream ref(argv[2]);
+      std::vector<double> expected;
+      for (double v; ref >> v;) expected.push_back(v);
+      // First half: MUMPS (direct, must agree to rounding); second half: fieldsplit
+      // (iterative to a relative residual of 1e-10, so to about 1e-6 in the values).
+      if (expected.size() != values.size()) throw std::runtime_error("reference has a different length");
+      const size_t half = values.size() / 2;
+      double worst_direct = 0.0, worst_iterative = 0.0;
+      for (size_t i = 0; i < values.size(); ++i)
+        (i < half ? worst_direct : worst_iterative) =
+            std::max(i < half ? worst_direct : worst_iterative, std::abs(values[i] - expected[i]));
+      std::printf("rank %d of %d: largest difference to the one-rank run (fraction of the flow / of the drop): "
+                  "MUMPS %.3e, fieldsplit %.3e\n", rank, size, worst_direct, worst_iterative);
+      if (!(worst_direct <= 1e-9) || !(worst_iterative <= 1e-5)) failures = 1;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rank %d: %s\n", rank, e.what());
+    failures = 1;
+  }
+  int total = 0;
+  MPI_Allreduce(&failures, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  flowire::fem::finalize_petsc();
+  MPI_Finalize();
+  return total == 0 ? 0 : 1;
+}
