@@ -392,6 +392,7 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
 
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir) {
   const auto t0 = std::chrono::steady_clock::now();
+  initialize();  // MPI up before meshing, so that rank 0 meshes for everyone
   MeshOptions mo;
   mo.mesh_size = opt.mesh_size;
   mo.size_factor = opt.size_factor;

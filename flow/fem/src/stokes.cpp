@@ -557,6 +557,8 @@ StokesSolution solve_stokes(const TetMesh& mesh, std::span<const double> group_p
   return sol;
 }
 
+void initialize() { ensure_petsc(); }
+
 void finalize_petsc() {
   if (!g_we_initialized) return;
   PetscBool up = PETSC_FALSE, done = PETSC_FALSE;

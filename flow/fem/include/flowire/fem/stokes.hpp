@@ -65,6 +65,9 @@ StokesSolution solve_stokes(const TetMesh& mesh, std::span<const double> group_p
 /// @brief Outward flux \f$ \int_{\Gamma_g} u\cdot n \f$ of a velocity field through each group.
 std::vector<double> group_fluxes(const TetMesh& mesh, const std::vector<Vec3>& velocity);
 
+/// @brief Initialize PETSc (and MPI) unless already done; build_mesh then sees every rank.
+void initialize();
+
 /// @brief Finalize PETSc if the fem solver initialized it (also done at exit).
 void finalize_petsc();
 
