@@ -634,12 +634,21 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     w.thetab = s.theta;
     w.frameb = s.frame;
     w.twistb = s.ref_twist;
-    w.fext_bk.head(nd) = w.fext.head(nd) - w.fcons.head(nd);
+    w.fext_bk.head(nd) = w.fext.head(nd);
+    w.fcons_bk.head(nd) = w.fcons.head(nd);
+    const double ext_energy_b = w.ext_energy;
     w.grad_bk.head(nd) = w.grad.head(nd);
     const Eigen::VectorXd& qb = w.q;  // unchanged until accepted
     double alpha = 1.0;
     bool accepted = false;
     double max_step = 0.0;
+    // Pass 0 measures conservative external forces by their potential. A potential that
+    // is not consistent with its forces (e.g. a contact whose wall changes where a vertex
+    // is relocated into another vessel) can leave no decrease along the ray; pass 1 then
+    // treats every external force as a load (trapezoidal work), as without potentials.
+    const int passes = externals_.empty() ? 1 : 2;
+    for (int pass = 0; pass < passes && !accepted; ++pass) {
+    alpha = 1.0;
     for (int cut = 0; cut <= settings_.max_line_search_cuts; ++cut) {
       for (int k = 0; k < nv; ++k) {
         s.x[k] = w.xb[k] + alpha * dq.segment<3>(4 * k);
@@ -672,9 +681,24 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       const double phi_t =
           assemble(mode, h, load_scale, with_gradient ? Need::Gradient : Need::Value);
       matrix_current = false;
-      const double work = 0.5 * (w.fext_bk.head(nd) + w.fext.head(nd) - w.fcons.head(nd))
-                                    .dot(w.q.head(nd) - w.rhs.head(nd));
-      const double merit0 = phi, merit_t = phi_t - work;
+      const auto dqt = w.q.head(nd) - w.rhs.head(nd);
+      double work = 0.5 * (w.fext_bk.head(nd) + w.fext.head(nd)).dot(dqt);
+      double merit0 = phi, merit_t = phi_t;
+      if (pass == 0) {
+        // Change of the external potential: exact, but never credited below the
+        // trapezoidal estimate −½(f_b + f_t)·Δq of the same forces. The two agree for a
+        // potential consistent with its forces; where they do not (a vertex relocated
+        // through a wall into another vessel makes the contact energy drop at once), the
+        // larger one keeps the search from accepting the jump.
+        const double w_cons = 0.5 * (w.fcons_bk.head(nd) + w.fcons.head(nd)).dot(dqt);
+        work -= w_cons;
+        const double de_exact = w.ext_energy - ext_energy_b;
+        merit_t += std::max(de_exact, -w_cons) - de_exact;
+      } else {
+        merit0 -= ext_energy_b;
+        merit_t -= w.ext_energy;
+      }
+      merit_t -= work;
       bool good = std::isfinite(phi_t) &&
                   merit_t <= merit0 + 1e-4 * alpha * slope + 1e-14 * std::abs(merit0);
       if (good && !with_gradient)
@@ -689,6 +713,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       w.q.head(nd).swap(w.rhs.head(nd));  // restore q
       alpha *= 0.5;
       ++rep.line_search_cuts;
+    }
     }
     if (!accepted) {
       // Restore the last accepted iterate and its derivatives.
