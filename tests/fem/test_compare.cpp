@@ -3,6 +3,7 @@
 // comparison files.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -51,6 +52,21 @@ TEST(FemCompare, AsymmetricYFlowSplitWithinOnePercent) {
   report("asymmetric Y (a = 0.4)", r);
   EXPECT_LT(r.max_flow_split_error, testing::tol(1e-2));
   EXPECT_LT(r.max_rel_diff_drop_away, testing::tol(2e-2));
+}
+
+TEST(FemCompare, BentTubeWithASphereAtTheBendMatchesTheNetwork) {
+  vessels::Centerlines c;
+  c.branches.push_back({"bent",
+                        {vessels::Vec3(0, 0, 0), vessels::Vec3(10e-3, 0, 0),
+                         vessels::Vec3(10e-3 + 10e-3 * std::cos(0.8), 10e-3 * std::sin(0.8), 0)},
+                        {1e-3, 1e-3, 1e-3}});
+  const auto net = vessels::Network::build(c);
+  FemOptions opt;
+  opt.size_factor = 0.4;
+  const CompareResult r = compare(net, paper_like(), opt, "");
+  report("bent tube (46 deg)", r);
+  EXPECT_LT(r.max_flow_error, testing::tol(1e-2));
+  EXPECT_LT(r.max_rel_diff_drop_away, testing::tol(1e-2));
 }
 
 TEST(FemCompare, WritesTheComparisonFiles) {
