@@ -91,7 +91,7 @@ L.append("Cantilever under a dead tip load (Bisshopp–Drucker elastica, α = PL
 L.append("![rod work-precision](performance/rod_work_precision.png)\n")
 L.append(how("rod", "plot_rod.py"))
 segs = sorted({int(r["segments"]) for r in rows if r["integrator"] == "static"})
-cases = sorted({r["case"] for r in rows if r["integrator"] == "static"})
+cases = list(dict.fromkeys(r["case"] for r in rows if r["integrator"] == "static"))  # CSV order
 L.append("| segments | " + " | ".join(f"{c} error (s)" for c in cases) + " |")
 L.append("|---|" + "---|" * len(cases))
 for n in segs:
