@@ -15,6 +15,9 @@
 #include "flowire/common/output.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
+#ifdef FLOWIRE_HAVE_FEM
+#include "flowire/fem/compare.hpp"
+#endif
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/wire_output.hpp"
 #include "flowire/flow/output.hpp"
@@ -164,6 +167,42 @@ void render_pictures(const config::Config& c, const vessels::Network& net, const
   flow::render_network_png(net, p, out / "network.png", ro);
   ro.view_direction = vessels::Vec3(1.0, 0.0, 0.0);
   flow::render_network_png(net, p, out / "network_side.png", ro);
+}
+
+/// The FEM reference on the same geometry, with the network's own pressures at the inlet and
+/// at every outlet (so any outlet model, resistance or RCR, is compared on the same footing).
+nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, const flow::FlowSolver& fs,
+                       const std::filesystem::path& out) {
+#ifdef FLOWIRE_HAVE_FEM
+  fem::BoundaryValues bv;
+  bv.inlet_node = fs.spec().inlets.empty() ? net.widest_end() : fs.spec().inlets.front().node;
+  bv.inlet_pressure = fs.node_pressure(bv.inlet_node);
+  for (int e : net.ends())
+    if (e != bv.inlet_node) bv.outlet_pressures.emplace_back(e, fs.node_pressure(e));
+  bv.viscosity = fs.spec().viscosity;
+  bv.density = fs.spec().density;
+  fem::FemOptions fo;
+  if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
+  fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
+  fo.solver = c.string("fem.solver") == "fieldsplit" ? fem::LinearSolver::Fieldsplit : fem::LinearSolver::Mumps;
+  fo.samples_per_branch = c.integer("fem.samples_per_branch");
+  fo.write_vtu = c.boolean("output.vtk");
+  fo.write_png = c.boolean("output.png");
+  const auto r = fem::compare(net, bv, fo, out.string());
+  return {{"tets", r.tets},
+          {"unknowns", r.unknowns},
+          {"max_rel_diff_away_from_junctions", r.max_rel_diff_drop_away},
+          {"max_rel_diff_near_junctions", r.max_rel_diff_drop_junction},
+          {"max_flow_split_error", r.max_flow_split_error},
+          {"max_flow_error", r.max_flow_error},
+          {"mesh_seconds", r.mesh_seconds},
+          {"assemble_seconds", r.assemble_seconds},
+          {"solve_seconds", r.solve_seconds}};
+#else
+  (void)net, (void)fs, (void)out;
+  throw_input_error(c.where("fem"),
+                    "this flowire was built without the FEM path (FLOWIRE_WITH_FEM needs gmsh and PETSc)");
+#endif
 }
 
 }  // namespace
@@ -441,6 +480,14 @@ RunResult run_scene(const config::Config& c) {
     }
     if (net && !fsolver && write_vtk) vessels::write_network_vtp(*net, (out / "network.vtp").string());
     t_out += seconds_since(to);
+
+    // ---------------- finite-element comparison of the flow (fem:)
+    if (c.has_section("fem")) {
+      if (!fsolver) throw_input_error(c.where("fem"), "fem: compares the flow, so the scene needs a flow: section");
+      const auto tf = Clock::now();
+      s["fem"] = run_fem(c, *net, *fsolver, out);
+      timings["fem"] = seconds_since(tf);
+    }
 
     // ---------------- summary
     if (fsolver) {
