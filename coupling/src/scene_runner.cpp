@@ -58,7 +58,9 @@ nlohmann::json counts_json(const vessels::NetworkCounts& n) {
           {"radius_min", n.radius_min}, {"radius_max", n.radius_max}};
 }
 
-rod::WireSpec wire_spec(const config::Config& c) {
+}  // namespace
+
+rod::WireSpec scene_wire_spec(const config::Config& c) {
   rod::WireSpec w;
   w.length = c.number("wire.length");
   w.radius = c.number("wire.radius");
@@ -92,6 +94,8 @@ rod::WireSpec wire_spec(const config::Config& c) {
     throw_input_error(c.where("wire"), "length, radius, youngs_modulus and density must be positive");
   return w;
 }
+
+namespace {
 
 /// Obstacles (clot resistance) and steering, if the scene has them.
 std::shared_ptr<TipForces> make_tip_forces(const config::Config& c, const vessels::Network* net) {
@@ -312,7 +316,7 @@ RunResult run_scene(const config::Config& c) {
     std::shared_ptr<VesselForces> forces;
     std::shared_ptr<TipForces> tip_forces;
     if (has_wire) {
-      auto spec = wire_spec(c);
+      auto spec = scene_wire_spec(c);
       if (net) {
         const int inlet = net->widest_end();
         int entry = -1;

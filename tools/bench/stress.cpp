@@ -27,61 +27,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// The network end farthest along the vessels from the inlet (the scene's `wire.entry: auto`).
-int farthest_end(const vessels::Network& net, int from) {
-  std::vector<double> dist(static_cast<size_t>(net.num_nodes()), std::numeric_limits<double>::infinity());
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> q;
-  dist[static_cast<size_t>(from)] = 0;
-  q.emplace(0.0, from);
-  while (!q.empty()) {
-    auto [d, n] = q.top();
-    q.pop();
-    if (d > dist[static_cast<size_t>(n)]) continue;
-    auto [b, e] = net.node_segments(n);
-    for (const int* it = b; it != e; ++it) {
-      const auto& s = net.segment(*it);
-      const int m = s.node_from == n ? s.node_to : s.node_from;
-      if (d + s.length < dist[static_cast<size_t>(m)]) {
-        dist[static_cast<size_t>(m)] = d + s.length;
-        q.emplace(d + s.length, m);
-      }
-    }
-  }
-  int best = -1;
-  for (int e : net.ends())
-    if (e != from && std::isfinite(dist[static_cast<size_t>(e)]) &&
-        (best < 0 || dist[static_cast<size_t>(e)] > dist[static_cast<size_t>(best)] + 1e-12))
-      best = e;
-  return best;
-}
-
-rod::WireSpec wire_spec(const config::Config& c) {
-  rod::WireSpec w;
-  w.length = c.number("wire.length");
-  w.radius = c.number("wire.radius");
-  w.youngs_modulus = c.number("wire.youngs_modulus");
-  w.poisson_ratio = c.number("wire.poisson_ratio");
-  w.density = c.number("wire.density");
-  if (c.has("wire.segment_length")) {
-    w.segments = 0;
-    w.segment_length = c.number("wire.segment_length");
-  } else {
-    w.segments = c.integer("wire.segments");
-  }
-  w.damping = c.number("wire.damping");
-  w.tip.length = 0.0;
-  if (c.has_section("wire.tip")) {
-    w.tip.length = c.number("wire.tip.length");
-    w.tip.youngs_modulus = c.number("wire.tip.youngs_modulus");
-    w.tip.shape = rod::parse_tip_shape(c.string("wire.tip.shape"));
-    w.tip.angle = c.number("wire.tip.angle");
-    w.tip.bend_radius = c.number("wire.tip.bend_radius");
-  }
-  w.inserted_length = c.number("insertion.initial_length");
-  return w;
-}
-
 std::string num(double v) { return fmt::format("{:.9g}", v); }
 
 }  // namespace
@@ -116,8 +61,8 @@ StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
   std::unique_ptr<flow::FlowSolver> fs;
   if (c.has_section("flow")) fs = flow::make_solver(net, flow::from_config(c, net));
 
-  rod::WireSpec spec = wire_spec(c);
-  const int entry = farthest_end(net, net.widest_end());
+  rod::WireSpec spec = coupling::scene_wire_spec(c);
+  const int entry = net.farthest_end(net.widest_end());
   const auto& seg = net.segment(*net.node_segments(entry).first);
   const int other = seg.node_from == entry ? seg.node_to : seg.node_from;
   spec.base_position = net.node(entry);

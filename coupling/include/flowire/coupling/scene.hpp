@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "flowire/common/config.hpp"
+#include "flowire/rod/model.hpp"
 #include "flowire/vessels/network.hpp"
 
 namespace flowire::coupling {
@@ -20,6 +21,10 @@ config::Config load_scene(const std::string& file, const std::vector<std::string
 
 /// @brief Build the vessel network a scene describes (`vessels.file` or `vessels.generator`).
 vessels::Network build_scene_network(const config::Config& scene);
+
+/// @brief The wire a scene describes (`wire:` and `insertion.initial_length`), before the
+/// vessel network places its base.
+rod::WireSpec scene_wire_spec(const config::Config& scene);
 
 /// @brief Result of a run; `summary` is what `summary.json` holds.
 struct RunResult {
