@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "flowire/common/union_find.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/flow/solver.hpp"
@@ -17,22 +18,6 @@ void check_node(const Network& net, int node, const char* what) {
     throw_usage_error(fmt::format("flow: {} node {} is not in the network (0..{})", what, node, net.num_nodes() - 1));
 }
 
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int a) {
-    while (parent[static_cast<size_t>(a)] != a) {
-      parent[static_cast<size_t>(a)] = parent[static_cast<size_t>(parent[static_cast<size_t>(a)])];
-      a = parent[static_cast<size_t>(a)];
-    }
-    return a;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
-  }
-};
 
 }  // namespace
 

@@ -1,3 +1,4 @@
+#include "flowire/common/union_find.hpp"
 #include "flowire/vessels/network.hpp"
 
 #include <fmt/format.h>
@@ -14,22 +15,6 @@
 namespace flowire::vessels {
 namespace {
 
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int a) {
-    while (parent[static_cast<size_t>(a)] != a) {
-      parent[static_cast<size_t>(a)] = parent[static_cast<size_t>(parent[static_cast<size_t>(a)])];
-      a = parent[static_cast<size_t>(a)];
-    }
-    return a;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
-  }
-};
 
 std::string branch_label(const Polyline& p, size_t index) {
   return p.name.empty() ? fmt::format("branch {}", index) : fmt::format("branch {} ('{}')", index, p.name);
