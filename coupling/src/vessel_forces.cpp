@@ -22,6 +22,10 @@ void VesselForces::ensure_size(int n) {
     segment_.resize(static_cast<size_t>(n), -1);
     fluid_.resize(static_cast<size_t>(n), Vec3::Zero());
     force_.resize(static_cast<size_t>(n), Vec3::Zero());
+    cur_normal_force_.resize(static_cast<size_t>(n), 0.0);
+    cur_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
+    lag_normal_force_.resize(static_cast<size_t>(n), 0.0);
+    lag_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
   }
 }
 
@@ -49,6 +53,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
   const double tip_s = rod.arc_length.empty() ? 0.0 : rod.arc_length[0];
   for (int i = 0; i < free; ++i) {
     force_[static_cast<size_t>(i)].setZero();
+    cur_normal_force_[static_cast<size_t>(i)] = 0.0;
     if (!contact_.enabled) continue;
     const int s = segment_[static_cast<size_t>(i)];
     const auto& seg = net.segment(s);
@@ -71,23 +76,35 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     out.add_conservative_force(i, f);
     out.add_energy(pen.energy);
     out.add_position_jacobian(i, -pen.hessian);
-    const double normal_force = contact_.stiffness * pen.penetration;
-    const double mu = (tip_s - rod.arc_length[static_cast<size_t>(i)] <= contact_.tip_length) ? contact_.tip_friction
-                                                                                              : contact_.friction;
-    const auto fr = coulomb_friction(rod.velocity(i), n_wall, normal_force, mu, contact_.slip_speed);
-    out.add_force(i, fr.force);
-    out.add_velocity_jacobian(i, fr.dfdv);
-    f += fr.force;
-    if (contact_.viscous_friction > 0.0) {
-      const double ell = 0.5 * ((i > 0 ? (x - rod.position(i - 1)).norm() : 0.0) +
-                                (i + 1 < n ? (rod.position(i + 1) - x).norm() : 0.0));
-      const Mat3 P = Mat3::Identity() - n_wall * n_wall.transpose();
-      const Mat3 C = contact_.viscous_friction * ell * P;
-      out.add_force(i, -C * rod.velocity(i));
-      out.add_velocity_jacobian(i, -C);
-      f -= C * rod.velocity(i);
-    }
+    cur_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * pen.penetration;
+    cur_normal_[static_cast<size_t>(i)] = n_wall;
     force_[static_cast<size_t>(i)] = f;
+  }
+  // Friction with the normal force and normal of the step's start (lagged, as in IPC):
+  // the friction force is then a function of the velocity alone and its Jacobian is
+  // exact, which keeps Newton quadratic at high μ. The first step uses the current ones.
+  if (contact_.enabled) {
+    for (int i = 0; i < free; ++i) {
+      const auto k = static_cast<size_t>(i);
+      const bool lag = lagged_ && k < lag_normal_force_.size();
+      const double normal_force = lag ? lag_normal_force_[k] : cur_normal_force_[k];
+      if (normal_force <= 0.0) continue;
+      const Vec3& nrm = lag ? lag_normal_[k] : cur_normal_[k];
+      const double mu = (tip_s - rod.arc_length[k] <= contact_.tip_length) ? contact_.tip_friction : contact_.friction;
+      const auto fr = coulomb_friction(rod.velocity(i), nrm, normal_force, mu, contact_.slip_speed);
+      out.add_force(i, fr.force);
+      out.add_velocity_jacobian(i, fr.dfdv);
+      force_[k] += fr.force;
+      if (contact_.viscous_friction > 0.0) {
+        const Vec3& x = rod.position(i);
+        const double ell = 0.5 * ((i > 0 ? (x - rod.position(i - 1)).norm() : 0.0) +
+                                  (i + 1 < n ? (rod.position(i + 1) - x).norm() : 0.0));
+        const Mat3 C = contact_.viscous_friction * ell * (Mat3::Identity() - nrm * nrm.transpose());
+        out.add_force(i, -C * rod.velocity(i));
+        out.add_velocity_jacobian(i, -C);
+        force_[k] -= C * rod.velocity(i);
+      }
+    }
   }
   stats_.seconds_contact += since(t0);
 
@@ -125,6 +142,9 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
 
 void VesselForces::end_step(const rod::RodView& rod) {
   const int free = std::min(rod.first_clamped_vertex, rod.vertex_count());
+  ensure_size(rod.vertex_count());
+  lagged_ = contact_.enabled;
+  for (int i = 0; i < rod.vertex_count(); ++i) lag_normal_force_[static_cast<size_t>(i)] = 0.0;
   for (int i = 0; i < free; ++i) {
     const int s = segment_[static_cast<size_t>(i)];
     if (s < 0) continue;
@@ -134,7 +154,12 @@ void VesselForces::end_step(const rod::RodView& rod) {
     if (capsule_distance(rod.position(i), net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr,
                          nullptr) + wire_radius_ < 0.0)
       continue;
-    const double d = index_.wall_distance(rod.position(i), s);
+    Vec3 nrm;
+    const double d = index_.wall_distance(rod.position(i), s, &nrm);
+    if (d + wire_radius_ > 0.0) {
+      lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * (d + wire_radius_);
+      lag_normal_[static_cast<size_t>(i)] = nrm;
+    }
     stats_.max_outside = std::max(stats_.max_outside, d);
     stats_.max_penetration = std::max(stats_.max_penetration, d + wire_radius_);
   }

@@ -121,13 +121,13 @@ TEST(VesselForces, CoulombFrictionOnTheWallNeedsMuTimesNToSlide) {
   const vessels::SpatialIndex index(net);
   const int n = 20;
   std::vector<Vec3> x0;
-  const double k = 1e6;
-  const double sink = g / (n * k);  // static penalty penetration under the weight
+  const double k_wall = 1e6;
+  const double sink = g / (n * k_wall);  // static penalty penetration under the weight
   for (int i = 0; i < n; ++i) x0.push_back(Vec3(4.0 + 0.01 * i, 0, -(R - a) - sink));  // resting on the bottom
   const double len = 0.01 * (n - 1);
   for (double F : {2.0, 3.0, 6.0, 10.0}) {
     RigidWire pm(x0, 1.0 / len);
-    ContactParams cp{.stiffness = k, .friction = mu, .tip_friction = mu, .slip_speed = 1e-5};
+    ContactParams cp{.stiffness = k_wall, .friction = mu, .tip_friction = mu, .slip_speed = 1e-5};
     VesselForces f(index, a, cp, DragParams{});
     const double dt = 1e-3;
     for (int k = 0; k < 1000; ++k) pm.step(f, dt, Vec3(F / len, 0, -g / len));

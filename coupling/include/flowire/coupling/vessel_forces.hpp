@@ -81,6 +81,9 @@ class VesselForces : public rod::ExternalForce {
   double drag_cn_ = 0.0;
   std::vector<int> segment_;
   std::vector<vessels::Vec3> fluid_, force_;
+  std::vector<double> cur_normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
+  std::vector<vessels::Vec3> cur_normal_, lag_normal_;
+  bool lagged_ = false;
   InteractionStats stats_;
 };
 
