@@ -11,7 +11,9 @@ OUT=${1:-out/aortic_arch}
 QUICK=${2:-}
 FLOWIRE=${FLOWIRE:-$root/build/tools/flowire}
 PY=${PYTHON:-/usr/bin/python3}   # Debian python3 with python3-matplotlib
-if command -v xvfb-run >/dev/null; then XR=(xvfb-run -a -s "-screen 0 1024x768x24"); else XR=(); fi
+# A virtual X server for the PNGs, unless there is a display already (e.g. ctest under xvfb-run).
+XR=()
+if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then XR=(xvfb-run -a -s "-screen 0 1024x768x24"); fi
 mkdir -p "$OUT"
 for speed in 1 1.5 2; do
   length_s=$(python3 -c "print(0.48 / ($speed / 100))")   # push 48 cm (50 cm with the 2 cm start)

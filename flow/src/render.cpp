@@ -20,6 +20,11 @@
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
+#include <X11/Xlib.h>
+#undef Status
+#undef None
+#undef Bool
+#undef Success
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
@@ -61,6 +66,12 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display)
     throw_input_error(path.string(), "rendering a PNG needs an X display; run under xvfb-run -a -s \"-screen 0 1024x768x24\"");
+  // VTK aborts the process when the display cannot be opened: try it first.
+  if (Display* x = XOpenDisplay(nullptr)) {
+    XCloseDisplay(x);
+  } else {
+    throw_input_error(path.string(), fmt::format("cannot connect to the X display '{}'; run under xvfb-run -a", display));
+  }
 
   // Vessels: one polydata, tubes of radius varying with the node radius.
   vtkNew<vtkPoints> pts;
