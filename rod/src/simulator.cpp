@@ -799,6 +799,34 @@ double clamp_inserted(double L, const RodModel& m, bool& clamped) {
 }
 }  // namespace
 
+void RodSimulator::begin_step(double h) {
+  auto& w = *work_;
+  auto& s = state_;
+  const int nv = s.vertex_count();
+  w.x0 = s.x;
+  w.v0 = s.v;
+  w.theta0 = s.theta;
+  w.omega0 = s.omega;
+  w.frame0 = s.frame;
+  w.twist0 = s.ref_twist;
+  for (int k = 0; k < nv; ++k) {
+    w.q0.segment<3>(4 * k) = s.x[k];
+    w.qhat.segment<3>(4 * k) = s.x[k] + h * s.v[k];
+    w.mass.segment<3>(4 * k).setConstant(model_.mass[k]);
+    w.damp.segment<3>(4 * k).setConstant(model_.damping * model_.h);
+    if (k < nv - 1) {
+      w.q0(4 * k + 3) = s.theta[k];
+      w.qhat(4 * k + 3) = s.theta[k] + h * s.omega[k];
+      w.mass(4 * k + 3) = model_.twist_inertia[k];
+      w.damp(4 * k + 3) = 0.0;
+    }
+  }
+  for (int k = 0; k < nv; ++k) {
+    s.x[k] += h * s.v[k];
+    if (k < nv - 1) s.theta[k] += h * s.omega[k];
+  }
+}
+
 StepReport RodSimulator::step_euler(double dt) {
   Work& w = *work_;
   RodState& s = state_;
@@ -812,30 +840,9 @@ StepReport RodSimulator::step_euler(double dt) {
   update_vertex_set(L_new);
   const double angle_new = target_angle_ + rotation_speed_ * dt;
 
-  const int nv = s.vertex_count();
-  w.x0 = s.x;
-  w.v0 = s.v;
-  w.theta0 = s.theta;
-  w.omega0 = s.omega;
-  w.frame0 = s.frame;
-  w.twist0 = s.ref_twist;
-  for (int k = 0; k < nv; ++k) {
-    w.q0.segment<3>(4 * k) = s.x[k];
-    w.qhat.segment<3>(4 * k) = s.x[k] + dt * s.v[k];
-    w.mass.segment<3>(4 * k).setConstant(model_.mass[k]);
-    w.damp.segment<3>(4 * k).setConstant(model_.damping * model_.h);
-    if (k < nv - 1) {
-      w.q0(4 * k + 3) = s.theta[k];
-      w.qhat(4 * k + 3) = s.theta[k] + dt * s.omega[k];
-      w.mass(4 * k + 3) = model_.twist_inertia[k];
-      w.damp(4 * k + 3) = 0.0;
-    }
-  }
   // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
-  for (int k = 0; k < nv; ++k) {
-    s.x[k] += dt * s.v[k];
-    if (k < nv - 1) s.theta[k] += dt * s.omega[k];
-  }
+  begin_step(dt);
+  const int nv = s.vertex_count();
   predict_feed(L_new - s.inserted_length, dt);
   set_prescribed(L_new, angle_new, s.x, s.theta);
   transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
@@ -898,29 +905,8 @@ StepReport RodSimulator::step_midpoint(double dt) {
   const double angle_half = target_angle_ + rotation_speed_ * hh;
   const double angle_new = target_angle_ + rotation_speed_ * dt;
 
+  begin_step(hh);
   const int nv = s.vertex_count();
-  w.x0 = s.x;
-  w.v0 = s.v;
-  w.theta0 = s.theta;
-  w.omega0 = s.omega;
-  w.frame0 = s.frame;
-  w.twist0 = s.ref_twist;
-  for (int k = 0; k < nv; ++k) {
-    w.q0.segment<3>(4 * k) = s.x[k];
-    w.qhat.segment<3>(4 * k) = s.x[k] + hh * s.v[k];
-    w.mass.segment<3>(4 * k).setConstant(model_.mass[k]);
-    w.damp.segment<3>(4 * k).setConstant(model_.damping * model_.h);
-    if (k < nv - 1) {
-      w.q0(4 * k + 3) = s.theta[k];
-      w.qhat(4 * k + 3) = s.theta[k] + hh * s.omega[k];
-      w.mass(4 * k + 3) = model_.twist_inertia[k];
-      w.damp(4 * k + 3) = 0.0;
-    }
-  }
-  for (int k = 0; k < nv; ++k) {
-    s.x[k] += hh * s.v[k];
-    if (k < nv - 1) s.theta[k] += hh * s.omega[k];
-  }
   predict_feed(L_half - L_start, hh);
   set_prescribed(L_half, angle_half, s.x, s.theta);
   transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);

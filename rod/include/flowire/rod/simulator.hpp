@@ -231,6 +231,9 @@ class RodSimulator {
   void predict_feed(double fed, double h);
   void vertex_params(int k, VertexParams& p) const;
   StepReport newton(Mode mode, double h, double load_scale);
+  /// Snapshot the step start (x, v, θ, ω, frames; q0, mass, damping) and move the state to
+  /// the inertial prediction q + h·v, with q̂ = that prediction; shared by both integrators.
+  void begin_step(double h);
   StepReport step_euler(double dt);
   StepReport step_midpoint(double dt);
   void gather(Eigen::Ref<Eigen::VectorXd> q) const;
