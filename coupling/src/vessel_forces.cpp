@@ -165,4 +165,24 @@ void VesselForces::end_step(const rod::RodView& rod) {
   }
 }
 
+void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
+  const int n = rod.vertex_count();
+  remap_segments_.assign(segment_.begin(), segment_.end());
+  ensure_size(n);
+  for (int i = 0; i < n; ++i) {
+    const int k = source[static_cast<size_t>(i)];
+    segment_[static_cast<size_t>(i)] =
+        k >= 0 && k < static_cast<int>(remap_segments_.size()) ? remap_segments_[static_cast<size_t>(k)] : -1;
+  }
+  // New vertices: located from the neighbour towards the base, as in evaluate().
+  const int free = std::min(rod.first_clamped_vertex, n);
+  for (int i = free - 1; i >= 0; --i) {
+    if (segment_[static_cast<size_t>(i)] >= 0) continue;
+    const int hint = i + 1 < n ? segment_[static_cast<size_t>(i + 1)] : -1;
+    segment_[static_cast<size_t>(i)] = index_.locate(rod.position(i), hint).segment;
+    ++stats_.lookups;
+  }
+  if (lagged_) end_step(rod);
+}
+
 }  // namespace flowire::coupling

@@ -71,11 +71,22 @@ struct RodSimulator::Work {
   std::vector<EdgeFrame> frameb;
   std::vector<Vec3> xz;
   std::vector<double> tz;
+  // resampling (adaptivity): the old state and the plan
+  std::vector<double> ru, rtau, rcell, rtheta, romega, rtwist, psi, unew;
+  std::vector<Vec3> rx, rv, rT;
+  std::vector<EdgeFrame> rframe;
+  std::vector<int> source;
+  std::vector<char> split, remove;
 };
 
 RodSimulator::RodSimulator(const WireSpec& spec)
     : model_(RodModel::from_spec(spec)), work_(std::make_unique<Work>()) {
-  const int nvmax = model_.grid_vertices;
+  // Adaptive refinement may hold up to one vertex per finest edge.
+  const int nvmax =
+      model_.adapt.enabled
+          ? std::max(model_.grid_vertices,
+                     static_cast<int>(std::ceil(model_.length / model_.adapt.min_segment_length)) + 4)
+          : model_.grid_vertices;
   const int max_dof = 4 * nvmax - 1;
   Work& w = *work_;
   w.max_dof = max_dof;
@@ -90,7 +101,14 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz, &w.tangent}) v->reserve(nvmax);
   w.spin.reserve(nvmax);
   w.ext_spin_k.reserve(nvmax);
-  for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.thetab, &w.twistb, &w.tz}) v->reserve(nvmax);
+  for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.thetab, &w.twistb, &w.tz, &w.ru, &w.rtau,
+                  &w.rcell, &w.rtheta, &w.romega, &w.rtwist, &w.psi, &w.unew})
+    v->reserve(nvmax);
+  for (auto* v : {&w.rx, &w.rv, &w.rT}) v->reserve(nvmax);
+  w.rframe.reserve(nvmax);
+  w.source.reserve(nvmax);
+  w.split.reserve(nvmax);
+  w.remove.reserve(nvmax);
   w.frame0.reserve(nvmax);
   w.frameb.reserve(nvmax);
   state_.x.reserve(nvmax);
@@ -99,6 +117,8 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   state_.omega.reserve(nvmax);
   state_.frame.reserve(nvmax);
   state_.ref_twist.reserve(nvmax);
+  state_.u.reserve(nvmax);
+  disc_.reserve(nvmax);
   arc_length_.reserve(nvmax);
   trace_.reserve(1 << 14);
 
@@ -111,6 +131,14 @@ RodSimulator::RodSimulator(const WireSpec& spec)
         "WireSpec: inserted_length {} m must be between two segments ({} m) and the length ({} m)",
         inserted, 2.0 * model_.h, spec.length));
   build_initial_state(inserted);
+  if (model_.adapt.enabled) {
+    // Resolve the rest shape (a pre-shaped tip) before the first step, then lay it out
+    // again on the refined vertices.
+    for (int round = 0; round < 12 && adapt(); ++round) {
+    }
+    layout_rest_shape();
+    record_trace_reset();
+  }
 }
 
 RodSimulator::~RodSimulator() = default;
@@ -130,23 +158,46 @@ void RodSimulator::build_initial_state(double inserted) {
   s.omega.assign(nv - 1, 0.0);
   s.frame.assign(nv - 1, EdgeFrame{});
   s.ref_twist.assign(nv, 0.0);
+  s.u.resize(nv);
+  for (int k = 0; k < nv; ++k) s.u[k] = model_.u(k);
+  model_.discretize(s.u, disc_);
   s.inserted_length = inserted;
   s.base_angle = 0.0;
   s.time = 0.0;
   first_clamped_ = kc;
+  target_angle_ = 0.0;
+  layout_rest_shape();
+  record_trace_reset();
+}
+
+void RodSimulator::record_trace_reset() {
+  trace_.clear();
+  record_trace();
+}
+
+void RodSimulator::layout_rest_shape() {
+  RodState& s = state_;
+  const int nv = s.vertex_count();
+  const int kc = first_clamped_;
+  const double inserted = s.inserted_length;
   const Vec3& pb = model_.base_position;
   const Vec3& db = model_.base_direction;
   const Vec3 a = model_.base_normal;
-  for (int k = kc; k < nv; ++k) s.x[k] = pb - db * (model_.u(k) - inserted);
+  for (int k = kc; k < nv; ++k) s.x[k] = pb - db * (s.u[k] - inserted);
   // Lay out the rest shape from the clamp to the tip (planar bends about the base normal).
   Vec3 tf = -db;
   for (int k = kc; k >= 1; --k) {
-    const double kappa = model_.rest_kappa1[k];
+    const double kappa = disc_.rest_kappa1[k];
     const double phi = 2.0 * std::atan(0.5 * kappa);
     const Eigen::AngleAxisd rot(-phi, a);
     const Vec3 te = k == kc && k == nv - 1 ? tf : (rot * tf).normalized();
-    s.x[k - 1] = s.x[k] - h * te;
+    s.x[k - 1] = s.x[k] - disc_.rest_length[k - 1] * te;
     tf = te;
+  }
+  for (auto& v : s.v) v.setZero();
+  for (int j = 0; j < nv - 1; ++j) {
+    s.theta[j] = 0.0;
+    s.omega[j] = 0.0;
   }
   for (int j = 0; j < nv - 1; ++j) {
     const Vec3 t = (s.x[j + 1] - s.x[j]).normalized();
@@ -156,30 +207,32 @@ void RodSimulator::build_initial_state(double inserted) {
   for (int k = 1; k < nv - 1; ++k)
     s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(),
                                      s.frame[k].d1, (s.x[k + 1] - s.x[k]).normalized(), 0.0);
-  target_angle_ = 0.0;
   refresh_arc_lengths();
-  trace_.clear();
-  record_trace();
 }
 
 void RodSimulator::refresh_arc_lengths() {
   arc_length_.resize(state_.x.size());
   for (size_t k = 0; k < state_.x.size(); ++k)
-    arc_length_[k] = state_.inserted_length - model_.u(static_cast<int>(k));
+    arc_length_[k] = state_.inserted_length - state_.u[k];
 }
 
 void RodSimulator::update_vertex_set(double new_inserted) {
+  // The clamp vertex is the first feeding-grid point at or behind the entry, followed by
+  // one more grid point. Near the entry every edge is a grid edge (adapt() keeps it so),
+  // so feeding only appends or drops grid points at the proximal end.
   RodState& s = state_;
   const double h = model_.h;
   const int kc = static_cast<int>(std::ceil(new_inserted / h - 1e-9));
-  const int nv_new = std::min(kc + 2, model_.grid_vertices);
+  const int k_last = std::min(kc + 1, model_.grid_vertices - 1);
+  const int k_old_last = static_cast<int>(std::lround(s.u.back() / h));
   const int nv_old = s.vertex_count();
   const Vec3& pb = model_.base_position;
   const Vec3& db = model_.base_direction;
   const double L = s.inserted_length;
   const double angle = s.base_angle;
-  if (nv_new > nv_old) {
-    for (int k = nv_old; k < nv_new; ++k) {
+  if (k_last > k_old_last) {
+    for (int k = k_old_last + 1; k <= k_last; ++k) {
+      s.u.push_back(model_.u(k));
       s.x.push_back(pb - db * (model_.u(k) - L));
       s.v.push_back(db * insertion_speed_);
       s.theta.push_back(-angle);
@@ -187,7 +240,9 @@ void RodSimulator::update_vertex_set(double new_inserted) {
       s.frame.push_back(EdgeFrame{base_d1_, base_d2_});
       s.ref_twist.push_back(0.0);
     }
-  } else if (nv_new < nv_old) {
+  } else if (k_last < k_old_last) {
+    const int nv_new = nv_old - (k_old_last - k_last);
+    s.u.resize(nv_new);
     s.x.resize(nv_new);
     s.v.resize(nv_new);
     s.theta.resize(nv_new - 1);
@@ -197,24 +252,26 @@ void RodSimulator::update_vertex_set(double new_inserted) {
     s.ref_twist.back() = 0.0;
   }
   const int nv = s.vertex_count();
-  if (kc < first_clamped_) {
-    // Pulled back: vertices kc … first_clamped_−1 enter the clamp. Keep the material twist
+  if (nv != nv_old) model_.discretize(s.u, disc_);
+  const int fc = nv - 2;
+  if (fc < first_clamped_) {
+    // Pulled back: vertices fc … first_clamped_−1 enter the clamp. Keep the material twist
     // continuous at the vertices whose edges are reset.
-    const int k_lo = std::max(kc, 1);
+    const int k_lo = std::max(fc, 1);
     for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k)
       work_->tz.push_back(s.theta[k] - s.theta[k - 1] + s.ref_twist[k]);  // total twist
-    for (int k = kc; k < std::min(first_clamped_, nv); ++k) {
-      s.x[k] = pb - db * (model_.u(k) - L);
+    for (int k = fc; k < std::min(first_clamped_, nv); ++k) {
+      s.x[k] = pb - db * (s.u[k] - L);
       s.v[k] = db * insertion_speed_;
     }
-    for (int j = kc; j < nv - 1; ++j) {
+    for (int j = fc; j < nv - 1; ++j) {
       s.frame[j] = EdgeFrame{base_d1_, base_d2_};
       s.theta[j] = -angle;
       s.omega[j] = -rotation_speed_;
     }
     // Re-transport the free edge that touches the clamp, then rebuild reference twists.
-    if (kc >= 1) {
-      const int j = kc - 1;
+    if (fc >= 1) {
+      const int j = fc - 1;
       const Vec3 t0 = s.frame[j].d1.cross(s.frame[j].d2);
       const Vec3 t1 = (s.x[j + 1] - s.x[j]).normalized();
       s.frame[j].d1 = parallel_transport(s.frame[j].d1, t0, t1);
@@ -230,7 +287,225 @@ void RodSimulator::update_vertex_set(double new_inserted) {
     }
     work_->tz.clear();
   }
-  first_clamped_ = std::min(kc, nv - 2);
+  first_clamped_ = fc;
+}
+
+// -----------------------------------------------------------------------------------------
+// Adaptivity
+// -----------------------------------------------------------------------------------------
+
+namespace {
+/// u is a multiple of len (within round-off of the dyadic grid).
+bool aligned(double u, double len) {
+  const double r = u / len;
+  return std::abs(r - std::round(r)) < 1e-7;
+}
+}  // namespace
+
+bool RodSimulator::adapt() {
+  if (!model_.adapt.enabled) return false;
+  const AdaptSpec& a = model_.adapt;
+  const double h = model_.h;
+  const double tol = 1e-9 * h;
+  bool any = false;
+  // Round 0 applies the curvature criteria and the grid near the entry; later rounds only
+  // finish restoring the grid near the entry (after a pull-back over a refined part).
+  for (int round = 0; round < 8; ++round) {
+    RodState& s = state_;
+    Work& w = *work_;
+    const int nv = s.vertex_count();
+    const int fc = first_clamped_;
+    const double zone = s.inserted_length - 2.0 * a.max_segment_length;
+    const int lowest = tip_clamped_ ? 3 : 0;  // a tip clamp holds vertices 0..2 as they are
+    auto len = [&](int j) { return s.u[j + 1] - s.u[j]; };
+    w.psi.assign(nv, 0.0);
+    for (int k = 1; k < nv - 1; ++k) {
+      const Vec3 te = (s.x[k] - s.x[k - 1]).normalized();
+      const Vec3 tf = (s.x[k + 1] - s.x[k]).normalized();
+      const double phi = std::atan2(te.cross(tf).norm(), te.dot(tf));
+      const double rest =
+          2.0 * std::atan(0.5 * std::hypot(disc_.rest_kappa1[k], disc_.rest_kappa2[k]));
+      w.psi[k] = std::max(phi, rest);
+    }
+    w.split.assign(nv - 1, 0);
+    w.remove.assign(nv, 0);
+    auto sibling_pair = [&](int k) {  // vertex k is the midpoint of an aligned parent edge
+      const double l = len(k - 1);
+      return std::abs(len(k) - l) <= 1e-9 * l && aligned(s.u[k - 1], 2.0 * l);
+    };
+    // Near the entry: grid edges only (coarse edges split, refined vertices removed).
+    for (int j = lowest; j < nv - 1; ++j)
+      if (s.u[j + 1] > zone + tol && len(j) > h + tol) w.split[j] = 1;
+    for (int k = std::max(lowest, 1); k < nv - 1; ++k)
+      if (s.u[k] > zone + tol && !aligned(s.u[k], h) && sibling_pair(k) && !w.split[k - 1] &&
+          !w.split[k])
+        w.remove[k] = 1;
+    if (round == 0) {
+      auto splittable = [&](int j) {
+        return j >= lowest && j < fc && s.u[j + 1] <= zone + tol &&
+               len(j) >= 2.0 * a.min_segment_length - tol;
+      };
+      for (int j = lowest; j < fc; ++j)
+        if (splittable(j) && std::max(w.psi[j], w.psi[j + 1]) > a.split_angle) w.split[j] = 1;
+      // 2:1 balance: neighbouring rest lengths differ by at most a factor 2.
+      auto final_len = [&](int j) { return w.split[j] ? 0.5 * len(j) : len(j); };
+      for (bool again = true; again;) {
+        again = false;
+        for (int j = 0; j < nv - 1; ++j)
+          for (int i : {j - 1, j + 1})
+            if (i >= 0 && i < nv - 1 && !w.split[i] && final_len(i) > 2.0 * final_len(j) + tol &&
+                splittable(i)) {
+              w.split[i] = 1;
+              again = true;
+            }
+      }
+      for (int k = std::max(lowest, 1); k < fc; ++k) {
+        if (w.remove[k] || s.u[k + 1] > zone + tol || !sibling_pair(k)) continue;
+        const double l = len(k - 1);
+        if (2.0 * l > a.max_segment_length + tol || w.split[k - 1] || w.split[k]) continue;
+        if (std::max({w.psi[k - 1], w.psi[k], w.psi[k + 1]}) >= a.merge_angle) continue;
+        if (k >= 2 && final_len(k - 2) < l - tol) continue;
+        if (final_len(k + 1) < l - tol) continue;
+        w.remove[k] = 1;
+      }
+    }
+    w.unew.clear();
+    int splits = 0, merges = 0;
+    for (int k = 0; k < nv; ++k) {
+      if (w.remove[k]) {
+        ++merges;
+      } else {
+        w.unew.push_back(s.u[k]);
+      }
+      if (k < nv - 1 && w.split[k]) {
+        w.unew.push_back(0.5 * (s.u[k] + s.u[k + 1]));
+        ++splits;
+      }
+    }
+    if (splits == 0 && merges == 0) break;
+    resample(w.unew);
+    adapt_splits_ += splits;
+    adapt_merges_ += merges;
+    any = true;
+  }
+  return any;
+}
+
+void RodSimulator::resample(const std::vector<double>& u_new) {
+  RodState& s = state_;
+  Work& w = *work_;
+  const int nv = s.vertex_count();
+  const int nn = static_cast<int>(u_new.size());
+  const double tol = 1e-9 * model_.h;
+  // The old state.
+  w.ru = s.u;
+  w.rx = s.x;
+  w.rv = s.v;
+  w.rtheta = s.theta;
+  w.romega = s.omega;
+  w.rframe = s.frame;
+  w.rtwist = s.ref_twist;
+  w.rcell = disc_.cell_length;
+  const int old_clamp = first_clamped_;
+  // Old twist density (twist per cell length) and vertex tangents.
+  w.rtau.assign(nv, 0.0);
+  for (int k = 1; k < nv - 1; ++k)
+    w.rtau[k] = (w.rtheta[k] - w.rtheta[k - 1] + w.rtwist[k]) / w.rcell[k];
+  w.rtau[0] = nv > 2 ? w.rtau[1] : 0.0;
+  w.rtau[nv - 1] = nv > 2 ? w.rtau[nv - 2] : 0.0;
+  w.rT.resize(nv);
+  for (int k = 0; k < nv; ++k) {
+    const Vec3 tl = k > 0 ? Vec3((w.rx[k] - w.rx[k - 1]).normalized()) : Vec3::Zero();
+    const Vec3 tr = k < nv - 1 ? Vec3((w.rx[k + 1] - w.rx[k]).normalized()) : Vec3::Zero();
+    w.rT[k] = (tl + tr).normalized();
+  }
+
+  // Vertices: kept ones as they were; new ones on the Hermite curve of their old edge.
+  s.u = u_new;
+  s.x.resize(nn);
+  s.v.resize(nn);
+  w.source.assign(nn, -1);
+  w.tz.assign(nn, 0.0);  // twist density at the new vertices
+  int i = 0;
+  for (int m = 0; m < nn; ++m) {
+    const double u = u_new[m];
+    while (i < nv - 2 && w.ru[i + 1] <= u + tol) ++i;
+    if (std::abs(u - w.ru[i]) <= tol || std::abs(u - w.ru[i + 1]) <= tol) {
+      const int k = std::abs(u - w.ru[i]) <= tol ? i : i + 1;
+      w.source[m] = k;
+      s.x[m] = w.rx[k];
+      s.v[m] = w.rv[k];
+      w.tz[m] = w.rtau[k];
+      continue;
+    }
+    const double t = (u - w.ru[i]) / (w.ru[i + 1] - w.ru[i]);
+    const double chord = (w.rx[i + 1] - w.rx[i]).norm();
+    const double t2 = t * t, t3 = t2 * t;
+    s.x[m] = (2 * t3 - 3 * t2 + 1) * w.rx[i] + (t3 - 2 * t2 + t) * chord * w.rT[i] +
+             (-2 * t3 + 3 * t2) * w.rx[i + 1] + (t3 - t2) * chord * w.rT[i + 1];
+    s.v[m] = (1.0 - t) * w.rv[i] + t * w.rv[i + 1];
+    w.tz[m] = (1.0 - t) * w.rtau[i] + t * w.rtau[i + 1];
+  }
+  for (int m = 0; m < nn; ++m)
+    if (w.source[m] == old_clamp) first_clamped_ = m;
+  model_.discretize(s.u, disc_);
+
+  // Edges: the old edge holding the new edge's midpoint gives the frame (transported to
+  // the new tangent), the spin rate and a provisional angle.
+  s.theta.resize(nn - 1);
+  s.omega.resize(nn - 1);
+  s.frame.resize(nn - 1);
+  s.ref_twist.assign(nn, 0.0);
+  i = 0;
+  for (int j = 0; j < nn - 1; ++j) {
+    const double mid = 0.5 * (u_new[j] + u_new[j + 1]);
+    while (i < nv - 2 && w.ru[i + 1] <= mid) ++i;
+    const Vec3 t0 = w.rframe[i].d1.cross(w.rframe[i].d2);
+    const Vec3 t1 = (s.x[j + 1] - s.x[j]).normalized();
+    Vec3 d1 = parallel_transport(w.rframe[i].d1, t0, t1);
+    d1 = (d1 - t1 * t1.dot(d1)).normalized();
+    s.frame[j] = EdgeFrame{d1, t1.cross(d1)};
+    s.omega[j] = w.romega[i];
+    s.theta[j] = w.rtheta[i];
+  }
+  for (int m = 1; m < nn - 1; ++m) {
+    const int k = w.source[m];
+    const double previous = (k > 0 && k < nv - 1) ? w.rtwist[k] : 0.0;
+    s.ref_twist[m] = reference_twist(s.frame[m - 1].d1, (s.x[m] - s.x[m - 1]).normalized(),
+                                     s.frame[m].d1, (s.x[m + 1] - s.x[m]).normalized(), previous);
+  }
+  // Material angles swept from the clamp (whose edges are unchanged): each vertex carries
+  // the old twist density times its new cell.
+  for (int j = nn - 3; j >= 0; --j) {
+    if (j >= first_clamped_) continue;  // clamp edges keep their angle
+    const int m = j + 1;
+    const double twist = w.tz[m] * disc_.cell_length[m];
+    s.theta[j] = s.theta[j + 1] + s.ref_twist[m] - twist;
+  }
+  refresh_arc_lengths();
+  if (!externals_.empty()) {
+    const RodView view = current_view(0.0);
+    for (auto& e : externals_) e->remap(view, w.source);
+  }
+}
+
+RodView RodSimulator::current_view(double dt) {
+  Work& w = *work_;
+  const RodState& s = state_;
+  const int nv = s.vertex_count();
+  RodView view;
+  view.positions = s.x;
+  view.velocities = s.v;
+  view.arc_length = arc_length_;
+  view.radius = std::span<const double>(disc_.edge_radius.data(), nv - 1);
+  w.tangent.resize(nv - 1);
+  for (int j = 0; j < nv - 1; ++j) w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
+  view.spin_rates = s.omega;
+  view.tangents = w.tangent;
+  view.first_clamped_vertex = first_clamped_;
+  view.time = s.time;
+  view.dt = dt;
+  return view;
 }
 
 void RodSimulator::set_prescribed(double inserted, double angle, std::vector<Vec3>& x,
@@ -238,7 +513,7 @@ void RodSimulator::set_prescribed(double inserted, double angle, std::vector<Vec
   const Vec3& pb = model_.base_position;
   const Vec3& db = model_.base_direction;
   const int nv = static_cast<int>(x.size());
-  for (int k = first_clamped_; k < nv; ++k) x[k] = pb - db * (model_.u(k) - inserted);
+  for (int k = first_clamped_; k < nv; ++k) x[k] = pb - db * (state_.u[k] - inserted);
   // Clamped edges point from the tip side to the holder (−base_direction); the base angle
   // is right-handed about +base_direction, hence the sign.
   for (int j = first_clamped_; j < nv - 1; ++j) theta[j] = -angle;
@@ -270,16 +545,18 @@ void RodSimulator::predict_feed(double fed, double h) {
   const Vec3& db = model_.base_direction;
   const int nv = static_cast<int>(w.x0.size());
   const double L_old = state_.inserted_length;
+  const std::vector<double>& uk = state_.u;
+  int i = 0;  // old edge holding material u (u increases with k: a forward walk)
   for (int k = 0; k < first_clamped_; ++k) {
-    const double u = model_.u(k) - fed;
+    const double u = uk[k] - fed;
     Vec3 p;
     if (u >= L_old) {
       p = pb + db * (L_old - u);
     } else if (u < 0.0) {
-      p = w.x0[0] + (w.x0[0] - w.x0[1]) * (-u / model_.h);
+      p = w.x0[0] + (w.x0[0] - w.x0[1]) * (-u / (uk[1] - uk[0]));
     } else {
-      const int i = std::min(static_cast<int>(u / model_.h), nv - 2);
-      const double a = u / model_.h - i;
+      while (i < nv - 2 && uk[i + 1] <= u) ++i;
+      const double a = (u - uk[i]) / (uk[i + 1] - uk[i]);
       p = (1.0 - a) * w.x0[i] + a * w.x0[i + 1];
     }
     const Vec3 t = k + 1 < nv ? Vec3((w.x0[k + 1] - w.x0[k]).normalized()) : db;
@@ -328,12 +605,13 @@ void RodSimulator::vertex_params(int k, VertexParams& p) const {
   // held rigid, so its bending and twisting act over h/2 (this keeps the clamp exactly at
   // the entry and the scheme second-order; a full cell would move the clamp back by h/2).
   const double cell = (k == first_clamped_ || (tip_clamped_ && k == 1)) ? 0.5 : 1.0;
-  p.bend_stiffness1 = p.bend_stiffness2 = model_.bend_stiffness[k];
-  p.rest_kappa1 = cell * model_.rest_kappa1[k];
-  p.rest_kappa2 = cell * model_.rest_kappa2[k];
-  p.twist_stiffness = model_.twist_stiffness[k];
+  // (Only the clamp's free side is a grid edge of length h; a tip clamp's vertex 1 the same.)
+  p.bend_stiffness1 = p.bend_stiffness2 = disc_.bend_stiffness[k];
+  p.rest_kappa1 = cell * disc_.rest_kappa1[k];
+  p.rest_kappa2 = cell * disc_.rest_kappa2[k];
+  p.twist_stiffness = disc_.twist_stiffness[k];
   p.rest_twist = 0.0;
-  p.voronoi_length = cell * model_.h;
+  p.voronoi_length = cell * disc_.cell_length[k];
 }
 
 void RodSimulator::gather(Eigen::Ref<Eigen::VectorXd> q) const {
@@ -365,14 +643,15 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   w.has_ext_k = false;
   w.moment_k.setZero();
   if (gravity_.squaredNorm() > 0.0)
-    for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += load_scale * model_.mass[k] * gravity_;
+    for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += load_scale * disc_.mass[k] * gravity_;
   w.fext.segment<3>(0) += load_scale * tip_force_;
   const double L = s.inserted_length;
   for (const PointForce& pf : point_forces_) {
     const double u = L - pf.s;
     if (u < 0.0 || u > L) continue;
-    const int k = std::min(static_cast<int>(std::floor(u / model_.h)), nv - 2);
-    const double a = std::clamp(u / model_.h - k, 0.0, 1.0);
+    const auto it = std::upper_bound(s.u.begin(), s.u.end(), u);
+    const int k = std::clamp(static_cast<int>(it - s.u.begin()) - 1, 0, nv - 2);
+    const double a = std::clamp((u - s.u[k]) / (s.u[k + 1] - s.u[k]), 0.0, 1.0);
     w.fext.segment<3>(4 * k) += load_scale * (1.0 - a) * pf.f;
     w.fext.segment<3>(4 * (k + 1)) += load_scale * a * pf.f;
   }
@@ -405,7 +684,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
     view.positions = s.x;
     view.velocities = w.vel;
     view.arc_length = std::span<const double>(arc_length_.data(), nv);
-    view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
+    view.radius = std::span<const double>(disc_.edge_radius.data(), nv - 1);
     view.spin_rates = w.spin;
     view.tangents = w.tangent;
     view.first_clamped_vertex = first_clamped_;
@@ -443,9 +722,9 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
   if (need_matrix) w.H.resize(nd);
   double energy = 0.0;
   // Stretching: E = ½ ks ℓ̄ (ℓ/ℓ̄ − 1)², one length and tangent per edge.
-  const double lbar = model_.h;
   for (int j = 0; j < nv - 1; ++j) {
-    const double ks = model_.stretch_stiffness[j];
+    const double lbar = disc_.rest_length[j];
+    const double ks = disc_.stretch_stiffness[j];
     const Vec3 e = s.x[j + 1] - s.x[j];
     const double l = e.norm();
     const double strain = l / lbar - 1.0;
@@ -521,16 +800,20 @@ double RodSimulator::force_scale(double load_scale) const {
   const RodState& s = state_;
   double total_mass = 0.0, ei = 0.0, ea = 0.0;
   for (int k = 0; k < s.vertex_count(); ++k) {
-    total_mass += model_.mass[k];
-    ei = std::max(ei, model_.bend_stiffness[k]);
+    total_mass += disc_.mass[k];
+    ei = std::max(ei, disc_.bend_stiffness[k]);
   }
-  for (int j = 0; j < s.edge_count(); ++j) ea = std::max(ea, model_.stretch_stiffness[j]);
+  double lmin = model_.h;
+  for (int j = 0; j < s.edge_count(); ++j) {
+    ea = std::max(ea, disc_.stretch_stiffness[j]);
+    lmin = std::min(lmin, disc_.rest_length[j]);
+  }
   const double L = std::max(s.inserted_length, model_.h);
   double f = std::max({ei / (L * L), load_scale * total_mass * gravity_.norm(),
                        load_scale * tip_force_.norm(), load_scale * tip_moment_.norm() / L});
   for (const auto& pf : point_forces_) f = std::max(f, load_scale * pf.f.norm());
   const double xscale = model_.base_position.norm() + L;
-  const double floor = 4.0 * std::numeric_limits<double>::epsilon() * ea * (1.0 + xscale / model_.h);
+  const double floor = 4.0 * std::numeric_limits<double>::epsilon() * ea * (1.0 + xscale / lmin);
   return settings_.force_tolerance * f + floor;
 }
 
@@ -552,7 +835,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
   auto residual_norm = [&]() {
     double r = 0.0;
     for (int d = first_free; d < first_fixed; ++d) {
-      const double v = (d % 4 == 3) ? w.grad(d) / model_.h : w.grad(d);
+      const double v = (d % 4 == 3) ? w.grad(d) / disc_.rest_length[d / 4] : w.grad(d);
       r = std::max(r, std::abs(v));
     }
     return r;
@@ -787,6 +1070,7 @@ void RodSimulator::record_trace() {
 
 StepReport RodSimulator::step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
+  adapt();
   return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt)
                                                               : step_euler(dt);
 }
@@ -812,12 +1096,12 @@ void RodSimulator::begin_step(double h) {
   for (int k = 0; k < nv; ++k) {
     w.q0.segment<3>(4 * k) = s.x[k];
     w.qhat.segment<3>(4 * k) = s.x[k] + h * s.v[k];
-    w.mass.segment<3>(4 * k).setConstant(model_.mass[k]);
-    w.damp.segment<3>(4 * k).setConstant(model_.damping * model_.h);
+    w.mass.segment<3>(4 * k).setConstant(disc_.mass[k]);
+    w.damp.segment<3>(4 * k).setConstant(model_.damping * disc_.cell_length[k]);
     if (k < nv - 1) {
       w.q0(4 * k + 3) = s.theta[k];
       w.qhat(4 * k + 3) = s.theta[k] + h * s.omega[k];
-      w.mass(4 * k + 3) = model_.twist_inertia[k];
+      w.mass(4 * k + 3) = disc_.twist_inertia[k];
       w.damp(4 * k + 3) = 0.0;
     }
   }
@@ -871,18 +1155,7 @@ StepReport RodSimulator::step_euler(double dt) {
   report(rep, "implicit Euler step");
   record_trace();
   if (!externals_.empty()) {
-    RodView view;
-    view.positions = s.x;
-    view.velocities = s.v;
-    view.arc_length = arc_length_;
-    view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
-    w.tangent.resize(nv - 1);
-    for (int j = 0; j < nv - 1; ++j) w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
-    view.spin_rates = s.omega;
-    view.tangents = w.tangent;
-    view.first_clamped_vertex = first_clamped_;
-    view.time = s.time;
-    view.dt = dt;
+    const RodView view = current_view(dt);
     for (auto& e : externals_) e->end_step(view);
   }
   return rep;
@@ -952,24 +1225,29 @@ StepReport RodSimulator::step_midpoint(double dt) {
   report(rep, "implicit midpoint step");
   record_trace();
   if (!externals_.empty()) {
-    RodView view;
-    view.positions = s.x;
-    view.velocities = s.v;
-    view.arc_length = arc_length_;
-    view.radius = std::span<const double>(model_.edge_radius.data(), nv - 1);
-    w.tangent.resize(nv - 1);
-    for (int j = 0; j < nv - 1; ++j) w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
-    view.spin_rates = s.omega;
-    view.tangents = w.tangent;
-    view.first_clamped_vertex = first_clamped_;
-    view.time = s.time;
-    view.dt = dt;
+    const RodView view = current_view(dt);
     for (auto& e : externals_) e->end_step(view);
   }
   return rep;
 }
 
 StepReport RodSimulator::solve_static() {
+  StepReport r = solve_static_once();
+  // Adaptive: resample at the equilibrium and solve again until the vertex set settles.
+  for (int round = 0; round < 12 && r.converged() && adapt(); ++round) {
+    trace_.pop_back();
+    const StepReport again = solve_static_once();
+    r.status = again.status;
+    r.newton_iterations += again.newton_iterations;
+    r.line_search_cuts += again.line_search_cuts;
+    r.regularizations += again.regularizations;
+    r.residual = again.residual;
+    r.tolerance = again.tolerance;
+  }
+  return r;
+}
+
+StepReport RodSimulator::solve_static_once() {
   RodState& s = state_;
   s.base_angle = target_angle_;
   set_prescribed(s.inserted_length, target_angle_, s.x, s.theta);
@@ -1016,11 +1294,11 @@ RodEnergy RodSimulator::energy() const {
   RodEnergy e;
   const int nv = s.vertex_count();
   for (int k = 0; k < nv; ++k) {
-    e.kinetic += 0.5 * model_.mass[k] * s.v[k].squaredNorm();
-    if (k < nv - 1) e.kinetic += 0.5 * model_.twist_inertia[k] * s.omega[k] * s.omega[k];
+    e.kinetic += 0.5 * disc_.mass[k] * s.v[k].squaredNorm();
+    if (k < nv - 1) e.kinetic += 0.5 * disc_.twist_inertia[k] * s.omega[k] * s.omega[k];
   }
   for (int j = 0; j < nv - 1; ++j)
-    e.stretching += stretch_energy(s.x[j], s.x[j + 1], model_.stretch_stiffness[j], model_.h);
+    e.stretching += stretch_energy(s.x[j], s.x[j + 1], disc_.stretch_stiffness[j], disc_.rest_length[j]);
   VertexStencil st;
   VertexParams p;
   for (int k = 1; k < nv - 1; ++k) {
@@ -1041,15 +1319,18 @@ RodEnergy RodSimulator::energy() const {
 double RodSimulator::max_strain() const {
   double m = 0.0;
   for (int j = 0; j < first_clamped_; ++j)
-    m = std::max(m, std::abs((state_.x[j + 1] - state_.x[j]).norm() / model_.h - 1.0));
+    m = std::max(m, std::abs((state_.x[j + 1] - state_.x[j]).norm() / disc_.rest_length[j] - 1.0));
   return m;
 }
 
 double RodSimulator::length_drift() const {
   double l = 0.0;
   const int ne = state_.edge_count();
-  for (int j = 0; j < ne; ++j) l += (state_.x[j + 1] - state_.x[j]).norm();
-  const double rest = ne * model_.h;
+  double rest = 0.0;
+  for (int j = 0; j < ne; ++j) {
+    l += (state_.x[j + 1] - state_.x[j]).norm();
+    rest += disc_.rest_length[j];
+  }
   return std::abs(l - rest) / rest;
 }
 

@@ -49,7 +49,7 @@ SweepResult run_sweep_case(double E, double dt, double inserted) {
   // Energy scale: the whole wire translating at the feed speed plus the tip hook
   // (radius ~2R) swinging at ω; the bound leaves a factor 100.
   double mass = 0.0;
-  for (int k = 0; k < sim.vertex_count(); ++k) mass += sim.model().mass[k];
+  for (int k = 0; k < sim.vertex_count(); ++k) mass += sim.discretization().mass[k];
   const double hook = 2.0 * spec.tip.bend_radius;
   SweepResult res;
   res.energy_bound = 100.0 * 0.5 * mass * (speed * speed + omega * omega * hook * hook);

@@ -100,7 +100,7 @@ TEST(RodStatics, GravityAndPointForceMatchBeamTheory) {
     EXPECT_NEAR(-sim.tip_position().y(), g / 8.0, tol(0.002 * g / 8.0));
     // The clamp carries the weight of every simulated vertex (the free wire and the stub).
     double mass = 0.0;
-    for (int k = 0; k < sim.vertex_count(); ++k) mass += sim.model().mass[k];
+    for (int k = 0; k < sim.vertex_count(); ++k) mass += sim.discretization().mass[k];
     EXPECT_NEAR(sim.base_force().y(), g * mass, 1e-6 * g);
   }
   {

@@ -60,6 +60,9 @@ class VesselForces : public rod::ExternalForce {
 
   void evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) override;
   void end_step(const rod::RodView& rod) override;
+  /// Carries the segment hints over a resampling and records the step-start contact
+  /// (normal force and normal for the lagged friction) of the new vertex set.
+  void remap(const rod::RodView& rod, std::span<const int> source) override;
 
   /// @brief Segment of each vertex found at the last evaluation (−1: not looked up).
   [[nodiscard]] const std::vector<int>& segments() const { return segment_; }
@@ -73,6 +76,7 @@ class VesselForces : public rod::ExternalForce {
 
  private:
   void ensure_size(int n);
+  std::vector<int> remap_segments_;
   const vessels::SpatialIndex& index_;
   double wire_radius_;
   ContactParams contact_;

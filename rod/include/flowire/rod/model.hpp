@@ -53,6 +53,25 @@ struct TipSpec {
   double bend_offset = -1.0;       ///< [m] distance from the tip to the arc; < 0: default
 };
 
+/// @brief Curvature-adaptive resampling of the free part of the wire (off by default).
+///
+/// Edges live on a dyadic hierarchy anchored at the tip: an edge of rest length ℓ spans
+/// [i·ℓ, (i+1)·ℓ] in the material coordinate, ℓ = h·2^m with h the feeding grid
+/// (`segment_length`). An edge is split at its material midpoint where the turning angle
+/// at one of its end vertices (the larger of the current and the rest turning) exceeds
+/// `split_angle`; two sibling edges are merged where the turning at the three vertices
+/// involved is below `merge_angle`. Neighbouring rest lengths never differ by more than a
+/// factor 2. The state is transferred so that positions lie on the smooth curve through
+/// the old vertices, momentum is conserved and the twist density is kept (see
+/// RodSimulator::adapt).
+struct AdaptSpec {
+  bool enabled = false;
+  double min_segment_length = 0.0;  ///< [m] finest edge; 0: h/4
+  double max_segment_length = 0.0;  ///< [m] coarsest edge; 0: 4h
+  double split_angle = 0.1;         ///< [rad] turning angle above which edges are split
+  double merge_angle = -1.0;        ///< [rad] below which siblings merge; < 0: split_angle/4
+};
+
 /// @brief A guidewire and where it enters (the clamp/introducer).
 struct WireSpec {
   double length = 1.7;              ///< [m] total wire length
@@ -76,33 +95,73 @@ struct WireSpec {
   double twist_stiffness = 0.0;     ///< GJ [N m²]
   double stretch_stiffness = 0.0;   ///< EA [N]
   double mass_per_length = 0.0;     ///< ρA [kg/m]
+  AdaptSpec adapt;
 };
 
-/// @brief Constant per-grid data (grid index k from the distal tip; edge j joins grid
-/// points j and j+1). Sizes are the grid capacity: `grid_vertices` and `grid_vertices − 1`.
-struct RodModel {
+/// @brief Cross-section constants at one material coordinate.
+struct Section {
+  double stretch_stiffness = 0.0;  ///< EA [N]
+  double bend_stiffness = 0.0;     ///< EI [N m²]
+  double twist_stiffness = 0.0;    ///< GJ [N m²]
+  double rho_a = 0.0;              ///< mass per length [kg/m]
+  double radius = 0.0;             ///< [m]
+};
+
+/// @brief Discrete constants of a polyline whose vertices sit at material coordinates u_k
+/// (vertex k, edge j joins vertices j and j+1). Edge constants are taken at the edge's
+/// midpoint; vertex constants are length-weighted averages over the vertex's cell
+/// [u_k − ℓ̄_{k−1}/2, u_k + ℓ̄_k/2]; rest curvature is integrated over that cell,
+/// κ̄ = 2 tan(Φ/2) with Φ the rest turning angle of the cell.
+struct Discretization {
+  // per edge j
+  std::vector<double> rest_length;        ///< ℓ̄ [m]
+  std::vector<double> stretch_stiffness;  ///< EA [N]
+  std::vector<double> rho_a;              ///< mass per length [kg/m]
+  std::vector<double> twist_inertia;      ///< ρ J ℓ̄: rotational inertia of the edge [kg m²]
+  std::vector<double> edge_radius;        ///< [m]
+  // per vertex k (bending/twisting quantities live on interior vertices)
+  std::vector<double> mass;               ///< lumped mass [kg] (the vertex's cell)
+  std::vector<double> cell_length;        ///< (ℓ̄_{k−1} + ℓ̄_k)/2, one-sided at the ends [m]
+  std::vector<double> bend_stiffness;     ///< EI [N m²]
+  std::vector<double> twist_stiffness;    ///< GJ [N m²]
+  std::vector<double> rest_kappa1;        ///< integrated rest curvature (material frame)
+  std::vector<double> rest_kappa2;
+  /// @brief Reserve room for @p vertices vertices (no allocation in later `discretize`).
+  void reserve(int vertices);
+};
+
+/// @brief The wire's material as functions of the material coordinate u, and its
+/// discretization on the uniform feeding grid u_k = k·h (grid index k from the distal tip;
+/// the Discretization arrays are sized for the grid capacity `grid_vertices`).
+struct RodModel : Discretization {
   double h = 1e-3;        ///< segment (rest) length [m]
   double length = 0.0;    ///< total wire length [m]
   int grid_vertices = 0;  ///< capacity: grid points that may ever be simulated
   Eigen::Vector3d base_position, base_direction, base_normal;
   double damping = 0.0;
-
-  // per edge j
-  std::vector<double> stretch_stiffness;  ///< EA [N]
-  std::vector<double> rho_a;              ///< mass per length [kg/m]
-  std::vector<double> twist_inertia;      ///< ρ J h: rotational inertia of the edge [kg m²]
-  std::vector<double> edge_radius;        ///< [m]
-  // per grid point k (bending/twisting quantities live on interior vertices)
-  std::vector<double> mass;               ///< lumped mass [kg] (a full Voronoi cell)
-  std::vector<double> bend_stiffness;     ///< EI [N m²]
-  std::vector<double> twist_stiffness;    ///< GJ [N m²]
-  std::vector<double> rest_kappa1;        ///< integrated rest curvature (material frame)
-  std::vector<double> rest_kappa2;
+  AdaptSpec adapt;        ///< with defaults resolved (min/max lengths, merge angle)
 
   /// @brief Build from a spec. @throws flowire::Error (usage) on invalid values.
   static RodModel from_spec(const WireSpec& spec);
   /// @brief Material coordinate (distance from the tip) of grid point k.
   [[nodiscard]] double u(int k) const { return h * k; }
+  /// @brief Cross-section at material coordinate @p u (shaft material continued past the
+  /// proximal end).
+  [[nodiscard]] Section section(double u) const;
+  /// @brief Rest turning angle ∫κ̄ du over [a, b] (in the plane of the pre-shaped tip) [rad].
+  [[nodiscard]] double rest_turning(double a, double b) const;
+  /// @brief Constants of the polyline with vertices at material coordinates @p u
+  /// (increasing); @p out must have room (Discretization::reserve) to stay allocation-free.
+  void discretize(const std::vector<double>& u, Discretization& out) const;
+
+ private:
+  // Material description (from the spec).
+  double E_shaft_ = 0.0, E_tip_ = 0.0, r_shaft_ = 0.0, r_tip_ = 0.0, nu_ = 0.3;
+  double G_shaft_ = 0.0;
+  double tip_length_ = 0.0, transition_ = 0.0;
+  double ei_override_ = 0.0, gj_override_ = 0.0, ea_override_ = 0.0, rho_a_override_ = 0.0;
+  double density_ = 0.0;
+  double arc_begin_ = 0.0, arc_end_ = 0.0, arc_radius_ = 1.0;  ///< pre-shaped arc [m]
 };
 
 }  // namespace flowire::rod

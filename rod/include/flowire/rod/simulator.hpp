@@ -44,6 +44,19 @@
 /// pulled back behind the entry are snapped onto the insertion line and clamped. Only the
 /// inserted part plus one clamped edge is simulated.
 ///
+/// **Adaptivity.** With `WireSpec::adapt` enabled, each step (and each round of a static
+/// solve) starts with `adapt()`: free edges are split where the wire is bent and merged
+/// where it is straight, on a dyadic hierarchy in the material coordinate (model.hpp).
+/// Within 2·max_segment_length of the entry every edge is a feeding-grid edge, so feeding
+/// is unaffected. The state is carried over consistently: a new vertex lies on the cubic
+/// Hermite curve through its edge's end points and vertex tangents (on a circular arc this
+/// keeps the bending energy to second order; the edge strain changes by O(φ²/32) at turning
+/// φ), velocities are interpolated linearly, each new edge's reference frame is the old
+/// edge's transported to the new tangent, spin rates carried over, and the material angles
+/// are re-swept from the clamp so that every vertex carries the old twist density times its
+/// new cell (uniform twist is kept exactly). External forces are told through
+/// `ExternalForce::remap`.
+///
 /// **Allocation.** Every buffer is sized for the whole wire at construction; `step` and
 /// `solve_static` do not allocate (the tip trace grows by amortized push_back only).
 ///
@@ -134,6 +147,7 @@ struct RodState {
   std::vector<double> omega;           ///< (n_edges) dθ/dt [rad/s]
   std::vector<EdgeFrame> frame;        ///< (n_edges) reference frames (time-parallel)
   std::vector<double> ref_twist;       ///< (n_vertices) reference twist (interior vertices)
+  std::vector<double> u;               ///< (n_vertices) material coordinate from the tip [m]
   double time = 0.0;                   ///< [s]
   double inserted_length = 0.0;        ///< [m] wire length in front of the entry point
   double base_angle = 0.0;             ///< [rad] rotation of the clamp
@@ -215,6 +229,16 @@ class RodSimulator {
   [[nodiscard]] double max_strain() const;
   /// @brief |Σℓ − Σℓ̄| / Σℓ̄ over all simulated edges.
   [[nodiscard]] double length_drift() const;
+  /// @brief Resample the free part (see Adaptivity above); returns true if the vertex set
+  /// changed. Called by step() and solve_static(); a no-op unless `WireSpec::adapt` is on.
+  bool adapt();
+  /// @brief Constants of the simulated vertices and edges (rest lengths, masses, …).
+  [[nodiscard]] const Discretization& discretization() const { return disc_; }
+  /// @brief (n_vertices) material coordinate of each vertex, distance from the tip [m].
+  [[nodiscard]] std::span<const double> material_coordinates() const { return state_.u; }
+  /// @brief Vertices added and removed by adaptivity so far.
+  [[nodiscard]] long adapt_splits() const { return adapt_splits_; }
+  [[nodiscard]] long adapt_merges() const { return adapt_merges_; }
   /// @brief Number of negative eigenvalues of the static Hessian (free unknowns) at the
   /// current state — 0 means the equilibrium is stable.
   [[nodiscard]] int static_hessian_negative_eigenvalues();
@@ -224,13 +248,22 @@ class RodSimulator {
   enum class Mode { Static, Dynamic };
 
   void build_initial_state(double inserted);
+  /// Positions, frames and zero velocities/angles of the rest shape on the current vertices.
+  void layout_rest_shape();
+  void record_trace_reset();
+  /// View of the current state for external forces (dt = 0: between steps).
+  RodView current_view(double dt);
   void update_vertex_set(double new_inserted);
   void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x,
                       std::vector<double>& theta) const;
   void refresh_arc_lengths();
+  /// Replace the vertex set by the one at material coordinates @p u_new (a dyadic
+  /// refinement/coarsening of the current one), carrying the state over.
+  void resample(const std::vector<double>& u_new);
   void predict_feed(double fed, double h);
   void vertex_params(int k, VertexParams& p) const;
   StepReport newton(Mode mode, double h, double load_scale);
+  StepReport solve_static_once();
   /// Snapshot the step start (x, v, θ, ω, frames; q0, mass, damping) and move the state to
   /// the inertial prediction q + h·v, with q̂ = that prediction; shared by both integrators.
   void begin_step(double h);
@@ -258,6 +291,8 @@ class RodSimulator {
 
   RodModel model_;
   RodState state_;
+  Discretization disc_;  // constants of the simulated vertices (state_.u)
+  long adapt_splits_ = 0, adapt_merges_ = 0;
   SolverSettings settings_;
   std::unique_ptr<Work> work_;
   std::vector<double> arc_length_;
