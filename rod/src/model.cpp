@@ -94,7 +94,7 @@ RodModel RodModel::from_spec(const WireSpec& s) {
   // Adaptivity defaults.
   m.adapt = s.adapt;
   if (m.adapt.min_segment_length <= 0.0) m.adapt.min_segment_length = 0.25 * m.h;
-  if (m.adapt.max_segment_length <= 0.0) m.adapt.max_segment_length = 4.0 * m.h;
+  if (m.adapt.max_segment_length <= 0.0) m.adapt.max_segment_length = m.h;
   if (m.adapt.merge_angle < 0.0) m.adapt.merge_angle = 0.25 * m.adapt.split_angle;
   if (m.adapt.enabled) {
     require(m.adapt.min_segment_length <= m.h && m.adapt.max_segment_length >= m.h,

@@ -302,7 +302,9 @@ bool aligned(double u, double len) {
 }
 }  // namespace
 
-bool RodSimulator::adapt() {
+bool RodSimulator::adapt() { return adapt_for(0.0); }
+
+bool RodSimulator::adapt_for(double pull_back) {
   if (!model_.adapt.enabled) return false;
   const AdaptSpec& a = model_.adapt;
   const double h = model_.h;
@@ -315,7 +317,9 @@ bool RodSimulator::adapt() {
     Work& w = *work_;
     const int nv = s.vertex_count();
     const int fc = first_clamped_;
-    const double zone = s.inserted_length - 2.0 * a.max_segment_length;
+    // Vertices at or behind `zone` (the entry after the next step's pull-back) must be
+    // feeding-grid points h apart.
+    const double zone = s.inserted_length - pull_back;
     const int lowest = tip_clamped_ ? 3 : 0;  // a tip clamp holds vertices 0..2 as they are
     auto len = [&](int j) { return s.u[j + 1] - s.u[j]; };
     w.psi.assign(nv, 0.0);
@@ -333,16 +337,17 @@ bool RodSimulator::adapt() {
       const double l = len(k - 1);
       return std::abs(len(k) - l) <= 1e-9 * l && aligned(s.u[k - 1], 2.0 * l);
     };
-    // Near the entry: grid edges only (coarse edges split, refined vertices removed).
+    // At and behind the entry (after the step's pull-back): grid points only (coarse edges
+    // reaching there split, refined vertices there removed).
     for (int j = lowest; j < nv - 1; ++j)
       if (s.u[j + 1] > zone + tol && len(j) > h + tol) w.split[j] = 1;
     for (int k = std::max(lowest, 1); k < nv - 1; ++k)
-      if (s.u[k] > zone + tol && !aligned(s.u[k], h) && sibling_pair(k) && !w.split[k - 1] &&
+      if (s.u[k] > zone - tol && !aligned(s.u[k], h) && sibling_pair(k) && !w.split[k - 1] &&
           !w.split[k])
         w.remove[k] = 1;
     if (round == 0) {
-      auto splittable = [&](int j) {
-        return j >= lowest && j < fc && s.u[j + 1] <= zone + tol &&
+      auto splittable = [&](int j) {  // the new vertex stays free over the next step
+        return j >= lowest && j < fc && 0.5 * (s.u[j] + s.u[j + 1]) < zone - tol &&
                len(j) >= 2.0 * a.min_segment_length - tol;
       };
       for (int j = lowest; j < fc; ++j)
@@ -360,12 +365,21 @@ bool RodSimulator::adapt() {
             }
       }
       for (int k = std::max(lowest, 1); k < fc; ++k) {
-        if (w.remove[k] || s.u[k + 1] > zone + tol || !sibling_pair(k)) continue;
+        if (w.remove[k] || !sibling_pair(k)) continue;
         const double l = len(k - 1);
+        if (2.0 * l > h + tol && s.u[k + 1] > zone + tol) continue;
         if (2.0 * l > a.max_segment_length + tol || w.split[k - 1] || w.split[k]) continue;
         if (std::max({w.psi[k - 1], w.psi[k], w.psi[k + 1]}) >= a.merge_angle) continue;
         if (k >= 2 && final_len(k - 2) < l - tol) continue;
         if (final_len(k + 1) < l - tol) continue;
+        // Lumping the vertex's mass onto its neighbours raises the kinetic energy by
+        // (m_k/8)|v_{k−1} − v_{k+1}|² (exact for a linear velocity field): merge only where
+        // that is negligible, so a rod swinging through straight is not coarsened.
+        const double dke = 0.125 * disc_.mass[k] * (s.v[k - 1] - s.v[k + 1]).squaredNorm();
+        const double ke = 0.5 * (disc_.mass[k - 1] * s.v[k - 1].squaredNorm() +
+                                 disc_.mass[k] * s.v[k].squaredNorm() +
+                                 disc_.mass[k + 1] * s.v[k + 1].squaredNorm());
+        if (dke > 1e-4 * ke) continue;
         w.remove[k] = 1;
       }
     }
@@ -604,8 +618,9 @@ void RodSimulator::vertex_params(int k, VertexParams& p) const {
   // A clamp vertex owns only the half cell on its free side: the wire behind it is
   // held rigid, so its bending and twisting act over h/2 (this keeps the clamp exactly at
   // the entry and the scheme second-order; a full cell would move the clamp back by h/2).
-  const double cell = (k == first_clamped_ || (tip_clamped_ && k == 1)) ? 0.5 : 1.0;
-  // (Only the clamp's free side is a grid edge of length h; a tip clamp's vertex 1 the same.)
+  double cell = 1.0;
+  if (k == first_clamped_) cell = 0.5 * disc_.rest_length[k - 1] / disc_.cell_length[k];
+  if (tip_clamped_ && k == 1) cell = 0.5;
   p.bend_stiffness1 = p.bend_stiffness2 = disc_.bend_stiffness[k];
   p.rest_kappa1 = cell * disc_.rest_kappa1[k];
   p.rest_kappa2 = cell * disc_.rest_kappa2[k];
@@ -1070,7 +1085,7 @@ void RodSimulator::record_trace() {
 
 StepReport RodSimulator::step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
-  adapt();
+  adapt_for(std::max(0.0, -insertion_speed_ * dt));
   return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt)
                                                               : step_euler(dt);
 }

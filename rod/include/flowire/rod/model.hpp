@@ -60,14 +60,15 @@ struct TipSpec {
 /// (`segment_length`). An edge is split at its material midpoint where the turning angle
 /// at one of its end vertices (the larger of the current and the rest turning) exceeds
 /// `split_angle`; two sibling edges are merged where the turning at the three vertices
-/// involved is below `merge_angle`. Neighbouring rest lengths never differ by more than a
+/// involved is below `merge_angle` and lumping the middle vertex's mass onto its neighbours
+/// changes the kinetic energy by less than 10⁻⁴ of theirs. Neighbouring rest lengths never differ by more than a
 /// factor 2. The state is transferred so that positions lie on the smooth curve through
 /// the old vertices, momentum is conserved and the twist density is kept (see
 /// RodSimulator::adapt).
 struct AdaptSpec {
   bool enabled = false;
   double min_segment_length = 0.0;  ///< [m] finest edge; 0: h/4
-  double max_segment_length = 0.0;  ///< [m] coarsest edge; 0: 4h
+  double max_segment_length = 0.0;  ///< [m] coarsest edge; 0: h (coarsening only undoes refinement)
   double split_angle = 0.1;         ///< [rad] turning angle above which edges are split
   double merge_angle = -1.0;        ///< [rad] below which siblings merge; < 0: split_angle/4
 };

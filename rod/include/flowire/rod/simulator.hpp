@@ -47,8 +47,8 @@
 /// **Adaptivity.** With `WireSpec::adapt` enabled, each step (and each round of a static
 /// solve) starts with `adapt()`: free edges are split where the wire is bent and merged
 /// where it is straight, on a dyadic hierarchy in the material coordinate (model.hpp).
-/// Within 2·max_segment_length of the entry every edge is a feeding-grid edge, so feeding
-/// is unaffected. The state is carried over consistently: a new vertex lies on the cubic
+/// Vertices at or behind the entry (after the step's pull-back) stay feeding-grid points,
+/// so feeding is unaffected. The state is carried over consistently: a new vertex lies on the cubic
 /// Hermite curve through its edge's end points and vertex tangents (on a circular arc this
 /// keeps the bending energy to second order; the edge strain changes by O(φ²/32) at turning
 /// φ), velocities are interpolated linearly, each new edge's reference frame is the old
@@ -264,6 +264,8 @@ class RodSimulator {
   void vertex_params(int k, VertexParams& p) const;
   StepReport newton(Mode mode, double h, double load_scale);
   StepReport solve_static_once();
+  /// adapt() with the grid kept over the length a pull-back of @p pull_back moves into the clamp.
+  bool adapt_for(double pull_back);
   /// Snapshot the step start (x, v, θ, ω, frames; q0, mass, damping) and move the state to
   /// the inertial prediction q + h·v, with q̂ = that prediction; shared by both integrators.
   void begin_step(double h);
