@@ -84,6 +84,13 @@ rod::WireSpec scene_wire_spec(const config::Config& c) {
     w.tip.angle = c.number("wire.tip.angle");
     w.tip.bend_radius = c.number("wire.tip.bend_radius");
   }
+  if (c.has_section("wire.adapt")) {
+    w.adapt.enabled = true;
+    if (c.has("wire.adapt.min_segment_length")) w.adapt.min_segment_length = c.number("wire.adapt.min_segment_length");
+    if (c.has("wire.adapt.max_segment_length")) w.adapt.max_segment_length = c.number("wire.adapt.max_segment_length");
+    w.adapt.split_angle = c.number("wire.adapt.split_angle");
+    if (c.has("wire.adapt.merge_angle")) w.adapt.merge_angle = c.number("wire.adapt.merge_angle");
+  }
   if (c.has_section("wire.base")) {
     w.base_position = c.vector3("wire.base.position");
     w.base_direction = c.vector3("wire.base.direction");
@@ -510,6 +517,8 @@ RunResult run_scene(const config::Config& c) {
                    {"base_torque", {sim->base_torque().x(), sim->base_torque().y(), sim->base_torque().z()}},
                    {"length_drift", sim->length_drift()},
                    {"unconverged_steps", failures}};
+      if (sim->model().adapt.enabled)
+        s["wire"]["adapt"] = {{"splits", sim->adapt_splits()}, {"merges", sim->adapt_merges()}};
       if (tip_forces)
         s["tip_forces"] = {{"obstacle_steps", tip_forces->obstacle_steps()},
                            {"steering_steps", tip_forces->steering_steps()}};
@@ -518,7 +527,7 @@ RunResult run_scene(const config::Config& c) {
         s["lookup"] = {{"window_hits", index->stats().window_hits}, {"fallbacks", index->stats().fallbacks}};
         s["contact"] = {{"max_penetration", st.max_penetration},
                         {"max_outside", st.max_outside},
-                        {"max_outside_over_wire_radius", st.max_outside / sim->model().edge_radius.front()},
+                        {"max_outside_over_wire_radius", st.max_outside / sim->discretization().edge_radius.front()},
                         {"contact_evaluations", st.contacts}};
         t_contact = st.seconds_lookup + st.seconds_contact;
         t_coupling = st.seconds_drag;

@@ -108,6 +108,13 @@ config::Schema make_schema() {
   add("wire.tip.shape", Type::Enum, "straight", D::None, "tip shape", {"straight", "angled", "j"});
   add("wire.tip.angle", Type::Number, "45 deg", D::Angle, "angled/j: total bend angle of the tip");
   add("wire.tip.bend_radius", Type::Number, "3 mm", D::Length, "angled/j: radius of the pre-bent arc");
+  add("wire.adapt", Type::Section, "", D::None,
+      "curvature-adaptive resampling: split edges where the wire bends, merge them back where it is straight");
+  add("wire.adapt.min_segment_length", Type::Number, "", D::Length, "finest edge (default a quarter of the segment length)");
+  add("wire.adapt.max_segment_length", Type::Number, "", D::Length,
+      "coarsest edge (default the segment length: merging only undoes refinement)");
+  add("wire.adapt.split_angle", Type::Number, "0.1 rad", D::Angle, "turning angle at a vertex above which its edges are split");
+  add("wire.adapt.merge_angle", Type::Number, "", D::Angle, "turning angle below which edges merge (default split_angle / 4)");
   add("wire.base", Type::Section, "", D::None, "where the wire is held");
   add("wire.base.position", Type::Vector3, "[0, 0, 0]", D::Length, "base position (vessel scenes: the entry node)");
   add("wire.base.direction", Type::Vector3, "[1, 0, 0]", D::None, "base direction (vessel scenes: into the entry vessel)");
@@ -129,7 +136,7 @@ config::Schema make_schema() {
   add("contact.friction", Type::Number, "0.1", D::None, "Coulomb friction coefficient (shaft)");
   add("contact.tip_friction", Type::Number, "", D::None, "Coulomb friction coefficient of the tip (default: friction)");
   add("contact.stiffness", Type::Number, "3e4", D::None,
-      "penalty stiffness per vertex (N/m): a vertex pressed with force F sinks F/k into the wall");
+      "penalty stiffness per vertex of the segment_length grid (N/m): a vertex pressed with force F sinks F/k into the wall (scaled with the edge length where wire.adapt refines)");
   add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
 
   add("obstacles", Type::List, "", D::None, "regions that resist the tip (a clot, a tight lesion)");

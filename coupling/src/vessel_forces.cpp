@@ -67,7 +67,10 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     if (d_cap + a < 0.0) continue;
     Vec3 n_wall;
     const double d = index_.wall_distance(x, s, &n_wall);
-    const auto pen = wall_penalty(d, n_wall, H_cap, a, contact_.stiffness);
+    // Stiffness per vertex of the feeding grid, scaled with the vertex's edges where the
+    // rod is resampled (so the wall stays equally stiff per unit length).
+    const double k_wall = contact_.stiffness * rod.cell_weight(i);
+    const auto pen = wall_penalty(d, n_wall, H_cap, a, k_wall);
     if (pen.penetration <= 0.0) continue;
     ++stats_.contacts;
     // The penalty has a potential (k/2 δ₊²): reported, the rod's line search measures the
@@ -76,7 +79,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     out.add_conservative_force(i, f);
     out.add_energy(pen.energy);
     out.add_position_jacobian(i, -pen.hessian);
-    cur_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * pen.penetration;
+    cur_normal_force_[static_cast<size_t>(i)] = k_wall * pen.penetration;
     cur_normal_[static_cast<size_t>(i)] = n_wall;
     force_[static_cast<size_t>(i)] = f;
   }
@@ -157,7 +160,7 @@ void VesselForces::end_step(const rod::RodView& rod) {
     Vec3 nrm;
     const double d = index_.wall_distance(rod.position(i), s, &nrm);
     if (d + wire_radius_ > 0.0) {
-      lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * (d + wire_radius_);
+      lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * rod.cell_weight(i) * (d + wire_radius_);
       lag_normal_[static_cast<size_t>(i)] = nrm;
     }
     stats_.max_outside = std::max(stats_.max_outside, d);

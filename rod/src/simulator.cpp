@@ -512,6 +512,8 @@ RodView RodSimulator::current_view(double dt) {
   view.velocities = s.v;
   view.arc_length = arc_length_;
   view.radius = std::span<const double>(disc_.edge_radius.data(), nv - 1);
+  view.rest_lengths = std::span<const double>(disc_.rest_length.data(), nv - 1);
+  view.segment_length = model_.h;
   w.tangent.resize(nv - 1);
   for (int j = 0; j < nv - 1; ++j) w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
   view.spin_rates = s.omega;
@@ -700,6 +702,8 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
     view.velocities = w.vel;
     view.arc_length = std::span<const double>(arc_length_.data(), nv);
     view.radius = std::span<const double>(disc_.edge_radius.data(), nv - 1);
+    view.rest_lengths = std::span<const double>(disc_.rest_length.data(), nv - 1);
+    view.segment_length = model_.h;
     view.spin_rates = w.spin;
     view.tangents = w.tangent;
     view.first_clamped_vertex = first_clamped_;

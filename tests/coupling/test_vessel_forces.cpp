@@ -149,3 +149,41 @@ TEST(VesselForces, LookupUsesTheWindowForAMovingWire) {
   for (int k = 0; k < 50; ++k) pm.step(f, 1e-3, Vec3(0, 0, 0.1));
   EXPECT_GT(index.stats().window_hits, 10 * index.stats().fallbacks);
 }
+
+TEST(VesselForces, WallStiffnessScalesWithTheVertexEdgesOfARefinedWire) {
+  // Two vertices pressed equally deep into the wall of a straight tube, one with grid
+  // edges h, one with refined edges h/4: the wall pushes the refined one a quarter as
+  // hard, so the wall stays equally stiff per unit length of wire.
+  const auto net = vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = 2e-3}),
+                                           {.max_segment_length = 5e-3});
+  const vessels::SpatialIndex index(net);
+  ContactParams cp;
+  cp.stiffness = 1e4;
+  cp.friction = 0.0;
+  cp.tip_friction = 0.0;
+  VesselForces forces(index, 0.3e-3, cp, DragParams{});
+  const double h = 1e-3;
+  // Vertices 0..4 along the wall (y = 1.8 mm: 0.1 mm into it with a 0.3 mm wire).
+  std::vector<Vec3> x, v(5, Vec3::Zero());
+  for (int i = 0; i < 5; ++i) x.emplace_back(0.05 + 0.001 * i, 1.8e-3, 0.0);
+  const std::vector<double> arc{5, 4, 3, 2, 1}, radius(4, 0.3e-3);
+  for (const double refined : {h, 0.25 * h}) {
+    const std::vector<double> rest{h, refined, refined, h};
+    rod::RodView view;
+    view.positions = x;
+    view.velocities = v;
+    view.arc_length = arc;
+    view.radius = radius;
+    view.rest_lengths = rest;
+    view.segment_length = h;
+    view.first_clamped_vertex = 5;
+    rod::ForceAccumulator acc;
+    acc.reset(5);
+    forces.evaluate(view, acc);
+    const double f_grid = acc.forces()[0].norm();   // edges h
+    const double f_mid = acc.forces()[2].norm();    // edges `refined`
+    ASSERT_GT(f_grid, 0.0);
+    EXPECT_NEAR(f_mid / f_grid, refined / h, 1e-9);
+    EXPECT_NEAR(f_grid, cp.stiffness * 0.1e-3, 1e-9);  // k δ on the grid
+  }
+}

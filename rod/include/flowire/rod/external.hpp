@@ -47,6 +47,10 @@ struct RodView {
   std::span<const Eigen::Vector3d> velocities;  ///< (vertex_count) [m/s] at this iterate
   std::span<const double> arc_length;           ///< (vertex_count) [m] from the entry, >0 inserted
   std::span<const double> radius;               ///< (vertex_count − 1) per edge [m]
+  /// (vertex_count − 1) rest length of each edge [m]: the feeding grid's `segment_length`,
+  /// shorter where adaptivity refined the wire (longer where it coarsened it)
+  std::span<const double> rest_lengths;
+  double segment_length = 0.0;  ///< [m] the feeding grid's edge length
   /// (vertex_count − 1) spin rate of each edge's material frame about its tangent [rad/s]
   std::span<const double> spin_rates;
   /// (vertex_count − 1) unit tangent of each edge, pointing from the tip toward the base
@@ -57,6 +61,17 @@ struct RodView {
   [[nodiscard]] int vertex_count() const { return static_cast<int>(positions.size()); }
   [[nodiscard]] const Eigen::Vector3d& position(int i) const { return positions[i]; }
   [[nodiscard]] const Eigen::Vector3d& velocity(int i) const { return velocities[i]; }
+  /// @brief Mean rest length of the edges at vertex @p i over the grid's segment length: 1 on
+  /// a uniform grid. Per-vertex penalties scaled by it stay per unit length under refinement.
+  [[nodiscard]] double cell_weight(int i) const {
+    if (rest_lengths.empty() || !(segment_length > 0.0)) return 1.0;
+    const int ne = static_cast<int>(rest_lengths.size());
+    double sum = 0.0;
+    int count = 0;
+    if (i > 0 && i - 1 < ne) sum += rest_lengths[i - 1], ++count;
+    if (i < ne) sum += rest_lengths[i], ++count;
+    return count ? sum / count / segment_length : 1.0;
+  }
 };
 
 /// @brief Where forces and Jacobians are accumulated (sized by the rod; no allocation).
