@@ -97,6 +97,9 @@ int feature_cost(const Options& o) {
       {"output_off", text, {"output.csv=false", "output.vtk=false"}},
       // No scene key switches wall contact off: stiffness 0 removes the force, not the lookup.
       {"contact_stiffness_0", text, {"contact.stiffness=0"}},
+      // Adaptivity is off in the scene (its cost is then nil: no resampling is attempted);
+      // this row shows what it costs when on.
+      {"adapt_on", text, {"wire.adapt.split_angle=0.1"}},
   };
   std::string csv = "variant,setup,flow,rod,contact,coupling,output,total,steps,status,flow_frames,window_hits,fallbacks\n";
   for (auto& v : variants) {

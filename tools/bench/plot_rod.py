@@ -11,10 +11,15 @@ data, out = sys.argv[1], sys.argv[2]
 rows = read_csv(f"{data}/rod_work_precision.csv")
 
 fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.6))
-for case in sorted({r["case"] for r in rows if r["integrator"] == "static"}):
-    pts = [(num(r["seconds"]), num(r["error"]), r["segments"]) for r in rows if r["case"] == case]
+colours = {}
+for case, integ in sorted({(r["case"], r["integrator"]) for r in rows if r["integrator"].startswith("static")}):
+    pts = [(num(r["seconds"]), num(r["error"]), r["segments"]) for r in rows if r["case"] == case and r["integrator"] == integ]
     pts = [p for p in pts if math.isfinite(p[1]) and p[1] > 0]
-    a.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=case.replace("cantilever_", "elastica "))
+    adaptive = integ == "static_adaptive"
+    label = case.replace("cantilever_", "elastica ") + (" adaptive" if adaptive else "")
+    line, = a.loglog([p[0] for p in pts], [p[1] for p in pts], "s" if adaptive else "o-", label=label,
+                     color=colours.get(case), mfc="none" if adaptive else None)
+    colours[case] = line.get_color()
     for s, e, n in pts[::2]:
         a.annotate(n, (s, e), fontsize=6, xytext=(2, 2), textcoords="offset points")
 a.set_xlabel("run time of the static solve [s]")
