@@ -137,6 +137,9 @@ config::Schema make_schema() {
   add("contact.tip_friction", Type::Number, "", D::None, "Coulomb friction coefficient of the tip (default: friction)");
   add("contact.stiffness", Type::Number, "3e4", D::None,
       "penalty stiffness per vertex of the segment_length grid (N/m): a vertex pressed with force F sinks F/k into the wall (scaled with the edge length where wire.adapt refines)");
+  add("contact.settle", Type::Bool, "true", D::None,
+      "start a dynamic run from the static equilibrium of the initial wire against the walls (a pre-shaped tip "
+      "squeezed into the lumen) instead of from its free shape");
   add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
 
   add("obstacles", Type::List, "", D::None, "regions that resist the tip (a clot, a tight lesion)");

@@ -647,6 +647,7 @@ int RodSimulator::add_point_force(double s, const Vec3& f) {
 void RodSimulator::add_external(std::shared_ptr<ExternalForce> force) {
   if (!force) throw_usage_error("RodSimulator::add_external: null force");
   externals_.push_back(std::move(force));
+  externals_.back()->start(current_view(0.0));
 }
 
 void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
@@ -1289,6 +1290,10 @@ StepReport RodSimulator::solve_static_once() {
   compute_base_reaction();
   report(total, "static solve");
   record_trace();
+  if (!externals_.empty()) {
+    const RodView view = current_view(0.0);
+    for (auto& e : externals_) e->start(view);
+  }
   return total;
 }
 

@@ -31,7 +31,7 @@ namespace {
 
 int usage() {
   std::fputs(
-      "usage: flowire_bench COMMAND [--out DIR] [--reduced] [--scene FILE] [--known FILE]\n"
+      "usage: flowire_bench COMMAND [--out DIR] [--reduced] [--scene FILE] [--known FILE] [--only TEXT]...\n"
       "commands:\n"
       "  rod-work-precision    cantilever/buckling error and frequency error vs run time; step cost vs n\n"
       "  flow-frame-cost       dense_inverse vs superposition vs sparse per frame; rlc vs Womersley vs dt\n"
@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
     else if (a == "--out" && i + 1 < argc) o.out_dir = argv[++i];
     else if (a == "--scene" && i + 1 < argc) o.scene = argv[++i];
     else if (a == "--known" && i + 1 < argc) o.known_failures = argv[++i];
+    else if (a == "--only" && i + 1 < argc) o.only.emplace_back(argv[++i]);
     else return usage();
   }
   try {

@@ -97,6 +97,7 @@ StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
   auto forces = std::make_shared<coupling::VesselForces>(index, spec.radius, cp, dp, vf);
   sim.add_external(forces);
 
+  if (!c.has("contact.settle") || c.boolean("contact.settle")) (void)sim.solve_static();  // as run_scene
   const double dt = c.number("solve.dt");
   const long steps = std::lround(c.number("solve.duration") / dt);
   const double max_length = c.number_or("insertion.max_length", std::numeric_limits<double>::infinity());

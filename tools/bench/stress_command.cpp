@@ -34,7 +34,14 @@ std::set<std::string> read_known(const std::string& path) {
 int stress(const Options& o) {
   const auto known = read_known(o.known_failures);
   std::set<std::string> failed;
-  const auto matrix = stress_matrix(o.reduced);
+  auto matrix = stress_matrix(o.reduced);
+  // --only: keep the points whose id contains every given fragment (e.g. "mu=1," "dt=1ms").
+  std::erase_if(matrix, [&](const StressPoint& p) {
+    const std::string id = stress_point_id(p);
+    for (const auto& f : o.only)
+      if (id.find(f) == std::string::npos) return true;
+    return false;
+  });
   std::string csv = stress_csv_header();
   int passed = 0;
   std::string failures;

@@ -2,6 +2,7 @@
 /// @file studies.hpp
 /// @brief The studies of `flowire_bench`; each writes one CSV (and echoes it to stdout).
 #include <string>
+#include <vector>
 
 namespace flowire::bench {
 
@@ -10,6 +11,7 @@ struct Options {
   std::string scene;          ///< the aortic-arch scene file
   bool reduced = false;       ///< CI / quick size
   std::string known_failures; ///< stress: file listing the failures that are known and explained
+  std::vector<std::string> only;  ///< stress: run only the points whose id contains all of these
 };
 
 int rod_work_precision(const Options& o);

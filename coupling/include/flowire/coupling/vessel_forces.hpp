@@ -60,6 +60,9 @@ class VesselForces : public rod::ExternalForce {
 
   void evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) override;
   void end_step(const rod::RodView& rod) override;
+  /// Records the contact of a state set outside a step (initial, after a static solve), so
+  /// the first step's friction is lagged as every other step's.
+  void start(const rod::RodView& rod) override { end_step(rod); }
   /// Carries the segment hints over a resampling and records the step-start contact
   /// (normal force and normal for the lagged friction) of the new vertex set.
   void remap(const rod::RodView& rod, std::span<const int> source) override;

@@ -152,6 +152,9 @@ class ExternalForce {
   virtual void evaluate(const RodView& rod, ForceAccumulator& out) = 0;
   /// @brief Called once after each accepted step (e.g. to update friction anchors).
   virtual void end_step(const RodView& /*rod*/) {}
+  /// @brief The rod's state was set outside a dynamic step (the force was just added, or a
+  /// static solve finished): record what end_step would record for it.
+  virtual void start(const RodView& rod) { (void)rod; }
   /// @brief The rod resampled its vertices (adaptivity) before a step: vertex i of @p rod
   /// continues old vertex source[i], or is new (source[i] = −1). Per-vertex state kept
   /// between steps must be carried over here.
