@@ -60,6 +60,30 @@ nlohmann::json counts_json(const vessels::NetworkCounts& n) {
 
 }  // namespace
 
+std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& c, const vessels::SpatialIndex& index,
+                                                 const rod::WireSpec& spec, flow::FlowSolver* flow) {
+  ContactParams cp;
+  cp.enabled = !c.has("contact.enabled") || c.boolean("contact.enabled");
+  cp.stiffness = c.number_or("contact.stiffness", 3e4);
+  cp.friction = c.number_or("contact.friction", 0.1);
+  cp.tip_friction = c.number_or("contact.tip_friction", cp.friction);
+  cp.tip_length = c.has_section("wire.tip") ? c.number("wire.tip.length") : 0.0;
+  cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
+  DragParams dp;
+  const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "slender_body";
+  dp.law = !flow || law == "none"          ? DragLaw::None
+           : law == "velocity_offset" ? DragLaw::VelocityOffset
+                                      : DragLaw::SlenderBody;
+  dp.scale = c.number_or("coupling.drag_scale", 1.0);
+  dp.viscosity = c.number_or("flow.viscosity", 3.5e-3);
+  dp.wire_length = spec.length;
+  dp.mass_per_length = spec.density * std::numbers::pi * spec.radius * spec.radius;
+  if (!cp.enabled && dp.law == DragLaw::None) return nullptr;
+  VelocityField vf;
+  if (flow) vf = [flow](int seg_id, const vessels::Vec3& p) { return flow->velocity_at(seg_id, p); };
+  return std::make_shared<VesselForces>(index, spec.radius, cp, dp, vf);
+}
+
 rod::WireSpec scene_wire_spec(const config::Config& c) {
   rod::WireSpec w;
   w.length = c.number("wire.length");
@@ -359,28 +383,8 @@ RunResult run_scene(const config::Config& c) {
       }
       if (net) {
         index.emplace(*net, 4);
-        ContactParams cp;
-        cp.stiffness = c.number_or("contact.stiffness", 3e4);
-        cp.friction = c.number_or("contact.friction", 0.1);
-        cp.tip_friction = c.number_or("contact.tip_friction", cp.friction);
-        cp.tip_length = c.has_section("wire.tip") ? c.number("wire.tip.length") : 0.0;
-        cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
-        DragParams dp;
-        const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "slender_body";
-        dp.law = !fsolver || law == "none" ? DragLaw::None
-                 : law == "velocity_offset" ? DragLaw::VelocityOffset
-                                            : DragLaw::SlenderBody;
-        dp.scale = c.number_or("coupling.drag_scale", 1.0);
-        dp.viscosity = c.number_or("flow.viscosity", 3.5e-3);
-        dp.wire_length = spec.length;
-        dp.mass_per_length = spec.density * std::numbers::pi * spec.radius * spec.radius;
-        VelocityField vf;
-        if (fsolver) {
-          flow::FlowSolver* fs = fsolver.get();
-          vf = [fs](int seg_id, const vessels::Vec3& p) { return fs->velocity_at(seg_id, p); };
-        }
-        forces = std::make_shared<VesselForces>(*index, spec.radius, cp, dp, vf);
-        sim->add_external(forces);
+        forces = make_vessel_forces(c, *index, spec, fsolver.get());
+        if (forces) sim->add_external(forces);
       }
       tip_forces = make_tip_forces(c, net ? &*net : nullptr);
       if (tip_forces) sim->add_external(tip_forces);

@@ -133,6 +133,8 @@ config::Schema make_schema() {
   add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length");
 
   add("contact", Type::Section, "", D::None, "wall contact (present by default when a wire moves in vessels)");
+  add("contact.enabled", Type::Bool, "true", D::None,
+      "false: no wall contact at all (no lookup or wall distance unless the blood drag needs them)");
   add("contact.friction", Type::Number, "0.1", D::None, "Coulomb friction coefficient (shaft)");
   add("contact.tip_friction", Type::Number, "", D::None, "Coulomb friction coefficient of the tip (default: friction)");
   add("contact.stiffness", Type::Number, "3e4", D::None,

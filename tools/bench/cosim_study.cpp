@@ -95,8 +95,9 @@ int feature_cost(const Options& o) {
       {"drag_off", text, {"coupling.drag=none"}},
       {"friction_off", text, {"contact.friction=0", "contact.tip_friction=0"}},
       {"output_off", text, {"output.csv=false", "output.vtk=false"}},
-      // No scene key switches wall contact off: stiffness 0 removes the force, not the lookup.
-      {"contact_stiffness_0", text, {"contact.stiffness=0"}},
+      // Without contact the wire leaves the lumen; the lookup stays for the drag.
+      {"contact_off", text, {"contact.enabled=false"}},
+      {"contact_and_drag_off", text, {"contact.enabled=false", "coupling.drag=none"}},
       // Adaptivity is off in the scene (its cost is then nil: no resampling is attempted);
       // this row shows what it costs when on.
       {"adapt_on", text, {"wire.adapt.split_angle=0.1"}},

@@ -171,9 +171,10 @@ L.append("## Cost of features\n")
 L.append("The same scene with one feature switched off at a time; per-phase timings from "
          "`summary.json`, in ms per step. `flow_off` removes the `flow:` section (no assembly, no "
          "frames); `drag_off` keeps the flow but sets `coupling.drag: none`; `friction_off` sets both "
-         "friction coefficients to 0; `output_off` writes no CSV/VTK. Wall contact has no scene key "
-         "that switches it off: `contact_stiffness_0` removes the contact force but the vertex lookup "
-         "and wall distance are still computed, so its contact time does **not** vanish (a missing switch).\n")
+         "friction coefficients to 0; `output_off` writes no CSV/VTK; `contact_off` sets `contact.enabled: false` (no wall distance "
+         "or penalty; the vertex lookup stays because the drag needs the local blood velocity); "
+         "`contact_and_drag_off` also drops the drag, so no vessel forces are built at all; "
+         "`adapt_on` switches the curvature-adaptive resampling *on* (`wire.adapt`), which the scene does not use.\n")
 L.append("![feature cost](performance/feature_cost.png)\n")
 L.append(how("features", "plot_cosim.py"))
 L.append("| variant | setup [s] | flow | rod | contact | coupling | output | total [ms/step] | flow frames |\n|---|---|---|---|---|---|---|---|---|")

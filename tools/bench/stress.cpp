@@ -32,8 +32,9 @@ std::string num(double v) { return fmt::format("{:.9g}", v); }
 }  // namespace
 
 std::string stress_point_id(const StressPoint& p) {
-  return fmt::format("dt={:g}ms,E={:g}GPa,L={:g}m,v={:g}cm/s,rot={:g}turn/s,flow=x{:g},mu={:g}", p.dt * 1e3,
-                     p.youngs_modulus * 1e-9, p.wire_length, p.speed * 1e2, p.rotation, p.flow_scale, p.friction);
+  return fmt::format("dt={:g}ms,E={:g}GPa,L={:g}m,v={:g}cm/s,rot={:g}turn/s,flow=x{:g},mu={:g},T={:g}s", p.dt * 1e3,
+                     p.youngs_modulus * 1e-9, p.wire_length, p.speed * 1e2, p.rotation, p.flow_scale, p.friction,
+                     p.duration);
 }
 
 StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
@@ -74,34 +75,15 @@ StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
   sim.set_base_angle(c.number("insertion.rotation_angle"));
 
   const vessels::SpatialIndex index(net, 4);
-  coupling::ContactParams cp;
-  cp.stiffness = c.number_or("contact.stiffness", 3e4);
-  cp.friction = c.number("contact.friction");
-  cp.tip_friction = c.number("contact.tip_friction");
-  cp.tip_length = spec.tip.length;
-  cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
-  coupling::DragParams dp;
-  const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "slender_body";
-  dp.law = !fs || law == "none"          ? coupling::DragLaw::None
-           : law == "velocity_offset" ? coupling::DragLaw::VelocityOffset
-                                      : coupling::DragLaw::SlenderBody;
-  dp.scale = c.number_or("coupling.drag_scale", 1.0);
-  dp.viscosity = c.number_or("flow.viscosity", 3.5e-3);
-  dp.wire_length = spec.length;
-  dp.mass_per_length = spec.density * std::numbers::pi * spec.radius * spec.radius;
-  coupling::VelocityField vf;
-  if (fs) {
-    flow::FlowSolver* f = fs.get();
-    vf = [f](int s, const vessels::Vec3& x) { return f->velocity_at(s, x); };
-  }
-  auto forces = std::make_shared<coupling::VesselForces>(index, spec.radius, cp, dp, vf);
+  auto forces = coupling::make_vessel_forces(c, index, spec, fs.get());
+  if (!forces) throw_usage_error("stress: the scene has neither wall contact nor blood drag");
   sim.add_external(forces);
 
   if (!c.has("contact.settle") || c.boolean("contact.settle")) (void)sim.solve_static();  // as run_scene
   const double dt = c.number("solve.dt");
   const long steps = std::lround(c.number("solve.duration") / dt);
   const double max_length = c.number_or("insertion.max_length", std::numeric_limits<double>::infinity());
-  const double rho_a = dp.mass_per_length;
+  const double rho_a = spec.density * std::numbers::pi * spec.radius * spec.radius;
   const double radius = spec.radius;
   if (fs) fs->advance(0.0);
   // Energy caps: a simulated wire moving at an rms speed above 10 m/s (100× the fastest
@@ -182,6 +164,8 @@ std::vector<StressPoint> stress_matrix(bool reduced) {
     add([](StressPoint& p) { p.dt = 1e-3; p.wire_length = 1.7; p.rotation = 2.0; p.duration = 0.3; });
     add([](StressPoint& p) { p.dt = 1.0 / 30.0; p.youngs_modulus = 5e9; p.friction = 0.05; p.flow_scale = 0.0; p.rotation = 2.0; });
     add([](StressPoint& p) { p.youngs_modulus = 200e9; p.wire_length = 1.7; p.speed = 0.1; p.flow_scale = 10.0; p.friction = 1.0; });
+    // A long insertion: the 1.7 m wire fed to the scene's 50 cm limit, then held.
+    add([](StressPoint& p) { p.wire_length = 1.7; p.speed = 0.1; p.friction = 1.0; p.duration = 5.5; });
     return m;
   }
   for (double dt : {1e-3, 1e-2, 1.0 / 30.0})
@@ -195,6 +179,14 @@ std::vector<StressPoint> stress_matrix(bool reduced) {
                               .flow_scale = flow, .friction = mu, .duration = 1.0};
                 m.push_back(p);
               }
+  // Long insertions: the 1.7 m wire fed at 10 cm/s to the scene's 50 cm limit (the aorta
+  // from the femoral entry towards the root) and held there, with and without rotation.
+  for (double dt : {1e-3, 1e-2})
+    for (double E : {5e9, 67e9, 200e9})
+      for (double rot : {0.0, 2.0})
+        for (double mu : {0.05, 1.0})
+          m.push_back(StressPoint{.dt = dt, .youngs_modulus = E, .wire_length = 1.7, .speed = 0.1, .rotation = rot,
+                                  .flow_scale = 1.0, .friction = mu, .duration = 5.5});
   return m;
 }
 

@@ -2,6 +2,7 @@
 /// @file scene.hpp
 /// @brief Scenes: the declaration of every scene key, and the runner that executes only the
 /// sections a scene has (no `flow:` → no flow assembly, no `wire:` → no rod, no output → no I/O).
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -9,6 +10,13 @@
 #include "flowire/common/config.hpp"
 #include "flowire/rod/model.hpp"
 #include "flowire/vessels/network.hpp"
+
+namespace flowire::flow {
+class FlowSolver;
+}
+namespace flowire::vessels {
+class SpatialIndex;
+}
 
 namespace flowire::coupling {
 
@@ -25,6 +33,13 @@ vessels::Network build_scene_network(const config::Config& scene);
 /// @brief The wire a scene describes (`wire:` and `insertion.initial_length`), before the
 /// vessel network places its base.
 rod::WireSpec scene_wire_spec(const config::Config& scene);
+
+class VesselForces;
+/// @brief Wall contact and blood drag on the wire as the scene's `contact:` and `coupling:`
+/// sections configure them (drag only with a @p flow solver); null when the scene needs
+/// neither (`contact.enabled: false` and no drag), so nothing is looked up.
+std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& scene, const vessels::SpatialIndex& index,
+                                                 const rod::WireSpec& wire, flow::FlowSolver* flow);
 
 /// @brief Result of a run; `summary` is what `summary.json` holds.
 struct RunResult {
