@@ -60,17 +60,16 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     const Vec3& x = rod.position(i);
     const Vec3& A = net.node(seg.node_from);
     const Vec3& B = net.node(seg.node_to);
-    Vec3 g_cap;
-    Mat3 H_cap;
-    const double d_cap = capsule_distance(x, A, B, seg.radius, &g_cap, &H_cap);
+    const double d_cap = capsule_distance(x, A, B, seg.radius, nullptr, nullptr);
     // The union's distance is at most this capsule's: deep inside it, no wall is near.
     if (d_cap + a < 0.0) continue;
     Vec3 n_wall;
-    const double d = index_.wall_distance(x, s, &n_wall);
+    Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
+    const double d = index_.wall_distance(x, s, &n_wall, &H_wall);
     // Stiffness per vertex of the feeding grid, scaled with the vertex's edges where the
     // rod is resampled (so the wall stays equally stiff per unit length).
     const double k_wall = contact_.stiffness * rod.cell_weight(i);
-    const auto pen = wall_penalty(d, n_wall, H_cap, a, k_wall);
+    const auto pen = wall_penalty(d, n_wall, H_wall, a, k_wall);
     if (pen.penetration <= 0.0) continue;
     ++stats_.contacts;
     // The penalty has a potential (k/2 δ₊²): reported, the rod's line search measures the

@@ -194,7 +194,7 @@ void SpatialIndex::nearby_segments(const Vec3& p, double radius, std::vector<int
   }
 }
 
-double SpatialIndex::wall_distance(const Vec3& p, int hint, Vec3* gradient) const {
+double SpatialIndex::wall_distance(const Vec3& p, int hint, Vec3* gradient, Eigen::Matrix3d* hessian) const {
   // Union of capsules: d(p) = min_i (|p − proj_i(p)| − r_i). Segments meeting at an angle
   // are blended with a quadratic smooth minimum of width k_ij = 0.2·min(r)·(1 − t_i·t_j),
   // which is zero for collinear segments (a straight tube stays exact) and rounds the
@@ -206,24 +206,35 @@ double SpatialIndex::wall_distance(const Vec3& p, int hint, Vec3* gradient) cons
   constexpr double kBlend = 0.2;
   nearby_segments(p, std::max(d0, 0.0) + kBlend * s0.radius + 1e-12, cand);
 
+  using Mat3 = Eigen::Matrix3d;
   struct Term {
     double d;
     Vec3 g;
     Vec3 t;
     double r;
+    Mat3 H;
   };
   auto term = [&](int s) {
     const auto& seg = net_.segment(s);
     const Vec3& a = net_.node(seg.node_from);
     const Vec3& b = net_.node(seg.node_to);
-    const auto pr = project_on_axis(p, a, b);
-    const Vec3 q = a + pr.t * (b - a);
+    const Vec3 ab = b - a;
+    const double L2 = ab.squaredNorm();
+    const double t_raw = L2 > 0.0 ? (p - a).dot(ab) / L2 : 0.0;
+    const Vec3 q = a + std::clamp(t_raw, 0.0, 1.0) * ab;
     Vec3 g = p - q;
     const double n = g.norm();
-    const Vec3 t = (b - a).normalized();
+    const Vec3 t = ab.normalized();
     if (n > 1e-300) g /= n;
     else g = t.unitOrthogonal();
-    return Term{n - seg.radius, g, t, seg.radius};
+    Mat3 H = Mat3::Zero();
+    if (hessian && n > 1e-300) {
+      // Distance to a segment: to its axis inside the span, to an end point beyond it.
+      H = Mat3::Identity() - g * g.transpose();
+      if (t_raw > 0.0 && t_raw < 1.0) H -= t * t.transpose();
+      H /= n;
+    }
+    return Term{n - seg.radius, g, t, seg.radius, H};
   };
   // The plain minimum first, then blend the others in.
   int best_i = -1;
@@ -234,30 +245,35 @@ double SpatialIndex::wall_distance(const Vec3& p, int hint, Vec3* gradient) cons
   }
   if (best_i < 0) {  // cannot happen (the located segment is a candidate), but stay defined
     if (gradient) *gradient = Vec3::UnitX();
+    if (hessian) hessian->setZero();
     return d0;
   }
   const Term tb = term(cand[static_cast<size_t>(best_i)]);
   double d = tb.d;
   Vec3 g = tb.g;
+  Mat3 H = tb.H;
   for (size_t i = 0; i < cand.size(); ++i) {
     if (static_cast<int>(i) == best_i) continue;
     const Term ti = term(cand[i]);
     const double k = kBlend * std::min(tb.r, ti.r) * (1.0 - std::abs(tb.t.dot(ti.t)));
     const double diff = std::abs(d - ti.d);
     if (k <= 0.0 || diff >= k) {
-      if (ti.d < d) d = ti.d, g = ti.g;
+      if (ti.d < d) d = ti.d, g = ti.g, H = ti.H;
       continue;
     }
+    // Quadratic smooth minimum: d' = min − h²k/4, h = (k − |d − d_i|)/k, so
+    // ∇d' = (1 − h/2)∇min + (h/2)∇max and ∇²d' adds −(g − g_i)(g − g_i)ᵀ/(2k).
     const double h = (k - diff) / k;
-    if (d <= ti.d) {
-      g = (1.0 - 0.5 * h) * g + 0.5 * h * ti.g;
-      d = d - 0.25 * h * h * k;
-    } else {
-      g = 0.5 * h * g + (1.0 - 0.5 * h) * ti.g;
-      d = ti.d - 0.25 * h * h * k;
+    const double w = d <= ti.d ? 1.0 - 0.5 * h : 0.5 * h;  // weight of the current (d, g, H)
+    if (hessian) {
+      const Vec3 dg = g - ti.g;
+      H = w * H + (1.0 - w) * ti.H - dg * dg.transpose() / (2.0 * k);
     }
+    g = w * g + (1.0 - w) * ti.g;
+    d = std::min(d, ti.d) - 0.25 * h * h * k;
   }
   if (gradient) *gradient = g;
+  if (hessian) *hessian = H;
   return d;
 }
 

@@ -48,8 +48,12 @@ class SpatialIndex {
 
   /// @brief Signed distance to the wall of the union of capsules (negative inside), with a
   /// smooth minimum of width `blend` (m) across junctions; gradient (outward normal) if asked.
-  /// Only segments within reach of `hint` are considered when hint >= 0.
-  double wall_distance(const Vec3& p, int hint = -1, Vec3* gradient = nullptr) const;
+  /// Only segments within reach of `hint` are considered when hint >= 0. With @p hessian,
+  /// also its exact second derivative (capsule curvature terms plus the blend's own
+  /// −(g_a − g_b)(g_a − g_b)ᵀ/(2k)), which a penalty contact needs for Newton to converge
+  /// quadratically near junctions and bends.
+  double wall_distance(const Vec3& p, int hint = -1, Vec3* gradient = nullptr,
+                       Eigen::Matrix3d* hessian = nullptr) const;
 
   [[nodiscard]] const LocatorStats& stats() const { return stats_; }
   void reset_stats() const { stats_ = {}; }
