@@ -94,7 +94,16 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       const Vec3& nrm = lag ? lag_normal_[k] : cur_normal_[k];
       const double mu = (tip_s - rod.arc_length[k] <= contact_.tip_length) ? contact_.tip_friction : contact_.friction;
       const auto fr = coulomb_friction(rod.velocity(i), nrm, normal_force, mu, contact_.slip_speed);
-      out.add_force(i, fr.force);
+      if (lag && rod.dt > 0.0) {
+        // With the normal force fixed over the step, friction is −∇_v D(v) with v = (x − x₀)/Δt:
+        // the gradient in x of Δt·D, an exact incremental potential (as in IPC). Reported as
+        // one, the line search measures friction exactly instead of by the work along its ray,
+        // which across the stick/slip band of width ε is far off.
+        out.add_conservative_force(i, fr.force);
+        out.add_energy(rod.dt * fr.dissipation);
+      } else {
+        out.add_force(i, fr.force);
+      }
       out.add_velocity_jacobian(i, fr.dfdv);
       force_[k] += fr.force;
       if (contact_.viscous_friction > 0.0) {

@@ -187,11 +187,16 @@ coupling: {steering: {branch: daughter_1, force: 10 mN}}
 solve: {dt: 5 ms, duration: 4 s}
 output: {csv: false, vtk: false}
 )";
+  // The tip pressed into the junction's crease leaves a few of the 800 steps at the Newton
+  // limit with residuals of ~1e-6 N (the contact's round-off level there); they are
+  // reported as warnings and counted, and bounded here.
+  const flowire::testing::ExpectWarnings reported;
   for (const char* branch : {"daughter_1", "daughter_2"}) {
     const std::vector<std::string> sets{"output.dir=" + (dir / branch).string(),
                                         std::string("coupling.steering.branch=") + branch};
     const auto s = run_scene(config::load_config_text(scene, "scene.yaml", scene_schema(), sets)).summary;
     ASSERT_EQ(s["status"], "ok");
+    EXPECT_LE(s["wire"]["unconverged_steps"].get<long>(), 12) << branch;
     const double y = s["wire"]["tip"][1].get<double>();
     // daughter_1 leaves towards +y, daughter_2 towards −y; the tip is well inside it.
     EXPECT_GT(std::string(branch) == "daughter_1" ? y : -y, 0.01) << branch;

@@ -10,8 +10,11 @@
 /// - Steering: while the tip is within `range` of the target point, a force of magnitude
 ///   F perpendicular to t pulls the tip towards the target: f = F·P⊥(p − x)/|P⊥(p − x)|,
 ///   P⊥ = I − t tᵀ.
-/// Both act on vertex 0 (the tip) and have no position Jacobian (they are small, dead-load
-/// like forces, as in the published models).
+/// Both act on vertex 0 (the tip). Their direction and whether they act are taken at the
+/// start of each step (lagged, like the friction's normal force): within a step they are a
+/// dead load f with the exact potential −f·x₀, so the rod's line search measures them
+/// exactly. Follower forces re-evaluated at every iterate have no potential and stalled
+/// Newton near convergence.
 #include <vector>
 
 #include <Eigen/Core>
@@ -42,9 +45,13 @@ class TipForces : public rod::ExternalForce {
   [[nodiscard]] long obstacle_steps() const { return obstacle_steps_; }
   [[nodiscard]] long steering_steps() const { return steering_steps_; }
   void end_step(const rod::RodView& rod) override;
+  void start(const rod::RodView& rod) override { lag_ = force_at(rod); }
 
  private:
   [[nodiscard]] Eigen::Vector3d tip_tangent(const rod::RodView& rod) const;
+  /// The obstacle and steering force on the tip in configuration @p rod.
+  [[nodiscard]] Eigen::Vector3d force_at(const rod::RodView& rod) const;
+  Eigen::Vector3d lag_ = Eigen::Vector3d::Zero();  ///< at the step start
   std::vector<Obstacle> obstacles_;
   Steering steering_;
   long obstacle_steps_ = 0, steering_steps_ = 0;
