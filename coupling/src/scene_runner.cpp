@@ -380,6 +380,7 @@ RunResult run_scene(const config::Config& c) {
         sim->set_insertion_speed(c.number("insertion.speed"));
         sim->set_rotation_speed(c.number("insertion.rotation_speed"));
         sim->set_base_angle(c.number("insertion.rotation_angle"));
+        if (c.has("insertion.max_force")) sim->set_max_insertion_force(c.number("insertion.max_force"));
       }
       if (net) {
         index.emplace(*net, 4);
@@ -533,6 +534,7 @@ RunResult run_scene(const config::Config& c) {
                    {"length_drift", sim->length_drift()},
                    {"unconverged_steps", failures}};
       if (!settle.is_null()) s["wire"]["settle"] = settle;
+      if (c.has("insertion.max_force")) s["wire"]["held_steps"] = sim->held_steps();
       if (sim->model().adapt.enabled)
         s["wire"]["adapt"] = {{"splits", sim->adapt_splits()}, {"merges", sim->adapt_merges()}};
       if (tip_forces)

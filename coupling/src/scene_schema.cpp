@@ -131,6 +131,9 @@ config::Schema make_schema() {
   add("insertion.rotation_angle", Type::Number, "0", D::Angle, "base rotation at the start (turns a pre-shaped tip)");
   add("insertion.initial_length", Type::Number, "2 cm", D::Length, "length inside at t = 0");
   add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length");
+  add("insertion.max_force", Type::Number, "", D::Force,
+      "force-limited feeding: hold the feed in steps that start with the wire pushed in harder than this "
+      "(a drive's or a hand's limit); default unlimited (the feed is kinematic)");
 
   add("contact", Type::Section, "", D::None, "wall contact (present by default when a wire moves in vessels)");
   add("contact.enabled", Type::Bool, "true", D::None,

@@ -234,7 +234,7 @@ void RodSimulator::update_vertex_set(double new_inserted) {
     for (int k = k_old_last + 1; k <= k_last; ++k) {
       s.u.push_back(model_.u(k));
       s.x.push_back(pb - db * (model_.u(k) - L));
-      s.v.push_back(db * insertion_speed_);
+      s.v.push_back(db * feed_speed_);
       s.theta.push_back(-angle);
       s.omega.push_back(-rotation_speed_);
       s.frame.push_back(EdgeFrame{base_d1_, base_d2_});
@@ -262,7 +262,7 @@ void RodSimulator::update_vertex_set(double new_inserted) {
       work_->tz.push_back(s.theta[k] - s.theta[k - 1] + s.ref_twist[k]);  // total twist
     for (int k = fc; k < std::min(first_clamped_, nv); ++k) {
       s.x[k] = pb - db * (s.u[k] - L);
-      s.v[k] = db * insertion_speed_;
+      s.v[k] = db * feed_speed_;
     }
     for (int j = fc; j < nv - 1; ++j) {
       s.frame[j] = EdgeFrame{base_d1_, base_d2_};
@@ -1090,7 +1090,13 @@ void RodSimulator::record_trace() {
 
 StepReport RodSimulator::step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
-  adapt_for(std::max(0.0, -insertion_speed_ * dt));
+  feed_speed_ = insertion_speed_;
+  if (feed_speed_ > 0.0 && max_insertion_force_ > 0.0 &&
+      base_force_.dot(model_.base_direction) > max_insertion_force_) {
+    feed_speed_ = 0.0;
+    ++held_steps_;
+  }
+  adapt_for(std::max(0.0, -feed_speed_ * dt));
   return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt)
                                                               : step_euler(dt);
 }
@@ -1135,10 +1141,11 @@ StepReport RodSimulator::step_euler(double dt) {
   Work& w = *work_;
   RodState& s = state_;
   bool clamped = false;
-  const double L_new = clamp_inserted(s.inserted_length + insertion_speed_ * dt, model_, clamped);
-  if (clamped && insertion_speed_ != 0.0) {
+  const double L_new = clamp_inserted(s.inserted_length + feed_speed_ * dt, model_, clamped);
+  if (clamped && feed_speed_ != 0.0) {
     warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
     insertion_speed_ = 0.0;
+    feed_speed_ = 0.0;
   }
   s.base_angle = target_angle_;
   update_vertex_set(L_new);
@@ -1186,10 +1193,11 @@ StepReport RodSimulator::step_midpoint(double dt) {
   RodState& s = state_;
   bool clamped = false;
   const double L_start = s.inserted_length;
-  const double L_new = clamp_inserted(L_start + insertion_speed_ * dt, model_, clamped);
-  if (clamped && insertion_speed_ != 0.0) {
+  const double L_new = clamp_inserted(L_start + feed_speed_ * dt, model_, clamped);
+  if (clamped && feed_speed_ != 0.0) {
     warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
     insertion_speed_ = 0.0;
+    feed_speed_ = 0.0;
   }
   s.base_angle = target_angle_;
   update_vertex_set(L_new);

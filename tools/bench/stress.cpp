@@ -29,6 +29,9 @@ using Clock = std::chrono::steady_clock;
 
 std::string num(double v) { return fmt::format("{:.9g}", v); }
 
+/// Force limit of the feed [N]: a guidewire is pushed with well under 2 N by hand.
+constexpr double kMaxInsertionForce = 2.0;
+
 }  // namespace
 
 std::string stress_point_id(const StressPoint& p) {
@@ -73,6 +76,9 @@ StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
   sim.set_insertion_speed(c.number("insertion.speed"));
   sim.set_rotation_speed(c.number("insertion.rotation_speed"));
   sim.set_base_angle(c.number("insertion.rotation_angle"));
+  // The matrix drives the wire as a force-limited drive would (an unlimited kinematic feed
+  // against friction 1 demands tens of newtons and compresses the wire).
+  sim.set_max_insertion_force(kMaxInsertionForce);
 
   const vessels::SpatialIndex index(net, 4);
   auto forces = coupling::make_vessel_forces(c, index, spec, fs.get());
@@ -142,6 +148,7 @@ StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
   }
   (void)take_warnings();
   r.pass = r.first_bad_step < 0;
+  r.held_steps = sim.held_steps();
   r.inserted_length = sim.inserted_length();
   r.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   return r;
@@ -193,7 +200,7 @@ std::vector<StressPoint> stress_matrix(bool reduced) {
 std::string stress_csv_header() {
   return "dt,youngs_modulus,wire_length,speed,rotation_turns_per_s,flow_scale,friction,duration,pass,reason,"
          "first_bad_step,steps,unconverged_steps,max_outside_over_radius,max_length_drift,max_energy_ratio,max_rms_speed,"
-         "inserted_length,seconds\n";
+         "inserted_length,seconds,held_steps\n";
 }
 
 std::string stress_csv_row(const StressResult& r) {
@@ -201,10 +208,11 @@ std::string stress_csv_row(const StressResult& r) {
   std::string reason = r.reason;
   for (char& ch : reason)
     if (ch == ',' || ch == '\n') ch = ';';
-  return fmt::format("{:g},{:g},{:g},{:g},{:g},{:g},{:g},{:g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g}\n", p.dt,
+  return fmt::format("{:g},{:g},{:g},{:g},{:g},{:g},{:g},{:g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g},{}\n", p.dt,
                      p.youngs_modulus, p.wire_length, p.speed, p.rotation, p.flow_scale, p.friction, p.duration,
                      r.pass ? 1 : 0, reason, r.first_bad_step, r.steps, r.unconverged_steps, r.max_outside_over_radius,
-                     r.max_length_drift, r.max_energy_ratio, r.max_rms_speed, r.inserted_length, r.seconds);
+                     r.max_length_drift, r.max_energy_ratio, r.max_rms_speed, r.inserted_length, r.seconds,
+                     r.held_steps);
 }
 
 }  // namespace flowire::bench

@@ -35,6 +35,7 @@ struct StressResult {
   StressPoint point;
   bool pass = false;
   std::string reason;           ///< empty when passing
+  long held_steps = 0;          ///< steps in which the force limit held the feed
   long first_bad_step = -1;     ///< 1-based step where a criterion first failed (−1: none)
   long steps = 0;               ///< steps taken
   int unconverged_steps = 0;    ///< Newton steps reported as not converged (warnings)

@@ -174,6 +174,12 @@ class RodSimulator {
   void set_integrator(Integrator integrator) { settings_.integrator = integrator; }
   /// @brief Feeding speed [m/s], > 0 pushes in, < 0 pulls back.
   void set_insertion_speed(double speed) { insertion_speed_ = speed; }
+  /// @brief Force-limited feeding: a step that starts with the clamp pushing the wire in
+  /// harder than @p force [N] (base_force() along the insertion direction) feeds nothing,
+  /// as a force-limited drive or an operator's hand would; 0 (default): no limit.
+  void set_max_insertion_force(double force) { max_insertion_force_ = force; }
+  /// @brief Steps in which feeding was held by the force limit.
+  [[nodiscard]] long held_steps() const { return held_steps_; }
   /// @brief Clamp rotation speed, right-handed about the insertion direction [rad/s].
   void set_rotation_speed(double omega) { rotation_speed_ = omega; }
   /// @brief Set the clamp rotation angle [rad], right-handed about the insertion direction
@@ -312,6 +318,9 @@ class RodSimulator {
   Eigen::Vector3d base_d1_ = Eigen::Vector3d::Zero();  // clamp frame at zero rotation
   Eigen::Vector3d base_d2_ = Eigen::Vector3d::Zero();
   double insertion_speed_ = 0.0;
+  double feed_speed_ = 0.0;  // this step's feeding speed (insertion_speed_ unless held)
+  double max_insertion_force_ = 0.0;
+  long held_steps_ = 0;
   double rotation_speed_ = 0.0;
   double target_angle_ = 0.0;
   int first_clamped_ = 0;
