@@ -209,3 +209,39 @@ TEST(RodAdapt, FeedingInAndOutKeepsTheGridAtTheClampAndTheLength) {
 
 }  // namespace
 }  // namespace flowire::rod
+
+namespace flowire::rod {
+namespace {
+
+TEST(RodFeeding, ForceLimitHoldsTheFeedAgainstALargerResistance) {
+  // A guidewire fed at 2 cm/s against a dead tip load opposing the feed, with a 0.2 N force
+  // limit: below the limit it is fed the whole way; above it the feed holds as soon as
+  // the clamp pushes harder than the limit, which then carries the load statically.
+  for (const double load : {0.05, 0.5}) {
+    WireSpec spec;
+    spec.length = 0.4;
+    spec.segment_length = 4e-3;
+    spec.radius = 3e-4;
+    spec.youngs_modulus = 60e9;
+    spec.tip.length = 0.0;
+    spec.inserted_length = 0.2;
+    spec.damping = 0.05;
+    RodSimulator sim(spec);
+    sim.set_max_insertion_force(0.2);
+    sim.set_tip_force({-load, 0.0, 0.0});
+    sim.set_insertion_speed(0.02);
+    for (int i = 0; i < 1000; ++i) ASSERT_TRUE(sim.step(1e-3).converged()) << i;
+    if (load < 0.2) {
+      EXPECT_EQ(sim.held_steps(), 0);
+      EXPECT_NEAR(sim.inserted_length(), 0.22, 1e-9);
+      EXPECT_NEAR(sim.base_force().x(), load, 0.1 * load);
+    } else {
+      EXPECT_GT(sim.held_steps(), 900);
+      EXPECT_LT(sim.inserted_length(), 0.202);
+      EXPECT_NEAR(sim.base_force().x(), load, 0.02 * load);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace flowire::rod
