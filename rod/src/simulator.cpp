@@ -77,6 +77,15 @@ struct RodSimulator::Work {
   std::vector<EdgeFrame> rframe;
   std::vector<int> source;
   std::vector<char> split, remove;
+  // step starts kept for a retry in substeps, one per subdivision level
+  struct Saved {
+    RodState state;
+    double target_angle = 0.0, insertion_speed = 0.0;
+    int first_clamped = 0;
+    Vec3 base_force = Vec3::Zero(), base_torque = Vec3::Zero();
+    size_t trace_size = 0;
+  };
+  std::vector<Saved> saved;
 };
 
 RodSimulator::RodSimulator(const WireSpec& spec)
@@ -109,6 +118,16 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   w.source.reserve(nvmax);
   w.split.reserve(nvmax);
   w.remove.reserve(nvmax);
+  w.saved.resize(static_cast<size_t>(std::max(settings_.max_subdivisions, 0)) + 4);
+  for (auto& v : w.saved) {
+    v.state.x.reserve(nvmax);
+    v.state.v.reserve(nvmax);
+    v.state.theta.reserve(nvmax);
+    v.state.omega.reserve(nvmax);
+    v.state.frame.reserve(nvmax);
+    v.state.ref_twist.reserve(nvmax);
+    v.state.u.reserve(nvmax);
+  }
   w.frame0.reserve(nvmax);
   w.frameb.reserve(nvmax);
   state_.x.reserve(nvmax);
@@ -1090,6 +1109,72 @@ void RodSimulator::record_trace() {
 
 StepReport RodSimulator::step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
+  const StepReport rep = step_subdivided(dt, 0);
+  report(rep, settings_.integrator == Integrator::ImplicitMidpoint ? "implicit midpoint step"
+                                                                   : "implicit Euler step");
+  return rep;
+}
+
+StepReport RodSimulator::step_subdivided(double dt, int depth) {
+  // A step whose Newton solve fails (no descent left, the iteration limit far from
+  // convergence, non-finite values) is taken again from its start as two half steps, down
+  // to dt/2^max_subdivisions; only the last level's result is kept as it is.
+  const bool can_retry = depth < settings_.max_subdivisions;
+  if (can_retry) save_state(depth);
+  StepReport rep = step_once(dt);
+  if (!rep.converged() && can_retry) {
+    restore_state(depth);
+    StepReport total;
+    for (int half = 0; half < 2; ++half) {
+      const StepReport r = step_subdivided(0.5 * dt, depth + 1);
+      total.status = r.status;
+      total.newton_iterations += r.newton_iterations;
+      total.line_search_cuts += r.line_search_cuts;
+      total.regularizations += r.regularizations;
+      total.residual = r.residual;
+      total.tolerance = r.tolerance;
+      total.subdivisions = std::max(total.subdivisions, r.subdivisions);
+      if (!r.converged()) break;
+    }
+    total.subdivisions = std::max(total.subdivisions, depth + 1);
+    return total;
+  }
+  last_report_ = rep;
+  record_trace();
+  if (!externals_.empty()) {
+    const RodView view = current_view(dt);
+    for (auto& e : externals_) e->end_step(view);
+  }
+  return rep;
+}
+
+void RodSimulator::save_state(int depth) {
+  Work& w = *work_;
+  if (static_cast<int>(w.saved.size()) <= depth) w.saved.resize(static_cast<size_t>(depth) + 1);
+  Work::Saved& v = w.saved[static_cast<size_t>(depth)];
+  v.state = state_;
+  v.target_angle = target_angle_;
+  v.insertion_speed = insertion_speed_;
+  v.first_clamped = first_clamped_;
+  v.base_force = base_force_;
+  v.base_torque = base_torque_;
+  v.trace_size = trace_.size();
+}
+
+void RodSimulator::restore_state(int depth) {
+  const Work::Saved& v = work_->saved[static_cast<size_t>(depth)];
+  state_ = v.state;
+  target_angle_ = v.target_angle;
+  insertion_speed_ = v.insertion_speed;
+  first_clamped_ = v.first_clamped;
+  base_force_ = v.base_force;
+  base_torque_ = v.base_torque;
+  trace_.resize(v.trace_size);
+  model_.discretize(state_.u, disc_);
+  refresh_arc_lengths();
+}
+
+StepReport RodSimulator::step_once(double dt) {
   feed_speed_ = insertion_speed_;
   if (feed_speed_ > 0.0 && max_insertion_force_ > 0.0 &&
       base_force_.dot(model_.base_direction) > max_insertion_force_) {
@@ -1179,12 +1264,6 @@ StepReport RodSimulator::step_euler(double dt) {
   target_angle_ = angle_new;
   s.base_angle = angle_new;
   compute_base_reaction();
-  report(rep, "implicit Euler step");
-  record_trace();
-  if (!externals_.empty()) {
-    const RodView view = current_view(dt);
-    for (auto& e : externals_) e->end_step(view);
-  }
   return rep;
 }
 
@@ -1250,12 +1329,6 @@ StepReport RodSimulator::step_midpoint(double dt) {
   refresh_arc_lengths();
   target_angle_ = angle_new;
   s.base_angle = angle_new;
-  report(rep, "implicit midpoint step");
-  record_trace();
-  if (!externals_.empty()) {
-    const RodView view = current_view(dt);
-    for (auto& e : externals_) e->end_step(view);
-  }
   return rep;
 }
 

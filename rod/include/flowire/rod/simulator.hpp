@@ -104,6 +104,7 @@ struct StepReport {
   int newton_iterations = 0;
   int line_search_cuts = 0;     ///< halvings summed over the iterations
   int regularizations = 0;      ///< diagonal shifts added to indefinite matrices
+  int subdivisions = 0;         ///< levels of step halving a failed solve needed (0: none)
   double residual = 0.0;        ///< final scaled residual [N]
   double tolerance = 0.0;       ///< the force tolerance it was compared with [N]
   [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
@@ -122,6 +123,9 @@ struct SolverSettings {
   /// Newton updates of positions follow the rotation of each edge (lengths changed only to
   /// first order): large rotations are taken in few iterations despite stiff stretching.
   bool curvilinear_update = true;
+  /// A step whose solve fails is retaken from its start as two half steps, at most this
+  /// many levels deep (dt/2^n); 0 keeps a failed step's last iterate at once.
+  int max_subdivisions = 3;
 };
 
 /// @brief One sample of the tip trace.
@@ -276,6 +280,10 @@ class RodSimulator {
   /// the inertial prediction q + h·v, with q̂ = that prediction; shared by both integrators.
   void begin_step(double h);
   StepReport step_euler(double dt);
+  StepReport step_once(double dt);
+  StepReport step_subdivided(double dt, int depth);
+  void save_state(int depth);
+  void restore_state(int depth);
   StepReport step_midpoint(double dt);
   void gather(Eigen::Ref<Eigen::VectorXd> q) const;
   void transport_frames_to(const std::vector<Eigen::Vector3d>& x_new,
