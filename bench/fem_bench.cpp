@@ -2,8 +2,12 @@
 // daughters 3.97 mm, 40 mm branches): mesh, assembly and solve timed as counters, once
 // per solver. Run on two cores with
 //   mpirun --allow-run-as-root --oversubscribe -n 2 build/bench/bench_fem
-// (every rank runs the collective benchmark and prints its own report).
+// (every rank runs the collective benchmark and prints its own report). A second
+// benchmark times a pulsatile series of quasi-steady frames.
 #include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <vector>
 
 #include "flowire/fem/compare.hpp"
 #include "flowire/vessels/generators.hpp"
@@ -33,5 +37,42 @@ void BM_FemYBifurcation(benchmark::State& state) {
   state.SetLabel(state.range(0) == 0 ? "mumps" : "fieldsplit");
 }
 BENCHMARK(BM_FemYBifurcation)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond);
+
+// The pulsatile quasi-steady series on the same Y with outlet resistances: one
+// factorization and one unit solve per open boundary (basis_s), then range(0) frames of a
+// sine inlet over a period, each a small dense solve, a linear combination of the unit
+// fields, a network solve and the sampling (frame_ms per frame).
+void BM_FemPulsatileFrames(benchmark::State& state) {
+  using namespace flowire;
+  const auto net = vessels::Network::build(vessels::y_bifurcation({}));
+  fem::FemOptions opt;
+  opt.mesh_size = 1.05e-3;
+  opt.write_png = false;
+  fem::BoundaryValues base;
+  base.inlet_pressure = 12850.0;
+  for (int e : net.ends())
+    if (e != net.widest_end()) base.outlets.push_back({e, fem::OutletValue::Type::Resistance, 12800.0, 2e6});
+  const auto n = static_cast<int>(state.range(0));
+  std::vector<double> times;
+  std::vector<fem::BoundaryValues> frames;
+  for (int i = 0; i < n; ++i) {
+    times.push_back(0.8 * i / n);
+    fem::BoundaryValues bv = base;
+    bv.inlet_pressure = 12850.0 + 25.0 * std::sin(2.0 * 3.141592653589793 * i / n);  // always above P_d
+    frames.push_back(bv);
+  }
+  fem::PulsatileResult r;
+  for (auto _ : state) {
+    r = fem::compare_pulsatile(net, times, frames, base, 0.0, opt, "");
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["tets"] = r.steady.tets;
+  state.counters["frames"] = n;
+  state.counters["factorizations"] = r.factorizations;
+  state.counters["basis_s"] = r.basis_seconds;
+  state.counters["frame_ms"] = 1e3 * r.frames_seconds / (n + 1);
+  state.counters["max_split_error"] = r.max_flow_split_error;
+}
+BENCHMARK(BM_FemPulsatileFrames)->Arg(20)->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The scene runner: builds only what a scene has (vessels, flow, wire) and steps it.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -204,18 +205,50 @@ void render_pictures(const config::Config& c, const vessels::Network& net, const
   flow::render_network_png(net, p, out / "network_side.png", ro);
 }
 
-/// The FEM reference on the same geometry, with the network's own pressures at the inlet and
-/// at every outlet (so any outlet model, resistance or RCR, is compared on the same footing).
+#ifdef FLOWIRE_HAVE_FEM
+nlohmann::json fem_result_json(const fem::CompareResult& r) {
+  return {{"tets", r.tets},
+          {"unknowns", r.unknowns},
+          {"max_rel_diff_away_from_junctions", r.max_rel_diff_drop_away},
+          {"max_rel_diff_near_junctions", r.max_rel_diff_drop_junction},
+          {"max_flow_split_error", r.max_flow_split_error},
+          {"max_flow_error", r.max_flow_error},
+          {"inlet",
+           {{"pressure_network", r.inlet_pressure_network},
+            {"pressure_fem", r.inlet_pressure_fem},
+            {"flow_network", r.inlet_flow_network},
+            {"flow_fem", r.inlet_flow_fem}}},
+          {"mesh_seconds", r.mesh_seconds},
+          {"assemble_seconds", r.assemble_seconds},
+          {"solve_seconds", r.solve_seconds}};
+}
+#endif
+
+/// Input checks of the fem: section that need the flow spec, done at setup.
+void check_fem(const config::Config& c, const flow::FlowSolver* fs) {
+  if (!fs) throw_input_error(c.where("fem"), "fem: compares the flow, so the scene needs a flow: section");
+  const int frames = c.integer("fem.frames");
+  if (frames < 0) throw_input_error(c.where("fem.frames"), "must be 0 (steady only) or a number of frames");
+  if (frames > 100000) throw_input_error(c.where("fem.frames"), "too many frames (at most 100000)");
+  if (frames > 0 && !(fs->spec().cycle() > 0.0))
+    throw_input_error(c.where("fem.frames"), "a pulsatile comparison needs a periodic inlet waveform (sine or table)");
+  if (fs->spec().inlets.size() != 1)
+    throw_input_error(c.where("fem"), fmt::format("the comparison needs exactly one inlet; the flow has {}",
+                                                  fs->spec().inlets.size()));
+}
+
+/// The FEM reference on the same geometry with the network's own boundary conditions (the
+/// flow spec): inlet pressure or flow, outlets at a pressure or through a resistance (RCR:
+/// Rp + Rd, quasi-steady), at the flow's current time; with fem.frames = N also N
+/// quasi-steady frames over one inlet period from one factorization.
 nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, const flow::FlowSolver& fs,
                        const std::filesystem::path& out) {
 #ifdef FLOWIRE_HAVE_FEM
-  fem::BoundaryValues bv;
-  bv.inlet_node = fs.spec().inlets.empty() ? net.widest_end() : fs.spec().inlets.front().node;
-  bv.inlet_pressure = fs.node_pressure(bv.inlet_node);
-  for (int e : net.ends())
-    if (e != bv.inlet_node) bv.outlet_pressures.emplace_back(e, fs.node_pressure(e));
-  bv.viscosity = fs.spec().viscosity;
-  bv.density = fs.spec().density;
+  const flow::FlowSpec& spec = fs.spec();
+  const fem::BoundaryValues bv = fem::boundary_values(spec, net, fs.time());
+  if (std::any_of(spec.outlets.begin(), spec.outlets.end(),
+                  [](const flow::OutletBC& o) { return o.type == flow::OutletBC::Type::Rcr; }))
+    warn("fem: RCR outlets are compared quasi-steadily, as the resistance Rp + Rd to Pd");
   fem::FemOptions fo;
   if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
   fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
@@ -223,16 +256,32 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   fo.samples_per_branch = c.integer("fem.samples_per_branch");
   fo.write_vtu = c.boolean("output.vtk");
   fo.write_png = c.boolean("output.png");
-  const auto r = fem::compare(net, bv, fo, out.string());
-  return {{"tets", r.tets},
-          {"unknowns", r.unknowns},
-          {"max_rel_diff_away_from_junctions", r.max_rel_diff_drop_away},
-          {"max_rel_diff_near_junctions", r.max_rel_diff_drop_junction},
-          {"max_flow_split_error", r.max_flow_split_error},
-          {"max_flow_error", r.max_flow_error},
-          {"mesh_seconds", r.mesh_seconds},
-          {"assemble_seconds", r.assemble_seconds},
-          {"solve_seconds", r.solve_seconds}};
+  const long frames = c.integer("fem.frames");  // checked by check_fem
+  if (frames == 0) {
+    auto j = fem_result_json(fem::compare(net, bv, fo, out.string()));
+    j["time"] = fs.time();
+    return j;
+  }
+  const double period = spec.cycle();
+  std::vector<double> times;
+  std::vector<fem::BoundaryValues> values;
+  for (long i = 0; i < frames; ++i) {
+    times.push_back(period * static_cast<double>(i) / static_cast<double>(frames));
+    values.push_back(fem::boundary_values(spec, net, times.back()));
+  }
+  const auto p = fem::compare_pulsatile(net, times, values, bv, fs.time(), fo, out.string());
+  auto j = fem_result_json(p.steady);
+  j["time"] = fs.time();
+  j["pulsatile"] = {{"frames", frames},
+                    {"period", period},
+                    {"max_rel_diff_away_from_junctions", p.max_rel_diff_drop_away},
+                    {"max_rel_diff_near_junctions", p.max_rel_diff_drop_junction},
+                    {"max_flow_split_error", p.max_flow_split_error},
+                    {"max_flow_error", p.max_flow_error},
+                    {"factorizations", p.factorizations},
+                    {"basis_seconds", p.basis_seconds},
+                    {"frames_seconds", p.frames_seconds}};
+  return j;
 #else
   (void)net, (void)fs, (void)out;
   throw_input_error(c.where("fem"),
@@ -342,6 +391,7 @@ RunResult run_scene(const config::Config& c) {
       fsolver = flow::make_solver(*net, flow::from_config(c, *net));
       s["flow"] = {{"solver", std::string(fsolver->name())}, {"model", c.string("flow.model")}};
     }
+    if (c.has_section("fem")) check_fem(c, fsolver.get());  // before the run, not after it
     std::unique_ptr<rod::RodSimulator> sim;
     std::optional<vessels::SpatialIndex> index;
     std::shared_ptr<VesselForces> forces;

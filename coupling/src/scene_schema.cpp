@@ -174,6 +174,8 @@ config::Schema make_schema() {
   add("fem.equations", Type::Enum, "stokes", D::None, "stokes | navier_stokes", {"stokes", "navier_stokes"});
   add("fem.solver", Type::Enum, "mumps", D::None, "mumps | fieldsplit", {"mumps", "fieldsplit"});
   add("fem.samples_per_branch", Type::Integer, "10", D::None, "comparison points per branch");
+  add("fem.frames", Type::Integer, "0", D::None,
+      "0: steady comparison only; N: also N quasi-steady frames over one inlet period (fem_pulsatile*.csv, fem.pvd)");
 
   add("output", Type::Section, "{}", D::None, "what is written and where");
   add("output.dir", Type::String, "out", D::None, "output folder (relative to the working directory)");

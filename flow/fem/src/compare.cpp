@@ -13,6 +13,7 @@
 #include <fstream>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <queue>
 #include <sstream>
 
@@ -34,10 +35,15 @@ int mpi_rank() {
   return rank;
 }
 
-double outlet_pressure_of(const BoundaryValues& bv, int node) {
+OutletValue outlet_value_of(const BoundaryValues& bv, int node) {
+  for (const auto& o : bv.outlets)
+    if (o.node == node) return o;
+  OutletValue o;
+  o.node = node;
+  o.pressure = bv.outlet_pressure;
   for (const auto& [n, p] : bv.outlet_pressures)
-    if (n == node) return p;
-  return bv.outlet_pressure;
+    if (n == node) o.pressure = p;
+  return o;
 }
 
 int inlet_of(const Network& net, const BoundaryValues& bv) {
@@ -114,6 +120,28 @@ std::string csv_field(const std::string& s) {
   return q + "\"";
 }
 
+std::string sample_row(const Network& net, const SamplePoint& sp) {
+  std::ostringstream o;
+  o.precision(10);
+  o << csv_field(branch_label(net, sp.branch)) << ',' << sp.s << ',' << sp.x.x() << ',' << sp.x.y() << ',' << sp.x.z()
+    << ',' << sp.pressure_network << ',' << sp.pressure_fem << ',' << sp.rel_diff << ',' << sp.pressure_fem_centre
+    << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ',' << (sp.near_junction ? 1 : 0);
+  return o.str();
+}
+
+constexpr const char* kSampleHeader =
+    "branch,s,x,y,z,pressure_network,pressure_fem,rel_diff,pressure_fem_centre,rel_diff_drop,path_distance,"
+    "near_junction";
+
+std::string outlet_row(const OutletFlow& q) {
+  std::ostringstream o;
+  o.precision(10);
+  o << q.node << ',' << q.flow_network << ',' << q.flow_fem << ','
+    << (q.flow_network != 0.0 ? q.flow_fem / q.flow_network - 1.0 : 0.0) << ',' << q.pressure_network << ','
+    << q.pressure_fem;
+  return o.str();
+}
+
 void write_vtu(const std::filesystem::path& path, const TetMesh& mesh, const StokesSolution& sol) {
   // Edge nodes take the mean pressure of their two vertices (the P1 field).
   std::vector<std::array<int, 2>> ev(mesh.nodes.size(), {-1, -1});
@@ -179,6 +207,48 @@ void write_png(const std::filesystem::path& png, const std::filesystem::path& cs
 
 }  // namespace
 
+BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, double t) {
+  if (spec.inlets.size() != 1)
+    throw_input_error("fem", fmt::format("the comparison needs exactly one inlet; the flow has {}", spec.inlets.size()));
+  BoundaryValues bv;
+  const auto& in = spec.inlets.front();
+  bv.inlet_node = in.node >= 0 ? in.node : net.widest_end();
+  if (in.type == flow::InletBC::Type::Flow) {
+    bv.inlet_type = BoundaryValues::Inlet::Flow;
+    bv.inlet_flow = in.waveform(t);
+  } else {
+    bv.inlet_pressure = in.waveform(t);
+  }
+  for (const auto& o : spec.outlets) {
+    OutletValue v;
+    v.node = o.node;
+    switch (o.type) {
+      case flow::OutletBC::Type::Pressure:
+        v.pressure = o.pressure;
+        break;
+      case flow::OutletBC::Type::Resistance:
+        v.type = OutletValue::Type::Resistance;
+        v.pressure = o.distal_pressure;
+        v.resistance = o.resistance;
+        break;
+      case flow::OutletBC::Type::Rcr:  // quasi-steady: the capacitor carries no flow
+        v.type = OutletValue::Type::Resistance;
+        v.pressure = o.distal_pressure;
+        v.resistance = o.rp + o.rd;
+        break;
+    }
+    bv.outlets.push_back(v);
+  }
+  for (int e : net.ends()) {
+    if (e == bv.inlet_node) continue;
+    if (std::none_of(bv.outlets.begin(), bv.outlets.end(), [&](const OutletValue& o) { return o.node == e; }))
+      throw_input_error("fem", fmt::format("network end node {} has no outlet condition (the FEM mesh opens every end)", e));
+  }
+  bv.viscosity = spec.viscosity;
+  bv.density = spec.density;
+  return bv;
+}
+
 NetworkFlow network_flow(const Network& net, const BoundaryValues& bv) {
   flow::FlowSpec spec;
   spec.solver = flow::SolverKind::Sparse;
@@ -187,15 +257,27 @@ NetworkFlow network_flow(const Network& net, const BoundaryValues& bv) {
   const int inlet = inlet_of(net, bv);
   flow::InletBC in;
   in.node = inlet;
-  in.type = flow::InletBC::Type::Pressure;
-  in.waveform = flow::Waveform::constant(bv.inlet_pressure);
+  if (bv.inlet_type == BoundaryValues::Inlet::Flow) {
+    in.type = flow::InletBC::Type::Flow;
+    in.waveform = flow::Waveform::constant(bv.inlet_flow);
+  } else {
+    in.type = flow::InletBC::Type::Pressure;
+    in.waveform = flow::Waveform::constant(bv.inlet_pressure);
+  }
   spec.inlets.push_back(in);
   for (int e : net.ends()) {
     if (e == inlet) continue;
+    const OutletValue v = outlet_value_of(bv, e);
     flow::OutletBC out;
     out.node = e;
-    out.type = flow::OutletBC::Type::Pressure;
-    out.pressure = outlet_pressure_of(bv, e);
+    if (v.type == OutletValue::Type::Resistance) {
+      out.type = flow::OutletBC::Type::Resistance;
+      out.resistance = v.resistance;
+      out.distal_pressure = v.pressure;
+    } else {
+      out.type = flow::OutletBC::Type::Pressure;
+      out.pressure = v.pressure;
+    }
     spec.outlets.push_back(out);
   }
   auto solver = flow::make_solver(net, spec);
@@ -206,13 +288,23 @@ NetworkFlow network_flow(const Network& net, const BoundaryValues& bv) {
   return nf;
 }
 
-std::vector<double> group_pressures(const TetMesh& mesh, const BoundaryValues& bv) {
-  std::vector<double> p(mesh.groups.size(), 0.0);
+std::vector<GroupCondition> group_conditions(const TetMesh& mesh, const BoundaryValues& bv) {
+  std::vector<GroupCondition> c(mesh.groups.size());
   for (size_t g = 0; g < mesh.groups.size(); ++g) {
-    if (mesh.groups[g].kind == BoundaryGroup::Kind::Inlet) p[g] = bv.inlet_pressure;
-    if (mesh.groups[g].kind == BoundaryGroup::Kind::Outlet) p[g] = outlet_pressure_of(bv, mesh.groups[g].node);
+    const auto& grp = mesh.groups[g];
+    if (grp.kind == BoundaryGroup::Kind::Inlet) {
+      // The FEM flux is outward: an inflow into the network is a negative outward flow.
+      c[g] = bv.inlet_type == BoundaryValues::Inlet::Flow ? GroupCondition::with_flow(-bv.inlet_flow)
+                                                          : GroupCondition::at_pressure(bv.inlet_pressure);
+    } else if (grp.kind == BoundaryGroup::Kind::Outlet) {
+      const OutletValue v = outlet_value_of(bv, grp.node);
+      if (v.type == OutletValue::Type::Resistance && !(v.resistance >= 0.0))
+        throw_usage_error(fmt::format("fem: outlet {} has a negative resistance", grp.node));
+      c[g] = v.type == OutletValue::Type::Resistance ? GroupCondition::with_resistance(v.resistance, v.pressure)
+                                                     : GroupCondition::at_pressure(v.pressure);
+    }
   }
-  return p;
+  return c;
 }
 
 CompareResult compare_fields(const Network& net, const TetMesh& mesh, const StokesSolution& sol,
@@ -300,9 +392,25 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
                                                   : -flow.segment_flow[static_cast<size_t>(s)];
     const int g = mesh.group_of_node(e);
     const double qf = g >= 0 ? sol.group_flow[static_cast<size_t>(g)] : 0.0;
-    res.outlets.push_back({e, qn, qf});
+    const double pf = g >= 0 && static_cast<size_t>(g) < sol.group_pressure.size()
+                          ? sol.group_pressure[static_cast<size_t>(g)]
+                          : std::numeric_limits<double>::quiet_NaN();
+    res.outlets.push_back({e, qn, qf, flow.node_pressure[static_cast<size_t>(e)], pf});
     qn_total += qn;
     qf_total += qf;
+  }
+  {
+    const int s = *net.node_segments(inlet).first;
+    res.inlet_flow_network = net.segment(s).node_from == inlet ? flow.segment_flow[static_cast<size_t>(s)]
+                                                               : -flow.segment_flow[static_cast<size_t>(s)];
+    res.inlet_pressure_network = flow.node_pressure[static_cast<size_t>(inlet)];
+    const int g = mesh.group_of_node(inlet);
+    if (g >= 0) {
+      res.inlet_flow_fem = -sol.group_flow[static_cast<size_t>(g)];
+      res.inlet_pressure_fem = static_cast<size_t>(g) < sol.group_pressure.size()
+                                   ? sol.group_pressure[static_cast<size_t>(g)]
+                                   : std::numeric_limits<double>::quiet_NaN();
+    }
   }
   for (const auto& o : res.outlets) {
     if (qn_total != 0.0 && qf_total != 0.0)
@@ -325,22 +433,15 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
   {
     std::ostringstream o;
     o.precision(10);
-    o << "branch,s,x,y,z,pressure_network,pressure_fem,rel_diff,pressure_fem_centre,rel_diff_drop,path_distance,"
-         "near_junction\n";
-    for (const auto& sp : res.samples)
-      o << csv_field(branch_label(net, sp.branch)) << ',' << sp.s << ',' << sp.x.x() << ',' << sp.x.y() << ','
-        << sp.x.z() << ',' << sp.pressure_network << ',' << sp.pressure_fem << ',' << sp.rel_diff << ','
-        << sp.pressure_fem_centre << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ','
-        << (sp.near_junction ? 1 : 0) << '\n';
+    o << kSampleHeader << '\n';
+    for (const auto& sp : res.samples) o << sample_row(net, sp) << '\n';
     write_text_atomically(dir / "fem_compare.csv", o.str());
   }
   {
     std::ostringstream o;
     o.precision(10);
-    o << "outlet,flow_network,flow_fem,rel_diff\n";
-    for (const auto& q : res.outlets)
-      o << q.node << ',' << q.flow_network << ',' << q.flow_fem << ','
-        << (q.flow_network != 0.0 ? q.flow_fem / q.flow_network - 1.0 : 0.0) << '\n';
+    o << "outlet,flow_network,flow_fem,rel_diff,pressure_network,pressure_fem\n";
+    for (const auto& q : res.outlets) o << outlet_row(q) << '\n';
     write_text_atomically(dir / "fem_outlets.csv", o.str());
   }
   {
@@ -371,10 +472,16 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
       for (const auto* p : pts) o << fmt::format(" {:+.2f}% ({:+.2f}%) |", 100 * p->rel_diff, 100 * p->rel_diff_drop);
       o << "\n\n";
     }
-    o << "## Outlet flows\n\n| outlet node | network (mL/s) | FEM (mL/s) | difference |\n|---|---|---|---|\n";
+    o << fmt::format("## Boundary\n\nInlet: network {:.5g} Pa, {:.5g} mL/s; FEM {:.5g} Pa, {:.5g} mL/s (the "
+                     "imposed one of pressure / flow is the same in both).\n\n",
+                     res.inlet_pressure_network, res.inlet_flow_network * 1e6, res.inlet_pressure_fem,
+                     res.inlet_flow_fem * 1e6);
+    o << "## Outlet flows\n\n| outlet node | network (mL/s) | FEM (mL/s) | difference | network p (Pa) | FEM p (Pa) "
+         "|\n|---|---|---|---|---|---|\n";
     for (const auto& q : res.outlets)
-      o << fmt::format("| {} | {:.5g} | {:.5g} | {:+.2f}% |\n", q.node, q.flow_network * 1e6, q.flow_fem * 1e6,
-                       q.flow_network != 0.0 ? 100 * (q.flow_fem / q.flow_network - 1.0) : 0.0);
+      o << fmt::format("| {} | {:.5g} | {:.5g} | {:+.2f}% | {:.5g} | {:.5g} |\n", q.node, q.flow_network * 1e6,
+                       q.flow_fem * 1e6, q.flow_network != 0.0 ? 100 * (q.flow_fem / q.flow_network - 1.0) : 0.0,
+                       q.pressure_network, q.pressure_fem);
     o << "\n## Pressure drop per branch\n\n| branch | network (Pa) | FEM (Pa) | difference |\n|---|---|---|---|\n";
     for (const auto& d : res.branches)
       o << fmt::format("| {} | {:.5g} | {:.5g} | {:+.2f}% |\n", branch_label(net, d.branch), d.drop_network, d.drop_fem,
@@ -390,26 +497,133 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
   if (opt.write_png) write_png(dir / "fem_compare.png", dir / "fem_compare.csv");
 }
 
-CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir) {
-  const auto t0 = std::chrono::steady_clock::now();
-  initialize();  // MPI up before meshing, so that rank 0 meshes for everyone
+namespace {
+
+MeshOptions mesh_options(const FemOptions& opt, const BoundaryValues& bv) {
   MeshOptions mo;
   mo.mesh_size = opt.mesh_size;
   mo.size_factor = opt.size_factor;
   mo.inlet_node = bv.inlet_node;
-  const TetMesh mesh = build_mesh(net, mo);
+  return mo;
+}
+
+StokesOptions stokes_options(const FemOptions& opt, const BoundaryValues& bv) {
   StokesOptions so;
   so.viscosity = bv.viscosity;
   so.density = bv.density;
   so.equations = opt.equations;
   so.solver = opt.solver;
   so.velocity_pc = opt.velocity_pc;
-  const StokesSolution sol = solve_stokes(mesh, group_pressures(mesh, bv), so);
+  return so;
+}
+
+void accumulate(PulsatileResult& p, const CompareResult& r) {
+  p.max_rel_diff_drop_away = std::max(p.max_rel_diff_drop_away, r.max_rel_diff_drop_away);
+  p.max_rel_diff_drop_junction = std::max(p.max_rel_diff_drop_junction, r.max_rel_diff_drop_junction);
+  p.max_flow_split_error = std::max(p.max_flow_split_error, r.max_flow_split_error);
+  p.max_flow_error = std::max(p.max_flow_error, r.max_flow_error);
+}
+
+}  // namespace
+
+CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir) {
+  const auto t0 = std::chrono::steady_clock::now();
+  initialize();  // MPI up before meshing, so that rank 0 meshes for everyone
+  const TetMesh mesh = build_mesh(net, mesh_options(opt, bv));
+  const auto cond = group_conditions(mesh, bv);
+  const StokesSolution sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), stokes_options(opt, bv));
   const NetworkFlow nf = network_flow(net, bv);
   CompareResult res = compare_fields(net, mesh, sol, nf, inlet_of(net, bv), opt.samples_per_branch);
   res.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!out_dir.empty()) write_outputs(out_dir, net, mesh, sol, res, opt);
   return res;
+}
+
+PulsatileResult compare_pulsatile(const Network& net, std::span<const double> times,
+                                  std::span<const BoundaryValues> frames, const BoundaryValues& steady,
+                                  double steady_time, const FemOptions& opt, const std::string& out_dir) {
+  if (times.size() != frames.size())
+    throw_usage_error(fmt::format("fem: {} frame times for {} frames", times.size(), frames.size()));
+  if (frames.empty()) throw_usage_error("fem: a pulsatile comparison needs at least one frame");
+  const int inlet = inlet_of(net, steady);
+  for (const auto& f : frames)
+    if (inlet_of(net, f) != inlet) throw_usage_error("fem: every frame must have the same inlet node");
+  const auto t_start = std::chrono::steady_clock::now();
+  initialize();
+  const TetMesh mesh = build_mesh(net, mesh_options(opt, steady));
+  const StokesOptions so = stokes_options(opt, steady);
+  PulsatileResult out;
+  std::optional<StokesBasis> basis;
+  if (opt.equations == Equations::Stokes) {
+    basis.emplace(mesh, so);
+    out.factorizations = 1;
+    out.basis_seconds = basis->assemble_seconds() + basis->solve_seconds();
+  }
+  auto solve = [&](const BoundaryValues& bv, StokesSolution& sol) {
+    const auto cond = group_conditions(mesh, bv);
+    if (basis) {
+      sol = basis->solve(cond);
+    } else {
+      sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), stokes_options(opt, bv));
+      out.factorizations += sol.picard_iterations;
+      out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
+    }
+    return compare_fields(net, mesh, sol, network_flow(net, bv), inlet, opt.samples_per_branch);
+  };
+  const auto t_frames = std::chrono::steady_clock::now();
+  StokesSolution steady_sol;
+  out.steady = solve(steady, steady_sol);
+  out.steady.time = steady_time;
+  const bool vtu = opt.write_vtu && !out_dir.empty();
+  std::vector<StokesSolution> sols(vtu ? frames.size() : 0);
+  StokesSolution scratch;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    CompareResult r = solve(frames[i], vtu ? sols[i] : scratch);
+    r.time = times[i];
+    accumulate(out, r);
+    out.frames.push_back(std::move(r));
+  }
+  out.frames_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_frames).count();
+  out.steady.mesh_seconds = mesh.mesh_seconds;
+  out.steady.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  if (basis) {
+    out.steady.assemble_seconds = basis->assemble_seconds();
+    out.steady.solve_seconds = basis->solve_seconds();
+  }
+  if (out_dir.empty()) return out;
+  write_outputs(out_dir, net, mesh, steady_sol, out.steady, opt);  // rank 0 only
+  if (mpi_rank() != 0) return out;
+  const std::filesystem::path dir(out_dir);
+  {
+    std::ostringstream o;
+    o.precision(10);
+    o << "time," << kSampleHeader << '\n';
+    for (const auto& r : out.frames)
+      for (const auto& sp : r.samples) o << r.time << ',' << sample_row(net, sp) << '\n';
+    write_text_atomically(dir / "fem_pulsatile.csv", o.str());
+  }
+  {
+    std::ostringstream o;
+    o.precision(10);
+    o << "time,outlet,flow_network,flow_fem,rel_diff,pressure_network,pressure_fem\n";
+    for (const auto& r : out.frames)
+      for (const auto& q : r.outlets) o << r.time << ',' << outlet_row(q) << '\n';
+    write_text_atomically(dir / "fem_pulsatile_outlets.csv", o.str());
+  }
+  if (vtu) {
+    std::ostringstream pvd;
+    pvd.precision(10);
+    pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+           "<Collection>\n";
+    for (size_t i = 0; i < frames.size(); ++i) {
+      const std::string name = fmt::format("fem_{:04d}.vtu", i);
+      write_vtu(dir / name, mesh, sols[i]);
+      pvd << "<DataSet timestep=\"" << times[i] << "\" part=\"0\" file=\"" << name << "\"/>\n";
+    }
+    pvd << "</Collection>\n</VTKFile>\n";
+    write_text_atomically(dir / "fem.pvd", pvd.str());
+  }
+  return out;
 }
 
 }  // namespace flowire::fem

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include <Eigen/Dense>
+
 #include "flowire/common/error.hpp"
 #include "flowire/fem/element.hpp"
 
@@ -51,6 +53,10 @@ class Handle {
   Handle(const Handle&) = delete;
   Handle& operator=(const Handle&) = delete;
   T* out() { return &h_; }
+  void reset() {
+    if (h_) Destroy(&h_);
+    h_ = nullptr;
+  }
   operator T() const { return h_; }  // NOLINT(google-explicit-constructor)
 
  private:
@@ -448,112 +454,291 @@ std::vector<double> group_fluxes(const TetMesh& mesh, const std::vector<Vec3>& v
   return flux;
 }
 
+namespace {
+
+/// The linear system of one mesh: numbering, matrices, solver; assembled for a given
+/// convection field, factorized once, then solved for any group pressures.
+class System {
+ public:
+  System(const TetMesh& mesh, const StokesOptions& opt) : mesh_(mesh), opt_(opt), num_(number(mesh, mpi_.rank, mpi_.size)) {
+    std::vector<PetscInt> ia, ja, pia, pja;
+    {
+      const NodeTets nt = node_tets(mesh);
+      sparsity(mesh, num_, nt, ia, ja, pia, pja);
+    }
+    FLOWIRE_PETSC(MatCreate(PETSC_COMM_WORLD, a_.out()));
+    FLOWIRE_PETSC(MatSetSizes(a_, num_.local, num_.local, num_.total, num_.total));
+    FLOWIRE_PETSC(MatSetType(a_, MATAIJ));
+    FLOWIRE_PETSC(MatSeqAIJSetPreallocationCSR(a_, ia.data(), ja.data(), nullptr));
+    FLOWIRE_PETSC(MatMPIAIJSetPreallocationCSR(a_, ia.data(), ja.data(), nullptr));
+    FLOWIRE_PETSC(MatSetOption(a_, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
+    if (opt.solver == LinearSolver::Fieldsplit) {
+      FLOWIRE_PETSC(MatCreate(PETSC_COMM_WORLD, mp_.out()));
+      FLOWIRE_PETSC(MatSetSizes(mp_, num_.p_local, num_.p_local, mesh.num_vertices, mesh.num_vertices));
+      FLOWIRE_PETSC(MatSetType(mp_, MATAIJ));
+      FLOWIRE_PETSC(MatSeqAIJSetPreallocationCSR(mp_, pia.data(), pja.data(), nullptr));
+      FLOWIRE_PETSC(MatMPIAIJSetPreallocationCSR(mp_, pia.data(), pja.data(), nullptr));
+    }
+    FLOWIRE_PETSC(MatCreateVecs(a_, x_.out(), b_.out()));
+    // Every rank gets the whole solution.
+    FLOWIRE_PETSC(VecScatterCreateToAll(x_, scatter_.out(), all_.out()));
+  }
+
+  [[nodiscard]] int unknowns() const { return static_cast<int>(num_.total); }
+
+  /// Assemble (with the convection field `wind` for Navier–Stokes) and factorize.
+  void prepare(const std::vector<Vec3>* wind) {
+    auto t0 = std::chrono::steady_clock::now();
+    assemble(mesh_, num_, mpi_, opt_, wind, a_, first_ ? Mat(mp_) : nullptr);
+    first_ = false;
+    assemble_seconds += seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    ksp_.reset();
+    isu_.reset();
+    isp_.reset();
+    FLOWIRE_PETSC(KSPCreate(PETSC_COMM_WORLD, ksp_.out()));
+    const bool symmetric = wind == nullptr;
+    FLOWIRE_PETSC(MatSetOption(a_, MAT_SYMMETRIC, symmetric ? PETSC_TRUE : PETSC_FALSE));
+    configure_solver(ksp_, a_, mp_, num_, opt_, symmetric, isu_, isp_);
+    FLOWIRE_PETSC(KSPSetUp(ksp_));
+    solve_seconds += seconds_since(t0);
+    ++factorizations;
+  }
+
+  /// Solve for the given group pressures: velocity, pressure and group fluxes.
+  StokesSolution solve(std::span<const double> group_pressure) {
+    auto t0 = std::chrono::steady_clock::now();
+    assemble_rhs(mesh_, num_, mpi_, group_pressure, b_);
+    FLOWIRE_PETSC(KSPSolve(ksp_, b_, x_));
+    KSPConvergedReason reason;
+    FLOWIRE_PETSC(KSPGetConvergedReason(ksp_, &reason));
+    PetscInt its = 0;
+    FLOWIRE_PETSC(KSPGetIterationNumber(ksp_, &its));
+    solve_seconds += seconds_since(t0);
+    if (reason < 0)
+      throw_numerical_error(fmt::format("fem: the linear solve failed ({}) after {} iterations",
+                                        KSPConvergedReasons[reason], static_cast<long>(its)));
+    if (opt_.solver == LinearSolver::Fieldsplit) krylov_iterations += static_cast<int>(its);
+    StokesSolution sol;
+    sol.velocity.assign(mesh_.nodes.size(), Vec3::Zero());
+    sol.pressure.assign(static_cast<size_t>(mesh_.num_vertices), 0.0);
+    FLOWIRE_PETSC(VecScatterBegin(scatter_, x_, all_, INSERT_VALUES, SCATTER_FORWARD));
+    FLOWIRE_PETSC(VecScatterEnd(scatter_, x_, all_, INSERT_VALUES, SCATTER_FORWARD));
+    const PetscScalar* v = nullptr;
+    FLOWIRE_PETSC(VecGetArrayRead(all_, &v));
+    for (size_t n = 0; n < mesh_.nodes.size(); ++n) {
+      const PetscInt d = num_.vdof[n];
+      if (d >= 0) sol.velocity[n] = Vec3(v[d], v[d + 1], v[d + 2]);
+    }
+    for (size_t k = 0; k < sol.pressure.size(); ++k) sol.pressure[k] = v[num_.pdof[k]];
+    FLOWIRE_PETSC(VecRestoreArrayRead(all_, &v));
+    sol.group_flow = group_fluxes(mesh_, sol.velocity);
+    sol.group_pressure.assign(group_pressure.begin(), group_pressure.end());
+    return sol;
+  }
+
+  double assemble_seconds = 0.0, solve_seconds = 0.0;
+  int krylov_iterations = 0, factorizations = 0;
+
+ private:
+  const TetMesh& mesh_;
+  StokesOptions opt_;
+  Mpi mpi_;
+  Numbering num_;
+  MatH a_, mp_;
+  VecH b_, x_, all_;
+  ScatterH scatter_;
+  KspH ksp_;
+  IsH isu_, isp_;
+  bool first_ = true;
+};
+
+/// sol += c · other (fields, fluxes and group pressures).
+void add_scaled(StokesSolution& sol, double c, const StokesSolution& other) {
+  for (size_t n = 0; n < sol.velocity.size(); ++n) sol.velocity[n] += c * other.velocity[n];
+  for (size_t k = 0; k < sol.pressure.size(); ++k) sol.pressure[k] += c * other.pressure[k];
+  for (size_t g = 0; g < sol.group_flow.size(); ++g) sol.group_flow[g] += c * other.group_flow[g];
+  for (size_t g = 0; g < sol.group_pressure.size(); ++g) sol.group_pressure[g] += c * other.group_pressure[g];
+}
+
+void check_conditions(const TetMesh& mesh, std::span<const GroupCondition> cond) {
+  if (cond.size() != mesh.groups.size())
+    throw_usage_error(fmt::format("fem: {} boundary conditions given for {} boundary groups", cond.size(),
+                                  mesh.groups.size()));
+  bool level = false;
+  for (size_t g = 0; g < cond.size(); ++g) {
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
+    const auto& c = cond[g];
+    const double vals[3] = {c.pressure, c.flow, c.resistance};
+    for (double v : vals)
+      if (!std::isfinite(v)) throw_usage_error(fmt::format("fem: boundary value of {} is not finite", mesh.groups[g].name));
+    if (c.type == GroupCondition::Type::Resistance && c.resistance < 0.0)
+      throw_usage_error(fmt::format("fem: negative resistance {} on {}", c.resistance, mesh.groups[g].name));
+    if (c.type != GroupCondition::Type::Flow) level = true;
+  }
+  if (!level)
+    throw_usage_error("fem: every open boundary has a prescribed flow, which leaves the pressure level undetermined; "
+                      "give at least one a pressure or a resistance");
+}
+
+}  // namespace
+
+std::vector<double> boundary_pressures(const TetMesh& mesh, std::span<const GroupCondition> cond,
+                                       const std::vector<int>& open, const std::vector<double>& base_flux,
+                                       const std::vector<std::vector<double>>& unit_flux) {
+  check_conditions(mesh, cond);
+  std::vector<double> p(mesh.groups.size(), 0.0);
+  for (size_t g = 0; g < cond.size(); ++g)
+    if (mesh.groups[g].kind != BoundaryGroup::Kind::Wall && cond[g].type == GroupCondition::Type::Pressure)
+      p[g] = cond[g].pressure;
+  const auto n = static_cast<Eigen::Index>(open.size());
+  if (n == 0) return p;
+  // Row i: the condition of group open[i]; column j: the pressure of open[j].
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd rhs(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto gi = static_cast<size_t>(open[static_cast<size_t>(i)]);
+    const auto& c = cond[gi];
+    switch (c.type) {
+      case GroupCondition::Type::Pressure:  // p_i = P
+        a(i, i) = 1.0;
+        rhs[i] = c.pressure;
+        break;
+      case GroupCondition::Type::Flow:  // Q_i = F0_i + Σ_j F_j,i p_j = Q
+        for (Eigen::Index j = 0; j < n; ++j) a(i, j) = unit_flux[static_cast<size_t>(j)][gi];
+        rhs[i] = c.flow - base_flux[gi];
+        break;
+      case GroupCondition::Type::Resistance:  // p_i − R (F0_i + Σ_j F_j,i p_j) = P_d
+        for (Eigen::Index j = 0; j < n; ++j) a(i, j) = -c.resistance * unit_flux[static_cast<size_t>(j)][gi];
+        a(i, i) += 1.0;
+        rhs[i] = c.pressure + c.resistance * base_flux[gi];
+        break;
+    }
+  }
+  // Scale every row to a unit largest entry: flow rows (m³/s/Pa) and pressure rows differ
+  // by many orders of magnitude.
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double s = a.row(i).cwiseAbs().maxCoeff();
+    if (s > 0.0) {
+      a.row(i) /= s;
+      rhs[i] /= s;
+    }
+  }
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(a);
+  if (lu.rank() < n || lu.rcond() < 1e-13)
+    throw_usage_error("fem: the boundary conditions do not determine the boundary pressures");
+  const Eigen::VectorXd x = lu.solve(rhs);
+  for (Eigen::Index i = 0; i < n; ++i) p[static_cast<size_t>(open[static_cast<size_t>(i)])] = x[i];
+  return p;
+}
+
 StokesSolution solve_stokes(const TetMesh& mesh, std::span<const double> group_pressure, const StokesOptions& opt) {
   if (group_pressure.size() != mesh.groups.size())
     throw_usage_error(fmt::format("fem: {} boundary pressures given for {} boundary groups", group_pressure.size(),
                                   mesh.groups.size()));
+  std::vector<GroupCondition> cond(mesh.groups.size());
+  for (size_t g = 0; g < cond.size(); ++g) cond[g] = GroupCondition::at_pressure(group_pressure[g]);
+  return solve_stokes(mesh, std::span<const GroupCondition>(cond), opt);
+}
+
+StokesSolution solve_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond, const StokesOptions& opt) {
   if (!(opt.viscosity > 0.0)) throw_usage_error("fem: viscosity must be > 0");
   if (mesh.tets.empty()) throw_usage_error("fem: empty mesh");
+  check_conditions(mesh, cond);
   ensure_petsc();
-  const Mpi mpi;
-  StokesSolution sol;
-  auto t0 = std::chrono::steady_clock::now();
-  const Numbering num = number(mesh, mpi.rank, mpi.size);
-  sol.unknowns = static_cast<int>(num.total);
-  std::vector<PetscInt> ia, ja, pia, pja;
-  {
-    const NodeTets nt = node_tets(mesh);
-    sparsity(mesh, num, nt, ia, ja, pia, pja);
+  System sys(mesh, opt);
+  // Groups whose pressure follows from a flow or resistance condition.
+  std::vector<int> unknown;
+  std::vector<double> known(mesh.groups.size(), 0.0);
+  for (size_t g = 0; g < mesh.groups.size(); ++g) {
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
+    if (cond[g].type == GroupCondition::Type::Pressure) known[g] = cond[g].pressure;
+    else unknown.push_back(static_cast<int>(g));
   }
-  MatH a, mp;
-  FLOWIRE_PETSC(MatCreate(PETSC_COMM_WORLD, a.out()));
-  FLOWIRE_PETSC(MatSetSizes(a, num.local, num.local, num.total, num.total));
-  FLOWIRE_PETSC(MatSetType(a, MATAIJ));
-  FLOWIRE_PETSC(MatSeqAIJSetPreallocationCSR(a, ia.data(), ja.data(), nullptr));
-  FLOWIRE_PETSC(MatMPIAIJSetPreallocationCSR(a, ia.data(), ja.data(), nullptr));
-  FLOWIRE_PETSC(MatSetOption(a, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
-  const bool fieldsplit = opt.solver == LinearSolver::Fieldsplit;
-  if (fieldsplit) {
-    FLOWIRE_PETSC(MatCreate(PETSC_COMM_WORLD, mp.out()));
-    FLOWIRE_PETSC(MatSetSizes(mp, num.p_local, num.p_local, mesh.num_vertices, mesh.num_vertices));
-    FLOWIRE_PETSC(MatSetType(mp, MATAIJ));
-    FLOWIRE_PETSC(MatSeqAIJSetPreallocationCSR(mp, pia.data(), pja.data(), nullptr));
-    FLOWIRE_PETSC(MatMPIAIJSetPreallocationCSR(mp, pia.data(), pja.data(), nullptr));
-  }
-  VecH b, x;
-  FLOWIRE_PETSC(MatCreateVecs(a, x.out(), b.out()));
-  assemble_rhs(mesh, num, mpi, group_pressure, b);
-
-  // Every rank gets the whole solution.
-  ScatterH scatter;
-  VecH all;
-  FLOWIRE_PETSC(VecScatterCreateToAll(x, scatter.out(), all.out()));
-  std::vector<Vec3> velocity(mesh.nodes.size(), Vec3::Zero());
-  std::vector<double> pressure(static_cast<size_t>(mesh.num_vertices), 0.0);
-  auto unpack = [&] {
-    FLOWIRE_PETSC(VecScatterBegin(scatter, x, all, INSERT_VALUES, SCATTER_FORWARD));
-    FLOWIRE_PETSC(VecScatterEnd(scatter, x, all, INSERT_VALUES, SCATTER_FORWARD));
-    const PetscScalar* v = nullptr;
-    FLOWIRE_PETSC(VecGetArrayRead(all, &v));
-    for (size_t n = 0; n < mesh.nodes.size(); ++n) {
-      const PetscInt d = num.vdof[n];
-      velocity[n] = d >= 0 ? Vec3(v[d], v[d + 1], v[d + 2]) : Vec3::Zero();
-    }
-    for (size_t k = 0; k < pressure.size(); ++k) pressure[k] = v[num.pdof[k]];
-    FLOWIRE_PETSC(VecRestoreArrayRead(all, &v));
-  };
-
   const int max_steps = opt.equations == Equations::NavierStokes ? std::max(1, opt.picard_max_iterations) + 1 : 1;
   std::vector<Vec3> wind;
+  StokesSolution sol;
   double change = 0.0;
   for (int step = 0; step < max_steps; ++step) {
-    t0 = std::chrono::steady_clock::now();
-    assemble(mesh, num, mpi, opt, step == 0 ? nullptr : &wind, a, step == 0 ? Mat(mp) : nullptr);
-    sol.assemble_seconds += seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
-    KspH ksp;
-    IsH isu, isp;
-    FLOWIRE_PETSC(KSPCreate(PETSC_COMM_WORLD, ksp.out()));
-    const bool symmetric = step == 0;
-    FLOWIRE_PETSC(MatSetOption(a, MAT_SYMMETRIC, symmetric ? PETSC_TRUE : PETSC_FALSE));
-    configure_solver(ksp, a, mp, num, opt, symmetric, isu, isp);
-    FLOWIRE_PETSC(KSPSolve(ksp, b, x));
-    KSPConvergedReason reason;
-    FLOWIRE_PETSC(KSPGetConvergedReason(ksp, &reason));
-    PetscInt its = 0;
-    FLOWIRE_PETSC(KSPGetIterationNumber(ksp, &its));
-    sol.solve_seconds += seconds_since(t0);
-    if (reason < 0)
-      throw_numerical_error(fmt::format("fem: the linear solve failed ({}) after {} iterations",
-                                        KSPConvergedReasons[reason], static_cast<long>(its)));
-    if (fieldsplit) sol.krylov_iterations += static_cast<int>(its);
-    ++sol.picard_iterations;
-    unpack();
+    sys.prepare(step == 0 ? nullptr : &wind);
+    sol = sys.solve(known);
+    if (!unknown.empty()) {
+      std::vector<StokesSolution> units;
+      std::vector<std::vector<double>> flux;
+      for (int g : unknown) {
+        std::vector<double> e(mesh.groups.size(), 0.0);
+        e[static_cast<size_t>(g)] = 1.0;
+        units.push_back(sys.solve(e));
+        flux.push_back(units.back().group_flow);
+      }
+      const std::vector<double> p = boundary_pressures(mesh, cond, unknown, sol.group_flow, flux);
+      for (size_t k = 0; k < unknown.size(); ++k) add_scaled(sol, p[static_cast<size_t>(unknown[k])], units[k]);
+    }
     if (opt.equations == Equations::Stokes) break;
     if (step > 0) {
       double du = 0.0, umax = 0.0;
-      for (size_t n = 0; n < velocity.size(); ++n) {
-        du = std::max(du, (velocity[n] - wind[n]).cwiseAbs().maxCoeff());
-        umax = std::max(umax, velocity[n].cwiseAbs().maxCoeff());
+      for (size_t n = 0; n < sol.velocity.size(); ++n) {
+        du = std::max(du, (sol.velocity[n] - wind[n]).cwiseAbs().maxCoeff());
+        umax = std::max(umax, sol.velocity[n].cwiseAbs().maxCoeff());
       }
       change = umax > 0.0 ? du / umax : 0.0;
       if (!std::isfinite(change)) throw_numerical_error("fem: Navier–Stokes Picard iterations produced NaN");
-      if (change <= opt.picard_tolerance) {
-        wind.clear();
-        break;
-      }
+      if (change <= opt.picard_tolerance) break;
     }
-    wind = velocity;
+    wind = sol.velocity;
     if (step + 1 == max_steps)
       throw_numerical_error(fmt::format("fem: Navier–Stokes Picard iterations did not converge in {} steps "
                                         "(last relative change {:.3g}); the Reynolds number may be too high",
                                         opt.picard_max_iterations, change));
   }
-  for (const Vec3& u : velocity)
+  for (const Vec3& u : sol.velocity)
     if (!u.allFinite()) throw_numerical_error("fem: the solution contains NaN");
-  sol.velocity = std::move(velocity);
-  sol.pressure = std::move(pressure);
-  sol.group_flow = group_fluxes(mesh, sol.velocity);
+  sol.unknowns = sys.unknowns();
+  sol.krylov_iterations = sys.krylov_iterations;
+  sol.picard_iterations = sys.factorizations;
+  sol.assemble_seconds = sys.assemble_seconds;
+  sol.solve_seconds = sys.solve_seconds;
+  return sol;
+}
+
+StokesBasis::StokesBasis(const TetMesh& mesh, const StokesOptions& opt) : mesh_(mesh) {
+  if (opt.equations != Equations::Stokes)
+    throw_usage_error("fem: the boundary-value basis is for Stokes only (Navier–Stokes is not linear)");
+  if (!(opt.viscosity > 0.0)) throw_usage_error("fem: viscosity must be > 0");
+  if (mesh.tets.empty()) throw_usage_error("fem: empty mesh");
+  ensure_petsc();
+  System sys(mesh, opt);
+  sys.prepare(nullptr);
+  for (size_t g = 0; g < mesh.groups.size(); ++g) {
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
+    open_.push_back(static_cast<int>(g));
+    std::vector<double> e(mesh.groups.size(), 0.0);
+    e[g] = 1.0;
+    unit_.push_back(sys.solve(e));
+    flux_.push_back(unit_.back().group_flow);
+  }
+  unknowns_ = sys.unknowns();
+  assemble_seconds_ = sys.assemble_seconds;
+  solve_seconds_ = sys.solve_seconds;
+}
+
+std::vector<double> StokesBasis::pressures(std::span<const GroupCondition> cond) const {
+  // The basis spans every open group: the "base" field is zero and every group pressure
+  // is an unknown of the small system (pressure groups get an identity row).
+  const std::vector<double> zero(mesh_.groups.size(), 0.0);
+  return boundary_pressures(mesh_, cond, open_, zero, flux_);
+}
+
+StokesSolution StokesBasis::solve(std::span<const GroupCondition> cond) const {
+  const std::vector<double> p = pressures(cond);
+  StokesSolution sol;
+  sol.velocity.assign(mesh_.nodes.size(), Vec3::Zero());
+  sol.pressure.assign(static_cast<size_t>(mesh_.num_vertices), 0.0);
+  sol.group_flow.assign(mesh_.groups.size(), 0.0);
+  sol.group_pressure.assign(mesh_.groups.size(), 0.0);
+  for (size_t k = 0; k < open_.size(); ++k) add_scaled(sol, p[static_cast<size_t>(open_[k])], unit_[k]);
+  sol.unknowns = unknowns_;
+  sol.picard_iterations = 1;
   return sol;
 }
 

@@ -2,8 +2,10 @@
 /// @file compare.hpp
 /// @brief The network model against the 3D finite-element solution on the same lumen.
 ///
-/// Both are driven by the same boundary values: a pressure at the inlet end and a
-/// pressure at every outlet end. Compared are
+/// Both are driven by the same boundary conditions, the network's own: a pressure or a
+/// flow at the inlet end, and at every outlet end a pressure or a resistance to a distal
+/// pressure (see BoundaryValues; the FEM enforces them through its affine structure, see
+/// stokes.hpp). Compared are
 /// - the pressure at `samples_per_branch` points along every branch centerline, equally
 ///   spaced in arc length from the first to the last node of the branch: the network's
 ///   value (linear along each segment, as in the Poiseuille model) against the FEM
@@ -21,17 +23,19 @@
 /// Output files (`write_outputs`, rank 0 only): fem_compare.csv
 /// (`branch,s,x,y,z,pressure_network,pressure_fem,rel_diff` then `pressure_fem_centre,
 /// rel_diff_drop,path_distance,near_junction`), fem_outlets.csv
-/// (`outlet,flow_network,flow_fem` then `rel_diff`), fem_compare.md (tables like the
+/// (`outlet,flow_network,flow_fem` then `rel_diff,pressure_network,pressure_fem`), fem_compare.md (tables like the
 /// paper's Table 1, flows, branch drops, timings), fem.vtu (quadratic tetrahedra, point
 /// data `velocity` and `pressure`), fem_compare.png (network vs FEM pressure along the
 /// path from the inlet, drawn by flow/fem/scripts/plot_fem_compare.py with matplotlib;
 /// a warning, not an error, when python3/matplotlib is missing).
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/stokes.hpp"
+#include "flowire/flow/spec.hpp"
 
 namespace flowire::fem {
 
@@ -46,11 +50,30 @@ struct FemOptions {
   bool write_vtu = true;
 };
 
+/// @brief Condition at one outlet end of the network.
+struct OutletValue {
+  enum class Type { Pressure, Resistance };
+  int node = -1;                 ///< network end node
+  Type type = Type::Pressure;
+  double pressure = 0.0;         ///< Pressure: Pa; Resistance: the distal pressure P_d (Pa)
+  double resistance = 0.0;       ///< Resistance: p = P_d + R·Q, Q the flow out (Pa·s/m³)
+};
+
+/// @brief The network's boundary conditions at one instant, imposed on both models.
+///
+/// Inlet: a pressure or a flow (into the network). Outlets: listed in `outlets`, else in
+/// `outlet_pressures`, else `outlet_pressure`. An RCR outlet is steady (quasi-steady
+/// frames too) a resistance Rp + Rd to its distal pressure, as in the network's
+/// Poiseuille model.
 struct BoundaryValues {
+  enum class Inlet { Pressure, Flow };
   int inlet_node = -1;           ///< -1: Network::widest_end()
-  double inlet_pressure = 0.0;   ///< Pa
+  Inlet inlet_type = Inlet::Pressure;
+  double inlet_pressure = 0.0;   ///< Pa (Inlet::Pressure)
+  double inlet_flow = 0.0;       ///< m³/s into the network (Inlet::Flow)
   double outlet_pressure = 0.0;  ///< Pa, every outlet not listed below
   std::vector<std::pair<int, double>> outlet_pressures;  ///< (end node, Pa)
+  std::vector<OutletValue> outlets;                      ///< take precedence over the two above
   double viscosity = 3.5e-3;     ///< Pa·s
   double density = 1060.0;       ///< kg/m³
 };
@@ -77,7 +100,8 @@ struct SamplePoint {
 
 struct OutletFlow {
   int node = -1;
-  double flow_network = 0.0, flow_fem = 0.0;  ///< m³/s out of the network
+  double flow_network = 0.0, flow_fem = 0.0;          ///< m³/s out of the network
+  double pressure_network = 0.0, pressure_fem = 0.0;  ///< Pa at the outlet (imposed, or from its resistance)
 };
 
 struct BranchDrop {
@@ -86,8 +110,12 @@ struct BranchDrop {
 };
 
 struct CompareResult {
+  double time = 0.0;                        ///< s: the instant of the boundary values
   std::vector<SamplePoint> samples;
   std::vector<OutletFlow> outlets;
+  /// Inlet: flow into the network and pressure, network and FEM (one of them imposed).
+  double inlet_flow_network = 0.0, inlet_flow_fem = 0.0;
+  double inlet_pressure_network = 0.0, inlet_pressure_fem = 0.0;
   std::vector<BranchDrop> branches;
   double max_rel_diff_drop_away = 0.0;      ///< max |rel_diff_drop| away from junctions
   double max_rel_diff_drop_junction = 0.0;  ///< max |rel_diff_drop| near junctions
@@ -97,11 +125,17 @@ struct CompareResult {
   double mesh_seconds = 0.0, assemble_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
 };
 
-/// @brief Network pressures and flows for the boundary values (flowire::flow, sparse solver).
+/// @brief The boundary values of a flow spec at time t: its (single) inlet and its
+/// outlets (RCR as Rp + Rd); ends of the network without an outlet condition are an error.
+/// @throws flowire::Error (input) for several inlets or an end without a condition.
+BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, double t);
+
+/// @brief Network pressures and flows for the boundary values (flowire::flow quasi-steady
+/// Poiseuille model, sparse solver).
 NetworkFlow network_flow(const Network& net, const BoundaryValues& bv);
 
-/// @brief Pressure of each mesh group (wall: 0) for the boundary values.
-std::vector<double> group_pressures(const TetMesh& mesh, const BoundaryValues& bv);
+/// @brief Condition of each mesh group (wall: ignored) for the boundary values.
+std::vector<GroupCondition> group_conditions(const TetMesh& mesh, const BoundaryValues& bv);
 
 /// @brief Compare a FEM solution with a network solution (see the file comment).
 CompareResult compare_fields(const Network& net, const TetMesh& mesh, const StokesSolution& sol,
@@ -115,5 +149,29 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
 /// files when `out_dir` is not empty. Collective under MPI.
 /// @throws flowire::Error as build_mesh, solve_stokes and the flow solver do.
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir);
+
+/// @brief A pulsatile series of quasi-steady comparisons.
+struct PulsatileResult {
+  CompareResult steady;                ///< the comparison at `steady_time` (the fem_compare.* files)
+  std::vector<CompareResult> frames;   ///< one per time
+  double max_rel_diff_drop_away = 0.0, max_rel_diff_drop_junction = 0.0;  ///< over all frames
+  double max_flow_split_error = 0.0, max_flow_error = 0.0;               ///< over all frames
+  int factorizations = 0;              ///< FEM matrix factorizations (1 for Stokes)
+  double basis_seconds = 0.0;          ///< assembly, factorization and unit solves
+  double frames_seconds = 0.0;         ///< combining the frames and comparing them
+};
+
+/// @brief Quasi-steady FEM frames at `times` with the boundary values `frames[i]`, and the
+/// steady comparison `steady` (at time `steady_time`), all compared with the network.
+/// Stokes: one factorization and one unit solve per open boundary (StokesBasis); every
+/// frame is a linear combination. Navier–Stokes: every frame is solved on its own.
+/// Every frame must have the same inlet node and the same kinds of conditions.
+/// Writes, besides the steady files of `compare`: fem_pulsatile.csv (`time`, then the
+/// columns of fem_compare.csv), fem_pulsatile_outlets.csv (`time`, then the columns of
+/// fem_outlets.csv), and with `write_vtu` fem.pvd + fem_NNNN.vtu.
+/// @throws flowire::Error (usage) for inconsistent frames, and as `compare`.
+PulsatileResult compare_pulsatile(const Network& net, std::span<const double> times,
+                                  std::span<const BoundaryValues> frames, const BoundaryValues& steady,
+                                  double steady_time, const FemOptions& opt, const std::string& out_dir);
 
 }  // namespace flowire::fem

@@ -12,6 +12,16 @@
 /// (Stokes: no convection; Navier–Stokes: Picard iterations with w the previous
 /// velocity, starting from the Stokes solution).
 ///
+/// Boundary conditions other than a pressure (a prescribed flow, or a resistance
+/// p_k = P_d + R_k Q_k) use that the problem is affine in the boundary pressures: with
+/// the matrix factorized once, the field is x = x_0 + Σ_{k∈U} p_k x_k, where x_0 solves
+/// with the known pressures and 0 on the groups U whose pressure is unknown, and x_k with
+/// 1 on group k and 0 elsewhere. The outward flows are then Q = F_0 + Σ_k p_k F_k
+/// (F: fluxes of those fields), and the |U| conditions form a small dense system for the
+/// p_k. Navier–Stokes repeats this inside every Picard step (the Oseen operator of a
+/// step is linear). `StokesBasis` keeps one unit field per open group for many boundary
+/// values (a pulsatile series of quasi-steady frames) after a single factorization.
+///
 /// Element matrices (quadrature of degree 5 on every tetrahedron) are assembled by
 /// flowire into a PETSc AIJ matrix with exact preallocation; the wall nodes are removed
 /// from the unknowns. Under MPI every rank assembles its share of the elements and owns
@@ -44,10 +54,24 @@ struct StokesOptions {
   double picard_tolerance = 1e-8;    ///< Navier–Stokes: max |Δu| / max |u|
 };
 
+/// @brief Condition on one open boundary group (inlet or outlet).
+struct GroupCondition {
+  enum class Type { Pressure, Flow, Resistance };
+  Type type = Type::Pressure;
+  double pressure = 0.0;    ///< Pressure: the group pressure; Resistance: the distal pressure P_d (Pa)
+  double flow = 0.0;        ///< Flow: outward flow through the group (m³/s; an inflow is negative)
+  double resistance = 0.0;  ///< Resistance: p = P_d + R·Q with Q the outward flow (Pa·s/m³, >= 0)
+
+  static GroupCondition at_pressure(double p) { return {Type::Pressure, p, 0.0, 0.0}; }
+  static GroupCondition with_flow(double q_out) { return {Type::Flow, 0.0, q_out, 0.0}; }
+  static GroupCondition with_resistance(double r, double distal) { return {Type::Resistance, distal, 0.0, r}; }
+};
+
 struct StokesSolution {
   std::vector<Vec3> velocity;     ///< (num_nodes) m/s, zero on the wall
   std::vector<double> pressure;   ///< (num_vertices) Pa, indexed by TetMesh::vertex_index
   std::vector<double> group_flow; ///< (groups) m³/s out of the domain through each group
+  std::vector<double> group_pressure;  ///< (groups) Pa: the pressure imposed on each open group (wall: 0)
   int unknowns = 0;               ///< size of the linear system
   int krylov_iterations = 0;      ///< fieldsplit: total over Picard steps (0 for MUMPS)
   int picard_iterations = 0;      ///< linear solves done
@@ -61,6 +85,51 @@ struct StokesSolution {
 /// @throws flowire::Error: usage (sizes, options), numerical (PETSc failure, no
 /// convergence, an inverted curved element).
 StokesSolution solve_stokes(const TetMesh& mesh, std::span<const double> group_pressure, const StokesOptions& opt = {});
+
+/// @brief Solve with a condition on every non-wall group (`conditions[g]` for group g;
+/// the wall entry is ignored): one factorization per Picard step, one solve with the
+/// known pressures plus one per group whose pressure is unknown (see the file comment).
+/// @throws flowire::Error: usage (sizes, a negative resistance, no group fixing the
+/// pressure level), numerical as above.
+StokesSolution solve_stokes(const TetMesh& mesh, std::span<const GroupCondition> conditions,
+                            const StokesOptions& opt = {});
+
+/// @brief Pressures on the groups that satisfy `conditions`, given the fluxes of unit
+/// fields: `unit_flux[k][g]` is the outward flow through group g of the field with
+/// pressure 1 on group `open[k]` and 0 on the others, `base_flux[g]` that of the field
+/// with the known pressures (Pressure groups) and 0 elsewhere. Returns one pressure per
+/// group (wall: 0). Also used by StokesBasis; exposed for tests.
+/// @throws flowire::Error (usage) when the conditions do not fix the pressures.
+std::vector<double> boundary_pressures(const TetMesh& mesh, std::span<const GroupCondition> conditions,
+                                       const std::vector<int>& open, const std::vector<double>& base_flux,
+                                       const std::vector<std::vector<double>>& unit_flux);
+
+/// @brief Steady Stokes (no convection) for many boundary values with one factorization:
+/// one unit field per open group (pressure 1 there, 0 on the others); any boundary
+/// values are then a linear combination of them. Collective under MPI (constructor only).
+class StokesBasis {
+ public:
+  /// @throws flowire::Error as solve_stokes; usage when `opt.equations` is Navier–Stokes.
+  StokesBasis(const TetMesh& mesh, const StokesOptions& opt = {});
+  /// @brief Group pressures satisfying `conditions` (one per group, wall 0).
+  [[nodiscard]] std::vector<double> pressures(std::span<const GroupCondition> conditions) const;
+  /// @brief The solution for `conditions`: the combination of the unit fields.
+  [[nodiscard]] StokesSolution solve(std::span<const GroupCondition> conditions) const;
+  /// @brief Outward flow through group g for pressure 1 on open group `open_groups()[k]`: [k][g].
+  [[nodiscard]] const std::vector<std::vector<double>>& unit_flux() const { return flux_; }
+  [[nodiscard]] const std::vector<int>& open_groups() const { return open_; }
+  [[nodiscard]] int unknowns() const { return unknowns_; }
+  [[nodiscard]] double assemble_seconds() const { return assemble_seconds_; }
+  [[nodiscard]] double solve_seconds() const { return solve_seconds_; }
+
+ private:
+  const TetMesh& mesh_;
+  std::vector<int> open_;
+  std::vector<StokesSolution> unit_;
+  std::vector<std::vector<double>> flux_;
+  int unknowns_ = 0;
+  double assemble_seconds_ = 0.0, solve_seconds_ = 0.0;
+};
 
 /// @brief Outward flux \f$ \int_{\Gamma_g} u\cdot n \f$ of a velocity field through each group.
 std::vector<double> group_fluxes(const TetMesh& mesh, const std::vector<Vec3>& velocity);
