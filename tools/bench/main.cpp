@@ -35,6 +35,7 @@ int usage() {
       "commands:\n"
       "  rod-work-precision    cantilever/buckling error and frequency error vs run time; step cost vs n\n"
       "  flow-frame-cost       dense_inverse vs superposition vs sparse per frame; rlc vs Womersley vs dt\n"
+      "  flow-fem-work-precision  network and FEM outlet-flow error vs run time (built with FLOWIRE_WITH_FEM)\n"
       "  cosim-work-precision  aortic-arch tip-trace error vs run time over dt and segment length\n"
       "  feature-cost          per-phase timings with each feature switched off\n"
       "  stress                the stability matrix (pass/fail CSV)\n"
@@ -63,6 +64,14 @@ int main(int argc, char** argv) {
   try {
     if (cmd == "rod-work-precision") return rod_work_precision(o);
     if (cmd == "flow-frame-cost") return flow_frame_cost(o);
+    if (cmd == "flow-fem-work-precision") {
+#ifdef FLOWIRE_BENCH_FEM
+      return flow_fem_work_precision(o);
+#else
+      std::cerr << "flowire_bench: flow-fem-work-precision needs a build with FLOWIRE_WITH_FEM=ON\n";
+      return 2;
+#endif
+    }
     if (cmd == "cosim-work-precision") return cosim_work_precision(o);
     if (cmd == "feature-cost") return feature_cost(o);
     if (cmd == "stress") return stress(o);

@@ -2,6 +2,7 @@
 
 usage: plot_flow.py DATA_DIR OUT_DIR
 """
+import os
 import sys
 
 from plot_common import PUBLISHED_DENSE_FRAME_S, PUBLISHED_DENSE_VESSELS, num, plt, read_csv, save
@@ -34,3 +35,19 @@ a.set_ylabel("| |Q/Qp| - Womersley | / Womersley")
 a.set_title("rlc vs Womersley (dotted: quasi-steady Poiseuille error)", fontsize=9)
 a.legend(fontsize=6, ncol=2)
 save(fig, f"{out}/rlc_womersley.png")
+
+path = f"{data}/flow_fem_work_precision.csv"
+if os.path.exists(path):
+    rows = read_csv(path)
+    fig, a = plt.subplots(figsize=(6, 3.8))
+    for model, style, label in (("network", "o-", "network (Poiseuille), over segment refinement"),
+                                ("fem", "s-", "3D FEM (Stokes P2/P1), over mesh size")):
+        pts = sorted((num(r["seconds"]), num(r["error"]), r["size"]) for r in rows if r["model"] == model)
+        a.loglog([p[0] for p in pts], [p[1] for p in pts], style, label=label)
+        for s, e, n in pts:
+            a.annotate(n, (s, e), fontsize=6, xytext=(2, 2), textcoords="offset points")
+    a.set_xlabel("run time [s]")
+    a.set_ylabel("outlet-flow error vs finest FEM (fraction of total flow)")
+    a.set_title("Y bifurcation: network vs FEM (labels: segments / tetrahedra)", fontsize=9)
+    a.legend(fontsize=7)
+    save(fig, f"{out}/flow_fem_work_precision.png")

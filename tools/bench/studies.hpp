@@ -16,6 +16,8 @@ struct Options {
 
 int rod_work_precision(const Options& o);
 int flow_frame_cost(const Options& o);
+/// Built with FLOWIRE_WITH_FEM only (FLOWIRE_BENCH_FEM).
+int flow_fem_work_precision(const Options& o);
 int cosim_work_precision(const Options& o);
 int feature_cost(const Options& o);
 int stress(const Options& o);
