@@ -104,7 +104,11 @@ void BM_FactorSolveSparse(benchmark::State& state) {
 }
 
 /// One bend/twist stencil: value, gradient and exact Hessian (the assembly's kernel).
-void BM_BendTwistKernel(benchmark::State& state) {
+/// Arg 0: gradient only (the line search), 1: with the Hessian (Newton matrix), 2: with the
+/// Gauss–Newton Hessian. The edge geometry is computed outside the timed kernel, as the
+/// simulator computes it once per edge.
+template <auto Kernel>
+void bend_twist_kernel(benchmark::State& state) {
   using namespace flowire::rod;
   const Vec3 x0(0, 0, 0), x1(1e-3, 1e-5, 0), x2(2e-3, 4e-5, 1e-5);
   EdgeFrame fe, ff;
@@ -116,20 +120,39 @@ void BM_BendTwistKernel(benchmark::State& state) {
   VertexParams p;
   p.voronoi_length = 1e-3;
   const bool hessian = state.range(0) != 0;
+  const bool gauss_newton = state.range(0) == 2;
+  // A few stencils cycled through, so the timing is not of one memoised input.
+  constexpr int kStencils = 8;
+  EdgeGeometry a[kStencils], b[kStencils];
+  for (int i = 0; i < kStencils; ++i) {
+    a[i] = edge_geometry(x0, x1, fe, 0.1 * i);
+    b[i] = edge_geometry(x1, x2, ff, 0.3 + 0.05 * i);
+  }
   Vec11 g;
   Mat11 H;
-  double theta = 0.0;
+  int i = 0;
   for (auto _ : state) {
-    theta += 1e-9;
-    const EdgeGeometry a = edge_geometry(x0, x1, fe, theta);
-    const EdgeGeometry b = edge_geometry(x1, x2, ff, 0.3);
-    const double e = bend_twist(a, b, theta, 0.3, 0.0, p, &g, hessian ? &H : nullptr);
+    const double e = Kernel(a[i], b[i], 0.1 * i, 0.3 + 0.05 * i, 0.0, p, &g,
+                            hessian ? &H : nullptr, gauss_newton);
+    i = (i + 1) % kStencils;
     benchmark::DoNotOptimize(e);
     benchmark::DoNotOptimize(g.data());
     benchmark::DoNotOptimize(H.data());
+    benchmark::ClobberMemory();
   }
 }
-BENCHMARK(BM_BendTwistKernel)->Arg(0)->Arg(1)->Unit(benchmark::kNanosecond);
+
+using KernelFn = double (*)(const flowire::rod::EdgeGeometry&, const flowire::rod::EdgeGeometry&,
+                            double, double, double, const flowire::rod::VertexParams&,
+                            flowire::rod::Vec11*, flowire::rod::Mat11*, bool);
+constexpr KernelFn kFast = &flowire::rod::bend_twist;
+constexpr KernelFn kReference = &flowire::rod::detail::bend_twist_reference;
+
+void BM_BendTwistKernel(benchmark::State& state) { bend_twist_kernel<kFast>(state); }
+/// The straightforward evaluation the fast kernel replaced, for the ratio in one run.
+void BM_BendTwistKernelReference(benchmark::State& state) { bend_twist_kernel<kReference>(state); }
+BENCHMARK(BM_BendTwistKernel)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kNanosecond);
+BENCHMARK(BM_BendTwistKernelReference)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kNanosecond);
 
 // 4·1700 − 1 unknowns: the 1,700-vertex wire.
 BENCHMARK(BM_FactorSolveBanded)->Arg(6799)->Arg(39999)->Unit(benchmark::kMicrosecond);
