@@ -249,8 +249,10 @@ double twist_y(const Local& L, double theta_e, double theta_f, const VertexParam
 // The stencil kernel is ~1,000 scalar multiply-adds. On x86-64 with GCC it is also compiled
 // for x86-64-v3 (AVX2, FMA: three-operand forms and fused multiply-adds, ~25% faster) and
 // the variant is picked once at load time, so the default build still runs on any x86-64.
-// Results differ between the two variants by round-off only.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+// Results differ between the two variants by round-off only (FLOWIRE_ROD_NO_KERNEL_CLONES
+// builds the default variant alone).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
+    !defined(FLOWIRE_ROD_NO_KERNEL_CLONES)
 #define FLOWIRE_ROD_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define FLOWIRE_ROD_KERNEL_CLONES
