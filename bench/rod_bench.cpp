@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SparseCholesky>
+#include <memory>
 #include <random>
 
 #include "flowire/rod/banded.hpp"
@@ -32,22 +33,39 @@ WireSpec guidewire(int vertices) {
   return spec;
 }
 
+/// The cost of a step (Newton iterations) changes as the wire moves: the same sequence of
+/// kCycle steps is timed over and over (the simulator rebuilt between cycles, untimed), and
+/// the step benchmarks run a whole number of cycles, so two builds measure the same work.
+constexpr int kCycle = 200;
+
 void run_steps(benchmark::State& state, LinearSolver solver) {
   const int n = static_cast<int>(state.range(0));
-  RodSimulator sim(guidewire(n));
-  sim.settings().linear_solver = solver;
-  sim.set_gravity({0.0, 0.0, -9.81});
-  sim.set_rotation_speed(2.0);
   const double dt = 1e-3;
-  for (int i = 0; i < 3; ++i) sim.step(dt);  // leave the initial transient
+  auto make = [&] {
+    auto sim = std::make_unique<RodSimulator>(guidewire(n));
+    sim->settings().linear_solver = solver;
+    sim->set_gravity({0.0, 0.0, -9.81});
+    sim->set_rotation_speed(2.0);
+    for (int i = 0; i < 3; ++i) sim->step(dt);  // leave the initial transient
+    return sim;
+  };
+  auto sim = make();
+  int in_cycle = 0;
   long iterations = 0, fallbacks = 0;
   for (auto _ : state) {
-    const auto r = sim.step(dt);
+    if (in_cycle == kCycle) {
+      state.PauseTiming();
+      sim = make();
+      in_cycle = 0;
+      state.ResumeTiming();
+    }
+    const auto r = sim->step(dt);
+    ++in_cycle;
     iterations += r.newton_iterations;
     fallbacks += r.regularizations;
-    benchmark::DoNotOptimize(sim.tip_position());
+    benchmark::DoNotOptimize(sim->tip_position());
   }
-  state.counters["vertices"] = sim.vertex_count();
+  state.counters["vertices"] = sim->vertex_count();
   state.counters["newton_per_step"] =
       benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
   state.counters["psd_fallbacks_per_step"] =
@@ -59,8 +77,9 @@ void BM_RodStepBanded(benchmark::State& state) { run_steps(state, LinearSolver::
 void BM_RodStepSparse(benchmark::State& state) { run_steps(state, LinearSolver::SparseLDLT); }
 
 BENCHMARK(BM_RodStepBanded)->RangeMultiplier(10)->Range(10, 10000)->Arg(1700)
-    ->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
-BENCHMARK(BM_RodStepSparse)->Arg(100)->Arg(1700)->Arg(10000)->Unit(benchmark::kMicrosecond);
+    ->Iterations(2 * kCycle)->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
+BENCHMARK(BM_RodStepSparse)->Arg(100)->Arg(1700)->Arg(10000)->Iterations(kCycle)
+    ->Unit(benchmark::kMicrosecond);
 
 /// A random SPD matrix with the rod's band (half-width 10), n unknowns.
 BandedMatrix rod_like_matrix(int n) {
@@ -104,7 +123,11 @@ void BM_FactorSolveSparse(benchmark::State& state) {
 }
 
 /// One bend/twist stencil: value, gradient and exact Hessian (the assembly's kernel).
-void BM_BendTwistKernel(benchmark::State& state) {
+/// Arg 0: gradient only (the line search), 1: with the Hessian (Newton matrix), 2: with the
+/// Gauss–Newton Hessian. The edge geometry is computed outside the timed kernel, as the
+/// simulator computes it once per edge.
+template <auto Kernel>
+void bend_twist_kernel(benchmark::State& state) {
   using namespace flowire::rod;
   const Vec3 x0(0, 0, 0), x1(1e-3, 1e-5, 0), x2(2e-3, 4e-5, 1e-5);
   EdgeFrame fe, ff;
@@ -116,20 +139,39 @@ void BM_BendTwistKernel(benchmark::State& state) {
   VertexParams p;
   p.voronoi_length = 1e-3;
   const bool hessian = state.range(0) != 0;
+  const bool gauss_newton = state.range(0) == 2;
+  // A few stencils cycled through, so the timing is not of one memoised input.
+  constexpr int kStencils = 8;
+  EdgeGeometry a[kStencils], b[kStencils];
+  for (int i = 0; i < kStencils; ++i) {
+    a[i] = edge_geometry(x0, x1, fe, 0.1 * i);
+    b[i] = edge_geometry(x1, x2, ff, 0.3 + 0.05 * i);
+  }
   Vec11 g;
   Mat11 H;
-  double theta = 0.0;
+  int i = 0;
   for (auto _ : state) {
-    theta += 1e-9;
-    const EdgeGeometry a = edge_geometry(x0, x1, fe, theta);
-    const EdgeGeometry b = edge_geometry(x1, x2, ff, 0.3);
-    const double e = bend_twist(a, b, theta, 0.3, 0.0, p, &g, hessian ? &H : nullptr);
+    const double e = Kernel(a[i], b[i], 0.1 * i, 0.3 + 0.05 * i, 0.0, p, &g,
+                            hessian ? &H : nullptr, gauss_newton);
+    i = (i + 1) % kStencils;
     benchmark::DoNotOptimize(e);
     benchmark::DoNotOptimize(g.data());
     benchmark::DoNotOptimize(H.data());
+    benchmark::ClobberMemory();
   }
 }
-BENCHMARK(BM_BendTwistKernel)->Arg(0)->Arg(1)->Unit(benchmark::kNanosecond);
+
+using KernelFn = double (*)(const flowire::rod::EdgeGeometry&, const flowire::rod::EdgeGeometry&,
+                            double, double, double, const flowire::rod::VertexParams&,
+                            flowire::rod::Vec11*, flowire::rod::Mat11*, bool);
+constexpr KernelFn kFast = &flowire::rod::bend_twist;
+constexpr KernelFn kReference = &flowire::rod::detail::bend_twist_reference;
+
+void BM_BendTwistKernel(benchmark::State& state) { bend_twist_kernel<kFast>(state); }
+/// The straightforward evaluation the fast kernel replaced, for the ratio in one run.
+void BM_BendTwistKernelReference(benchmark::State& state) { bend_twist_kernel<kReference>(state); }
+BENCHMARK(BM_BendTwistKernel)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kNanosecond);
+BENCHMARK(BM_BendTwistKernelReference)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kNanosecond);
 
 // 4·1700 − 1 unknowns: the 1,700-vertex wire.
 BENCHMARK(BM_FactorSolveBanded)->Arg(6799)->Arg(39999)->Unit(benchmark::kMicrosecond);

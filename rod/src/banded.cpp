@@ -75,12 +75,18 @@ namespace {
 
 /// Right-looking LDLᵀ of a band stored by rows (stride b + 1). With B > 0 the half-width is
 /// a compile-time constant (the rod's b = 10): the short update loops are then unrolled and
-/// vectorized, which is most of the factorization's cost at this bandwidth.
+/// vectorized, which is most of the factorization's cost at this bandwidth. The multipliers
+/// of the current column live in a local array: it cannot alias the factor, so they stay in
+/// registers across the rank-1 update.
+/// Two doubles, for the explicitly paired rank-1 update (GCC/Clang vector extension).
+typedef double V2 __attribute__((vector_size(16)));
+
 template <int B>
-bool factorize_band(double* L, int n, int b_runtime, double tiny, double min_pivot, double* w,
-                    int& negative, int& modified, double& min_pivot_seen) {
+bool factorize_band(double* __restrict L, int n, int b_runtime, double tiny, double min_pivot,
+                    double* __restrict w, int& negative, int& modified, double& min_pivot_seen) {
   const int b = B > 0 ? B : b_runtime;
   const size_t stride = static_cast<size_t>(b) + 1;
+  double w_local[B > 0 ? B : 1];
   for (int j = 0; j < n; ++j) {
     double* lj = L + static_cast<size_t>(j) * stride;
     double d = lj[b];
@@ -98,22 +104,33 @@ bool factorize_band(double* L, int n, int b_runtime, double tiny, double min_piv
     lj[b] = d;
     const double inv_d = 1.0 / d;
     const int m = std::min(n - 1, j + b) - j;
-    if (B > 0 && m == B) {
-      // Interior column: fixed trip counts, fully unrolled.
+    if constexpr (B > 0) {
+      if (m == B) {
+        // Interior column: fixed trip counts, fully unrolled; w_local is not aliased.
+        double c[B];
 #pragma GCC unroll 16
-      for (int r = 0; r < B; ++r) {  // w_r = A(j+1+r, j) before scaling
-        double* li = L + static_cast<size_t>(j + 1 + r) * stride;
-        w[r] = li[B - 1 - r];
-        li[B - 1 - r] = w[r] * inv_d;
+        for (int r = 0; r < B; ++r) {  // w_r = A(j+1+r, j) before scaling
+          double* li = L + static_cast<size_t>(j + 1 + r) * stride;
+          w_local[r] = li[B - 1 - r];
+          c[r] = w_local[r] * inv_d;
+          li[B - 1 - r] = c[r];
+        }
+#pragma GCC unroll 16
+        for (int r = 0; r < B; ++r) {
+          double* row = L + static_cast<size_t>(j + 1 + r) * stride + (B - r);  // cols j+1..i
+          const V2 cr = {c[r], c[r]};
+#pragma GCC unroll 16
+          for (int k = 0; k + 1 <= r; k += 2) {
+            V2 a, x;
+            __builtin_memcpy(&a, row + k, sizeof a);
+            __builtin_memcpy(&x, w_local + k, sizeof x);
+            a -= cr * x;
+            __builtin_memcpy(row + k, &a, sizeof a);
+          }
+          if (r % 2 == 0) row[r] -= c[r] * w_local[r];
+        }
+        continue;
       }
-#pragma GCC unroll 16
-      for (int r = 0; r < B; ++r) {
-        double* row = L + static_cast<size_t>(j + 1 + r) * stride + (B - r);  // columns j+1..i
-        const double c = w[r] * inv_d;
-#pragma GCC unroll 16
-        for (int k = 0; k <= r; ++k) row[k] -= c * w[k];
-      }
-      continue;
     }
     for (int r = 0; r < m; ++r) {
       double* li = L + static_cast<size_t>(j + 1 + r) * stride;
@@ -127,6 +144,50 @@ bool factorize_band(double* L, int n, int b_runtime, double tiny, double min_piv
     }
   }
   return true;
+}
+
+/// Forward (L y = r), diagonal and backward (Lᵀ x = z) substitution in place; with B > 0
+/// the interior rows run with a compile-time bandwidth.
+template <int B>
+void solve_band(const double* __restrict L, int n, int b_runtime, double* __restrict x) {
+  const int b = B > 0 ? B : b_runtime;
+  const size_t stride = static_cast<size_t>(b) + 1;
+  for (int i = 0; i < n; ++i) {  // L y = rhs
+    const double* li = L + static_cast<size_t>(i) * stride;
+    if (B > 0 && i >= B) {
+      // Only x[i−1] was just computed: sum the older terms in independent pairs so the
+      // row-to-row dependency is one multiply-subtract, not a chain of B.
+      const double* xi = x + (i - B);
+      V2 acc = {0.0, 0.0};
+#pragma GCC unroll 16
+      for (int k = 0; k + 1 < B - 1; k += 2) {
+        V2 l, v;
+        __builtin_memcpy(&l, li + k, sizeof l);
+        __builtin_memcpy(&v, xi + k, sizeof v);
+        acc += l * v;
+      }
+      double older = acc[0] + acc[1];
+      if ((B - 1) % 2 == 1) older += li[B - 2] * xi[B - 2];
+      x[i] = (x[i] - older) - li[B - 1] * xi[B - 1];
+      continue;
+    }
+    const int k0 = std::max(0, i - b);
+    double s = x[i];
+    for (int k = k0; k < i; ++k) s -= li[k - i + b] * x[k];
+    x[i] = s;
+  }
+  for (int i = 0; i < n; ++i) x[i] /= L[static_cast<size_t>(i) * stride + b];  // D z = y
+  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z
+    const double* li = L + static_cast<size_t>(i) * stride;
+    const double xi = x[i];
+    if (B > 0 && i >= B) {
+      double* xk = x + (i - B);
+#pragma GCC unroll 16
+      for (int k = 0; k < B; ++k) xk[k] -= li[k] * xi;
+      continue;
+    }
+    for (int k = std::max(0, i - b); k < i; ++k) x[k] -= li[k - i + b] * xi;
+  }
 }
 
 }  // namespace
@@ -154,20 +215,11 @@ bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
 void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const {
   const int n = l_.size();
   const int b = l_.bandwidth();
-  const size_t stride = static_cast<size_t>(b) + 1;
-  const double* L = l_.data().data();
-  for (int i = 0; i < n; ++i) {  // L y = rhs
-    const double* li = L + static_cast<size_t>(i) * stride;
-    const int k0 = std::max(0, i - b);
-    if (i > k0)
-      x(i) -= Eigen::Map<const Eigen::VectorXd>(li + (k0 - i + b), i - k0).dot(x.segment(k0, i - k0));
-  }
-  for (int i = 0; i < n; ++i) x(i) /= L[static_cast<size_t>(i) * stride + b];  // D z = y
-  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z
-    const double* li = L + static_cast<size_t>(i) * stride;
-    const double xi = x(i);
-    for (int k = std::max(0, i - b); k < i; ++k) x(k) -= li[k - i + b] * xi;
-  }
+  assert(x.size() == n);
+  if (b == 10)
+    solve_band<10>(l_.data().data(), n, b, x.data());
+  else
+    solve_band<0>(l_.data().data(), n, b, x.data());
 }
 
 }  // namespace flowire::rod

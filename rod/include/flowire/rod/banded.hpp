@@ -45,15 +45,17 @@ class BandedMatrix {
         if (idx[a] >= idx[c]) lower(idx[a], idx[c]) += block(a, c);
   }
   /// @brief Add a dense symmetric block on the contiguous index range [first, first + size).
+  /// A fixed-size block (the 11×11 stencil) is added with compile-time trip counts.
   template <typename Derived>
   void add_block(const Eigen::MatrixBase<Derived>& block, int first) {
-    const int m = static_cast<int>(block.rows());
+    constexpr int M = Derived::RowsAtCompileTime;
+    const int m = M != Eigen::Dynamic ? M : static_cast<int>(block.rows());
     assert(m <= b_ + 1 && first + m <= n_);
-    for (int a = 0; a < m; ++a) {
-      // Row first+a holds columns first … first+a contiguously from offset b − a.
-      double* row = &data_[static_cast<size_t>(first + a) * (b_ + 1) + (b_ - a)];
+    // Row first+a holds columns first … first+a contiguously from offset b − a, i.e. rows
+    // are b steps apart in the storage.
+    double* row = data_.data() + static_cast<size_t>(first) * (b_ + 1) + b_;
+    for (int a = 0; a < m; ++a, row += b_)
       for (int c = 0; c <= a; ++c) row[c] += block(a, c);
-    }
   }
   /// @brief Replace row and column @p i by those of the identity (a prescribed unknown).
   void set_identity_row(int i);

@@ -155,4 +155,13 @@ double bend_twist(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, 
                   double ref_twist, const VertexParams& p, Vec11* gradient, Mat11* hessian,
                   bool gauss_newton = false);
 
+namespace detail {
+/// @brief The same function as bend_twist(EdgeGeometry, …), evaluated the straightforward
+/// way: dense 8×8 Hessian in y = (t_e, t_f, θ_e, θ_f), then the chain rule with dense
+/// projector products. Kept as the reference for tests and benchmarks of the fast kernel.
+double bend_twist_reference(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e,
+                            double theta_f, double ref_twist, const VertexParams& p,
+                            Vec11* gradient, Mat11* hessian, bool gauss_newton = false);
+}  // namespace detail
+
 }  // namespace flowire::rod
