@@ -26,6 +26,9 @@
 #undef Bool
 #undef Success
 #include <vtkRenderWindow.h>
+
+#include <chrono>
+#include <thread>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
 #include <vtkTextActor.h>
@@ -66,12 +69,21 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display)
     throw_input_error(path.string(), "rendering a PNG needs an X display; run under xvfb-run -a -s \"-screen 0 1024x768x24\"");
-  // VTK aborts the process when the display cannot be opened: try it first.
-  if (Display* x = XOpenDisplay(nullptr)) {
-    XCloseDisplay(x);
-  } else {
-    throw_input_error(path.string(), fmt::format("cannot connect to the X display '{}'; run under xvfb-run -a", display));
+  // VTK aborts the process when it cannot open the display: open it here and hand the
+  // connection to the render window (which then opens none of its own; a second connection
+  // per render occasionally failed under a busy Xvfb). Closed after the window is gone.
+  struct XConnection {
+    Display* d = nullptr;
+    ~XConnection() {
+      if (d) XCloseDisplay(d);
+    }
+  } x;
+  for (int attempt = 0; attempt < 5 && !x.d; ++attempt) {
+    x.d = XOpenDisplay(nullptr);
+    if (!x.d) std::this_thread::sleep_for(std::chrono::milliseconds(100 << attempt));
   }
+  if (!x.d)
+    throw_input_error(path.string(), fmt::format("cannot connect to the X display '{}'; run under xvfb-run -a", display));
 
   // Vessels: one polydata, tubes of radius varying with the node radius.
   vtkNew<vtkPoints> pts;
@@ -189,6 +201,7 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   ren->ResetCamera();
 
   vtkNew<vtkRenderWindow> win;
+  win->SetDisplayId(x.d);
   win->SetOffScreenRendering(1);
   win->SetSize(opt.width, opt.height);
   win->AddRenderer(ren);
@@ -205,6 +218,7 @@ void render_network_png(const Network& net, std::span<const double> node_values,
     if (png->GetErrorCode() != 0 || !std::filesystem::exists(tmp) || std::filesystem::file_size(tmp) == 0)
       throw_input_error(path.string(), "the PNG could not be written");
   });
+  win->Finalize();  // release the window's X resources before the connection closes
 #endif
 }
 
