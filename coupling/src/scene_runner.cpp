@@ -111,10 +111,27 @@ rod::WireSpec scene_wire_spec(const config::Config& c) {
   }
   if (c.has_section("wire.adapt")) {
     w.adapt.enabled = true;
-    if (c.has("wire.adapt.min_segment_length")) w.adapt.min_segment_length = c.number("wire.adapt.min_segment_length");
-    if (c.has("wire.adapt.max_segment_length")) w.adapt.max_segment_length = c.number("wire.adapt.max_segment_length");
+    const double h = w.segments > 0 ? w.length / w.segments : w.segment_length;
+    if (c.has("wire.adapt.min_segment_length")) {
+      w.adapt.min_segment_length = c.number("wire.adapt.min_segment_length");
+      if (!(w.adapt.min_segment_length > 0.0 && w.adapt.min_segment_length <= h))
+        throw_input_error(c.where("wire.adapt.min_segment_length"),
+                          fmt::format("min_segment_length must be in (0, {:g} m] (the segment length)", h));
+    }
+    if (c.has("wire.adapt.max_segment_length")) {
+      w.adapt.max_segment_length = c.number("wire.adapt.max_segment_length");
+      if (!(w.adapt.max_segment_length >= h))
+        throw_input_error(c.where("wire.adapt.max_segment_length"),
+                          fmt::format("max_segment_length must be at least the segment length ({:g} m)", h));
+    }
     w.adapt.split_angle = c.number("wire.adapt.split_angle");
-    if (c.has("wire.adapt.merge_angle")) w.adapt.merge_angle = c.number("wire.adapt.merge_angle");
+    if (!(w.adapt.split_angle > 0.0 && w.adapt.split_angle < 1.5))
+      throw_input_error(c.where("wire.adapt.split_angle"), "split_angle must be in (0, 1.5) rad");
+    if (c.has("wire.adapt.merge_angle")) {
+      w.adapt.merge_angle = c.number("wire.adapt.merge_angle");
+      if (!(w.adapt.merge_angle >= 0.0 && w.adapt.merge_angle < 0.5 * w.adapt.split_angle))
+        throw_input_error(c.where("wire.adapt.merge_angle"), "merge_angle must be in [0, split_angle / 2) rad");
+    }
   }
   if (c.has_section("wire.base")) {
     w.base_position = c.vector3("wire.base.position");
@@ -430,7 +447,11 @@ RunResult run_scene(const config::Config& c) {
         sim->set_insertion_speed(c.number("insertion.speed"));
         sim->set_rotation_speed(c.number("insertion.rotation_speed"));
         sim->set_base_angle(c.number("insertion.rotation_angle"));
-        if (c.has("insertion.max_force")) sim->set_max_insertion_force(c.number("insertion.max_force"));
+        if (c.has("insertion.max_force")) {
+          const double f = c.number("insertion.max_force");
+          if (!(f > 0.0)) throw_input_error(c.where("insertion.max_force"), "max_force must be > 0 N");
+          sim->set_max_insertion_force(f);
+        }
       }
       if (net) {
         index.emplace(*net, 4);

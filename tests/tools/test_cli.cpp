@@ -171,6 +171,14 @@ TEST(Cli, BadInputGivesOneLineAndStatusTwo) {
   expect_bad("run " + (dir / "scene3.yaml").string() + " --set vessels.nothing=1", "vessels.nothing");
   expect_bad("run " + (dir / "scene3.yaml").string() + " --set vessels.generator.radius=0", "radius");
   expect_bad("network info", "file");
+  // Adaptivity and the feed's force limit: out-of-range values name the file and line.
+  write(dir / "wire.yaml",
+        "wire:\n  length: 0.1\n  segment_length: 2 mm\n  adapt: {split_angle: 2 rad}\n"
+        "insertion: {speed: 1 cm/s, max_force: -1 N}\nsolve: {dt: 1 ms, duration: 2 ms}\n");
+  expect_bad("run " + (dir / "wire.yaml").string() + " --out " + (dir / "w").string(), "wire.yaml:4");
+  EXPECT_FALSE(fs::exists(dir / "w" / "summary.json"));
+  expect_bad("run " + (dir / "wire.yaml").string() + " --set wire.adapt.split_angle=0.1 --out " + (dir / "w").string(),
+             "wire.yaml:5");
 }
 
 TEST(Cli, VesselsOnlySceneWritesSummaryAndSegments) {
