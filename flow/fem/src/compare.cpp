@@ -565,7 +565,7 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
       sol = basis->solve(cond);
     } else {
       sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), stokes_options(opt, bv));
-      out.factorizations += sol.picard_iterations;
+      out.factorizations += sol.factorizations;
       out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
     }
     return compare_fields(net, mesh, sol, network_flow(net, bv), inlet, opt.samples_per_branch);

@@ -73,6 +73,19 @@ void tet_p2_grad(const std::array<double, 3>& xi, double (*g)[3]) {
   }
 }
 
+void tet_p2_hessian(double (*h)[3][3]) {
+  // L_i(2L_i − 1) has second derivatives 4·∇L_i∇L_iᵀ; 4L_aL_b has 4(∇L_a∇L_bᵀ + ∇L_b∇L_aᵀ).
+  static constexpr double dl[4][3] = {{-1, -1, -1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int i = 0; i < 4; ++i)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) h[i][a][b] = 4.0 * dl[i][a] * dl[i][b];
+  for (int e = 0; e < 6; ++e) {
+    const int p = kTetEdges[e][0], q = kTetEdges[e][1];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) h[4 + e][a][b] = 4.0 * (dl[p][a] * dl[q][b] + dl[q][a] * dl[p][b]);
+  }
+}
+
 void tet_p1(const std::array<double, 3>& xi, double* v) {
   v[0] = 1.0 - xi[0] - xi[1] - xi[2];
   v[1] = xi[0];

@@ -1,5 +1,6 @@
 // Taylor–Hood P2/P1 Stokes / Navier–Stokes: element matrices computed here, a PETSc AIJ
-// matrix with exact (CSR) preallocation, MUMPS or a fieldsplit Schur preconditioner.
+// matrix with exact (CSR) preallocation, MUMPS or a fieldsplit Schur preconditioner;
+// Navier–Stokes by Newton with density continuation and SUPG/LSIC/backflow stabilization.
 #include "flowire/fem/stokes.hpp"
 
 #include <fmt/format.h>
@@ -10,6 +11,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
+#include <limits>
+#include <numbers>
 
 #include <Eigen/Dense>
 
@@ -99,12 +103,14 @@ std::pair<long, long> split(long n, int parts, int r) {
   return {lo, lo + b + (r < extra ? 1 : 0)};
 }
 
-Numbering number(const TetMesh& mesh, int rank, int size) {
+/// `fixed_group` >= 0: the nodes of that group carry a prescribed velocity too.
+Numbering number(const TetMesh& mesh, int rank, int size, int fixed_group = -1) {
   Numbering num;
   const size_t nn = mesh.nodes.size();
   std::vector<char> wall(nn, 0);
   for (size_t f = 0; f < mesh.faces.size(); ++f)
-    if (mesh.groups[static_cast<size_t>(mesh.face_group[f])].kind == BoundaryGroup::Kind::Wall)
+    if (mesh.groups[static_cast<size_t>(mesh.face_group[f])].kind == BoundaryGroup::Kind::Wall ||
+        mesh.face_group[f] == fixed_group)
       for (int n : mesh.faces[f]) wall[static_cast<size_t>(n)] = 1;
   std::vector<int> free_nodes;
   for (size_t n = 0; n < nn; ++n)
@@ -162,7 +168,8 @@ NodeTets node_tets(const TetMesh& mesh) {
 
 /// Local rows of the system in CSR form (global column indices) for exact preallocation,
 /// and the same for the pressure mass matrix in the pressure-only layout.
-void sparsity(const TetMesh& mesh, const Numbering& num, const NodeTets& nt, std::vector<PetscInt>& ia,
+/// `coupled`: every velocity component couples to every other (the Navier–Stokes Jacobian).
+void sparsity(const TetMesh& mesh, const Numbering& num, const NodeTets& nt, bool coupled, std::vector<PetscInt>& ia,
               std::vector<PetscInt>& ja, std::vector<PetscInt>& pia, std::vector<PetscInt>& pja) {
   ia.assign(1, 0);
   ja.clear();
@@ -187,7 +194,12 @@ void sparsity(const TetMesh& mesh, const Numbering& num, const NodeTets& nt, std
     gather(node);
     for (int c = 0; c < 3; ++c) {
       row.clear();
-      for (PetscInt d : vel) row.push_back(d + c);
+      for (PetscInt d : vel) {
+        if (coupled)
+          for (int k = 0; k < 3; ++k) row.push_back(d + k);
+        else
+          row.push_back(d + c);
+      }
       for (int v : pre) row.push_back(num.pdof[static_cast<size_t>(v)]);
       std::sort(row.begin(), row.end());
       ja.insert(ja.end(), row.begin(), row.end());
@@ -235,18 +247,15 @@ struct Reference {
 
 /// Element matrices of one tetrahedron.
 struct ElementMatrices {
-  double k[10][10];   // viscous (+ convection) block, the same for every component
+  double k[10][10];   // viscous block, the same for every component
   double bt[30][4];   // velocity (node i, component c -> row 3i+c) x pressure: -(q, div v)
   double mp[4][4];    // pressure mass / viscosity
 };
 
-bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, double rho,
-             const std::vector<Vec3>* wind, ElementMatrices& em) {
+bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, ElementMatrices& em) {
   const auto& t = mesh.tets[static_cast<size_t>(e)];
-  Vec3 x[10], wn[10];
+  Vec3 x[10];
   for (int i = 0; i < 10; ++i) x[i] = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(i)])];
-  if (wind)
-    for (int i = 0; i < 10; ++i) wn[i] = (*wind)[static_cast<size_t>(t[static_cast<size_t>(i)])];
   std::fill(&em.k[0][0], &em.k[0][0] + 100, 0.0);
   std::fill(&em.bt[0][0], &em.bt[0][0] + 120, 0.0);
   std::fill(&em.mp[0][0], &em.mp[0][0] + 16, 0.0);
@@ -270,14 +279,6 @@ bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, doubl
         em.k[i][jj] += v;
         if (jj != i) em.k[jj][i] += v;
       }
-    if (wind) {
-      Vec3 b = Vec3::Zero();
-      for (int i = 0; i < 10; ++i) b += ref.phi[q][i] * wn[i];
-      for (int jj = 0; jj < 10; ++jj) {
-        const double adv = rho * wd * (b[0] * g[jj][0] + b[1] * g[jj][1] + b[2] * g[jj][2]);
-        for (int i = 0; i < 10; ++i) em.k[i][jj] += ref.phi[q][i] * adv;
-      }
-    }
     for (int i = 0; i < 10; ++i)
       for (int c = 0; c < 3; ++c)
         for (int l = 0; l < 4; ++l) em.bt[3 * i + c][l] -= wd * ref.psi[q][l] * g[i][c];
@@ -296,8 +297,7 @@ struct Mpi {
 };
 
 /// Assemble the system matrix (and the pressure mass matrix when `mp` is given).
-void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const StokesOptions& opt,
-              const std::vector<Vec3>* wind, Mat a, Mat mp) {
+void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const StokesOptions& opt, Mat a, Mat mp) {
   static const Reference ref;
   FLOWIRE_PETSC(MatZeroEntries(a));
   if (mp) FLOWIRE_PETSC(MatZeroEntries(mp));
@@ -307,7 +307,7 @@ void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const S
   double kbuf[100], btbuf[120], bbuf[120];
   int bad = -1;
   for (long e = e0; e < e1; ++e) {
-    if (!element(mesh, ref, static_cast<int>(e), opt.viscosity, opt.density, wind, em)) {
+    if (!element(mesh, ref, static_cast<int>(e), opt.viscosity, em)) {
       bad = static_cast<int>(e);
       break;
     }
@@ -352,10 +352,317 @@ void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const S
                                       "curved element); use a smaller mesh size", any_bad));
 }
 
-/// Right-hand side: -p_k ∫ n·v over each inlet/outlet face.
+/// Add `vals` (count entries) at `rows` of a vector, skipping wall (negative) rows: PETSc
+/// vectors do not skip negative indices.
+void add_to_vector(Vec b, int count, const PetscInt* rows, const double* vals) {
+  PetscInt r[34];
+  double v[34];
+  PetscInt m = 0;
+  for (int k = 0; k < count; ++k)
+    if (rows[k] >= 0) {
+      r[m] = rows[k];
+      v[m++] = vals[k];
+    }
+  if (m > 0) FLOWIRE_PETSC(VecSetValues(b, m, r, v, ADD_VALUES));
+}
+
+/// Reference data of the Navier–Stokes element: the P2 second derivatives and the P1
+/// gradients (both constant on the reference tetrahedron).
+struct ReferenceNs : Reference {
+  double hess[10][3][3];
+  static constexpr double dpsi[4][3] = {{-1, -1, -1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  ReferenceNs() { tet_p2_hessian(hess); }
+};
+
+/// The current iterate seen by the element loops: velocity per node, pressure per
+/// vertex, pressure per group.
+struct State {
+  const std::vector<Vec3>* velocity = nullptr;
+  const std::vector<double>* pressure = nullptr;  // by vertex index
+  const std::vector<double>* group_pressure = nullptr;
+};
+
+/// Parameters of the Navier–Stokes residual.
+struct NsParams {
+  double eta = 0.0, rho = 0.0, backflow = 0.0;
+  bool stabilize = false;
+  const std::function<Vec3(const Vec3&)>* body_force = nullptr;
+  const std::function<Vec3(const Vec3&, const Vec3&, int)>* traction = nullptr;
+};
+
+NsParams ns_params(const StokesOptions& opt) {
+  NsParams prm;
+  prm.eta = opt.viscosity;
+  prm.rho = opt.density;
+  prm.backflow = opt.backflow;
+  prm.stabilize = opt.stabilization == Stabilization::Supg;
+  prm.body_force = &opt.body_force;
+  prm.traction = &opt.traction;
+  return prm;
+}
+
+/// Residual (34: velocity rows 3i+c, then 4 pressure rows) and Jacobian (34 × 34, row
+/// major) of one tetrahedron for the Navier–Stokes weak form with SUPG + LSIC (see
+/// stokes.hpp). Returns false for a non-positive Jacobian determinant.
+bool ns_element(const TetMesh& mesh, const ReferenceNs& ref, int e, const NsParams& prm, const State& st,
+                double* res, double* jac) {
+  constexpr int n = 34;
+  const auto& t = mesh.tets[static_cast<size_t>(e)];
+  Vec3 x[10], un[10];
+  double pn[4];
+  for (int i = 0; i < 10; ++i) {
+    x[i] = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(i)])];
+    un[i] = (*st.velocity)[static_cast<size_t>(t[static_cast<size_t>(i)])];
+  }
+  for (int l = 0; l < 4; ++l)
+    pn[l] = (*st.pressure)[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
+  std::fill(res, res + n, 0.0);
+  std::fill(jac, jac + n * n, 0.0);
+  const double eta = prm.eta, rho = prm.rho;
+  // Element size: the edge of the regular tetrahedron of the straight element's volume,
+  // halved for quadratic elements.
+  const double vol = std::abs((x[1] - x[0]).dot((x[2] - x[0]).cross(x[3] - x[0]))) / 6.0;
+  const double h = 0.5 * std::cbrt(6.0 * std::sqrt(2.0) * vol);
+  for (int q = 0; q < ref.nq; ++q) {
+    Eigen::Matrix3d j = Eigen::Matrix3d::Zero();  // dx/dxi
+    for (int i = 0; i < 10; ++i) j += x[i] * Eigen::RowVector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
+    const double det = j.determinant();
+    if (!(det > 0.0)) return false;
+    const Eigen::Matrix3d jinv = j.inverse();
+    const Eigen::Matrix3d jinv_t = jinv.transpose();
+    const double* phi = ref.phi[q];
+    const double* psi = ref.psi[q];
+    Eigen::Vector3d g[10];
+    for (int i = 0; i < 10; ++i) g[i] = jinv_t * Eigen::Vector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
+    Eigen::Vector3d gp[4];
+    for (int l = 0; l < 4; ++l) gp[l] = jinv_t * Eigen::Vector3d(ref.dpsi[l][0], ref.dpsi[l][1], ref.dpsi[l][2]);
+    // Values at the point.
+    Vec3 u = Vec3::Zero(), xq = Vec3::Zero();
+    Eigen::Matrix3d grad = Eigen::Matrix3d::Zero();  // grad(a, b) = ∂u_a/∂x_b
+    for (int i = 0; i < 10; ++i) {
+      u += phi[i] * un[i];
+      xq += phi[i] * x[i];
+      grad += un[i] * g[i].transpose();
+    }
+    double p = 0.0;
+    Eigen::Vector3d gradp = Eigen::Vector3d::Zero();
+    for (int l = 0; l < 4; ++l) {
+      p += psi[l] * pn[l];
+      gradp += pn[l] * gp[l];
+    }
+    const Vec3 f = prm.body_force && *prm.body_force ? (*prm.body_force)(xq) : Vec3::Zero();
+    const double wd = ref.w[q] * det;
+    const double div = grad.trace();
+    const Eigen::Vector3d conv = grad * u;  // (u·∇)u
+    double taum = 0.0, tauc = 0.0;
+    Eigen::Vector3d dtaum = Eigen::Vector3d::Zero(), dtauc = Eigen::Vector3d::Zero();
+    double lap[10] = {};
+    Eigen::Vector3d rm = Eigen::Vector3d::Zero();  // strong momentum residual
+    if (prm.stabilize && rho > 0.0) {
+      // Physical second derivatives of the isoparametric basis:
+      // ∇²φ = J⁻ᵀ (∇_ξ²φ − Σ_c (∂φ/∂x_c) ∇_ξ² x_c) J⁻¹; only the Laplacian is needed.
+      Eigen::Matrix3d xh[3];
+      for (auto& m : xh) m.setZero();
+      for (int i = 0; i < 10; ++i) {
+        const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> hi(&ref.hess[i][0][0]);
+        for (int c = 0; c < 3; ++c) xh[c] += x[i][c] * hi;
+      }
+      const Eigen::Matrix3d jj = jinv * jinv_t;  // for tr(J⁻ᵀ M J⁻¹) = tr(M J⁻¹J⁻ᵀ)
+      Eigen::Vector3d lapu = Eigen::Vector3d::Zero();
+      for (int i = 0; i < 10; ++i) {
+        const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> hi(&ref.hess[i][0][0]);
+        const Eigen::Matrix3d m = hi - g[i][0] * xh[0] - g[i][1] * xh[1] - g[i][2] * xh[2];
+        lap[i] = (m.cwiseProduct(jj)).sum();
+        lapu += lap[i] * un[i];
+      }
+      const double speed = u.norm();
+      const double adv = 2.0 * rho / h;
+      taum = 1.0 / std::sqrt(std::pow(adv * speed, 2) + std::pow(12.0 * eta / (h * h), 2));
+      const double re_h = rho * speed * h / (2.0 * eta);
+      // ∂τ/∂u (times φ_j for node j): τ_M = (a²|u|² + b²)^(−1/2) gives −τ_M³ a² u;
+      // τ_C = ρ²h²|u|²/(12η) below Re_h = 3 and ρ|u|h/2 above.
+      dtaum = -taum * taum * taum * adv * adv * u;
+      if (re_h < 3.0) {
+        tauc = rho * rho * h * h * speed * speed / (12.0 * eta);
+        dtauc = rho * rho * h * h / (6.0 * eta) * u;
+      } else {
+        tauc = 0.5 * rho * speed * h;
+        dtauc = 0.5 * rho * h / speed * u;
+      }
+      rm = rho * conv - eta * lapu + gradp - f;
+    }
+    double ug[10];
+    for (int i = 0; i < 10; ++i) ug[i] = u.dot(g[i]);
+    for (int i = 0; i < 10; ++i) {
+      const Eigen::Vector3d visc = eta * (grad * g[i]);
+      for (int a = 0; a < 3; ++a)
+        res[3 * i + a] += wd * (visc[a] + rho * conv[a] * phi[i] - p * g[i][a] - f[a] * phi[i] +
+                                taum * rho * ug[i] * rm[a] + tauc * div * g[i][a]);
+    }
+    for (int l = 0; l < 4; ++l) res[30 + l] -= wd * psi[l] * div;
+    for (int i = 0; i < 10; ++i)
+      for (int jn = 0; jn < 10; ++jn) {
+        const double gij = g[i].dot(g[jn]);
+        for (int a = 0; a < 3; ++a) {
+          double* row = jac + (3 * i + a) * n + 3 * jn;
+          for (int c = 0; c < 3; ++c) {
+            const double dconv = (a == c ? ug[jn] : 0.0) + grad(a, c) * phi[jn];  // ∂((u·∇)u)_a/∂u_{j,c}
+            double v = (a == c ? eta * gij : 0.0) + rho * phi[i] * dconv;
+            if (taum > 0.0) {
+              const double drm = rho * dconv - (a == c ? eta * lap[jn] : 0.0);
+              v += taum * rho * (phi[jn] * g[i][c] * rm[a] + ug[i] * drm);
+              v += phi[jn] * (dtaum[c] * rho * ug[i] * rm[a] + dtauc[c] * div * g[i][a]);
+            }
+            v += tauc * g[i][a] * g[jn][c];
+            row[c] += wd * v;
+          }
+        }
+      }
+    for (int i = 0; i < 10; ++i)
+      for (int a = 0; a < 3; ++a)
+        for (int m = 0; m < 4; ++m) {
+          const double v = -psi[m] * g[i][a] + taum * rho * ug[i] * gp[m][a];
+          jac[(3 * i + a) * n + 30 + m] += wd * v;
+          jac[(30 + m) * n + 3 * i + a] -= wd * psi[m] * g[i][a];
+        }
+  }
+  return true;
+}
+
+/// Residual and Jacobian of one open-boundary triangle: the pressure and traction
+/// terms, and the backflow term on outlets (18 velocity rows 3k+c).
+void ns_face(const TetMesh& mesh, size_t f, const NsParams& prm, const State& st, double* res, double* jac,
+             bool& any_jac) {
+  const auto& tri = mesh.faces[f];
+  const int grp = mesh.face_group[f];
+  const double pk = (*st.group_pressure)[static_cast<size_t>(grp)];
+  const bool outlet = mesh.groups[static_cast<size_t>(grp)].kind == BoundaryGroup::Kind::Outlet;
+  const double beta = outlet ? prm.backflow * prm.rho : 0.0;
+  std::fill(res, res + 18, 0.0);
+  std::fill(jac, jac + 18 * 18, 0.0);
+  any_jac = false;
+  double phi[6], dphi[6][2];
+  for (const QuadPoint& q : tri_quadrature()) {
+    tri_p2(q.xi, phi);
+    tri_p2_grad(q.xi, dphi);
+    Vec3 ts = Vec3::Zero(), tt = Vec3::Zero(), u = Vec3::Zero(), xq = Vec3::Zero();
+    for (int k = 0; k < 6; ++k) {
+      const auto nd = static_cast<size_t>(tri[static_cast<size_t>(k)]);
+      ts += dphi[k][0] * mesh.nodes[nd];
+      tt += dphi[k][1] * mesh.nodes[nd];
+      u += phi[k] * (*st.velocity)[nd];
+      xq += phi[k] * mesh.nodes[nd];
+    }
+    const Vec3 nds = ts.cross(tt);  // outward normal times the area element
+    const double area = nds.norm();
+    Vec3 load = pk * nds;            // residual: + p_k ∫ n·v − ∫ g·v
+    if (prm.traction && *prm.traction) load -= area * (*prm.traction)(xq, nds / area, grp);
+    for (int k = 0; k < 6; ++k)
+      for (int c = 0; c < 3; ++c) res[3 * k + c] += q.weight * phi[k] * load[c];
+    const double un = u.dot(nds);
+    if (beta > 0.0 && un < 0.0) {
+      // −(βρ/2) ∫ min(u·n, 0) u·v and its derivative.
+      any_jac = true;
+      const double c0 = -0.5 * beta * q.weight;
+      for (int k = 0; k < 6; ++k) {
+        for (int a = 0; a < 3; ++a) res[3 * k + a] += c0 * un * u[a] * phi[k];
+        for (int m = 0; m < 6; ++m)
+          for (int a = 0; a < 3; ++a)
+            for (int c = 0; c < 3; ++c)
+              jac[(3 * k + a) * 18 + 3 * m + c] +=
+                  c0 * phi[k] * phi[m] * (nds[c] * u[a] + (a == c ? un : 0.0));
+      }
+    }
+  }
+}
+
+/// Assemble the Navier–Stokes Jacobian into `a` and the residual into `r` at the state.
+/// With `shape` (a velocity per node, nonzero only on prescribed-velocity nodes), also
+/// the lifting −J_{free,fixed}·shape into `lift`: the right-hand side of the field that
+/// a unit amplitude of the prescribed velocity adds.
+void assemble_ns(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const NsParams& prm, const State& st,
+                 const std::vector<Vec3>* shape, Mat a, Vec r, Vec lift) {
+  static const ReferenceNs ref;
+  FLOWIRE_PETSC(MatZeroEntries(a));
+  FLOWIRE_PETSC(VecSet(r, 0.0));
+  if (shape) FLOWIRE_PETSC(VecSet(lift, 0.0));
+  double lvals[34];
+  const auto [e0, e1] = split(mesh.num_tets(), mpi.size, mpi.rank);
+  double res[34], jac[34 * 34], prow[4 * 30];
+  PetscInt idx[34];
+  int bad = -1;
+  for (long e = e0; e < e1; ++e) {
+    if (!ns_element(mesh, ref, static_cast<int>(e), prm, st, res, jac)) {
+      bad = static_cast<int>(e);
+      break;
+    }
+    const auto& t = mesh.tets[static_cast<size_t>(e)];
+    for (int i = 0; i < 10; ++i) {
+      const PetscInt d = num.vdof[static_cast<size_t>(t[static_cast<size_t>(i)])];
+      for (int c = 0; c < 3; ++c) idx[3 * i + c] = d >= 0 ? d + c : -1;
+    }
+    for (int l = 0; l < 4; ++l)
+      idx[30 + l] = num.pdof[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
+    // Velocity rows couple to everything; pressure rows only to velocities (the
+    // pressure–pressure block is not in the pattern).
+    FLOWIRE_PETSC(MatSetValues(a, 30, idx, 34, idx, jac, ADD_VALUES));
+    for (int l = 0; l < 4; ++l) std::copy(jac + (30 + l) * 34, jac + (30 + l) * 34 + 30, prow + 30 * l);
+    FLOWIRE_PETSC(MatSetValues(a, 4, idx + 30, 30, idx, prow, ADD_VALUES));
+    add_to_vector(r, 34, idx, res);
+    if (shape) {
+      bool any = false;
+      double w[30];
+      for (int i = 0; i < 10; ++i)
+        for (int c = 0; c < 3; ++c) {
+          w[3 * i + c] = idx[3 * i + c] < 0 ? (*shape)[static_cast<size_t>(t[static_cast<size_t>(i)])][c] : 0.0;
+          any = any || w[3 * i + c] != 0.0;
+        }
+      if (any) {
+        for (int row = 0; row < 34; ++row) {
+          double sum = 0.0;
+          for (int col = 0; col < 30; ++col) sum += jac[row * 34 + col] * w[col];
+          lvals[row] = -sum;
+        }
+        add_to_vector(lift, 34, idx, lvals);
+      }
+    }
+  }
+  const auto [f0, f1] = split(static_cast<long>(mesh.faces.size()), mpi.size, mpi.rank);
+  double fres[18], fjac[18 * 18];
+  for (long f = f0; f < f1; ++f) {
+    const int g = mesh.face_group[static_cast<size_t>(f)];
+    if (mesh.groups[static_cast<size_t>(g)].kind == BoundaryGroup::Kind::Wall) continue;
+    bool any_jac = false;
+    ns_face(mesh, static_cast<size_t>(f), prm, st, fres, fjac, any_jac);
+    const auto& tri = mesh.faces[static_cast<size_t>(f)];
+    for (int k = 0; k < 6; ++k) {
+      const PetscInt d = num.vdof[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+      for (int c = 0; c < 3; ++c) idx[3 * k + c] = d >= 0 ? d + c : -1;
+    }
+    if (any_jac) FLOWIRE_PETSC(MatSetValues(a, 18, idx, 18, idx, fjac, ADD_VALUES));
+    add_to_vector(r, 18, idx, fres);
+  }
+  FLOWIRE_PETSC(MatAssemblyBegin(a, MAT_FINAL_ASSEMBLY));
+  FLOWIRE_PETSC(MatAssemblyEnd(a, MAT_FINAL_ASSEMBLY));
+  FLOWIRE_PETSC(VecAssemblyBegin(r));
+  FLOWIRE_PETSC(VecAssemblyEnd(r));
+  if (shape) {
+    FLOWIRE_PETSC(VecAssemblyBegin(lift));
+    FLOWIRE_PETSC(VecAssemblyEnd(lift));
+  }
+  int any_bad = bad;
+  MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
+  if (any_bad >= 0)
+    throw_numerical_error(fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
+                                      "curved element); use a smaller mesh size", any_bad));
+}
+
+/// Right-hand side: -p_k ∫ n·v over each inlet/outlet face; with `data`, also its body
+/// force ∫ f·v and its traction ∫ g·v.
 void assemble_rhs(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, std::span<const double> group_pressure,
-                  Vec b) {
+                  const StokesOptions* data, Vec b) {
   FLOWIRE_PETSC(VecSet(b, 0.0));
+  const bool traction = data && data->traction;
   const auto [f0, f1] = split(static_cast<long>(mesh.faces.size()), mpi.size, mpi.rank);
   double phi[6], dphi[6][2];
   PetscInt rows[18];
@@ -364,32 +671,57 @@ void assemble_rhs(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, std
     const int g = mesh.face_group[static_cast<size_t>(f)];
     if (mesh.groups[static_cast<size_t>(g)].kind == BoundaryGroup::Kind::Wall) continue;
     const double p = group_pressure[static_cast<size_t>(g)];
-    if (p == 0.0) continue;
+    if (p == 0.0 && !traction) continue;
     const auto& tri = mesh.faces[static_cast<size_t>(f)];
     std::fill(vals, vals + 18, 0.0);
     for (const QuadPoint& q : tri_quadrature()) {
       tri_p2(q.xi, phi);
       tri_p2_grad(q.xi, dphi);
-      Vec3 ts = Vec3::Zero(), tt = Vec3::Zero();
+      Vec3 ts = Vec3::Zero(), tt = Vec3::Zero(), xq = Vec3::Zero();
       for (int k = 0; k < 6; ++k) {
-        ts += dphi[k][0] * mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(k)])];
-        tt += dphi[k][1] * mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+        const auto& xk = mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+        ts += dphi[k][0] * xk;
+        tt += dphi[k][1] * xk;
+        xq += phi[k] * xk;
       }
       const Vec3 nds = ts.cross(tt);  // outward normal times the area element
+      Vec3 load = -p * nds;
+      if (traction) load += nds.norm() * data->traction(xq, nds.normalized(), g);
       for (int k = 0; k < 6; ++k)
-        for (int c = 0; c < 3; ++c) vals[3 * k + c] -= p * q.weight * phi[k] * nds[c];
+        for (int c = 0; c < 3; ++c) vals[3 * k + c] += q.weight * phi[k] * load[c];
     }
-    // Vectors do not skip negative (wall) indices: pass only the free unknowns.
-    PetscInt count = 0;
     for (int k = 0; k < 6; ++k) {
       const PetscInt d = num.vdof[static_cast<size_t>(tri[static_cast<size_t>(k)])];
-      if (d < 0) continue;
-      for (int c = 0; c < 3; ++c) {
-        rows[count] = d + c;
-        vals[count++] = vals[3 * k + c];
-      }
+      for (int c = 0; c < 3; ++c) rows[3 * k + c] = d >= 0 ? d + c : -1;
     }
-    if (count > 0) FLOWIRE_PETSC(VecSetValues(b, count, rows, vals, ADD_VALUES));
+    add_to_vector(b, 18, rows, vals);
+  }
+  if (data && data->body_force) {
+    static const Reference ref;
+    const auto [e0, e1] = split(mesh.num_tets(), mpi.size, mpi.rank);
+    PetscInt erows[30];
+    double evals[30];
+    for (long e = e0; e < e1; ++e) {
+      const auto& t = mesh.tets[static_cast<size_t>(e)];
+      std::fill(evals, evals + 30, 0.0);
+      for (int q = 0; q < ref.nq; ++q) {
+        Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
+        Vec3 xq = Vec3::Zero();
+        for (int i = 0; i < 10; ++i) {
+          const auto& xi = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(i)])];
+          j += xi * Eigen::RowVector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
+          xq += ref.phi[q][i] * xi;
+        }
+        const Vec3 fq = ref.w[q] * j.determinant() * data->body_force(xq);
+        for (int i = 0; i < 10; ++i)
+          for (int c = 0; c < 3; ++c) evals[3 * i + c] += ref.phi[q][i] * fq[c];
+      }
+      for (int i = 0; i < 10; ++i) {
+        const PetscInt d = num.vdof[static_cast<size_t>(t[static_cast<size_t>(i)])];
+        for (int c = 0; c < 3; ++c) erows[3 * i + c] = d >= 0 ? d + c : -1;
+      }
+      add_to_vector(b, 30, erows, evals);
+    }
   }
   FLOWIRE_PETSC(VecAssemblyBegin(b));
   FLOWIRE_PETSC(VecAssemblyEnd(b));
@@ -456,15 +788,18 @@ std::vector<double> group_fluxes(const TetMesh& mesh, const std::vector<Vec3>& v
 
 namespace {
 
-/// The linear system of one mesh: numbering, matrices, solver; assembled for a given
-/// convection field, factorized once, then solved for any group pressures.
+/// The linear system of one mesh: numbering, matrices, solver. Stokes: assembled and
+/// factorized once, then solved for any group pressures. Navier–Stokes: the Jacobian and
+/// residual at a state, factorized per Newton step (the symbolic factorization is kept).
 class System {
  public:
-  System(const TetMesh& mesh, const StokesOptions& opt) : mesh_(mesh), opt_(opt), num_(number(mesh, mpi_.rank, mpi_.size)) {
+  /// `fixed_group` >= 0: that group's velocity is prescribed (Navier–Stokes inlet profile).
+  System(const TetMesh& mesh, const StokesOptions& opt, bool navier_stokes, int fixed_group = -1)
+      : mesh_(mesh), opt_(opt), ns_(navier_stokes), num_(number(mesh, mpi_.rank, mpi_.size, fixed_group)) {
     std::vector<PetscInt> ia, ja, pia, pja;
     {
       const NodeTets nt = node_tets(mesh);
-      sparsity(mesh, num_, nt, ia, ja, pia, pja);
+      sparsity(mesh, num_, nt, ns_, ia, ja, pia, pja);
     }
     FLOWIRE_PETSC(MatCreate(PETSC_COMM_WORLD, a_.out()));
     FLOWIRE_PETSC(MatSetSizes(a_, num_.local, num_.local, num_.total, num_.total));
@@ -480,35 +815,59 @@ class System {
       FLOWIRE_PETSC(MatMPIAIJSetPreallocationCSR(mp_, pia.data(), pja.data(), nullptr));
     }
     FLOWIRE_PETSC(MatCreateVecs(a_, x_.out(), b_.out()));
+    FLOWIRE_PETSC(VecDuplicate(b_, lift_.out()));
     // Every rank gets the whole solution.
     FLOWIRE_PETSC(VecScatterCreateToAll(x_, scatter_.out(), all_.out()));
   }
 
   [[nodiscard]] int unknowns() const { return static_cast<int>(num_.total); }
 
-  /// Assemble (with the convection field `wind` for Navier–Stokes) and factorize.
-  void prepare(const std::vector<Vec3>* wind) {
+  /// Stokes: assemble and factorize.
+  void prepare_stokes() {
     auto t0 = std::chrono::steady_clock::now();
-    assemble(mesh_, num_, mpi_, opt_, wind, a_, first_ ? Mat(mp_) : nullptr);
-    first_ = false;
+    assemble(mesh_, num_, mpi_, opt_, a_, Mat(mp_));
     assemble_seconds += seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
-    ksp_.reset();
-    isu_.reset();
-    isp_.reset();
-    FLOWIRE_PETSC(KSPCreate(PETSC_COMM_WORLD, ksp_.out()));
-    const bool symmetric = wind == nullptr;
-    FLOWIRE_PETSC(MatSetOption(a_, MAT_SYMMETRIC, symmetric ? PETSC_TRUE : PETSC_FALSE));
-    configure_solver(ksp_, a_, mp_, num_, opt_, symmetric, isu_, isp_);
-    FLOWIRE_PETSC(KSPSetUp(ksp_));
-    solve_seconds += seconds_since(t0);
-    ++factorizations;
+    FLOWIRE_PETSC(MatSetOption(a_, MAT_SYMMETRIC, PETSC_TRUE));
+    factorize(true);
   }
 
-  /// Solve for the given group pressures: velocity, pressure and group fluxes.
-  StokesSolution solve(std::span<const double> group_pressure) {
+  /// Navier–Stokes: assemble the Jacobian and the residual (into the right-hand side, with
+  /// its sign flipped: the Newton update solves J δx = −r) at the state, and factorize.
+  void prepare_newton(const NsParams& prm, const State& st, const std::vector<Vec3>* shape) {
     auto t0 = std::chrono::steady_clock::now();
-    assemble_rhs(mesh_, num_, mpi_, group_pressure, b_);
+    assemble_ns(mesh_, num_, mpi_, prm, st, shape, a_, b_, lift_);
+    FLOWIRE_PETSC(VecScale(b_, -1.0));
+    FLOWIRE_PETSC(MatSetOption(a_, MAT_SYMMETRIC, PETSC_FALSE));
+    if (mp_ && !mass_done_) {
+      // The Schur preconditioner's pressure mass matrix: assembled once, with a Stokes
+      // matrix that is then overwritten.
+      assemble(mesh_, num_, mpi_, opt_, scratch(), Mat(mp_));
+      mass_done_ = true;
+    }
+    assemble_seconds += seconds_since(t0);
+    factorize(false);
+  }
+
+  /// Solve for the given group pressures (and, with `with_data`, the body force and the
+  /// traction of the options): velocity, pressure and group fluxes.
+  StokesSolution solve(std::span<const double> group_pressure, bool with_data) {
+    assemble_rhs(mesh_, num_, mpi_, group_pressure, with_data ? &opt_ : nullptr, b_);
+    StokesSolution sol = solve_rhs();
+    sol.group_pressure.assign(group_pressure.begin(), group_pressure.end());
+    return sol;
+  }
+
+  /// Solve with prepare_newton's lifting as the right-hand side: the free part of the
+  /// field of a unit prescribed-velocity amplitude.
+  StokesSolution solve_lift() {
+    FLOWIRE_PETSC(VecCopy(lift_, b_));
+    return solve_rhs();
+  }
+
+  /// Solve with the right-hand side already in place (prepare_newton's −r). Group
+  /// pressures of the result are 0.
+  StokesSolution solve_rhs() {
+    auto t0 = std::chrono::steady_clock::now();
     FLOWIRE_PETSC(KSPSolve(ksp_, b_, x_));
     KSPConvergedReason reason;
     FLOWIRE_PETSC(KSPGetConvergedReason(ksp_, &reason));
@@ -533,7 +892,7 @@ class System {
     for (size_t k = 0; k < sol.pressure.size(); ++k) sol.pressure[k] = v[num_.pdof[k]];
     FLOWIRE_PETSC(VecRestoreArrayRead(all_, &v));
     sol.group_flow = group_fluxes(mesh_, sol.velocity);
-    sol.group_pressure.assign(group_pressure.begin(), group_pressure.end());
+    sol.group_pressure.assign(mesh_.groups.size(), 0.0);
     return sol;
   }
 
@@ -541,16 +900,38 @@ class System {
   int krylov_iterations = 0, factorizations = 0;
 
  private:
+  void factorize(bool symmetric) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!ksp_) {
+      FLOWIRE_PETSC(KSPCreate(PETSC_COMM_WORLD, ksp_.out()));
+      configure_solver(ksp_, a_, mp_, num_, opt_, symmetric, isu_, isp_);
+    } else {
+      // Same nonzero pattern: PETSc keeps the symbolic factorization.
+      FLOWIRE_PETSC(KSPSetOperators(ksp_, a_, a_));
+    }
+    FLOWIRE_PETSC(KSPSetUp(ksp_));
+    solve_seconds += seconds_since(t0);
+    ++factorizations;
+  }
+
+  Mat scratch() {
+    if (!scratch_) {
+      FLOWIRE_PETSC(MatDuplicate(a_, MAT_DO_NOT_COPY_VALUES, scratch_.out()));
+    }
+    return scratch_;
+  }
+
   const TetMesh& mesh_;
   StokesOptions opt_;
+  bool ns_ = false;
   Mpi mpi_;
   Numbering num_;
-  MatH a_, mp_;
-  VecH b_, x_, all_;
+  MatH a_, mp_, scratch_;
+  VecH b_, x_, all_, lift_;
   ScatterH scatter_;
   KspH ksp_;
   IsH isu_, isp_;
-  bool first_ = true;
+  bool mass_done_ = false;
 };
 
 /// sol += c · other (fields, fluxes and group pressures).
@@ -579,6 +960,373 @@ void check_conditions(const TetMesh& mesh, std::span<const GroupCondition> cond)
   if (!level)
     throw_usage_error("fem: every open boundary has a prescribed flow, which leaves the pressure level undetermined; "
                       "give at least one a pressure or a resistance");
+}
+
+/// Groups whose pressure follows from a flow or resistance condition, and the known
+/// pressures (0 on those groups).
+void split_conditions(const TetMesh& mesh, std::span<const GroupCondition> cond, std::vector<int>& unknown,
+                      std::vector<double>& known) {
+  unknown.clear();
+  known.assign(mesh.groups.size(), 0.0);
+  for (size_t g = 0; g < mesh.groups.size(); ++g) {
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
+    if (cond[g].type == GroupCondition::Type::Pressure) known[g] = cond[g].pressure;
+    else unknown.push_back(static_cast<int>(g));
+  }
+}
+
+/// The unit fields of the factorized matrix (pressure 1 on one unknown group, 0
+/// elsewhere; no body force or traction) and their fluxes.
+void unit_fields(System& sys, const TetMesh& mesh, const std::vector<int>& unknown, std::vector<StokesSolution>& units,
+                 std::vector<std::vector<double>>& flux) {
+  units.clear();
+  flux.clear();
+  for (int g : unknown) {
+    std::vector<double> e(mesh.groups.size(), 0.0);
+    e[static_cast<size_t>(g)] = 1.0;
+    units.push_back(sys.solve(e, false));
+    flux.push_back(units.back().group_flow);
+  }
+}
+
+double max_abs(const std::vector<Vec3>& v) {
+  double m = 0.0;
+  for (const Vec3& x : v) m = std::max(m, x.cwiseAbs().maxCoeff());
+  return m;
+}
+
+StokesSolution solve_linear_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond, const StokesOptions& opt) {
+  System sys(mesh, opt, false);
+  std::vector<int> unknown;
+  std::vector<double> known;
+  split_conditions(mesh, cond, unknown, known);
+  sys.prepare_stokes();
+  StokesSolution sol = sys.solve(known, true);
+  if (!unknown.empty()) {
+    std::vector<StokesSolution> units;
+    std::vector<std::vector<double>> flux;
+    unit_fields(sys, mesh, unknown, units, flux);
+    const std::vector<double> p = boundary_pressures(mesh, cond, unknown, sol.group_flow, flux);
+    for (size_t k = 0; k < unknown.size(); ++k) add_scaled(sol, p[static_cast<size_t>(unknown[k])], units[k]);
+  }
+  sol.unknowns = sys.unknowns();
+  sol.krylov_iterations = sys.krylov_iterations;
+  sol.factorizations = sys.factorizations;
+  sol.assemble_seconds = sys.assemble_seconds;
+  sol.solve_seconds = sys.solve_seconds;
+  return sol;
+}
+
+/// Mean of the (P1) pressure over boundary group g.
+double mean_pressure(const TetMesh& mesh, const std::vector<double>& pressure, int g) {
+  double sum = 0.0, area = 0.0, phi[6], dphi[6][2];
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (mesh.face_group[f] != g) continue;
+    const auto& tri = mesh.faces[f];
+    double pv[3];
+    for (int k = 0; k < 3; ++k)
+      pv[k] = pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(tri[static_cast<size_t>(k)])])];
+    for (const QuadPoint& q : tri_quadrature()) {
+      tri_p2(q.xi, phi);
+      tri_p2_grad(q.xi, dphi);
+      Vec3 ts = Vec3::Zero(), tt = Vec3::Zero();
+      for (int k = 0; k < 6; ++k) {
+        ts += dphi[k][0] * mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+        tt += dphi[k][1] * mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+      }
+      const double da = q.weight * ts.cross(tt).norm();
+      const double l[3] = {1.0 - q.xi[0] - q.xi[1], q.xi[0], q.xi[1]};
+      sum += da * (l[0] * pv[0] + l[1] * pv[1] + l[2] * pv[2]);
+      area += da;
+    }
+  }
+  return area > 0.0 ? sum / area : 0.0;
+}
+
+/// The prescribed inlet velocity shape of group g (zero elsewhere and on the wall):
+/// `user(x)` when given, else the Poiseuille profile −n (1 − r²/R²) of the end disk
+/// (centre, outward normal and radius from the faces; peak 1 m/s into the domain).
+std::vector<Vec3> inlet_shape(const TetMesh& mesh, int g, const std::function<Vec3(const Vec3&)>& user) {
+  std::vector<Vec3> shape(mesh.nodes.size(), Vec3::Zero());
+  std::vector<char> wall(mesh.nodes.size(), 0), inlet(mesh.nodes.size(), 0);
+  Vec3 centre = Vec3::Zero(), normal = Vec3::Zero();
+  double area = 0.0, phi[6], dphi[6][2];
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& tri = mesh.faces[f];
+    if (mesh.groups[static_cast<size_t>(mesh.face_group[f])].kind == BoundaryGroup::Kind::Wall)
+      for (int n : tri) wall[static_cast<size_t>(n)] = 1;
+    if (mesh.face_group[f] != g) continue;
+    for (int n : tri) inlet[static_cast<size_t>(n)] = 1;
+    for (const QuadPoint& q : tri_quadrature()) {
+      tri_p2(q.xi, phi);
+      tri_p2_grad(q.xi, dphi);
+      Vec3 ts = Vec3::Zero(), tt = Vec3::Zero(), x = Vec3::Zero();
+      for (int k = 0; k < 6; ++k) {
+        const auto& xk = mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+        ts += dphi[k][0] * xk;
+        tt += dphi[k][1] * xk;
+        x += phi[k] * xk;
+      }
+      const Vec3 nds = q.weight * ts.cross(tt);
+      normal += nds;
+      centre += nds.norm() * x;
+      area += nds.norm();
+    }
+  }
+  if (!(area > 0.0)) throw_usage_error(fmt::format("fem: boundary group {} has no faces", g));
+  centre /= area;
+  normal.normalize();
+  const double r2 = area / std::numbers::pi;
+  for (size_t n = 0; n < shape.size(); ++n) {
+    if (!inlet[n] || wall[n]) continue;
+    const Vec3& x = mesh.nodes[n];
+    if (user) {
+      shape[n] = user(x);
+    } else {
+      const Vec3 d = x - centre;
+      const double rho2 = (d - d.dot(normal) * normal).squaredNorm();
+      shape[n] = -std::max(0.0, 1.0 - rho2 / r2) * normal;
+    }
+  }
+  return shape;
+}
+
+/// The unknowns of the small boundary system: the amplitude of the prescribed inlet
+/// velocity (group `fixed`) and the pressures of the other groups without a pressure
+/// condition.
+struct BoundarySystem {
+  const TetMesh& mesh;
+  std::span<const GroupCondition> cond;
+  int fixed = -1;              // group with a prescribed velocity shape, or -1
+  std::vector<int> unknown;    // groups, `fixed` (if any) first
+
+  /// The pressure of group g in field x: its imposed pressure, or for the fixed group
+  /// the mean of the pressure field over it.
+  [[nodiscard]] double pressure(const StokesSolution& x, int g) const {
+    return g == fixed ? mean_pressure(mesh, x.pressure, g) : x.group_pressure[static_cast<size_t>(g)];
+  }
+  /// The condition of group g applied to field x (left side) and its target.
+  [[nodiscard]] double lhs(const StokesSolution& x, int g) const {
+    const auto& c = cond[static_cast<size_t>(g)];
+    const double q = x.group_flow[static_cast<size_t>(g)];
+    switch (c.type) {
+      case GroupCondition::Type::Pressure: return pressure(x, g);
+      case GroupCondition::Type::Flow: return q;
+      case GroupCondition::Type::Resistance: return pressure(x, g) - c.resistance * q;
+    }
+    return 0.0;
+  }
+  [[nodiscard]] double target(int g) const {
+    const auto& c = cond[static_cast<size_t>(g)];
+    return c.type == GroupCondition::Type::Flow ? c.flow : c.pressure;
+  }
+  /// The values of the unknowns that make base + Σ z_j units[j] satisfy the conditions.
+  [[nodiscard]] std::vector<double> solve(const StokesSolution& base, const std::vector<StokesSolution>& units) const {
+    const auto n = static_cast<Eigen::Index>(unknown.size());
+    Eigen::MatrixXd a(n, n);
+    Eigen::VectorXd rhs(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const int g = unknown[static_cast<size_t>(i)];
+      for (Eigen::Index j = 0; j < n; ++j) a(i, j) = lhs(units[static_cast<size_t>(j)], g);
+      rhs[i] = target(g) - lhs(base, g);
+      const double sc = a.row(i).cwiseAbs().maxCoeff();
+      if (sc > 0.0) {
+        a.row(i) /= sc;
+        rhs[i] /= sc;
+      }
+    }
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(a);
+    if (lu.rank() < n || lu.rcond() < 1e-13)
+      throw_usage_error("fem: the boundary conditions do not determine the boundary values");
+    const Eigen::VectorXd z = lu.solve(rhs);
+    return {z.data(), z.data() + n};
+  }
+};
+
+/// A Navier–Stokes iterate: the field and the amplitude of the prescribed inlet velocity.
+struct NsState {
+  StokesSolution x;
+  double amplitude = 0.0;
+};
+
+/// Newton's method for Navier–Stokes at density `rho`, from `state` (updated in place
+/// when it converges). Returns the number of Newton steps, or -1 when the iteration
+/// fails (no convergence, growing updates, NaN, a failed factorization).
+int newton(System& sys, const BoundarySystem& bs, const std::vector<Vec3>* shape, const StokesOptions& opt, double rho,
+           NsState& state, int& steps_done) {
+  NsParams prm = ns_params(opt);
+  prm.rho = rho;
+  const TetMesh& mesh = bs.mesh;
+  NsState y = state;
+  double last = std::numeric_limits<double>::infinity();
+  // ρ = 0 is Stokes: linear, so one step solves it.
+  const int max_it = rho == 0.0 ? 1 : std::max(1, opt.newton_max_iterations);
+  for (int it = 1; it <= max_it; ++it) {
+    const State st{&y.x.velocity, &y.x.pressure, &y.x.group_pressure};
+    StokesSolution next;
+    double amplitude = y.amplitude;
+    try {
+      sys.prepare_newton(prm, st, shape);
+      ++steps_done;
+      // The linearized field is affine in the unknown boundary values z (inlet amplitude,
+      // unknown group pressures): x + δx₀ + Σ_j (z'_j − z_j) x_j.
+      next = sys.solve_rhs();
+      add_scaled(next, 1.0, y.x);
+      if (!bs.unknown.empty()) {
+        std::vector<StokesSolution> units;
+        for (int g : bs.unknown) {
+          if (g == bs.fixed) {
+            StokesSolution ua = sys.solve_lift();
+            for (size_t n = 0; n < ua.velocity.size(); ++n) ua.velocity[n] += (*shape)[n];
+            ua.group_flow = group_fluxes(mesh, ua.velocity);
+            add_scaled(next, -y.amplitude, ua);
+            units.push_back(std::move(ua));
+          } else {
+            std::vector<double> e(mesh.groups.size(), 0.0);
+            e[static_cast<size_t>(g)] = 1.0;
+            units.push_back(sys.solve(e, false));
+            add_scaled(next, -y.x.group_pressure[static_cast<size_t>(g)], units.back());
+          }
+        }
+        const std::vector<double> z = bs.solve(next, units);
+        for (size_t j = 0; j < units.size(); ++j) {
+          add_scaled(next, z[j], units[j]);
+          if (bs.unknown[j] == bs.fixed) amplitude = z[j];
+        }
+      }
+    } catch (const Error& e) {
+      if (e.kind() != ErrorKind::Numerical) throw;
+      return -1;
+    }
+    double du = 0.0;
+    for (size_t n = 0; n < next.velocity.size(); ++n)
+      du = std::max(du, (next.velocity[n] - y.x.velocity[n]).cwiseAbs().maxCoeff());
+    const double umax = max_abs(next.velocity);
+    const double change = umax > 0.0 ? du / umax : 0.0;
+    if (!std::isfinite(change)) return -1;
+    y.x = std::move(next);
+    y.amplitude = amplitude;
+    if (rho == 0.0 || change <= opt.newton_tolerance) {
+      state = std::move(y);
+      return it;
+    }
+    // Newton may take a few long steps before it converges; updates that stay large
+    // or grow after that mean the density step was too long.
+    if (change > 1e2 || (it >= 6 && change > 0.5 * last)) return -1;
+    last = change;
+  }
+  return -1;
+}
+
+double inlet_reynolds(const TetMesh& mesh, const StokesSolution& sol, double rho, double eta) {
+  for (size_t g = 0; g < mesh.groups.size(); ++g)
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Inlet) {
+      const double area = mesh.area(static_cast<int>(g));
+      const double d = 2.0 * std::sqrt(area / std::numbers::pi);
+      return rho * std::abs(sol.group_flow[g]) / area * d / eta;
+    }
+  return 0.0;
+}
+
+StokesSolution solve_navier_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond, const StokesOptions& opt) {
+  if (!(opt.density >= 0.0) || !std::isfinite(opt.density)) throw_usage_error("fem: density must be >= 0");
+  if (!(opt.backflow >= 0.0)) throw_usage_error("fem: the backflow coefficient must be >= 0");
+  if (opt.solver != LinearSolver::Mumps)
+    throw_usage_error("fem: Navier–Stokes needs the direct solver (mumps): the fieldsplit preconditioner's Schur "
+                      "approximation (the pressure mass matrix) ignores convection");
+  BoundarySystem bs{mesh, cond, -1, {}};
+  if (opt.inlet == InletCondition::Profile) {
+    for (size_t g = 0; g < mesh.groups.size(); ++g)
+      if (mesh.groups[g].kind == BoundaryGroup::Kind::Inlet) bs.fixed = static_cast<int>(g);
+    if (bs.fixed < 0) throw_usage_error("fem: the mesh has no inlet group for the inlet velocity profile");
+    if (cond[static_cast<size_t>(bs.fixed)].type == GroupCondition::Type::Resistance)
+      throw_usage_error("fem: an inlet with a velocity profile takes a pressure or a flow, not a resistance");
+    bs.unknown.push_back(bs.fixed);
+  }
+  std::vector<int> unknown;
+  std::vector<double> known;
+  split_conditions(mesh, cond, unknown, known);
+  for (int g : unknown)
+    if (g != bs.fixed) bs.unknown.push_back(g);
+  std::vector<Vec3> shape;
+  if (bs.fixed >= 0) {
+    shape = inlet_shape(mesh, bs.fixed, opt.inlet_velocity);
+    known[static_cast<size_t>(bs.fixed)] = 0.0;
+  }
+  System sys(mesh, opt, true, bs.fixed);
+  NsState state;
+  state.x.velocity.assign(mesh.nodes.size(), Vec3::Zero());
+  state.x.pressure.assign(static_cast<size_t>(mesh.num_vertices), 0.0);
+  state.x.group_flow.assign(mesh.groups.size(), 0.0);
+  state.x.group_pressure = known;
+  const std::vector<Vec3>* sh = bs.fixed >= 0 ? &shape : nullptr;
+  int newton_steps = 0, accepted = 0, tried = 0;
+  double s = 0.0, ds = 1.0;
+  if (const StokesSolution* guess = opt.initial_guess) {
+    if (guess->velocity.size() != mesh.nodes.size() || guess->pressure.size() != state.x.pressure.size() ||
+        guess->group_pressure.size() != mesh.groups.size())
+      throw_usage_error("fem: the initial guess belongs to another mesh");
+    NsState start = state;
+    start.x.velocity = guess->velocity;
+    start.x.pressure = guess->pressure;
+    for (int g : bs.unknown) start.x.group_pressure[static_cast<size_t>(g)] = guess->group_pressure[static_cast<size_t>(g)];
+    if (sh) {
+      // The inlet velocity must be a multiple of the shape: the least-squares amplitude.
+      double uw = 0.0, ww = 0.0;
+      for (size_t n = 0; n < shape.size(); ++n) {
+        uw += shape[n].dot(guess->velocity[n]);
+        ww += shape[n].squaredNorm();
+      }
+      start.amplitude = ww > 0.0 ? uw / ww : 0.0;
+      start.x.group_pressure[static_cast<size_t>(bs.fixed)] = 0.0;
+      for (size_t n = 0; n < shape.size(); ++n)
+        if (shape[n] != Vec3::Zero()) start.x.velocity[n] = start.amplitude * shape[n];
+    }
+    start.x.group_flow = group_fluxes(mesh, start.x.velocity);
+    ++tried;
+    if (newton(sys, bs, sh, opt, opt.density, start, newton_steps) >= 0) {
+      state = std::move(start);
+      s = 1.0;
+      accepted = 1;
+    }
+  }
+  if (s < 1.0 && newton(sys, bs, sh, opt, 0.0, state, newton_steps) < 0)
+    throw_numerical_error("fem: the Stokes start of the Navier–Stokes solve failed");
+  // Continuation in the density (Re ∝ ρ) from the Stokes solution.
+  while (s < 1.0) {
+    if (tried == opt.continuation_max_steps || ds < 1e-4) {
+      throw_numerical_error(fmt::format(
+          "fem: Navier–Stokes did not converge: the density continuation stalled at {:.3g} of the target "
+          "(inlet Reynolds number {:.0f} reached; {} Newton steps in {} tries); refine the mesh or lower the "
+          "Reynolds number",
+          s, inlet_reynolds(mesh, state.x, s * opt.density, opt.viscosity), newton_steps, tried));
+    }
+    const double s_try = std::min(1.0, s + ds);
+    ++tried;
+    NsState y = state;
+    const int its = newton(sys, bs, sh, opt, s_try * opt.density, y, newton_steps);
+    if (its < 0) {
+      ds *= 0.25;
+      continue;
+    }
+    state = std::move(y);
+    s = s_try;
+    ++accepted;
+    if (its <= 5) ds *= 2.0;
+  }
+  StokesSolution x = std::move(state.x);
+  for (const Vec3& u : x.velocity)
+    if (!u.allFinite()) throw_numerical_error("fem: the solution contains NaN");
+  if (bs.fixed >= 0) x.group_pressure[static_cast<size_t>(bs.fixed)] = mean_pressure(mesh, x.pressure, bs.fixed);
+  x.unknowns = sys.unknowns();
+  x.krylov_iterations = sys.krylov_iterations;
+  x.factorizations = sys.factorizations;
+  x.newton_iterations = newton_steps;
+  x.continuation_steps = accepted;
+  x.reynolds = inlet_reynolds(mesh, x, opt.density, opt.viscosity);
+  x.assemble_seconds = sys.assemble_seconds;
+  x.solve_seconds = sys.solve_seconds;
+  return x;
 }
 
 }  // namespace
@@ -646,59 +1394,8 @@ StokesSolution solve_stokes(const TetMesh& mesh, std::span<const GroupCondition>
   if (mesh.tets.empty()) throw_usage_error("fem: empty mesh");
   check_conditions(mesh, cond);
   ensure_petsc();
-  System sys(mesh, opt);
-  // Groups whose pressure follows from a flow or resistance condition.
-  std::vector<int> unknown;
-  std::vector<double> known(mesh.groups.size(), 0.0);
-  for (size_t g = 0; g < mesh.groups.size(); ++g) {
-    if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
-    if (cond[g].type == GroupCondition::Type::Pressure) known[g] = cond[g].pressure;
-    else unknown.push_back(static_cast<int>(g));
-  }
-  const int max_steps = opt.equations == Equations::NavierStokes ? std::max(1, opt.picard_max_iterations) + 1 : 1;
-  std::vector<Vec3> wind;
-  StokesSolution sol;
-  double change = 0.0;
-  for (int step = 0; step < max_steps; ++step) {
-    sys.prepare(step == 0 ? nullptr : &wind);
-    sol = sys.solve(known);
-    if (!unknown.empty()) {
-      std::vector<StokesSolution> units;
-      std::vector<std::vector<double>> flux;
-      for (int g : unknown) {
-        std::vector<double> e(mesh.groups.size(), 0.0);
-        e[static_cast<size_t>(g)] = 1.0;
-        units.push_back(sys.solve(e));
-        flux.push_back(units.back().group_flow);
-      }
-      const std::vector<double> p = boundary_pressures(mesh, cond, unknown, sol.group_flow, flux);
-      for (size_t k = 0; k < unknown.size(); ++k) add_scaled(sol, p[static_cast<size_t>(unknown[k])], units[k]);
-    }
-    if (opt.equations == Equations::Stokes) break;
-    if (step > 0) {
-      double du = 0.0, umax = 0.0;
-      for (size_t n = 0; n < sol.velocity.size(); ++n) {
-        du = std::max(du, (sol.velocity[n] - wind[n]).cwiseAbs().maxCoeff());
-        umax = std::max(umax, sol.velocity[n].cwiseAbs().maxCoeff());
-      }
-      change = umax > 0.0 ? du / umax : 0.0;
-      if (!std::isfinite(change)) throw_numerical_error("fem: Navier–Stokes Picard iterations produced NaN");
-      if (change <= opt.picard_tolerance) break;
-    }
-    wind = sol.velocity;
-    if (step + 1 == max_steps)
-      throw_numerical_error(fmt::format("fem: Navier–Stokes Picard iterations did not converge in {} steps "
-                                        "(last relative change {:.3g}); the Reynolds number may be too high",
-                                        opt.picard_max_iterations, change));
-  }
-  for (const Vec3& u : sol.velocity)
-    if (!u.allFinite()) throw_numerical_error("fem: the solution contains NaN");
-  sol.unknowns = sys.unknowns();
-  sol.krylov_iterations = sys.krylov_iterations;
-  sol.picard_iterations = sys.factorizations;
-  sol.assemble_seconds = sys.assemble_seconds;
-  sol.solve_seconds = sys.solve_seconds;
-  return sol;
+  return opt.equations == Equations::NavierStokes ? solve_navier_stokes(mesh, cond, opt)
+                                                  : solve_linear_stokes(mesh, cond, opt);
 }
 
 StokesBasis::StokesBasis(const TetMesh& mesh, const StokesOptions& opt) : mesh_(mesh) {
@@ -706,15 +1403,17 @@ StokesBasis::StokesBasis(const TetMesh& mesh, const StokesOptions& opt) : mesh_(
     throw_usage_error("fem: the boundary-value basis is for Stokes only (Navier–Stokes is not linear)");
   if (!(opt.viscosity > 0.0)) throw_usage_error("fem: viscosity must be > 0");
   if (mesh.tets.empty()) throw_usage_error("fem: empty mesh");
+  if (opt.body_force || opt.traction)
+    throw_usage_error("fem: the boundary-value basis takes no body force or traction");
   ensure_petsc();
-  System sys(mesh, opt);
-  sys.prepare(nullptr);
+  System sys(mesh, opt, false);
+  sys.prepare_stokes();
   for (size_t g = 0; g < mesh.groups.size(); ++g) {
     if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
     open_.push_back(static_cast<int>(g));
     std::vector<double> e(mesh.groups.size(), 0.0);
     e[g] = 1.0;
-    unit_.push_back(sys.solve(e));
+    unit_.push_back(sys.solve(e, false));
     flux_.push_back(unit_.back().group_flow);
   }
   unknowns_ = sys.unknowns();
@@ -738,9 +1437,27 @@ StokesSolution StokesBasis::solve(std::span<const GroupCondition> cond) const {
   sol.group_pressure.assign(mesh_.groups.size(), 0.0);
   for (size_t k = 0; k < open_.size(); ++k) add_scaled(sol, p[static_cast<size_t>(open_[k])], unit_[k]);
   sol.unknowns = unknowns_;
-  sol.picard_iterations = 1;
+  sol.factorizations = 1;
   return sol;
 }
+
+namespace detail {
+
+bool navier_stokes_element(const TetMesh& mesh, int tet, const StokesOptions& opt, const std::vector<Vec3>& velocity,
+                           const std::vector<double>& pressure, double* res, double* jac) {
+  static const ReferenceNs ref;
+  const State st{&velocity, &pressure, nullptr};
+  return ns_element(mesh, ref, tet, ns_params(opt), st, res, jac);
+}
+
+void navier_stokes_face(const TetMesh& mesh, int face, const StokesOptions& opt, const std::vector<Vec3>& velocity,
+                        const std::vector<double>& group_pressure, double* res, double* jac) {
+  const State st{&velocity, nullptr, &group_pressure};
+  bool any = false;
+  ns_face(mesh, static_cast<size_t>(face), ns_params(opt), st, res, jac, any);
+}
+
+}  // namespace detail
 
 void initialize() { ensure_petsc(); }
 

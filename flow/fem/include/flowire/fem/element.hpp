@@ -33,6 +33,9 @@ std::span<const QuadPoint> tri_quadrature();
 void tet_p2(const std::array<double, 3>& xi, double* values);
 /// @brief P2 basis gradients (10 × 3, row per function) with respect to xi.
 void tet_p2_grad(const std::array<double, 3>& xi, double (*grads)[3]);
+/// @brief P2 basis second derivatives (10 × 3 × 3) with respect to xi (constant on the
+/// reference tetrahedron).
+void tet_p2_hessian(double (*hess)[3][3]);
 /// @brief P1 basis values (4).
 void tet_p1(const std::array<double, 3>& xi, double* values);
 /// @brief P2 triangle basis values (6) at (s, t) = (xi[0], xi[1]).

@@ -3,14 +3,38 @@
 /// @brief Steady incompressible Stokes / Navier–Stokes on a TetMesh with Taylor–Hood
 /// P2/P1 elements (isoparametric: the quadratic geometry of the mesh is used).
 ///
-/// Governing equations (η viscosity, ρ density):
-/// \f[ -\eta\Delta u + \rho (u\cdot\nabla)u + \nabla p = 0, \qquad \nabla\cdot u = 0 \f]
+/// Governing equations (η viscosity, ρ density, f a body force):
+/// \f[ -\eta\Delta u + \rho (u\cdot\nabla)u + \nabla p = f, \qquad \nabla\cdot u = 0 \f]
 /// with u = 0 on the wall and the "do-nothing" condition with a prescribed pressure on
-/// every inlet / outlet face Γ_k: \f$ \eta\,\partial_n u - p\,n = -p_k\, n \f$, i.e. the weak form
-/// \f[ \eta(\nabla u,\nabla v) + \rho((w\cdot\nabla)u, v) - (p,\nabla\cdot v) - (q,\nabla\cdot u)
-///     = -\sum_k p_k \int_{\Gamma_k} n\cdot v \f]
-/// (Stokes: no convection; Navier–Stokes: Picard iterations with w the previous
-/// velocity, starting from the Stokes solution).
+/// every inlet / outlet face Γ_k: \f$ \eta\,\partial_n u - p\,n = -p_k\, n + g \f$ (g: an
+/// optional extra traction, zero unless given), i.e. the weak form
+/// \f[ \eta(\nabla u,\nabla v) + \rho((u\cdot\nabla)u, v) - (p,\nabla\cdot v) - (q,\nabla\cdot u)
+///     = (f, v) - \sum_k p_k \int_{\Gamma_k} n\cdot v + \int g\cdot v \f]
+/// (Stokes: ρ = 0).
+///
+/// Navier–Stokes at arterial Reynolds numbers (see solve_stokes): Newton's method with
+/// the exact Jacobian of the convection, continuation in the density from the Stokes
+/// solution (Re ∝ ρ) with an adaptive step, and three consistent stabilization terms:
+/// - SUPG: \f$ \sum_e (\tau_M\,\rho\,u\cdot\nabla v,\ \rho(u\cdot\nabla)u - \eta\Delta u + \nabla p - f)_e \f$
+///   with \f$ \tau_M = [(2\rho|u|/h)^2 + (12\eta/h^2)^2]^{-1/2} \f$, h half the element
+///   size (P2); the second derivatives of the curved (isoparametric) element are exact;
+/// - LSIC (grad-div): \f$ \sum_e (\tau_C \nabla\cdot u, \nabla\cdot v)_e \f$ with
+///   \f$ \tau_C = \rho|u|h/2\cdot\min(1, Re_h/3) \f$, \f$ Re_h = \rho|u|h/(2\eta) \f$;
+/// - backflow on outlets: \f$ -\tfrac{\beta\rho}{2}\int_{\Gamma_{out}} \min(u\cdot n, 0)\, u\cdot v \f$,
+///   which removes the kinetic energy that flow entering through an outlet would bring
+///   in (zero where the flow leaves). The exact solution satisfies all three terms'
+///   residuals, so the discretization keeps its order (tests: manufactured solution).
+/// The Jacobian is exact, including the derivatives of τ_M, τ_C and of the backflow
+/// term (finite-difference tests).
+/// The inlet of a Navier–Stokes solve carries by default a prescribed velocity profile
+/// (Poiseuille over the inlet disk, or `inlet_velocity`) whose amplitude is one more
+/// unknown of the boundary system: a flow condition fixes its flux, a pressure condition
+/// the mean pressure over the inlet. The traction condition at an inflow boundary lets
+/// the convective term bring in kinetic energy unchecked (½ρ∫(u·n)|u|² < 0 there), which
+/// made Newton stall near Re ≈ 100 even for Poiseuille flow; with the profile it reaches
+/// Re = 1000 in a tube from the Stokes start in one density step.
+/// Navier–Stokes runs with MUMPS only: the fieldsplit preconditioner's Schur
+/// approximation (pressure mass) ignores convection.
 ///
 /// Boundary conditions other than a pressure (a prescribed flow, or a resistance
 /// p_k = P_d + R_k Q_k) use that the problem is affine in the boundary pressures: with
@@ -18,9 +42,10 @@
 /// with the known pressures and 0 on the groups U whose pressure is unknown, and x_k with
 /// 1 on group k and 0 elsewhere. The outward flows are then Q = F_0 + Σ_k p_k F_k
 /// (F: fluxes of those fields), and the |U| conditions form a small dense system for the
-/// p_k. Navier–Stokes repeats this inside every Picard step (the Oseen operator of a
-/// step is linear). `StokesBasis` keeps one unit field per open group for many boundary
-/// values (a pulsatile series of quasi-steady frames) after a single factorization.
+/// p_k. Navier–Stokes does the same in every Newton step (the linearized problem is
+/// affine in the boundary pressures too). `StokesBasis` keeps one unit field per open
+/// group for many boundary values (a pulsatile series of quasi-steady frames) after a
+/// single factorization.
 ///
 /// Element matrices (quadrature of degree 5 on every tetrahedron) are assembled by
 /// flowire into a PETSc AIJ matrix with exact preallocation; the wall nodes are removed
@@ -31,6 +56,7 @@
 /// pressure mass matrix scaled by 1/η for the Schur complement. PETSc options with the
 /// prefix `-fem_` (e.g. `-fem_ksp_monitor`, `-fem_fieldsplit_u_pc_type hypre`) override
 /// these choices.
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -41,17 +67,39 @@ namespace flowire::fem {
 
 enum class Equations { Stokes, NavierStokes };
 enum class LinearSolver { Mumps, Fieldsplit };
+/// Navier–Stokes stabilization: SUPG + LSIC (see the file comment), or plain Galerkin.
+enum class Stabilization { Supg, None };
+/// Navier–Stokes inlet: a prescribed velocity profile whose amplitude the inlet condition
+/// (pressure: the mean pressure over the inlet; flow) determines, or the traction
+/// condition of the outlets.
+enum class InletCondition { Profile, Traction };
 
 struct StokesOptions {
   double viscosity = 3.5e-3;   ///< Pa·s
   double density = 1060.0;     ///< kg/m³ (Navier–Stokes only)
   Equations equations = Equations::Stokes;
+  Stabilization stabilization = Stabilization::Supg;  ///< Navier–Stokes only
+  double backflow = 1.0;       ///< β of the outlet backflow term (Navier–Stokes; 0: none)
+  InletCondition inlet = InletCondition::Profile;  ///< Navier–Stokes only
+  /// Shape of the inlet velocity profile (Navier–Stokes, `Profile`); empty: Poiseuille,
+  /// −n(1 − r²/R²) over the inlet disk.
+  std::function<Vec3(const Vec3&)> inlet_velocity;
   LinearSolver solver = LinearSolver::Mumps;
   std::string velocity_pc = "gamg";  ///< fieldsplit: "gamg" or "hypre" on the velocity block
   double rtol = 1e-10;               ///< fieldsplit: relative residual tolerance
   int max_iterations = 5000;         ///< fieldsplit: Krylov iterations at most
-  int picard_max_iterations = 50;    ///< Navier–Stokes
-  double picard_tolerance = 1e-8;    ///< Navier–Stokes: max |Δu| / max |u|
+  int newton_max_iterations = 12;    ///< Navier–Stokes: per continuation step
+  double newton_tolerance = 1e-9;    ///< Navier–Stokes: max |Δu| / max |u| of the last update
+  int continuation_max_steps = 60;   ///< Navier–Stokes: density steps at most (accepted or not)
+  /// Navier–Stokes: start Newton from this field (same mesh) at the full density instead
+  /// of from the Stokes solution (e.g. the previous frame of a series); if that Newton
+  /// solve fails, the Stokes start and the continuation follow as usual. nullptr: none.
+  const struct StokesSolution* initial_guess = nullptr;
+  /// Body force f(x) (N/m³); empty: none. Not for StokesBasis.
+  std::function<Vec3(const Vec3&)> body_force;
+  /// Extra traction g(x, n, group) on the open groups (Pa), added to −p_k n; empty: none.
+  /// Not for StokesBasis.
+  std::function<Vec3(const Vec3&, const Vec3&, int)> traction;
 };
 
 /// @brief Condition on one open boundary group (inlet or outlet).
@@ -73,8 +121,11 @@ struct StokesSolution {
   std::vector<double> group_flow; ///< (groups) m³/s out of the domain through each group
   std::vector<double> group_pressure;  ///< (groups) Pa: the pressure imposed on each open group (wall: 0)
   int unknowns = 0;               ///< size of the linear system
-  int krylov_iterations = 0;      ///< fieldsplit: total over Picard steps (0 for MUMPS)
-  int picard_iterations = 0;      ///< linear solves done
+  int krylov_iterations = 0;      ///< fieldsplit: total over all linear solves (0 for MUMPS)
+  int factorizations = 0;         ///< matrix factorizations (Stokes: 1; Navier–Stokes: Newton steps)
+  int newton_iterations = 0;      ///< Navier–Stokes: Newton steps over all continuation steps
+  int continuation_steps = 0;     ///< Navier–Stokes: accepted density steps (1: no continuation needed)
+  double reynolds = 0.0;          ///< inlet Reynolds number ρ·ū·D/η (ū = |Q|/A, D = 2√(A/π))
   double assemble_seconds = 0.0;  ///< preallocation and element assembly
   double solve_seconds = 0.0;     ///< factorization / Krylov solve
 };
@@ -87,10 +138,15 @@ struct StokesSolution {
 StokesSolution solve_stokes(const TetMesh& mesh, std::span<const double> group_pressure, const StokesOptions& opt = {});
 
 /// @brief Solve with a condition on every non-wall group (`conditions[g]` for group g;
-/// the wall entry is ignored): one factorization per Picard step, one solve with the
-/// known pressures plus one per group whose pressure is unknown (see the file comment).
+/// the wall entry is ignored): one factorization (Navier–Stokes: one per Newton step),
+/// one solve with the known pressures plus one per group whose pressure is unknown (see
+/// the file comment). Navier–Stokes starts from the Stokes solution and tries the full
+/// density at once; a Newton solve that fails (no convergence within
+/// `newton_max_iterations`, growing updates, NaN) is retried from the last converged
+/// density with a quarter of the step, and successful steps double it.
 /// @throws flowire::Error: usage (sizes, a negative resistance, no group fixing the
-/// pressure level), numerical as above.
+/// pressure level), numerical as above, and when the continuation stalls (the message
+/// gives the Reynolds number reached).
 StokesSolution solve_stokes(const TetMesh& mesh, std::span<const GroupCondition> conditions,
                             const StokesOptions& opt = {});
 
@@ -133,6 +189,20 @@ class StokesBasis {
 
 /// @brief Outward flux \f$ \int_{\Gamma_g} u\cdot n \f$ of a velocity field through each group.
 std::vector<double> group_fluxes(const TetMesh& mesh, const std::vector<Vec3>& velocity);
+
+namespace detail {
+/// @brief One tetrahedron's Navier–Stokes residual `res` (34: velocity rows 3i+c for its
+/// 10 nodes, then its 4 vertex pressures) and Jacobian `jac` (34 × 34, row major) at the
+/// state (`velocity` per node, `pressure` per vertex index), with the density, viscosity,
+/// stabilization and body force of `opt`. For tests.
+/// @return false when the element is inverted.
+bool navier_stokes_element(const TetMesh& mesh, int tet, const StokesOptions& opt, const std::vector<Vec3>& velocity,
+                           const std::vector<double>& pressure, double* res, double* jac);
+/// @brief One open boundary triangle's residual (18: rows 3k+c of its 6 nodes) and
+/// Jacobian (18 × 18): the group pressure, the traction and the outlet backflow term.
+void navier_stokes_face(const TetMesh& mesh, int face, const StokesOptions& opt, const std::vector<Vec3>& velocity,
+                        const std::vector<double>& group_pressure, double* res, double* jac);
+}  // namespace detail
 
 /// @brief Initialize PETSc (and MPI) unless already done; build_mesh then sees every rank.
 void initialize();
