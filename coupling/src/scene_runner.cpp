@@ -226,6 +226,8 @@ void render_pictures(const config::Config& c, const vessels::Network& net, const
 nlohmann::json fem_result_json(const fem::CompareResult& r) {
   return {{"tets", r.tets},
           {"unknowns", r.unknowns},
+          {"reynolds", r.reynolds},
+          {"newton_iterations", r.newton_iterations},
           {"max_rel_diff_away_from_junctions", r.max_rel_diff_drop_away},
           {"max_rel_diff_near_junctions", r.max_rel_diff_drop_junction},
           {"max_flow_split_error", r.max_flow_split_error},
@@ -247,6 +249,10 @@ void check_fem(const config::Config& c, const flow::FlowSolver* fs) {
   const int frames = c.integer("fem.frames");
   if (frames < 0) throw_input_error(c.where("fem.frames"), "must be 0 (steady only) or a number of frames");
   if (frames > 100000) throw_input_error(c.where("fem.frames"), "too many frames (at most 100000)");
+  if (!(c.number("fem.backflow") >= 0.0)) throw_input_error(c.where("fem.backflow"), "must be >= 0");
+  if (c.string("fem.equations") == "navier_stokes" && c.string("fem.solver") == "fieldsplit")
+    throw_input_error(c.where("fem.solver"),
+                      "navier_stokes needs mumps (the fieldsplit Schur approximation ignores convection)");
   if (frames > 0 && !(fs->spec().cycle() > 0.0))
     throw_input_error(c.where("fem.frames"), "a pulsatile comparison needs a periodic inlet waveform (sine or table)");
   if (fs->spec().inlets.size() != 1)
@@ -270,6 +276,9 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
   fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
   fo.solver = c.string("fem.solver") == "fieldsplit" ? fem::LinearSolver::Fieldsplit : fem::LinearSolver::Mumps;
+  fo.stabilization = c.string("fem.stabilization") == "none" ? fem::Stabilization::None : fem::Stabilization::Supg;
+  fo.inlet = c.string("fem.inlet") == "traction" ? fem::InletCondition::Traction : fem::InletCondition::Profile;
+  fo.backflow = c.number("fem.backflow");
   fo.samples_per_branch = c.integer("fem.samples_per_branch");
   fo.write_vtu = c.boolean("output.vtk");
   fo.write_png = c.boolean("output.png");

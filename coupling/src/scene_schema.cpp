@@ -172,7 +172,13 @@ config::Schema make_schema() {
   add("fem", Type::Section, "", D::None, "finite-element comparison of the flow (needs FLOWIRE_WITH_FEM)");
   add("fem.mesh_size", Type::Number, "", D::Length, "target tetrahedron size (default from the smallest radius)");
   add("fem.equations", Type::Enum, "stokes", D::None, "stokes | navier_stokes", {"stokes", "navier_stokes"});
-  add("fem.solver", Type::Enum, "mumps", D::None, "mumps | fieldsplit", {"mumps", "fieldsplit"});
+  add("fem.solver", Type::Enum, "mumps", D::None, "direct (mumps) or iterative (fieldsplit, Stokes only)", {"mumps", "fieldsplit"});
+  add("fem.stabilization", Type::Enum, "supg", D::None,
+      "navier_stokes: supg (SUPG + grad-div, consistent) or none (plain Galerkin)", {"supg", "none"});
+  add("fem.inlet", Type::Enum, "profile", D::None,
+      "navier_stokes: profile (a Poiseuille velocity profile scaled to the inlet pressure or flow) or traction",
+      {"profile", "traction"});
+  add("fem.backflow", Type::Number, "1", D::None, "navier_stokes: outlet backflow stabilization coefficient (0: off)");
   add("fem.samples_per_branch", Type::Integer, "10", D::None, "comparison points per branch");
   add("fem.frames", Type::Integer, "0", D::None,
       "0: steady comparison only; N: also N quasi-steady frames over one inlet period (fem_pulsatile*.csv, fem.pvd)");

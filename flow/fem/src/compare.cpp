@@ -317,6 +317,8 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
   CompareResult res;
   res.tets = mesh.num_tets();
   res.unknowns = sol.unknowns;
+  res.reynolds = sol.reynolds;
+  res.newton_iterations = sol.newton_iterations;
   const FieldSampler fs(mesh, sol);
   const std::vector<double> dist = path_distances(net, inlet);
   double pmin_out = std::numeric_limits<double>::infinity();
@@ -514,6 +516,9 @@ StokesOptions stokes_options(const FemOptions& opt, const BoundaryValues& bv) {
   so.equations = opt.equations;
   so.solver = opt.solver;
   so.velocity_pc = opt.velocity_pc;
+  so.stabilization = opt.stabilization;
+  so.inlet = opt.inlet;
+  so.backflow = opt.backflow;
   return so;
 }
 
@@ -559,12 +564,16 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
     out.factorizations = 1;
     out.basis_seconds = basis->assemble_seconds() + basis->solve_seconds();
   }
+  StokesSolution previous;  // Navier–Stokes: each frame's Newton starts from the last frame
   auto solve = [&](const BoundaryValues& bv, StokesSolution& sol) {
     const auto cond = group_conditions(mesh, bv);
     if (basis) {
       sol = basis->solve(cond);
     } else {
-      sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), stokes_options(opt, bv));
+      StokesOptions fso = stokes_options(opt, bv);
+      if (!previous.velocity.empty()) fso.initial_guess = &previous;
+      sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), fso);
+      previous = sol;
       out.factorizations += sol.factorizations;
       out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
     }

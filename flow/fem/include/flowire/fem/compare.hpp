@@ -45,6 +45,9 @@ struct FemOptions {
   Equations equations = Equations::Stokes;
   LinearSolver solver = LinearSolver::Mumps;
   std::string velocity_pc = "gamg";
+  Stabilization stabilization = Stabilization::Supg;  ///< Navier–Stokes
+  InletCondition inlet = InletCondition::Profile;     ///< Navier–Stokes
+  double backflow = 1.0;                              ///< Navier–Stokes: outlet backflow β
   int samples_per_branch = 10;
   bool write_png = true;
   bool write_vtu = true;
@@ -122,6 +125,8 @@ struct CompareResult {
   double max_flow_split_error = 0.0;        ///< max |Q_fem/ΣQ_fem − Q_net/ΣQ_net| over outlets
   double max_flow_error = 0.0;              ///< max |Q_fem/Q_net − 1| over outlets
   int tets = 0, unknowns = 0;
+  double reynolds = 0.0;       ///< inlet Reynolds number of the FEM flow (ρ ū D / η)
+  int newton_iterations = 0;   ///< Navier–Stokes: Newton steps (0 for Stokes)
   double mesh_seconds = 0.0, assemble_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
 };
 
