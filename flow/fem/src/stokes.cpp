@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <numbers>
 
 #include <Eigen/Dense>
@@ -248,6 +249,7 @@ struct Reference {
 /// Element matrices of one tetrahedron.
 struct ElementMatrices {
   double k[10][10];   // viscous block, the same for every component
+  double m[10][10];   // velocity mass block (per component)
   double bt[30][4];   // velocity (node i, component c -> row 3i+c) x pressure: -(q, div v)
   double mp[4][4];    // pressure mass / viscosity
 };
@@ -257,6 +259,7 @@ bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, Eleme
   Vec3 x[10];
   for (int i = 0; i < 10; ++i) x[i] = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(i)])];
   std::fill(&em.k[0][0], &em.k[0][0] + 100, 0.0);
+  std::fill(&em.m[0][0], &em.m[0][0] + 100, 0.0);
   std::fill(&em.bt[0][0], &em.bt[0][0] + 120, 0.0);
   std::fill(&em.mp[0][0], &em.mp[0][0] + 16, 0.0);
   for (int q = 0; q < ref.nq; ++q) {
@@ -278,6 +281,9 @@ bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, Eleme
         const double v = eta * wd * (g[i][0] * g[jj][0] + g[i][1] * g[jj][1] + g[i][2] * g[jj][2]);
         em.k[i][jj] += v;
         if (jj != i) em.k[jj][i] += v;
+        const double mv = wd * ref.phi[q][i] * ref.phi[q][jj];
+        em.m[i][jj] += mv;
+        if (jj != i) em.m[jj][i] += mv;
       }
     for (int i = 0; i < 10; ++i)
       for (int c = 0; c < 3; ++c)
@@ -297,10 +303,15 @@ struct Mpi {
 };
 
 /// Assemble the system matrix (and the pressure mass matrix when `mp` is given).
-void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const StokesOptions& opt, Mat a, Mat mp) {
+/// With `mass_coef` c > 0 the velocity block is K + c·M (time-dependent Stokes), and with
+/// `mass` the velocity mass matrix M is assembled there too.
+void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const StokesOptions& opt, Mat a, Mat mp,
+              double mass_coef = 0.0, Mat mass = nullptr) {
   static const Reference ref;
   FLOWIRE_PETSC(MatZeroEntries(a));
   if (mp) FLOWIRE_PETSC(MatZeroEntries(mp));
+  if (mass) FLOWIRE_PETSC(MatZeroEntries(mass));
+  double mbuf[100];
   const auto [e0, e1] = split(mesh.num_tets(), mpi.size, mpi.rank);
   ElementMatrices em{};
   PetscInt rows_c[10], vrows[30], prows[4], pidx[4];
@@ -313,13 +324,17 @@ void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const S
     }
     const auto& t = mesh.tets[static_cast<size_t>(e)];
     for (int i = 0; i < 10; ++i)
-      for (int jj = 0; jj < 10; ++jj) kbuf[i * 10 + jj] = em.k[i][jj];
+      for (int jj = 0; jj < 10; ++jj) {
+        kbuf[i * 10 + jj] = em.k[i][jj] + mass_coef * em.m[i][jj];
+        mbuf[i * 10 + jj] = em.m[i][jj];
+      }
     for (int c = 0; c < 3; ++c) {
       for (int i = 0; i < 10; ++i) {
         const PetscInt d = num.vdof[static_cast<size_t>(t[static_cast<size_t>(i)])];
         rows_c[i] = d >= 0 ? d + c : -1;
       }
       FLOWIRE_PETSC(MatSetValues(a, 10, rows_c, 10, rows_c, kbuf, ADD_VALUES));
+      if (mass) FLOWIRE_PETSC(MatSetValues(mass, 10, rows_c, 10, rows_c, mbuf, ADD_VALUES));
     }
     for (int i = 0; i < 10; ++i) {
       const PetscInt d = num.vdof[static_cast<size_t>(t[static_cast<size_t>(i)])];
@@ -341,10 +356,11 @@ void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const S
   }
   FLOWIRE_PETSC(MatAssemblyBegin(a, MAT_FINAL_ASSEMBLY));
   FLOWIRE_PETSC(MatAssemblyEnd(a, MAT_FINAL_ASSEMBLY));
-  if (mp) {
-    FLOWIRE_PETSC(MatAssemblyBegin(mp, MAT_FINAL_ASSEMBLY));
-    FLOWIRE_PETSC(MatAssemblyEnd(mp, MAT_FINAL_ASSEMBLY));
-  }
+  for (Mat extra : {mp, mass})
+    if (extra) {
+      FLOWIRE_PETSC(MatAssemblyBegin(extra, MAT_FINAL_ASSEMBLY));
+      FLOWIRE_PETSC(MatAssemblyEnd(extra, MAT_FINAL_ASSEMBLY));
+    }
   int any_bad = bad;
   MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
   if (any_bad >= 0)
@@ -878,11 +894,16 @@ class System {
       throw_numerical_error(fmt::format("fem: the linear solve failed ({}) after {} iterations",
                                         KSPConvergedReasons[reason], static_cast<long>(its)));
     if (opt_.solver == LinearSolver::Fieldsplit) krylov_iterations += static_cast<int>(its);
+    return gather(x_);
+  }
+
+  /// A distributed solution vector as a field on every rank, with its group fluxes.
+  StokesSolution gather(Vec x) {
     StokesSolution sol;
     sol.velocity.assign(mesh_.nodes.size(), Vec3::Zero());
     sol.pressure.assign(static_cast<size_t>(mesh_.num_vertices), 0.0);
-    FLOWIRE_PETSC(VecScatterBegin(scatter_, x_, all_, INSERT_VALUES, SCATTER_FORWARD));
-    FLOWIRE_PETSC(VecScatterEnd(scatter_, x_, all_, INSERT_VALUES, SCATTER_FORWARD));
+    FLOWIRE_PETSC(VecScatterBegin(scatter_, x, all_, INSERT_VALUES, SCATTER_FORWARD));
+    FLOWIRE_PETSC(VecScatterEnd(scatter_, x, all_, INSERT_VALUES, SCATTER_FORWARD));
     const PetscScalar* v = nullptr;
     FLOWIRE_PETSC(VecGetArrayRead(all_, &v));
     for (size_t n = 0; n < mesh_.nodes.size(); ++n) {
@@ -894,6 +915,32 @@ class System {
     sol.group_flow = group_fluxes(mesh_, sol.velocity);
     sol.group_pressure.assign(mesh_.groups.size(), 0.0);
     return sol;
+  }
+
+  /// Time-dependent Stokes: assemble K + c·M (and M), factorize.
+  void prepare_unsteady(double c) {
+    auto t0 = std::chrono::steady_clock::now();
+    if (!mass_) FLOWIRE_PETSC(MatDuplicate(a_, MAT_DO_NOT_COPY_VALUES, mass_.out()));
+    assemble(mesh_, num_, mpi_, opt_, a_, Mat(mp_), c, mass_);
+    assemble_seconds += seconds_since(t0);
+    FLOWIRE_PETSC(MatSetOption(a_, MAT_SYMMETRIC, PETSC_TRUE));
+    factorize(true);
+  }
+
+  /// Solve with the group pressures' right-hand side plus M·h (h: a solution-layout
+  /// vector); the solution stays in x().
+  StokesSolution solve_with_history(std::span<const double> group_pressure, Vec h) {
+    assemble_rhs(mesh_, num_, mpi_, group_pressure, nullptr, b_);
+    FLOWIRE_PETSC(MatMultAdd(mass_, h, b_, b_));
+    return solve_rhs();
+  }
+
+  [[nodiscard]] Vec x() const { return x_; }
+  [[nodiscard]] Vec new_vector() const {
+    Vec v = nullptr;
+    FLOWIRE_PETSC(VecDuplicate(x_, &v));
+    FLOWIRE_PETSC(VecSet(v, 0.0));
+    return v;
   }
 
   double assemble_seconds = 0.0, solve_seconds = 0.0;
@@ -926,7 +973,7 @@ class System {
   bool ns_ = false;
   Mpi mpi_;
   Numbering num_;
-  MatH a_, mp_, scratch_;
+  MatH a_, mp_, scratch_, mass_;
   VecH b_, x_, all_, lift_;
   ScatterH scatter_;
   KspH ksp_;
@@ -1440,6 +1487,92 @@ StokesSolution StokesBasis::solve(std::span<const GroupCondition> cond) const {
   sol.factorizations = 1;
   return sol;
 }
+
+struct UnsteadyStokes::Impl {
+  Impl(const TetMesh& m, const StokesOptions& o) : mesh(m), sys(m, o, false) {}
+  ~Impl() {
+    for (Vec* v : {&prev, &curr, &hist})
+      if (*v) VecDestroy(v);
+    for (Vec& v : units) VecDestroy(&v);
+  }
+  const TetMesh& mesh;
+  System sys;
+  double rho = 0.0, dt = 0.0, time = 0.0;
+  int steps = 0;
+  std::vector<int> open;
+  std::vector<Vec> units;                   // unit fields (pressure 1 on open[k])
+  std::vector<std::vector<double>> flux;    // their fluxes
+  Vec prev = nullptr, curr = nullptr, hist = nullptr;  // x^{n−1}, x^n, scratch
+  StokesSolution current;
+};
+
+UnsteadyStokes::UnsteadyStokes(const TetMesh& mesh, const StokesOptions& opt, double dt) {
+  if (opt.equations != Equations::Stokes)
+    throw_usage_error("fem: time-dependent solves are for Stokes (Navier–Stokes frames are solved one by one)");
+  if (opt.body_force || opt.traction) throw_usage_error("fem: time-dependent Stokes takes no body force or traction");
+  if (!(opt.viscosity > 0.0)) throw_usage_error("fem: viscosity must be > 0");
+  if (!(opt.density > 0.0) || !std::isfinite(opt.density)) throw_usage_error("fem: density must be > 0");
+  if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("fem: the time step must be > 0");
+  if (mesh.tets.empty()) throw_usage_error("fem: empty mesh");
+  ensure_petsc();
+  impl_ = std::make_unique<Impl>(mesh, opt);
+  Impl& m = *impl_;
+  m.rho = opt.density;
+  m.dt = dt;
+  // BDF2: (3u^{n+1} − 4u^n + u^{n−1})/(2Δt): the matrix is K + (3ρ/2Δt) M.
+  m.sys.prepare_unsteady(1.5 * opt.density / dt);
+  m.prev = m.sys.new_vector();
+  m.curr = m.sys.new_vector();
+  m.hist = m.sys.new_vector();
+  for (size_t g = 0; g < mesh.groups.size(); ++g) {
+    if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
+    m.open.push_back(static_cast<int>(g));
+    std::vector<double> e(mesh.groups.size(), 0.0);
+    e[g] = 1.0;
+    FLOWIRE_PETSC(VecSet(m.hist, 0.0));
+    m.flux.push_back(m.sys.solve_with_history(e, m.hist).group_flow);
+    m.units.push_back(m.sys.new_vector());
+    FLOWIRE_PETSC(VecCopy(m.sys.x(), m.units.back()));
+  }
+  m.current.velocity.assign(mesh.nodes.size(), Vec3::Zero());
+  m.current.pressure.assign(static_cast<size_t>(mesh.num_vertices), 0.0);
+  m.current.group_flow.assign(mesh.groups.size(), 0.0);
+  m.current.group_pressure.assign(mesh.groups.size(), 0.0);
+}
+
+UnsteadyStokes::~UnsteadyStokes() = default;
+
+const StokesSolution& UnsteadyStokes::step(std::span<const GroupCondition> cond) {
+  Impl& m = *impl_;
+  // History h = ρ(4u^n − u^{n−1})/(2Δt); the field with zero group pressures, then the
+  // group pressures from the conditions (every open group is a column of the small
+  // system, as in StokesBasis), then the combination.
+  FLOWIRE_PETSC(VecAXPBYPCZ(m.hist, 4.0 * m.rho / (2.0 * m.dt), -m.rho / (2.0 * m.dt), 0.0, m.curr, m.prev));
+  const std::vector<double> zero(m.mesh.groups.size(), 0.0);
+  const StokesSolution base = m.sys.solve_with_history(zero, m.hist);
+  const std::vector<double> p = boundary_pressures(m.mesh, cond, m.open, base.group_flow, m.flux);
+  std::swap(m.prev, m.curr);
+  FLOWIRE_PETSC(VecCopy(m.sys.x(), m.curr));
+  for (size_t k = 0; k < m.open.size(); ++k)
+    FLOWIRE_PETSC(VecAXPY(m.curr, p[static_cast<size_t>(m.open[k])], m.units[k]));
+  m.current = m.sys.gather(m.curr);
+  m.current.group_pressure = p;
+  m.current.unknowns = m.sys.unknowns();
+  m.current.factorizations = m.sys.factorizations;
+  m.current.assemble_seconds = m.sys.assemble_seconds;
+  m.current.solve_seconds = m.sys.solve_seconds;
+  for (const Vec3& u : m.current.velocity)
+    if (!u.allFinite()) throw_numerical_error("fem: time-dependent Stokes produced NaN");
+  m.time += m.dt;
+  ++m.steps;
+  return m.current;
+}
+
+const StokesSolution& UnsteadyStokes::current() const { return impl_->current; }
+double UnsteadyStokes::time() const { return impl_->time; }
+double UnsteadyStokes::dt() const { return impl_->dt; }
+const std::vector<std::vector<double>>& UnsteadyStokes::unit_flux() const { return impl_->flux; }
+const std::vector<int>& UnsteadyStokes::open_groups() const { return impl_->open; }
 
 namespace detail {
 

@@ -57,6 +57,7 @@
 /// prefix `-fem_` (e.g. `-fem_ksp_monitor`, `-fem_fieldsplit_u_pc_type hypre`) override
 /// these choices.
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -185,6 +186,37 @@ class StokesBasis {
   std::vector<std::vector<double>> flux_;
   int unknowns_ = 0;
   double assemble_seconds_ = 0.0, solve_seconds_ = 0.0;
+};
+
+/// @brief Time-dependent Stokes, \f$ \rho\,\partial_t u - \eta\Delta u + \nabla p = 0 \f$, by BDF2
+/// with a fixed step Δt from rest (u = 0 at t = 0; the first step sees u^{−1} = 0 too,
+/// which only matters for a start that is not at rest). One factorization of
+/// K + (3ρ/2Δt)M and one unit solve per open group; a step is one solve of the history
+/// right-hand side and the small boundary system of the conditions at the new time (any
+/// mix of pressure, flow and resistance, e.g. an RCR outlet's resistance to its current
+/// capacitor pressure). Collective under MPI (every call).
+class UnsteadyStokes {
+ public:
+  /// @throws flowire::Error (usage) for Navier–Stokes, a body force or traction, Δt,
+  /// ρ or η not positive; as solve_stokes otherwise.
+  UnsteadyStokes(const TetMesh& mesh, const StokesOptions& opt, double dt);
+  ~UnsteadyStokes();
+  UnsteadyStokes(const UnsteadyStokes&) = delete;
+  UnsteadyStokes& operator=(const UnsteadyStokes&) = delete;
+  /// @brief Advance by Δt to the conditions `conditions` (one per group, wall ignored),
+  /// given at the new time. Returns the new field (valid until the next step).
+  const StokesSolution& step(std::span<const GroupCondition> conditions);
+  [[nodiscard]] const StokesSolution& current() const;
+  [[nodiscard]] double time() const;
+  [[nodiscard]] double dt() const;
+  /// @brief Outward flow through group g of the step's unit field for pressure 1 on
+  /// `open_groups()[k]`: [k][g] (the instantaneous resistance of the domain).
+  [[nodiscard]] const std::vector<std::vector<double>>& unit_flux() const;
+  [[nodiscard]] const std::vector<int>& open_groups() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// @brief Outward flux \f$ \int_{\Gamma_g} u\cdot n \f$ of a velocity field through each group.
