@@ -7,6 +7,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "flowire/fem/compare.hpp"
@@ -74,5 +75,38 @@ void BM_FemPulsatileFrames(benchmark::State& state) {
   state.counters["max_split_error"] = r.max_flow_split_error;
 }
 BENCHMARK(BM_FemPulsatileFrames)->Arg(20)->Iterations(1)->Unit(benchmark::kSecond);
+
+}  // namespace
+
+namespace {
+
+// Navier–Stokes on the same Y at an inlet Reynolds number of 600 (inlet flow 15.6 mL/s,
+// outlets at one pressure), mesh size range(0)/10 mm: Newton steps (each an LU
+// factorization), density steps, and the time of the whole comparison.
+void BM_FemNavierStokesY(benchmark::State& state) {
+  using namespace flowire;
+  const auto net = vessels::Network::build(vessels::y_bifurcation({}));
+  fem::FemOptions opt;
+  opt.mesh_size = static_cast<double>(state.range(0)) * 1e-4;
+  opt.equations = fem::Equations::NavierStokes;
+  fem::BoundaryValues bv;
+  bv.inlet_type = fem::BoundaryValues::Inlet::Flow;
+  const double r = 5e-3, eta = 3.5e-3, rho = 1060.0;
+  bv.inlet_flow = 600.0 * eta / (rho * 2 * r) * std::numbers::pi * r * r;
+  bv.outlet_pressure = 12800.0;
+  fem::CompareResult res;
+  for (auto _ : state) {
+    res = fem::compare(net, bv, opt, "");
+    benchmark::DoNotOptimize(res);
+  }
+  state.counters["tets"] = res.tets;
+  state.counters["unknowns"] = res.unknowns;
+  state.counters["reynolds"] = res.reynolds;
+  state.counters["newton_steps"] = res.newton_iterations;
+  state.counters["assemble_s"] = res.assemble_seconds;
+  state.counters["solve_s"] = res.solve_seconds;
+  state.counters["total_s"] = res.total_seconds;
+}
+BENCHMARK(BM_FemNavierStokesY)->Arg(20)->Arg(14)->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
