@@ -250,6 +250,12 @@ void check_fem(const config::Config& c, const flow::FlowSolver* fs) {
   if (frames < 0) throw_input_error(c.where("fem.frames"), "must be 0 (steady only) or a number of frames");
   if (frames > 100000) throw_input_error(c.where("fem.frames"), "too many frames (at most 100000)");
   if (!(c.number("fem.backflow") >= 0.0)) throw_input_error(c.where("fem.backflow"), "must be >= 0");
+  if (c.integer("fem.steps_per_period") < 1 || c.integer("fem.steps_per_period") > 1000000)
+    throw_input_error(c.where("fem.steps_per_period"), "must be between 1 and 1000000");
+  if (c.boolean("fem.time_dependent") && frames == 0)
+    throw_input_error(c.where("fem.time_dependent"), "needs fem.frames > 0 (a pulsatile series)");
+  if (c.boolean("fem.time_dependent") && c.string("fem.equations") == "navier_stokes")
+    throw_input_error(c.where("fem.time_dependent"), "is for equations: stokes");
   if (c.string("fem.equations") == "navier_stokes" && c.string("fem.solver") == "fieldsplit")
     throw_input_error(c.where("fem.solver"),
                       "navier_stokes needs mumps (the fieldsplit Schur approximation ignores convection)");
@@ -269,9 +275,14 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
 #ifdef FLOWIRE_HAVE_FEM
   const flow::FlowSpec& spec = fs.spec();
   const fem::BoundaryValues bv = fem::boundary_values(spec, net, fs.time());
-  if (std::any_of(spec.outlets.begin(), spec.outlets.end(),
-                  [](const flow::OutletBC& o) { return o.type == flow::OutletBC::Type::Rcr; }))
-    warn("fem: RCR outlets are compared quasi-steadily, as the resistance Rp + Rd to Pd");
+  const bool has_rcr = std::any_of(spec.outlets.begin(), spec.outlets.end(),
+                                   [](const flow::OutletBC& o) { return o.type == flow::OutletBC::Type::Rcr; });
+  const bool time_dependent = c.boolean("fem.time_dependent");
+  // Windkessel dynamics on both sides when the network integrates them (rlc model).
+  const bool dynamic_rcr = has_rcr && spec.model == flow::Model::Rlc;
+  if (has_rcr && !dynamic_rcr)
+    warn("fem: RCR outlets are compared quasi-steadily, as the resistance Rp + Rd to Pd (the poiseuille flow model "
+         "has no capacitor; use flow.model: rlc with fem.frames for the windkessel dynamics)");
   fem::FemOptions fo;
   if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
   fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
@@ -295,7 +306,30 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
     times.push_back(period * static_cast<double>(i) / static_cast<double>(frames));
     values.push_back(fem::boundary_values(spec, net, times.back()));
   }
-  const auto p = fem::compare_pulsatile(net, times, values, bv, fs.time(), fo, out.string());
+  fem::DynamicOptions dyn;
+  std::unique_ptr<flow::FlowSolver> periodic;  // the network over enough periods to be periodic
+  const bool dynamic = dynamic_rcr || time_dependent;
+  if (dynamic) {
+    dyn.period = period;
+    dyn.time_dependent = time_dependent;
+    dyn.steps_per_period = static_cast<int>(c.integer("fem.steps_per_period"));
+    dyn.values_at = [&spec, &net](double t) { return fem::boundary_values(spec, net, t); };
+    if (dynamic_rcr)
+      for (const auto& o : spec.outlets)
+        if (o.type == flow::OutletBC::Type::Rcr) dyn.windkessels.push_back({o.node, o.rp, o.c, o.rd, o.distal_pressure});
+    if (spec.model == flow::Model::Rlc) {
+      periodic = flow::make_solver(net, spec);
+      const double start = 30.0 * period;
+      dyn.network_at = [&periodic, &net, start](double t) {
+        fem::NetworkFlow nf;
+        nf.node_pressure.resize(static_cast<size_t>(net.num_nodes()));
+        nf.segment_flow.resize(static_cast<size_t>(net.num_segments()));
+        periodic->solve_at(start + t, nf.node_pressure, nf.segment_flow);
+        return nf;
+      };
+    }
+  }
+  const auto p = fem::compare_pulsatile(net, times, values, bv, fs.time(), fo, out.string(), dynamic ? &dyn : nullptr);
   auto j = fem_result_json(p.steady);
   j["time"] = fs.time();
   j["pulsatile"] = {{"frames", frames},
@@ -306,7 +340,13 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
                     {"max_flow_error", p.max_flow_error},
                     {"factorizations", p.factorizations},
                     {"basis_seconds", p.basis_seconds},
-                    {"frames_seconds", p.frames_seconds}};
+                    {"frames_seconds", p.frames_seconds},
+                    {"dynamic", dynamic},
+                    {"time_dependent", time_dependent},
+                    {"windkessels", dyn.windkessels.size()},
+                    {"periods", p.periods},
+                    {"steps_per_period", p.steps_per_period},
+                    {"periodic_change", p.periodic_change}};
   return j;
 #else
   (void)net, (void)fs, (void)out;

@@ -179,6 +179,10 @@ config::Schema make_schema() {
       "navier_stokes: profile (a Poiseuille velocity profile scaled to the inlet pressure or flow) or traction",
       {"profile", "traction"});
   add("fem.backflow", Type::Number, "1", D::None, "navier_stokes: outlet backflow stabilization coefficient (0: off)");
+  add("fem.time_dependent", Type::Bool, "false", D::None,
+      "frames from time-dependent Stokes (BDF2, inertia included) instead of quasi-steady solves; needs fem.frames");
+  add("fem.steps_per_period", Type::Integer, "200", D::None,
+      "time steps per period of a time-dependent series or of windkessel outlets (rounded up to a multiple of fem.frames)");
   add("fem.samples_per_branch", Type::Integer, "10", D::None, "comparison points per branch");
   add("fem.frames", Type::Integer, "0", D::None,
       "0: steady comparison only; N: also N quasi-steady frames over one inlet period (fem_pulsatile*.csv, fem.pvd)");

@@ -28,6 +28,7 @@
 /// data `velocity` and `pressure`), fem_compare.png (network vs FEM pressure along the
 /// path from the inlet, drawn by flow/fem/scripts/plot_fem_compare.py with matplotlib;
 /// a warning, not an error, when python3/matplotlib is missing).
+#include <functional>
 #include <span>
 #include <string>
 #include <utility>
@@ -155,6 +156,30 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
 /// @throws flowire::Error as build_mesh, solve_stokes and the flow solver do.
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir);
 
+/// @brief An RCR windkessel at an outlet end: C dP_c/dt = Q − (P_c − P_d)/R_d, outlet
+/// pressure P_c + R_p·Q (Q the flow out).
+struct Windkessel {
+  int node = -1;
+  double rp = 0.0, c = 0.0, rd = 0.0, pd = 0.0;
+};
+
+/// @brief Time integration of a pulsatile FEM series (see compare_pulsatile).
+struct DynamicOptions {
+  /// Boundary values at any time of the period (inlet waveform; the outlets listed in
+  /// `windkessels` are replaced by their windkessels).
+  std::function<BoundaryValues(double)> values_at;
+  /// The network solution at a time of the period, in its periodic state (e.g. the rlc
+  /// model run over enough periods); empty: the quasi-steady Poiseuille network of the
+  /// frame's boundary values.
+  std::function<NetworkFlow(double)> network_at;
+  std::vector<Windkessel> windkessels;
+  double period = 0.0;             ///< s, > 0; the frame times are k·period/N
+  bool time_dependent = false;     ///< time-dependent Stokes (UnsteadyStokes) instead of quasi-steady frames
+  int steps_per_period = 200;      ///< at least; rounded up to a multiple of the frames
+  int max_periods = 40;
+  double periodic_tolerance = 1e-5;  ///< max change of the frames' outlet flows over a period / max flow
+};
+
 /// @brief A pulsatile series of quasi-steady comparisons.
 struct PulsatileResult {
   CompareResult steady;                ///< the comparison at `steady_time` (the fem_compare.* files)
@@ -164,6 +189,9 @@ struct PulsatileResult {
   int factorizations = 0;              ///< FEM matrix factorizations (1 for Stokes)
   double basis_seconds = 0.0;          ///< assembly, factorization and unit solves
   double frames_seconds = 0.0;         ///< combining the frames and comparing them
+  int periods = 0;                     ///< dynamic: periods integrated until periodic
+  int steps_per_period = 0;            ///< dynamic: time steps per period
+  double periodic_change = 0.0;        ///< dynamic: the last period's change (see DynamicOptions)
 };
 
 /// @brief Quasi-steady FEM frames at `times` with the boundary values `frames[i]`, and the
@@ -175,8 +203,15 @@ struct PulsatileResult {
 /// columns of fem_compare.csv), fem_pulsatile_outlets.csv (`time`, then the columns of
 /// fem_outlets.csv), and with `write_vtu` fem.pvd + fem_NNNN.vtu.
 /// @throws flowire::Error (usage) for inconsistent frames, and as `compare`.
+/// With `dyn` (Stokes only), the frames come from a time integration instead: BDF2 with
+/// `steps_per_period` steps, each outlet in `dyn->windkessels` carrying its capacitor
+/// (BDF2 too: at each step a resistance R_p + 1/(C·D) to a pressure set by the history,
+/// D = 3/(2Δt) + 1/(R_d C)), quasi-steady 3D fields or, with `time_dependent`,
+/// UnsteadyStokes; period after period until the frames' outlet flows change by less than
+/// `periodic_tolerance` (else a numerical error). The frames are those of the last period.
 PulsatileResult compare_pulsatile(const Network& net, std::span<const double> times,
                                   std::span<const BoundaryValues> frames, const BoundaryValues& steady,
-                                  double steady_time, const FemOptions& opt, const std::string& out_dir);
+                                  double steady_time, const FemOptions& opt, const std::string& out_dir,
+                                  const DynamicOptions* dyn = nullptr);
 
 }  // namespace flowire::fem

@@ -1,0 +1,129 @@
+// Windkessel (RCR) outlets in the dynamic FEM series against the exact steady-periodic
+// solution of the circuit. A straight tube with a sinusoidal inlet pressure P̂ e^{iωt} and
+// one RCR outlet: with the tube a resistance R_t (Hagen–Poiseuille) the outlet flow is
+// Q̂ = P̂ / Z, Z = R_t + R_p + R_d/(1 + iωR_dC) (the capacitor in parallel with R_d). With
+// time-dependent Stokes the tube is Womersley's impedance instead: Z_t = 8ηL/(πR⁴) divided
+// by Womersley's Q/Q_P. Asserted: amplitude and phase, and order 2 in the time step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <numbers>
+#include <vector>
+
+#include "fem_test_cases.hpp"
+#include "flowire/fem/compare.hpp"
+#include "flowire_test.hpp"
+
+namespace flowire::fem {
+namespace {
+
+using cd = std::complex<double>;
+constexpr double kPi = std::numbers::pi;
+constexpr double kR = 2e-3, kL = 10e-3, kEta = 3.5e-3, kRho = 1060.0;
+constexpr double kP0 = 200.0, kAmp = 100.0, kPeriod = 0.8;
+
+cd bessel_j(int n, cd z) {
+  cd term = std::pow(z / 2.0, n);
+  for (int k = 1; k <= n; ++k) term /= static_cast<double>(k);
+  cd sum = term;
+  for (int k = 1; k < 200; ++k) {
+    term *= -(z / 2.0) * (z / 2.0) / (static_cast<double>(k) * static_cast<double>(k + n));
+    sum += term;
+    if (std::abs(term) < 1e-17 * std::abs(sum)) break;
+  }
+  return sum;
+}
+
+struct TubeWindkessel {
+  vessels::Network net = test::tube(kR, kL);
+  int outlet = -1;
+  Windkessel wk;
+  TubeWindkessel() {
+    for (int e : net.ends())
+      if (e != net.widest_end() || outlet >= 0) outlet = e;
+    const double rt = 8 * kEta * kL / (kPi * std::pow(kR, 4));
+    // R_d C = 0.2 s against ω = 7.85 rad/s: the capacitor takes most of the oscillation.
+    wk = {outlet, 0.5 * rt, 0.2 / (5 * rt), 5 * rt, 20.0};
+  }
+  [[nodiscard]] BoundaryValues at(double t) const {
+    BoundaryValues bv;
+    bv.inlet_pressure = kP0 + kAmp * std::sin(2 * kPi * t / kPeriod);
+    bv.outlets.push_back({outlet, OutletValue::Type::Resistance, wk.pd, wk.rp + wk.rd});
+    bv.viscosity = kEta;
+    bv.density = kRho;
+    return bv;
+  }
+};
+
+/// Complex amplitude of the outlet flow (e^{iωt} part) over the last period of the series.
+cd outlet_amplitude(const TubeWindkessel& s, int steps, bool time_dependent, int frames = 16) {
+  std::vector<double> times;
+  std::vector<BoundaryValues> values;
+  for (int i = 0; i < frames; ++i) {
+    times.push_back(kPeriod * i / frames);
+    values.push_back(s.at(times.back()));
+  }
+  FemOptions opt;
+  opt.size_factor = 0.35;
+  DynamicOptions dyn;
+  dyn.period = kPeriod;
+  dyn.values_at = [&s](double t) { return s.at(t); };
+  dyn.windkessels = {s.wk};
+  dyn.steps_per_period = steps;
+  dyn.time_dependent = time_dependent;
+  dyn.periodic_tolerance = 1e-9;
+  const PulsatileResult r = compare_pulsatile(s.net, times, values, values[0], 0.0, opt, "", &dyn);
+  const double omega = 2 * kPi / kPeriod;
+  cd amp = 0.0;
+  for (const auto& f : r.frames)
+    for (const auto& o : f.outlets)
+      if (o.node == s.outlet) amp += o.flow_fem * 2.0 * cd(0.0, 1.0) * std::exp(cd(0.0, -omega * f.time)) / double(frames);
+  std::printf("%s, %d steps per period: %d periods to periodic (change %.1e), Q̂ = %.5e ∠ %.3f°\n",
+              time_dependent ? "time-dependent" : "quasi-steady", r.steps_per_period, r.periods, r.periodic_change,
+              std::abs(amp), std::arg(amp) * 180 / kPi);
+  return amp;
+}
+
+cd circuit_flow(const TubeWindkessel& s, cd tube_impedance) {
+  const double omega = 2 * kPi / kPeriod;
+  const cd z = tube_impedance + s.wk.rp + s.wk.rd / (1.0 + cd(0.0, omega * s.wk.rd * s.wk.c));
+  return kAmp / z;
+}
+
+TEST(FemWindkessel, QuasiSteadyTubeFollowsTheCircuitAtOrderTwo) {
+  const TubeWindkessel s;
+  const cd exact = circuit_flow(s, 8 * kEta * kL / (kPi * std::pow(kR, 4)));
+  const int steps[3] = {32, 64, 512};
+  cd q[3];
+  for (int k = 0; k < 3; ++k) q[k] = outlet_amplitude(s, steps[k], false);
+  std::printf("circuit: Q̂ = %.5e ∠ %.3f°; finest relative error %.2e\n", std::abs(exact), std::arg(exact) * 180 / kPi,
+              std::abs(q[2] / exact - 1.0));
+  // The capacitor shifts the outlet flow ahead of the inlet pressure by tens of degrees.
+  EXPECT_GT(std::arg(exact) * 180 / kPi, 20.0);
+  EXPECT_LT(std::abs(q[2] / exact - 1.0), testing::tol(2e-3));
+  const double order = std::log(std::abs(q[0] / q[2] - 1.0) / std::abs(q[1] / q[2] - 1.0)) / std::log(2.0);
+  std::printf("BDF2 capacitor: observed order %.2f\n", order);
+  EXPECT_GT(order, 1.8);
+}
+
+TEST(FemWindkessel, TimeDependentTubeFollowsWomersleyAndTheCircuit) {
+  const TubeWindkessel s;
+  const double omega = 2 * kPi / kPeriod;
+  const double alpha = kR * std::sqrt(omega * kRho / kEta);
+  const cd lam = std::sqrt(cd(0.0, -1.0)) * alpha;
+  const cd ratio = 8.0 / (cd(0.0, 1.0) * alpha * alpha) * (1.0 - 2.0 * bessel_j(1, lam) / (lam * bessel_j(0, lam)));
+  const cd exact = circuit_flow(s, 8 * kEta * kL / (kPi * std::pow(kR, 4)) / ratio);
+  const cd quasi = circuit_flow(s, 8 * kEta * kL / (kPi * std::pow(kR, 4)));
+  const cd q = outlet_amplitude(s, 320, true);
+  std::printf("α = %.2f: exact Q̂ = %.5e ∠ %.3f° (quasi-steady tube %.5e ∠ %.3f°); FEM error %.2e\n", alpha,
+              std::abs(exact), std::arg(exact) * 180 / kPi, std::abs(quasi), std::arg(quasi) * 180 / kPi,
+              std::abs(q / exact - 1.0));
+  EXPECT_LT(std::abs(q / exact - 1.0), testing::tol(3e-3));
+  // The tube's inertia is visible: the quasi-steady answer is farther off.
+  EXPECT_GT(std::abs(quasi / exact - 1.0), 3 * std::abs(q / exact - 1.0));
+}
+
+}  // namespace
+}  // namespace flowire::fem
