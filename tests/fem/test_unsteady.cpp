@@ -23,24 +23,11 @@ using cd = std::complex<double>;
 constexpr double kPi = std::numbers::pi;
 constexpr double kR = 2e-3, kL = 10e-3, kEta = 3.5e-3, kRho = 1060.0, kAmp = 10.0;
 
-/// Bessel function J_n of a complex argument by its power series (|z| ≤ 10 here).
-cd bessel_j(int n, cd z) {
-  cd term = std::pow(z / 2.0, n);
-  for (int k = 1; k <= n; ++k) term /= static_cast<double>(k);
-  cd sum = term;
-  for (int k = 1; k < 200; ++k) {
-    term *= -(z / 2.0) * (z / 2.0) / (static_cast<double>(k) * static_cast<double>(k + n));
-    sum += term;
-    if (std::abs(term) < 1e-17 * std::abs(sum)) break;
-  }
-  return sum;
-}
-
 /// Womersley's flow for the pressure gradient Ĝ e^{iωt}, over Poiseuille's πR⁴Ĝ/(8η):
 /// Q̂/Q_P = (8/(iα²)) (1 − 2J₁(Λ)/(Λ J₀(Λ))), Λ = √(−i) α.
 cd womersley_ratio(double alpha) {
   const cd lam = std::sqrt(cd(0.0, -1.0)) * alpha;
-  return 8.0 / (cd(0.0, 1.0) * alpha * alpha) * (1.0 - 2.0 * bessel_j(1, lam) / (lam * bessel_j(0, lam)));
+  return 8.0 / (cd(0.0, 1.0) * alpha * alpha) * (1.0 - 2.0 * test::bessel_j(1, lam) / (lam * test::bessel_j(0, lam)));
 }
 
 TEST(FemUnsteady, WomersleyRatioMatchesThePublishedTable) {

@@ -24,18 +24,6 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kR = 2e-3, kL = 10e-3, kEta = 3.5e-3, kRho = 1060.0;
 constexpr double kP0 = 200.0, kAmp = 100.0, kPeriod = 0.8;
 
-cd bessel_j(int n, cd z) {
-  cd term = std::pow(z / 2.0, n);
-  for (int k = 1; k <= n; ++k) term /= static_cast<double>(k);
-  cd sum = term;
-  for (int k = 1; k < 200; ++k) {
-    term *= -(z / 2.0) * (z / 2.0) / (static_cast<double>(k) * static_cast<double>(k + n));
-    sum += term;
-    if (std::abs(term) < 1e-17 * std::abs(sum)) break;
-  }
-  return sum;
-}
-
 struct TubeWindkessel {
   vessels::Network net = test::tube(kR, kL);
   int outlet = -1;
@@ -113,7 +101,7 @@ TEST(FemWindkessel, TimeDependentTubeFollowsWomersleyAndTheCircuit) {
   const double omega = 2 * kPi / kPeriod;
   const double alpha = kR * std::sqrt(omega * kRho / kEta);
   const cd lam = std::sqrt(cd(0.0, -1.0)) * alpha;
-  const cd ratio = 8.0 / (cd(0.0, 1.0) * alpha * alpha) * (1.0 - 2.0 * bessel_j(1, lam) / (lam * bessel_j(0, lam)));
+  const cd ratio = 8.0 / (cd(0.0, 1.0) * alpha * alpha) * (1.0 - 2.0 * test::bessel_j(1, lam) / (lam * test::bessel_j(0, lam)));
   const cd exact = circuit_flow(s, 8 * kEta * kL / (kPi * std::pow(kR, 4)) / ratio);
   const cd quasi = circuit_flow(s, 8 * kEta * kL / (kPi * std::pow(kR, 4)));
   const cd q = outlet_amplitude(s, 320, true);
