@@ -413,7 +413,7 @@ vessels::Network build_scene_network(const config::Config& c) {
   }
 }
 
-RunResult run_scene(const config::Config& c) {
+RunResult run_scene(const config::Config& c, const RunOptions& options) {
   const auto t_start = Clock::now();
   (void)take_warnings();
   RunResult result;
@@ -606,6 +606,7 @@ RunResult run_scene(const config::Config& c) {
         if (wire_out) wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
       }
       if (series && (step + 1) % out_every == 0) record(t1);
+      if (options.progress) options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
     }
     if (!series && steps > 0) record(static_cast<double>(steps) * dt);
     s["steps"] = steps;
