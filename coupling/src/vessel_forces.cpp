@@ -35,6 +35,7 @@ void VesselForces::ensure_size(int n) {
     force_.resize(static_cast<size_t>(n), Vec3::Zero());
     drag_force_.resize(static_cast<size_t>(n), Vec3::Zero());
     contact_force_.resize(static_cast<size_t>(n), Vec3::Zero());
+    reynolds_.resize(static_cast<size_t>(n), 0.0);
     cur_normal_force_.resize(static_cast<size_t>(n), 0.0);
     cur_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
     lag_normal_force_.resize(static_cast<size_t>(n), 0.0);
@@ -160,7 +161,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       in.v = rod.velocity(i);
       in.vessel_radius = s >= 0 ? net.segment(s).radius : 0.0;
       const auto d = blood_drag(drag_, in);
-      stats_.max_reynolds = std::max(stats_.max_reynolds, d.reynolds_normal);
+      reynolds_[k] = d.reynolds_normal;
       out.add_force(i, d.force);
       out.add_velocity_jacobian(i, d.dfdv);
       force_[k] += d.force;
@@ -174,6 +175,10 @@ void VesselForces::end_step(const rod::RodView& rod) {
   const int free = std::min(rod.first_clamped_vertex, rod.vertex_count());
   ensure_size(rod.vertex_count());
   lagged_ = contact_.enabled;
+  // The drag's Reynolds number of the accepted state (the last evaluation), not of the
+  // Newton and line-search trials on the way.
+  for (int i = 0; i < free && i < static_cast<int>(reynolds_.size()); ++i)
+    stats_.max_reynolds = std::max(stats_.max_reynolds, reynolds_[static_cast<size_t>(i)]);
   for (int i = 0; i < rod.vertex_count(); ++i) lag_normal_force_[static_cast<size_t>(i)] = 0.0;
   for (int i = 0; i < free; ++i) {
     const int s = segment_[static_cast<size_t>(i)];

@@ -1,5 +1,6 @@
 #include "flowire/flow/profile.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace flowire::flow {
@@ -51,6 +52,35 @@ double womersley_velocity(std::complex<double> flow_amplitude, double radius, do
   const std::complex<double> j0 = bessel_j0(lambda);
   const std::complex<double> shape = (1.0 - bessel_j0(lambda * rho) / j0) / (1.0 - 2.0 * bessel_j1(lambda) / (lambda * j0));
   return (flow_amplitude / area * shape * phase).real();
+}
+
+WomersleyShape::WomersleyShape(double alpha) : alpha_(alpha) {
+  value_.resize(kIntervals + 1);
+  slope_.resize(kIntervals + 1);
+  for (int k = 0; k <= kIntervals; ++k) {
+    const double rho = static_cast<double>(k) / kIntervals;
+    if (alpha < 1e-3) {  // the laminar limit, 2(1 − ρ²)
+      value_[static_cast<size_t>(k)] = 2.0 * (1.0 - rho * rho);
+      slope_[static_cast<size_t>(k)] = -4.0 * rho;
+      continue;
+    }
+    const std::complex<double> lambda = alpha * std::polar(1.0, 0.75 * kPi);
+    const std::complex<double> j0 = bessel_j0(lambda);
+    const std::complex<double> den = 1.0 - 2.0 * bessel_j1(lambda) / (lambda * j0);
+    value_[static_cast<size_t>(k)] = (1.0 - bessel_j0(lambda * rho) / j0) / den;
+    slope_[static_cast<size_t>(k)] = lambda * bessel_j1(lambda * rho) / (j0 * den);
+  }
+}
+
+std::complex<double> WomersleyShape::operator()(double rho) const {
+  if (!(rho < 1.0)) return 0.0;
+  const double x = std::max(rho, 0.0) * kIntervals;
+  const int k = std::min(static_cast<int>(x), kIntervals - 1);
+  const double t = x - k, h = 1.0 / kIntervals;
+  const double t2 = t * t, t3 = t2 * t;
+  const auto i = static_cast<size_t>(k);
+  return (2 * t3 - 3 * t2 + 1) * value_[i] + (t3 - 2 * t2 + t) * h * slope_[i] + (-2 * t3 + 3 * t2) * value_[i + 1] +
+         (t3 - t2) * h * slope_[i + 1];
 }
 
 }  // namespace flowire::flow

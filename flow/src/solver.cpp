@@ -85,10 +85,19 @@ double FlowSolver::profile_velocity(int segment, double rho2, double t) const {
     return 2.0 * q / area * (1.0 - rho2);
   }
   const auto s = static_cast<size_t>(segment);
-  const double alpha = womersley_number(r, omega_, spec_.density, spec_.viscosity);
-  // A sin(ωt) = Re[-i A e^{iωt}]
-  return 2.0 * harmonic_mean_[s] / area * (1.0 - rho2) +
-         womersley_velocity(std::complex<double>(0.0, -harmonic_amp_[s]), r, alpha, std::sqrt(rho2), omega_ * t);
+  if (!shape_[s]) {
+    const double alpha = womersley_number(r, omega_, spec_.density, spec_.viscosity);
+    for (const auto& other : shape_)  // a segment of the same α already has one
+      if (other && other->alpha() == alpha) {
+        shape_[s] = other;
+        break;
+      }
+    if (!shape_[s]) shape_[s] = std::make_shared<const WomersleyShape>(alpha);
+  }
+  // A sin(ωt) = Re[-i A e^{iωt}]: u = Re[(−iA)/(πr²) S(ρ) e^{iωt}]
+  const std::complex<double> oscillating =
+      std::complex<double>(0.0, -harmonic_amp_[s]) / area * (*shape_[s])(std::sqrt(rho2)) * std::polar(1.0, omega_ * t);
+  return 2.0 * harmonic_mean_[s] / area * (1.0 - rho2) + oscillating.real();
 }
 
 double FlowSolver::axial_velocity_at(int segment, const Vec3& p) const { return axial_velocity_at(segment, p, time_); }
@@ -125,6 +134,7 @@ void FlowSolver::prepare_profile() {
   const auto ne = static_cast<size_t>(net_.num_segments());
   harmonic_mean_.resize(ne);
   harmonic_amp_.resize(ne);
+  shape_.assign(ne, nullptr);
   for (size_t s = 0; s < ne; ++s) {
     const double q0 = segment_flow_at(static_cast<int>(s), 0.0);
     const double q1 = segment_flow_at(static_cast<int>(s), 0.25 * period);

@@ -342,6 +342,23 @@ TEST(FlowProfile, BesselAndWomersleyTableOfReference5) {
   }
 }
 
+TEST(FlowProfile, TabulatedWomersleyShapeEqualsTheBesselSeries) {
+  // Between its nodes the table interpolates; it must agree with the series everywhere,
+  // including inside the Stokes layer at the wall at aortic α.
+  for (double alpha : {0.0, 0.5, 3.0, 10.0, 17.0, 25.0}) {
+    const WomersleyShape shape(alpha);
+    double worst = 0.0;
+    for (int i = 0; i <= 5000; ++i) {
+      const double rho = i / 5000.0 * (1.0 - 1e-12);
+      const double direct = womersley_velocity({1.0, 0.0}, 1.0, alpha, rho, 0.0);
+      const double direct_im = womersley_velocity({1.0, 0.0}, 1.0, alpha, rho, -0.5 * M_PI);
+      const std::complex<double> table = shape(rho) / M_PI;
+      worst = std::max({worst, std::abs(table.real() - direct), std::abs(table.imag() - direct_im)});
+    }
+    EXPECT_LT(worst, 1e-7 * 2.0 / M_PI) << alpha;  // of the laminar centre value 2/π
+  }
+}
+
 TEST(FlowProfile, WomersleyProfileOptionCarriesTheSegmentFlow) {
   const Network net = tube(0.1, 2e-3, 2);
   FlowSpec spec = pressure_spec(net, 0, Waveform::sine(1200.0, 800.0, 0.5), {{net.num_nodes() - 1, 0.0}});

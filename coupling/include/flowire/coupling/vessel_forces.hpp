@@ -40,7 +40,7 @@ struct InteractionStats {
   double max_penetration = 0.0;        ///< over accepted steps [m]
   double max_outside = 0.0;            ///< max over accepted steps of (wall distance of a vertex centre) [m]
   double seconds_lookup = 0.0, seconds_contact = 0.0, seconds_drag = 0.0;
-  double max_reynolds = 0.0;           ///< largest normal Reynolds number of the drag law [-]
+  double max_reynolds = 0.0;           ///< largest normal Reynolds number of the drag law over accepted steps [-]
 };
 
 class VesselForces : public rod::ExternalForce {
@@ -87,6 +87,7 @@ class VesselForces : public rod::ExternalForce {
   VelocityField velocity_;
   std::vector<int> segment_;
   std::vector<vessels::Vec3> fluid_, force_, drag_force_, contact_force_;
+  std::vector<double> reynolds_;  ///< (vertices) normal Reynolds number at the last evaluation
   int free_ = 0;  ///< free vertices at the last evaluation
   std::vector<double> cur_normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;

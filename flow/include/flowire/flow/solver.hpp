@@ -26,6 +26,7 @@
 #include <span>
 #include <string>
 
+#include "flowire/flow/profile.hpp"
 #include "flowire/flow/spec.hpp"
 
 namespace flowire::flow {
@@ -108,6 +109,9 @@ void finalize_petsc();
   FlowSpec spec_;
   std::vector<Vec3> axis_;          // (num_segments) unit axis node_from -> node_to
   std::vector<double> harmonic_mean_, harmonic_amp_;  // (num_segments) when the Womersley profile is on
+  /// (num_segments) the Womersley shape of each segment's α, tabulated the first time a
+  /// velocity in that segment is asked for (segments of one radius share one table)
+  mutable std::vector<std::shared_ptr<const WomersleyShape>> shape_;
   std::vector<double> resistance_;  // (num_segments)
   double time_ = 0.0;
   double omega_ = 0.0;              // angular frequency of the spec's cycle
