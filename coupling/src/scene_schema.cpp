@@ -60,7 +60,11 @@ config::Schema make_schema() {
   add("flow.wall", Type::Section, "", D::None, "rlc: the vessel wall (compliance C = 3 pi r^3 l / (2 E h))");
   add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus");
   add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
-  add("flow.profile", Type::Enum, "laminar", D::None, "velocity profile across a segment", {"laminar", "womersley"});
+  add("flow.profile", Type::Enum, "laminar", D::None,
+      "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
+      "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
+      "docs/blood-drag.md)",
+      {"laminar", "womersley"});
   add("flow.inlet", Type::Section, "{}", D::None, "inlet boundary condition");
   add("flow.inlet.node", Type::StringOrInteger, "", D::None, "inlet node id (default: the network end with the largest radius)");
   for (const char* what : {"pressure", "flow"}) {

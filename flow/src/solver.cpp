@@ -80,24 +80,34 @@ double FlowSolver::profile_velocity(int segment, double rho2, double t) const {
   const auto& seg = net_.segment(segment);
   const double r = seg.radius;
   const double area = kPi * r * r;
-  if (harmonic_mean_.empty()) {
-    const double q = t == time_ ? segment_flow(segment) : segment_flow_at(segment, t);
-    return 2.0 * q / area * (1.0 - rho2);
-  }
-  const auto s = static_cast<size_t>(segment);
-  if (!shape_[s]) {
+  const double q = t == time_ ? segment_flow(segment) : segment_flow_at(segment, t);
+  const double laminar = 2.0 / area * (1.0 - rho2);  // the parabola per unit flow
+  double u = laminar * q;
+  if (harmonic_.empty()) return u;
+  // Each harmonic swaps its quasi-steady parabola for its Womersley profile.
+  const auto base = static_cast<size_t>(segment) * kHarmonics;
+  if (!shape_ready_[static_cast<size_t>(segment)]) {
+    shape_ready_[static_cast<size_t>(segment)] = 1;
     const double alpha = womersley_number(r, omega_, spec_.density, spec_.viscosity);
-    for (const auto& other : shape_)  // a segment of the same α already has one
-      if (other && other->alpha() == alpha) {
-        shape_[s] = other;
-        break;
-      }
-    if (!shape_[s]) shape_[s] = std::make_shared<const WomersleyShape>(alpha);
+    for (int n = 1; n <= kHarmonics; ++n) {
+      if (harmonic_[base + static_cast<size_t>(n - 1)] == 0.0) continue;
+      const double a_n = alpha * std::sqrt(static_cast<double>(n));
+      auto& cached = shape_by_alpha_[a_n];
+      if (!cached) cached = std::make_shared<const WomersleyShape>(a_n);
+      shape_[base + static_cast<size_t>(n - 1)] = cached;
+    }
   }
-  // A sin(ωt) = Re[-i A e^{iωt}]: u = Re[(−iA)/(πr²) S(ρ) e^{iωt}]
-  const std::complex<double> oscillating =
-      std::complex<double>(0.0, -harmonic_amp_[s]) / area * (*shape_[s])(std::sqrt(rho2)) * std::polar(1.0, omega_ * t);
-  return 2.0 * harmonic_mean_[s] / area * (1.0 - rho2) + oscillating.real();
+  const double rho = std::sqrt(rho2);
+  const std::complex<double> step = std::polar(1.0, omega_ * t);
+  std::complex<double> phase = 1.0;
+  for (int n = 1; n <= kHarmonics; ++n) {
+    phase *= step;  // e^{inωt}
+    const auto k = base + static_cast<size_t>(n - 1);
+    if (!shape_[k]) continue;
+    const std::complex<double> qn = harmonic_[k] * phase;
+    u += ((*shape_[k])(rho) * qn).real() / area - laminar * qn.real();
+  }
+  return u;
 }
 
 double FlowSolver::axial_velocity_at(int segment, const Vec3& p) const { return axial_velocity_at(segment, p, time_); }
@@ -120,27 +130,41 @@ Vec3 FlowSolver::velocity_at(int segment, const Vec3& p, double t) const {
 
 void FlowSolver::prepare_profile() {
   if (spec_.profile != Profile::Womersley) return;
-  bool sines = omega_ > 0.0 && spec_.model == Model::Poiseuille;
   const double period = spec_.cycle();
-  for (const auto& in : spec_.inlets)
-    if (!(in.waveform.is_constant() || (in.waveform.kind == Waveform::Kind::Sine && in.waveform.period == period)))
-      sines = false;
-  if (!sines) {
-    warn("flow.profile: womersley needs the quasi-steady model driven by sine waveforms of one period; "
+  bool periodic = omega_ > 0.0 && spec_.model == Model::Poiseuille;
+  for (const auto& in : spec_.inlets) {
+    const double c = in.waveform.cycle();
+    if (!(in.waveform.is_constant() || std::abs(c - period) <= 1e-12 * period)) periodic = false;
+  }
+  if (!periodic) {
+    warn("flow.profile: womersley needs the quasi-steady model driven by periodic waveforms of one period; "
          "using the laminar profile");
     return;
   }
-  // Q(t) = mean + A sin(ωt): sin = 0 at t = 0, 1 at t = T/4.
+  // Q̂_n = (2/M) Σ_m Q(t_m) e^{−inωt_m} over one period (the quasi-steady model gives Q at any t).
   const auto ne = static_cast<size_t>(net_.num_segments());
-  harmonic_mean_.resize(ne);
-  harmonic_amp_.resize(ne);
-  shape_.assign(ne, nullptr);
-  for (size_t s = 0; s < ne; ++s) {
-    const double q0 = segment_flow_at(static_cast<int>(s), 0.0);
-    const double q1 = segment_flow_at(static_cast<int>(s), 0.25 * period);
-    harmonic_mean_[s] = q0;
-    harmonic_amp_[s] = q1 - q0;
+  harmonic_.assign(ne * kHarmonics, 0.0);
+  std::vector<double> magnitude(ne, 0.0);
+  for (int m = 0; m < kSamplesPerPeriod; ++m) {
+    const double tm = period * m / kSamplesPerPeriod;
+    const std::complex<double> step = std::polar(1.0, -omega_ * tm);
+    for (size_t s = 0; s < ne; ++s) {
+      const double q = segment_flow_at(static_cast<int>(s), tm);
+      magnitude[s] = std::max(magnitude[s], std::abs(q));
+      std::complex<double> phase = 1.0;
+      for (int n = 1; n <= kHarmonics; ++n) {
+        phase *= step;
+        harmonic_[s * kHarmonics + static_cast<size_t>(n - 1)] += (2.0 / kSamplesPerPeriod) * q * phase;
+      }
+    }
   }
+  // A harmonic the waveform does not have (a sine has one) is left to the parabola.
+  for (size_t s = 0; s < ne; ++s)
+    for (int n = 0; n < kHarmonics; ++n)
+      if (std::abs(harmonic_[s * kHarmonics + static_cast<size_t>(n)]) <= 1e-9 * magnitude[s])
+        harmonic_[s * kHarmonics + static_cast<size_t>(n)] = 0.0;
+  shape_.assign(ne * kHarmonics, nullptr);
+  shape_ready_.assign(ne, 0);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -359,6 +359,42 @@ TEST(FlowProfile, TabulatedWomersleyShapeEqualsTheBesselSeries) {
   }
 }
 
+TEST(FlowProfile, WomersleyProfileOfAMeasuredWaveformIsTheSumOfItsHarmonics) {
+  // A table inlet (as a measured waveform arrives) with a first and a third harmonic:
+  // p(t) = p0 + p1 sin ωt + p3 cos 3ωt. In a tube the quasi-steady flow is p(t)/R, so the
+  // exact velocity is the parabola of the mean plus the Womersley solutions of α and α√3,
+  // summed here with the Bessel series (womersley_velocity), not the solver's tables.
+  const double r = 4e-3, len = 0.1, period = 0.8, p0 = 1000, p1 = 600, p3 = 250;
+  const Network net = tube(len, r, 2);
+  const double omega = 2 * M_PI / period;
+  std::vector<double> times, values;
+  for (int i = 0; i <= 2000; ++i) {
+    const double t = period * i / 2000;
+    times.push_back(t);
+    values.push_back(p0 + p1 * std::sin(omega * t) + p3 * std::cos(3 * omega * t));
+  }
+  FlowSpec spec = pressure_spec(net, 0, Waveform::table(times, values), {{net.num_nodes() - 1, 0.0}});
+  spec.profile = Profile::Womersley;
+  auto s = make_solver(net, spec);
+  const double R = 8 * spec.viscosity * len / (M_PI * std::pow(r, 4));
+  const double alpha = womersley_number(r, omega, spec.density, spec.viscosity);
+  const Vec3 a = net.node(0);
+  double worst = 0.0, scale = 0.0;
+  for (double t : {0.0, 0.13, 0.37, 0.61}) {
+    s->advance(t);
+    for (double rho : {0.0, 0.3, 0.7, 0.9, 0.97}) {
+      // sin ωt = Re[−i e^{iωt}], cos 3ωt = Re[e^{3iωt}]
+      const double exact = 2 * p0 / R / (M_PI * r * r) * (1 - rho * rho) +
+                           womersley_velocity({0.0, -p1 / R}, r, alpha, rho, omega * t) +
+                           womersley_velocity({p3 / R, 0.0}, r, alpha * std::sqrt(3.0), rho, 3 * omega * t);
+      const double u = s->axial_velocity_at(0, a + Vec3(0, rho * r, 0));
+      worst = std::max(worst, std::abs(u - exact));
+      scale = std::max(scale, std::abs(exact));
+    }
+  }
+  EXPECT_LT(worst, 1e-4 * scale) << "alpha " << alpha;
+}
+
 TEST(FlowProfile, WomersleyProfileOptionCarriesTheSegmentFlow) {
   const Network net = tube(0.1, 2e-3, 2);
   FlowSpec spec = pressure_spec(net, 0, Waveform::sine(1200.0, 800.0, 0.5), {{net.num_nodes() - 1, 0.0}});

@@ -22,6 +22,8 @@
 /// Model::Rlc: segments also carry inertance and nodes compliance; `advance` integrates
 /// in time (see rlc.hpp); it has its own sparse LU and ignores `spec.solver`.
 #include <chrono>
+#include <complex>
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -101,17 +103,23 @@ void finalize_petsc();
   [[nodiscard]] double profile_velocity(int segment, double rho2, double t) const;
 
   friend std::unique_ptr<FlowSolver> make_solver(const Network&, FlowSpec);
-  /// Womersley profile: split every segment's flow into mean + A·sin(ωt) (quasi-steady
-  /// model with sine sources of one period); otherwise the laminar profile is used.
+  /// Womersley profile: the first harmonics of every segment's flow over one period
+  /// (quasi-steady model with periodic sources of one period); otherwise the laminar profile.
   void prepare_profile();
+  static constexpr int kHarmonics = 10;         ///< harmonics with their own Womersley profile
+  static constexpr int kSamplesPerPeriod = 128; ///< samples of Q(t) for the harmonics
 
   const Network& net_;
   FlowSpec spec_;
   std::vector<Vec3> axis_;          // (num_segments) unit axis node_from -> node_to
-  std::vector<double> harmonic_mean_, harmonic_amp_;  // (num_segments) when the Womersley profile is on
-  /// (num_segments) the Womersley shape of each segment's α, tabulated the first time a
-  /// velocity in that segment is asked for (segments of one radius share one table)
+  /// (num_segments × kHarmonics) Q̂_n of each segment, Q(t) ≈ Q̄ + Σ Re[Q̂_n e^{inωt}];
+  /// empty unless the Womersley profile is on
+  std::vector<std::complex<double>> harmonic_;
+  /// (num_segments × kHarmonics) the Womersley shape of α√n, tabulated the first time a
+  /// velocity in that segment is asked for; null for a negligible harmonic
   mutable std::vector<std::shared_ptr<const WomersleyShape>> shape_;
+  mutable std::vector<char> shape_ready_;  ///< (num_segments) its shapes are made
+  mutable std::map<double, std::shared_ptr<const WomersleyShape>> shape_by_alpha_;  ///< shared by equal α
   std::vector<double> resistance_;  // (num_segments)
   double time_ = 0.0;
   double omega_ = 0.0;              // angular frequency of the spec's cycle

@@ -81,8 +81,11 @@ enum class SolverKind { Superposition, DenseInverse, Sparse, Petsc };
 /// Womersley flow amplitude and phase within about 1–4 % up to α ≈ 4.
 enum class Inertance { Poiseuille, Womersley };
 /// @brief Velocity profile reported by velocity queries.
-/// Laminar: \f$ u(d) = \frac{2Q}{\pi r^2}(1 - d^2/r^2) \f$; Womersley: the mean flow carries
-/// the parabola and each sinusoidal flow harmonic the Womersley profile of its α.
+/// Laminar: \f$ u(d) = \frac{2Q}{\pi r^2}(1 - d^2/r^2) \f$; Womersley (quasi-steady model,
+/// periodic inlets of one period T, sine or table): each segment's flow over one period is
+/// split into its mean and its first harmonics Q̂_n (n = 1..10, 128 samples a period); the
+/// mean carries the parabola, harmonic n the Womersley profile of α√n, and what the ten
+/// harmonics leave of Q(t) the parabola (quasi-steady), so the profile always carries Q(t).
 enum class Profile { Laminar, Womersley };
 
 std::string_view to_string(Model m);
