@@ -31,6 +31,8 @@ Vec3 VesselForces::total_drag() const {
 void VesselForces::ensure_size(int n) {
   if (static_cast<int>(segment_.size()) < n) {
     segment_.resize(static_cast<size_t>(n), -1);
+    location_.resize(static_cast<size_t>(n));
+    near_.resize(static_cast<size_t>(n));
     fluid_.resize(static_cast<size_t>(n), Vec3::Zero());
     force_.resize(static_cast<size_t>(n), Vec3::Zero());
     drag_force_.resize(static_cast<size_t>(n), Vec3::Zero());
@@ -53,11 +55,14 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
 
   // 1) Lookup: hint = the same vertex's segment at the previous evaluation, else the
   //    neighbour towards the base (vertices are found from the base towards the tip).
+  //    Beyond the hint's window, the vertex's neighbourhood answers instead of the tree.
   auto t0 = Clock::now();
   for (int i = free - 1; i >= 0; --i) {
-    int hint = segment_[static_cast<size_t>(i)];
-    if (hint < 0 && i + 1 < n) hint = segment_[static_cast<size_t>(i + 1)];
-    segment_[static_cast<size_t>(i)] = index_.locate(rod.position(i), hint).segment;
+    const auto k = static_cast<size_t>(i);
+    int hint = segment_[k];
+    if (hint < 0 && i + 1 < n) hint = segment_[k + 1];
+    location_[k] = index_.locate(rod.position(i), hint, near_[k]);
+    segment_[k] = location_[k].segment;
     ++stats_.lookups;
   }
   stats_.seconds_lookup += since(t0);
@@ -82,7 +87,8 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     if (d_cap + a < 0.0) continue;
     Vec3 n_wall;
     Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
-    const double d = index_.wall_distance(x, s, &n_wall, &H_wall);
+    const double d = index_.wall_distance(x, location_[static_cast<size_t>(i)], near_[static_cast<size_t>(i)],
+                                          &n_wall, &H_wall);
     // Stiffness per vertex of the feeding grid, scaled with the vertex's edges where the
     // rod is resampled (so the wall stays equally stiff per unit length).
     const double k_wall = contact_.stiffness * rod.cell_weight(i);
@@ -190,7 +196,9 @@ void VesselForces::end_step(const rod::RodView& rod) {
                          nullptr) + wire_radius_ < 0.0)
       continue;
     Vec3 nrm;
-    const double d = index_.wall_distance(rod.position(i), s, &nrm);
+    const auto k = static_cast<size_t>(i);
+    const auto loc = index_.locate(rod.position(i), s, near_[k]);
+    const double d = index_.wall_distance(rod.position(i), loc, near_[k], &nrm);
     if (d + wire_radius_ > 0.0) {
       lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * rod.cell_weight(i) * (d + wire_radius_);
       lag_normal_[static_cast<size_t>(i)] = nrm;
@@ -203,18 +211,26 @@ void VesselForces::end_step(const rod::RodView& rod) {
 void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
   const int n = rod.vertex_count();
   remap_segments_.assign(segment_.begin(), segment_.end());
+  remap_near_.swap(near_);
+  near_.resize(remap_near_.size());
   ensure_size(n);
   for (int i = 0; i < n; ++i) {
     const int k = source[static_cast<size_t>(i)];
-    segment_[static_cast<size_t>(i)] =
-        k >= 0 && k < static_cast<int>(remap_segments_.size()) ? remap_segments_[static_cast<size_t>(k)] : -1;
+    const bool kept = k >= 0 && k < static_cast<int>(remap_segments_.size());
+    segment_[static_cast<size_t>(i)] = kept ? remap_segments_[static_cast<size_t>(k)] : -1;
+    auto& nb = near_[static_cast<size_t>(i)];
+    if (kept && k < static_cast<int>(remap_near_.size()))
+      nb = remap_near_[static_cast<size_t>(k)];  // within capacity after the first remaps
+    else
+      nb.clear();
   }
   // New vertices: located from the neighbour towards the base, as in evaluate().
   const int free = std::min(rod.first_clamped_vertex, n);
   for (int i = free - 1; i >= 0; --i) {
     if (segment_[static_cast<size_t>(i)] >= 0) continue;
     const int hint = i + 1 < n ? segment_[static_cast<size_t>(i + 1)] : -1;
-    segment_[static_cast<size_t>(i)] = index_.locate(rod.position(i), hint).segment;
+    location_[static_cast<size_t>(i)] = index_.locate(rod.position(i), hint, near_[static_cast<size_t>(i)]);
+    segment_[static_cast<size_t>(i)] = location_[static_cast<size_t>(i)].segment;
     ++stats_.lookups;
   }
   if (lagged_) end_step(rod);

@@ -62,6 +62,56 @@ void check_against_brute_force(const Network& net, const std::vector<Vec3>& pts,
   EXPECT_EQ(index.stats().window_hits + index.stats().fallbacks, pts.size());
 }
 
+/// Random walks of points that drift (as wire vertices between Newton iterates) and now and
+/// then jump; each point's neighbourhood is kept across the walk. The fast path must give
+/// the general path's answer to the last bit: same segment, same wall distance, normal and
+/// Hessian.
+void check_neighbourhood_against_general(const Network& net, unsigned seed) {
+  const SpatialIndex index(net, 4);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto starts = random_points(net, 60, 1.6, seed + 100);
+  long queries = 0, outside = 0, blended = 0;
+  for (const Vec3& start : starts) {
+    Neighbourhood nb;
+    int hint = -1;
+    Vec3 p = start;
+    for (int step = 0; step < 150; ++step) {
+      const double r = net.segment(hint >= 0 ? hint : 0).radius;
+      // Mostly drift; some jumps of up to about the neighbourhood's reach, so queries fall
+      // both just inside and just beyond what it covers.
+      const double scale = u(rng) < 0.3 ? 0.4 * u(rng) * r : 0.03 * r;
+      p += scale * Vec3(g(rng), g(rng), g(rng));
+      const auto ref = index.locate(p, hint);
+      const auto got = index.locate(p, hint, nb);
+      ASSERT_EQ(got.segment, ref.segment) << "query " << queries;
+      ASSERT_EQ(got.inside, ref.inside);
+      ASSERT_EQ(got.t, ref.t);
+      ASSERT_EQ(got.axis_distance, ref.axis_distance);
+      Vec3 g_ref, g_got;
+      Eigen::Matrix3d H_ref, H_got;
+      const double d_ref = index.wall_distance(p, ref.segment, &g_ref, &H_ref);
+      const double d_got = index.wall_distance(p, got, nb, &g_got, &H_got);
+      ASSERT_EQ(d_got, d_ref) << "query " << queries;
+      ASSERT_EQ(g_got, g_ref);
+      ASSERT_EQ(H_got, H_ref);
+      outside += !ref.inside;
+      blended += H_ref.norm() > 0.0 && std::abs(d_ref - wall_gap(net, ref.segment, p)) > 0.0;
+      hint = got.segment;
+      ++queries;
+      // Now and then a neighbourhood of arbitrary centre and reach, which the next query may
+      // find covering it, or not, by any margin.
+      if (u(rng) < 0.2) index.gather(p + 0.5 * r * Vec3(g(rng), g(rng), g(rng)), 1.5 * r * u(rng), nb);
+      // Pull the walk back towards the lumen so it stays near the walls.
+      if (d_ref > r) p -= 0.5 * d_ref * g_ref;
+    }
+  }
+  // The walks cover the cases that matter: outside the lumen, junction blends.
+  EXPECT_GT(outside, queries / 20);
+  EXPECT_GT(blended, 0);
+}
+
 }  // namespace
 
 TEST(Spatial, WindowWithFallbackEqualsBruteForceOnTheAorta) {
@@ -188,4 +238,33 @@ TEST(Spatial, WallDistanceIsContinuousAcrossTheJunction) {
     prev = d;
   }
   EXPECT_LT(max_jump, 2.0 * 0.02 * std::sqrt(2.0) / n);  // Lipschitz constant 1
+}
+
+TEST(Spatial, NeighbourhoodQueriesEqualTheGeneralPathOnTheAorta) {
+  check_neighbourhood_against_general(Network::build(aortic_arch(), {.max_segment_length = 1e-3}), 11);
+  check_neighbourhood_against_general(Network::build(aortic_arch(), {.max_segment_length = 5e-3}), 12);
+}
+
+TEST(Spatial, NeighbourhoodQueriesEqualTheGeneralPathOnATree) {
+  check_neighbourhood_against_general(binary_tree({.depth = 7}), 13);
+}
+
+TEST(Spatial, NeighbourhoodsAreReusedByADriftingPoint) {
+  // A point drifting by 0.2 % of the radius just outside the wall of the aorta: the tree is
+  // descended once, then every query is answered from the neighbourhood.
+  const auto net = Network::build(aortic_arch(), {.max_segment_length = 1e-3});
+  const SpatialIndex index(net, 4);
+  Neighbourhood nb;
+  const auto& s = net.segment(net.num_segments() / 2);
+  const Vec3 a = net.node(s.node_from), b = net.node(s.node_to);
+  const Vec3 side = (b - a).unitOrthogonal();
+  const Vec3 mid = 0.5 * (a + b);
+  int hint = -1;
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 p = mid + (1.02 + 0.002 * std::sin(0.1 * i)) * s.radius * side;
+    const auto loc = index.locate(p, hint, nb);
+    (void)index.wall_distance(p, loc, nb);
+    hint = loc.segment;
+  }
+  EXPECT_EQ(index.stats().gathers, 1u);
 }

@@ -80,6 +80,9 @@ class VesselForces : public rod::ExternalForce {
  private:
   void ensure_size(int n);
   std::vector<int> remap_segments_;
+  std::vector<vessels::Neighbourhood> remap_near_;
+  std::vector<vessels::Location> location_;     ///< (vertices) at the last evaluation
+  std::vector<vessels::Neighbourhood> near_;    ///< (vertices) segments near each vertex, kept across steps
   const vessels::SpatialIndex& index_;
   double wire_radius_;
   ContactParams contact_;

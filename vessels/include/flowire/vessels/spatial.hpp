@@ -35,6 +35,22 @@ struct Location {
 struct LocatorStats {
   std::uint64_t window_hits = 0;
   std::uint64_t fallbacks = 0;
+  std::uint64_t gathers = 0;  ///< neighbourhoods (re)gathered from the tree
+};
+
+/// @brief The segments near a point, gathered once from the tree and reused by the queries
+/// at points close to it (a wire vertex moves little between Newton iterates and steps).
+///
+/// Holds every segment whose box lies within `reach` of `centre`, in the tree's traversal
+/// order. A query at p with |p − centre| = δ needs only the segments whose box lies within
+/// some radius ρ of p; when ρ + δ ≤ reach they are all here, in the order the tree would
+/// visit them, so the answer is the general path's to the last bit. Otherwise the query
+/// gathers again around p (`SpatialIndex::locate(p, hint, nb)`, `wall_distance(p, loc, nb)`).
+struct Neighbourhood {
+  Vec3 centre = Vec3::Zero();
+  double reach = -1.0;        ///< < 0: empty
+  std::vector<int> segments;  ///< (segments near centre) in traversal order
+  void clear() { reach = -1.0; segments.clear(); }
 };
 
 class SpatialIndex {
@@ -55,6 +71,17 @@ class SpatialIndex {
   double wall_distance(const Vec3& p, int hint = -1, Vec3* gradient = nullptr,
                        Eigen::Matrix3d* hessian = nullptr) const;
 
+  /// @brief locate(p, hint) answered from a neighbourhood (gathered again around p when it
+  /// does not cover the query): the same answer, without descending the tree.
+  Location locate(const Vec3& p, int hint, Neighbourhood& nb) const;
+  /// @brief wall_distance(p, loc.segment, …) for @p loc = locate(p, …), answered from a
+  /// neighbourhood (gathered again around p when it does not cover the query): the same
+  /// value, gradient and Hessian to the last bit.
+  double wall_distance(const Vec3& p, const Location& loc, Neighbourhood& nb, Vec3* gradient = nullptr,
+                       Eigen::Matrix3d* hessian = nullptr) const;
+  /// @brief Fill @p nb with every segment whose box lies within @p reach of @p centre.
+  void gather(const Vec3& centre, double reach, Neighbourhood& nb) const;
+
   [[nodiscard]] const LocatorStats& stats() const { return stats_; }
   void reset_stats() const { stats_ = {}; }
   [[nodiscard]] const Network& network() const { return net_; }
@@ -69,7 +96,19 @@ class SpatialIndex {
   int build_bvh(int first, int count, int depth);
   bool test_segment(const Vec3& p, int s, Location& best) const;
   Location fallback(const Vec3& p) const;
+  /// Keeps in @p best the segment whose wall is nearest (ties: the lower index).
+  void nearest_wall_candidate(const Vec3& p, int s, double& best_d, Location& best) const;
+  /// locate() up to the fallback: the hint, then its window. False if neither holds p.
+  bool locate_in_window(const Vec3& p, int hint, Location& best) const;
   void nearby_segments(const Vec3& p, double radius, std::vector<int>& out) const;
+  /// Radius around p that wall_distance searches when p is located in @p loc.
+  double wall_search_radius(const Location& loc) const;
+  /// Union-of-capsules distance over @p cand (in traversal order), blended at junctions.
+  double blended_distance(const Vec3& p, const std::vector<int>& cand, const Location& loc, Vec3* gradient,
+                          Eigen::Matrix3d* hessian) const;
+  /// Reach gathered around a point located in @p loc: the wall search radius plus room
+  /// for the point to move.
+  double gather_reach(const Location& loc) const;
 
   const Network& net_;
   int window_;
