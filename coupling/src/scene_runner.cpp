@@ -20,6 +20,7 @@
 #include "flowire/fem/compare.hpp"
 #endif
 #include "flowire/coupling/vessel_forces.hpp"
+#include "flowire/coupling/vessel_path.hpp"
 #include "flowire/coupling/wire_output.hpp"
 #include "flowire/flow/output.hpp"
 #include "flowire/flow/solver.hpp"
@@ -465,6 +466,8 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     std::optional<vessels::SpatialIndex> index;
     std::shared_ptr<VesselForces> forces;
     std::shared_ptr<TipForces> tip_forces;
+    int wire_entry = -1;
+    std::string initial_layout = "straight";
     if (has_wire) {
       auto spec = scene_wire_spec(c);
       if (net) {
@@ -490,6 +493,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
         }
         if (spec.inserted_length < 0) spec.inserted_length = 0.02;
         s["wire_entry_node"] = entry;
+        wire_entry = entry;
       }
       sim = std::make_unique<rod::RodSimulator>(spec);
       sim->set_integrator(c.string("solve.integrator") == "implicit_midpoint" ? rod::Integrator::ImplicitMidpoint
@@ -507,6 +511,24 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       }
       if (net) {
         index.emplace(*net, 4);
+        if (wire_entry >= 0 && !c.has_section("wire.base")) {
+          // A wire inserted farther than the entry vessel runs straight leaves the lumen
+          // when laid out straight (the shaft crosses the walls, centimetres deep, and no
+          // penalty pulls it back in one step): lay it along the vessel path instead.
+          const double shaft = sim->inserted_length() - spec.tip.length;
+          bool leaves = false;
+          for (double a = 0.0; a < shaft && !leaves; a += 0.5 * sim->model().h)
+            leaves = index->wall_distance(spec.base_position + a * spec.base_direction) + spec.radius > 0.0;
+          if (leaves) {
+            const VesselPath path(*net, wire_entry);
+            if (sim->inserted_length() > path.max_wire_length())
+              throw_input_error(c.where("insertion.initial_length"),
+                                fmt::format("{:.4g} m is longer than the vessel path from the entry and back ({:.4g} m)",
+                                            sim->inserted_length(), path.max_wire_length()));
+            sim->lay_along([&path](double a) { return path.wire_point(a); });
+            initial_layout = "vessel_path";
+          }
+        }
         forces = make_vessel_forces(c, *index, spec, fsolver.get());
         if (forces) sim->add_external(forces);
       }
@@ -662,6 +684,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
                    {"length_drift", sim->length_drift()},
                    {"unconverged_steps", failures}};
       if (!settle.is_null()) s["wire"]["settle"] = settle;
+      s["wire"]["initial_layout"] = initial_layout;
       if (c.has("insertion.max_force")) s["wire"]["held_steps"] = sim->held_steps();
       if (sim->model().adapt.enabled)
         s["wire"]["adapt"] = {{"splits", sim->adapt_splits()}, {"merges", sim->adapt_merges()}};

@@ -229,6 +229,28 @@ void RodSimulator::layout_rest_shape() {
   refresh_arc_lengths();
 }
 
+void RodSimulator::lay_along(const std::function<Vec3(double)>& along) {
+  RodState& s = state_;
+  const int nv = s.vertex_count();
+  const int kc = first_clamped_;
+  for (int k = 0; k < kc; ++k) s.x[k] = along(arc_length_[k]);
+  for (auto& v : s.v) v.setZero();
+  for (int j = 0; j < nv - 1; ++j) s.theta[j] = s.omega[j] = 0.0;
+  // Frames from the clamp towards the tip, each transported from its neighbour.
+  for (int j = std::min(kc, nv - 2) - 1; j >= 0; --j) {
+    const Vec3 tn = (s.x[j + 2] - s.x[j + 1]).normalized();
+    const Vec3 t = (s.x[j + 1] - s.x[j]).normalized();
+    Vec3 d1 = parallel_transport(s.frame[j + 1].d1, tn, t);
+    d1 = (d1 - t * t.dot(d1)).normalized();
+    s.frame[j].d1 = d1;
+    s.frame[j].d2 = t.cross(d1);
+  }
+  for (int k = 1; k < nv - 1; ++k)
+    s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(), s.frame[k].d1,
+                                     (s.x[k + 1] - s.x[k]).normalized(), 0.0);
+  record_trace_reset();
+}
+
 void RodSimulator::refresh_arc_lengths() {
   arc_length_.resize(state_.x.size());
   for (size_t k = 0; k < state_.x.size(); ++k)

@@ -70,6 +70,7 @@
 /// @endcode
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string_view>
@@ -208,6 +209,12 @@ class RodSimulator {
   /// clamped at both ends (test cases); feeding still works at the base.
   void clamp_tip(const Eigen::Vector3d& tip, const Eigen::Vector3d& next);
   void release_tip() { tip_clamped_ = false; }
+  /// @brief Lay the free (inserted) part at rest on a curve: vertex k at @p along(s_k), s_k
+  /// its arc length from the entry (e.g. a vessel path from the entry, so a long wire
+  /// starts inside the lumen); frames parallel-transported from the clamp, so no twist.
+  /// The rest shape of a pre-shaped tip is not applied: it springs back in the first
+  /// static solve or steps. Call before add_external().
+  void lay_along(const std::function<Eigen::Vector3d(double)>& along);
   [[nodiscard]] bool tip_clamped() const { return tip_clamped_; }
   SolverSettings& settings() { return settings_; }
   [[nodiscard]] const SolverSettings& settings() const { return settings_; }
