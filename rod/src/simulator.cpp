@@ -1,5 +1,6 @@
 #include "flowire/rod/simulator.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -17,6 +18,14 @@ constexpr int kBandwidth = 10;  // stencil (x_{k-1}, θ_{k-1}, x_k, θ_k, x_{k+1
 Mat3 sym(const Mat3& a) { return 0.5 * (a + a.transpose()); }
 
 bool finite(const Eigen::Ref<const Eigen::VectorXd>& v) { return v.allFinite(); }
+
+/// The symmetric matrix's negative eigenvalues set to zero.
+Mat3 positive_part(const Mat3& a) {
+  Eigen::SelfAdjointEigenSolver<Mat3> es;
+  es.computeDirect(a);
+  const Eigen::Vector3d lambda = es.eigenvalues().cwiseMax(0.0);
+  return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
+}
 }  // namespace
 
 const char* to_string(SolveStatus s) {
@@ -843,7 +852,13 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
     for (int k = 0; w.has_ext_k && k < nv; ++k) {
       if (w.ext_k[k].isZero(0.0)) continue;
       const int idx[3] = {4 * k, 4 * k + 1, 4 * k + 2};
-      w.H.add_block(w.ext_k[k], idx, 3);
+      if (psd) {
+        // An external stiffness need not be definite (a contact's wall curvature where two
+        // vessels are blended): its positive part, so the Gauss–Newton matrix is.
+        w.H.add_block(positive_part(w.ext_k[k]), idx, 3);
+      } else {
+        w.H.add_block(w.ext_k[k], idx, 3);
+      }
     }
     for (int j = 0; w.has_ext_k && j < nv - 1; ++j) w.H.lower(4 * j + 3, 4 * j + 3) += w.ext_spin_k[j];
     if (!psd && !w.moment_k.isZero(0.0)) {
