@@ -27,7 +27,7 @@ if [ ! -f "$BUILD_DIR/build.ninja" ] && [ ! -f "$BUILD_DIR/Makefile" ]; then
 else
   cmake -S "$ROOT" -B "$BUILD_DIR" -DFLOWIRE_WITH_FEM=ON >/dev/null
 fi
-cmake --build "$BUILD_DIR" --target flowire_bench -j"$JOBS"
+cmake --build "$BUILD_DIR" --target flowire_bench bench_coupling -j"$JOBS"
 BENCH="$BUILD_DIR/tools/bench/flowire_bench"
 
 rm -rf "$OUT_DIR"
@@ -48,6 +48,9 @@ run_study flowfem flow-fem-work-precision   # exit 2 (no figure) in a build with
 run_study cosim cosim-work-precision
 run_study features feature-cost
 run_study stress stress   # exit 1 when a point fails: reported in the note, not hidden
+# The co-simulation step by phase (Google Benchmark, JSON).
+"$BUILD_DIR/bench/bench_coupling" --benchmark_filter=ArchExample --benchmark_format=json \
+  > "$OUT_DIR/coupling_phases.json" 2> "$OUT_DIR/coupling_phases.log" || echo "performance.sh: bench_coupling failed" >&2
 
 for p in rod flow cosim stress; do
   "$PYTHON" "$ROOT/tools/bench/plot_$p.py" "$OUT_DIR" "$OUT_DIR/figures"

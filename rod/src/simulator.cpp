@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -917,9 +918,13 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     return r;
   };
 
+  using Clock = std::chrono::steady_clock;
+  auto seconds = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+  auto t_phase = Clock::now();
   gather(w.q);
   double phi = assemble(mode, h, load_scale, Need::Matrix);
   bool matrix_current = true;  // trial points are evaluated without the matrix
+  phase_seconds_.assembly += seconds(t_phase);
   if (!std::isfinite(phi) || !finite(w.grad.head(nd))) {
     rep.status = SolveStatus::NonFinite;
     return rep;
@@ -934,9 +939,12 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     rep.newton_iterations = it + 1;
     if (!matrix_current) {
       // Same configuration as the accepted trial: its loads and external forces are kept.
+      t_phase = Clock::now();
       phi = assemble(mode, h, load_scale, Need::Matrix, false, /*reuse_loads=*/true);
       matrix_current = true;
+      phase_seconds_.assembly += seconds(t_phase);
     }
+    t_phase = Clock::now();
     // Linear solve on the free unknowns: the exact Hessian first; if it is indefinite
     // (strongly bent or compressed states), the Gauss–Newton matrix of the same residual,
     // which is positive semi-definite, with a modified factorization as last resort.
@@ -980,10 +988,12 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
         if (ok) w.dq.head(nd) = w.sparse_ldlt.solve(rhs);
       }
     }
+    phase_seconds_.factorize += seconds(t_phase);  // (with the rare positive semi-definite reassembly)
     if (!ok || !finite(w.dq.head(nd))) {
       rep.status = SolveStatus::SingularMatrix;
       break;
     }
+    t_phase = Clock::now();
     auto dq = w.dq.head(nd);
     const double slope = w.grad.head(nd).dot(dq);
     // Backtracking line search on φ + E_ext − W: φ the incremental potential, E_ext the
@@ -1074,6 +1084,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       ++rep.line_search_cuts;
     }
     }
+    phase_seconds_.line_search += seconds(t_phase);
     if (!accepted) {
       // Restore the last accepted iterate and its derivatives.
       s.x = w.xb;

@@ -111,6 +111,15 @@ struct StepReport {
   [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
 };
 
+/// @brief Wall-clock seconds spent by the Newton solves, by phase, summed since construction
+/// (a benchmark's per-phase breakdown). External forces are evaluated inside the first
+/// and third (their own timers split them further).
+struct NewtonPhaseSeconds {
+  double assembly = 0.0;     ///< gradient and Newton matrix at accepted iterates
+  double factorize = 0.0;    ///< LDLᵀ factorizations and solves
+  double line_search = 0.0;  ///< trial configurations: state update, frames, merit (and gradient)
+};
+
 /// @brief Newton and linear-solver settings.
 struct SolverSettings {
   int max_iterations = 30;          ///< per dynamic step
@@ -240,6 +249,7 @@ class RodSimulator {
   /// @brief Torque the clamp exerts on the wire about the entry point [N m].
   [[nodiscard]] const Eigen::Vector3d& base_torque() const { return base_torque_; }
   [[nodiscard]] const StepReport& last_report() const { return last_report_; }
+  [[nodiscard]] const NewtonPhaseSeconds& phase_seconds() const { return phase_seconds_; }
   [[nodiscard]] const std::vector<TipSample>& tip_trace() const { return trace_; }
   [[nodiscard]] RodEnergy energy() const;
   /// @brief max over free edges of |ℓ/ℓ̄ − 1|.
@@ -344,6 +354,7 @@ class RodSimulator {
   Eigen::Vector3d tip_clamp_x1_ = Eigen::Vector3d::Zero();
   double tip_clamp_theta_ = 0.0;
   StepReport last_report_;
+  NewtonPhaseSeconds phase_seconds_;
   std::vector<TipSample> trace_;
 };
 
