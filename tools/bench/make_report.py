@@ -209,7 +209,7 @@ if os.path.exists(phases_json):
     with open(phases_json) as f:
         bench = json.load(f)
     L.append("## Co-simulation step by phase\n")
-    L.append("The aortic-arch example (J tip, 2 mm segments, μ = 0.2/0.05, slender-body drag, pulsatile "
+    L.append("The aortic-arch example (J tip, 2 mm segments, μ = 0.2/0.05, cylinder drag, pulsatile "
              "flow, dt = 10 ms) with 0.78 m inserted, laid on the vessel path and settled against the walls, "
              "held; 200 steps after 20 untimed ones, the network sampled at 5 mm and at 1 mm. Phases in µs "
              "per step: lookup, contact (wall distance, penalty, friction) and drag are the vessel forces' "
