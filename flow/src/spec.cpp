@@ -297,7 +297,9 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   if (cfg.string_or("flow.outlets.scaling", "none") == "murray" && o.type != OutletBC::Type::Pressure) {
     auto end_radius = [&](int node) {
       const auto [b, e] = net.node_segments(node);
-      return b != e ? net.segment(*b).radius : 0.0;
+      if (b == e) return 0.0;
+      const auto& seg = net.segment(*b);
+      return seg.node_from == node ? seg.radius_from : seg.radius_to;  // the vessel's radius at the outlet
     };
     double sum = 0.0;
     for (const auto& x : s.outlets) sum += std::pow(end_radius(x.node), 3);
