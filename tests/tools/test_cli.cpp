@@ -260,6 +260,19 @@ TEST(Cli, SceneKeyDefaultsAgreeWithTheirUnits) {
   EXPECT_GE(flow_rate_keys, 4);
 }
 
+TEST(Cli, AnSvZeroDSolverModelIsNotAVesselsFile) {
+  // A 0D model has no geometry: `flowire run model.json` solves it, `vessels.file` refuses it.
+  FLOWIRE_REQUIRE_SHARED("peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json");
+  const auto dir = flowire::testing::scratch_dir("cli-svzerod-vessels");
+  const auto model = (flowire::testing::shared_dir() / "peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json").string();
+  write(dir / "scene.yaml", "vessels:\n  file: " + model + "\n");
+  const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "o").string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("flowire: error: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("steadyFlow_bifurcationR_R1.json"), std::string::npos) << r.err;
+  EXPECT_LE(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
 TEST(Cli, SceneKeyReferenceIsUpToDate) {
   // docs/scene-keys.md is generated from the one declaration: `flowire help scene > docs/scene-keys.md`.
   std::ifstream in(std::string(FLOWIRE_SOURCE_DIR) + "/docs/scene-keys.md");
