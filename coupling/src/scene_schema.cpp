@@ -115,7 +115,9 @@ config::Schema make_schema() {
   add("wire.tip.length", Type::Number, "3 cm", D::Length, "tip length");
   add("wire.tip.youngs_modulus", Type::Number, "10 GPa", D::Pressure, "tip Young's modulus");
   add("wire.tip.shape", Type::Enum, "straight", D::None, "tip shape", {"straight", "angled", "j"});
-  add("wire.tip.angle", Type::Number, "45 deg", D::Angle, "angled/j: total bend angle of the tip");
+  add("wire.tip.angle", Type::Number, "", D::Angle,
+      "angled/j: total bend angle of the tip (default by shape: 45 deg angled, 180 deg j, the J of the published "
+      "experiment)");
   add("wire.tip.bend_radius", Type::Number, "3 mm", D::Length, "angled/j: radius of the pre-bent arc");
   add("wire.adapt", Type::Section, "", D::None,
       "curvature-adaptive resampling: split edges where the wire bends, merge them back where it is straight");

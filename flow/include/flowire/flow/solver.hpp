@@ -81,11 +81,7 @@ class FlowSolver {
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p) const;
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p, double t) const;
 
-  /// @brief Finalize PETSc if the petsc solver initialized it (it also runs at exit). A
-/// program that calls MPI_Init itself calls this before MPI_Finalize. No-op without PETSc.
-void finalize_petsc();
-
-/// @brief Poiseuille resistance of each segment (Pa·s/m³).
+  /// @brief Poiseuille resistance of each segment (Pa·s/m³).
   [[nodiscard]] double resistance(int segment) const { return resistance_[static_cast<size_t>(segment)]; }
   [[nodiscard]] const Network& network() const { return net_; }
   [[nodiscard]] const FlowSpec& spec() const { return spec_; }
