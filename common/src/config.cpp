@@ -268,7 +268,9 @@ class Loader {
         for (int i = 0; i < n; ++i) parents.push_back(fmt::format("{}[{}]", list, i));
       } else {
         std::string concrete = parent;  // a section below list items is not defaulted
-        if (out_.has(concrete)) parents.push_back(concrete);
+        // Children are defaulted under a section given (or defaulted) as a map, not under a
+        // number-or-section key given as a number.
+        if (out_.has(concrete) && out_.values().at(concrete).type == Type::Section) parents.push_back(concrete);
       }
       for (const auto& p : parents) {
         const std::string cpath = p.empty() ? std::string(leaf_of(k.path)) : p + "." + std::string(leaf_of(k.path));

@@ -110,7 +110,7 @@ rod::WireSpec scene_wire_spec(const config::Config& c) {
     w.tip.youngs_modulus = c.number("wire.tip.youngs_modulus");
     const auto& shape = c.string("wire.tip.shape");
     w.tip.shape = shape == "j" ? rod::TipShape::J : shape == "angled" ? rod::TipShape::Angled : rod::TipShape::Straight;
-    w.tip.angle = c.number("wire.tip.angle");
+    w.tip.angle = c.number_or("wire.tip.angle", -1.0);  // < 0: the shape's own default (rod::TipSpec)
     w.tip.bend_radius = c.number("wire.tip.bend_radius");
   }
   if (c.has_section("wire.adapt")) {

@@ -67,19 +67,28 @@ config::Schema make_schema() {
       {"laminar", "womersley"});
   add("flow.inlet", Type::Section, "{}", D::None, "inlet boundary condition");
   add("flow.inlet.node", Type::StringOrInteger, "", D::None, "inlet node id (default: the network end with the largest radius)");
+  // The inlet: a pressure (by default the 120/80 mmHg sine, declared here once) or a flow.
+  // A flow has no default amplitude: a flow sine needs its systolic and diastolic values.
   for (const char* what : {"pressure", "flow"}) {
     const bool p = std::string_view(what) == "pressure";
     const D dim = p ? D::Pressure : D::FlowRate;
     const std::string base = std::string("flow.inlet.") + what;
-    add(base, Type::NumberOrSection, "", dim,
-        p ? "inlet pressure: a constant, or a waveform section (default: the 120/80 mmHg sine)"
-          : "prescribed inlet flow instead of a pressure: a constant or a waveform section");
+    const std::string q = p ? "P" : "Q";
+    if (p)
+      add(base, Type::NumberOrSection, "{waveform: sine}", dim,
+          "inlet pressure: a constant, or a waveform section (default: the sine with the defaults below)");
+    else
+      add(base, Type::NumberOrSection, "", dim,
+          "prescribed inlet flow instead of a pressure: a constant or a waveform section");
     add(base + ".waveform", Type::Enum, "", D::None,
-        "sine: (P1-P2)/2 sin(2 pi t/T) + (P1+P2)/2 | constant | table (default: table if file is given, else sine)",
+        "sine: (" + q + "1-" + q + "2)/2 sin(2 pi t/T) + (" + q + "1+" + q +
+            "2)/2; constant; table (default: table if file is given, else sine)",
         {"sine", "constant", "table"});
-    add(base + ".systolic", Type::Number, "", dim, "sine: P1 (default 120 mmHg)");
-    add(base + ".diastolic", Type::Number, "", dim, "sine: P2 (default 80 mmHg)");
-    add(base + ".period", Type::Number, "", D::Time, "sine: period T (default 0.8 s)");
+    add(base + ".systolic", Type::Number, p ? "120 mmHg" : "", dim,
+        p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
+    add(base + ".diastolic", Type::Number, p ? "80 mmHg" : "", dim,
+        p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
+    add(base + ".period", Type::Number, "0.8 s", D::Time, "sine: period T");
     add(base + ".value", Type::Number, "", dim, "constant: the value");
     add(base + ".file", Type::String, "", D::None, "table: CSV with a header and columns time,value (SI), periodic");
   }
@@ -110,7 +119,9 @@ config::Schema make_schema() {
   add("wire.tip.length", Type::Number, "3 cm", D::Length, "tip length");
   add("wire.tip.youngs_modulus", Type::Number, "10 GPa", D::Pressure, "tip Young's modulus");
   add("wire.tip.shape", Type::Enum, "straight", D::None, "tip shape", {"straight", "angled", "j"});
-  add("wire.tip.angle", Type::Number, "45 deg", D::Angle, "angled/j: total bend angle of the tip");
+  add("wire.tip.angle", Type::Number, "", D::Angle,
+      "angled/j: total bend angle of the tip (default by shape: 45 deg angled, 180 deg j, the J of the published "
+      "experiment)");
   add("wire.tip.bend_radius", Type::Number, "3 mm", D::Length, "angled/j: radius of the pre-bent arc");
   add("wire.adapt", Type::Section, "", D::None,
       "curvature-adaptive resampling: split edges where the wire bends, merge them back where it is straight");

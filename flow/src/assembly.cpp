@@ -31,10 +31,10 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
   a.conductance.resize(ne);
   for (size_t s = 0; s < ne; ++s) {
     const auto& seg = net.segment(static_cast<int>(s));
-    resistance[s] = poiseuille_resistance(spec.viscosity, seg.length, seg.radius);
+    resistance[s] = segment_resistance(spec.viscosity, seg);
     if (!(resistance[s] > 0.0) || !std::isfinite(resistance[s]))
-      throw_input_error(net.source(), fmt::format("segment {}: resistance {} is not positive and finite (r = {}, l = {})",
-                                                  s, resistance[s], seg.radius, seg.length));
+      throw_input_error(net.source(), fmt::format("segment {}: resistance {} is not positive and finite (r = {} to {}, l = {})",
+                                                  s, resistance[s], seg.radius_from, seg.radius_to, seg.length));
     a.conductance[s] = 1.0 / resistance[s];
   }
   a.dirichlet.assign(nn, 0);

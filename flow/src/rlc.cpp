@@ -26,6 +26,16 @@ double segment_compliance(double youngs_modulus, double thickness_ratio, double 
   return 3.0 * kPi * radius * radius * length / (2.0 * youngs_modulus * thickness_ratio);
 }
 
+double segment_inertance(Inertance kind, double density, double length, double r1, double r2) {
+  const double l = density * length / (kPi * r1 * r2);
+  return kind == Inertance::Womersley ? 4.0 / 3.0 * l : l;
+}
+
+double segment_compliance(double youngs_modulus, double thickness_ratio, double length, double r1, double r2) {
+  if (!(youngs_modulus > 0.0) || !(thickness_ratio > 0.0)) return 0.0;
+  return kPi * length * (r1 * r1 + r1 * r2 + r2 * r2) / (2.0 * youngs_modulus * thickness_ratio);
+}
+
 namespace detail {
 namespace {
 
@@ -96,11 +106,12 @@ class RlcSolver final : public FlowSolver {
     for (size_t s = 0; s < ne; ++s) {
       const auto& seg = net_.segment(static_cast<int>(s));
       const int row = qi(s);
-      te.emplace_back(row, row, segment_inertance(spec_.inertance, spec_.density, seg.length, seg.radius));
+      te.emplace_back(row, row, segment_inertance(spec_.inertance, spec_.density, seg.length, seg.radius_from, seg.radius_to));
       tf.emplace_back(row, row, resistance_[s]);
       tf.emplace_back(row, seg.node_from, -1.0);
       tf.emplace_back(row, seg.node_to, 1.0);
-      const double c = segment_compliance(spec_.wall_youngs_modulus, spec_.wall_thickness_ratio, seg.length, seg.radius);
+      const double c = segment_compliance(spec_.wall_youngs_modulus, spec_.wall_thickness_ratio, seg.length, seg.radius_from,
+                                          seg.radius_to);
       node_c[static_cast<size_t>(seg.node_from)] += 0.5 * c;
       node_c[static_cast<size_t>(seg.node_to)] += 0.5 * c;
       // Node balance rows (non-Dirichlet): C dp/dt + sum_out Q - sum_in Q + outflow = injected.

@@ -191,11 +191,15 @@ Waveform waveform_from(const Config& cfg, const std::string& path) {
     return Waveform::constant(cfg.number(path + ".value"));
   }
   if (kind == "sine") {
-    const double sys = cfg.number_or(path + ".systolic", 120.0 * units::mmHg);
-    const double dia = cfg.number_or(path + ".diastolic", 80.0 * units::mmHg);
-    const double period = cfg.number_or(path + ".period", 0.8);
+    // Every value comes from the scene or from the defaults its schema declares (a pressure
+    // sine has them, a flow sine has none): nothing is assumed here.
+    for (const char* key : {"systolic", "diastolic", "period"})
+      if (!cfg.has(path + "." + key))
+        throw_input_error(cfg.where(path), fmt::format("a sine waveform needs '{}.{}'{}", path, key,
+                                                       path.ends_with(".flow") ? " (a flow has no default amplitude)" : ""));
+    const double period = cfg.number(path + ".period");
     if (!(period > 0.0)) throw_input_error(cfg.where(path + ".period"), "period must be positive");
-    return Waveform::sine(sys, dia, period);
+    return Waveform::sine(cfg.number(path + ".systolic"), cfg.number(path + ".diastolic"), period);
   }
   if (kind == "table") {
     if (!cfg.has(path + ".file")) throw_input_error(cfg.where(path), "waveform: table needs 'file' (CSV time,value)");
@@ -256,16 +260,23 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
 
   InletBC in;
   in.node = cfg.has("flow.inlet.node") ? node_from(cfg, "flow.inlet.node", net) : net.widest_end();
+  // The schema declares the default inlet (a pressure sine); a flow given replaces it.
+  const auto given = [&](const char* path) {
+    if (!(cfg.has(path) || cfg.has_section(path))) return false;
+    const auto it = cfg.values().find(path);
+    return it == cfg.values().end() || it->second.where != "default";
+  };
+  const bool has_q = given("flow.inlet.flow");
   const bool has_p = cfg.has("flow.inlet.pressure") || cfg.has_section("flow.inlet.pressure");
-  const bool has_q = cfg.has("flow.inlet.flow") || cfg.has_section("flow.inlet.flow");
-  if (has_p && has_q) throw_input_error(cfg.where("flow.inlet.flow"), "give either flow.inlet.pressure or flow.inlet.flow, not both");
+  if (given("flow.inlet.pressure") && has_q)
+    throw_input_error(cfg.where("flow.inlet.flow"), "give either flow.inlet.pressure or flow.inlet.flow, not both");
   if (has_q) {
     in.type = InletBC::Type::Flow;
     in.waveform = waveform_from(cfg, "flow.inlet.flow");
   } else if (has_p) {
     in.waveform = waveform_from(cfg, "flow.inlet.pressure");
   } else {
-    in.waveform = Waveform::sine(120.0 * units::mmHg, 80.0 * units::mmHg, 0.8);
+    throw_input_error(cfg.where("flow.inlet"), "no inlet condition: give flow.inlet.pressure or flow.inlet.flow");
   }
   s.inlets.push_back(in);
 
@@ -297,7 +308,9 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   if (cfg.string_or("flow.outlets.scaling", "none") == "murray" && o.type != OutletBC::Type::Pressure) {
     auto end_radius = [&](int node) {
       const auto [b, e] = net.node_segments(node);
-      return b != e ? net.segment(*b).radius : 0.0;
+      if (b == e) return 0.0;
+      const auto& seg = net.segment(*b);
+      return seg.node_from == node ? seg.radius_from : seg.radius_to;  // the vessel's radius at the outlet
     };
     double sum = 0.0;
     for (const auto& x : s.outlets) sum += std::pow(end_radius(x.node), 3);

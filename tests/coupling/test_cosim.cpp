@@ -287,3 +287,21 @@ TEST(CoSim, ALongWireStartsOnTheVesselPathInsideTheLumen) {
     EXPECT_LE(s["contact"]["max_outside_over_wire_radius"].get<double>(), 0.5);
   }
 }
+
+TEST(SceneWire, TheTipAngleDefaultsToTheShapesOwn) {
+  // A J tip of the published experiment is a 180° J; an angled tip bends 45°; an angle given
+  // wins. The total turn of the rest shape, summed over the wire, is the angle.
+  auto turn = [](const std::string& tip) {
+    const auto cfg = config::load_config_text("wire:\n  length: 0.2\n  segment_length: 0.5 mm\n  tip: " + tip + "\n",
+                                              "tip.yaml", scene_schema());
+    const rod::RodModel m = rod::RodModel::from_spec(scene_wire_spec(cfg));
+    double sum = 0.0;
+    for (double k : m.rest_kappa1) sum += 2.0 * std::atan(0.5 * k);
+    return sum;
+  };
+  EXPECT_NEAR(turn("{shape: j}"), std::numbers::pi, 1e-12);
+  EXPECT_NEAR(turn("{shape: angled}"), std::numbers::pi / 4.0, 1e-12);
+  EXPECT_NEAR(turn("{shape: j, angle: 120 deg}"), 2.0 * std::numbers::pi / 3.0, 1e-12);
+  EXPECT_NEAR(turn("{shape: angled, angle: 30 deg}"), std::numbers::pi / 6.0, 1e-12);
+  EXPECT_NEAR(turn("{shape: straight}"), 0.0, 1e-15);
+}

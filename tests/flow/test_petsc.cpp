@@ -1,6 +1,8 @@
 // PETSc (CG + GAMG / hypre) against the serial sparse direct answer.
 #include <gtest/gtest.h>
 
+#include <type_traits>
+
 #include "flow_test_networks.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire_test.hpp"
@@ -10,6 +12,13 @@ namespace {
 
 using flowire::testing::tol;
 using namespace flowire::flow::test;
+
+// PETSc is finalized by the free function flow::finalize_petsc (what an MPI program calls
+// before MPI_Finalize, tests/flow/petsc_mpi_main.cpp); a solver has no member of that name.
+template <class T>
+concept HasFinalizeMember = requires { &T::finalize_petsc; };
+static_assert(!HasFinalizeMember<FlowSolver>, "FlowSolver::finalize_petsc would be declared without a definition");
+static_assert(std::is_same_v<decltype(&finalize_petsc), void (*)()>);
 
 void compare(const Network& net, FlowSpec spec, const std::string& pc) {
   spec.solver = SolverKind::Sparse;

@@ -29,12 +29,13 @@ config::Schema flow_schema() {
   add("flow.inlet", Type::Section, "{}", D::None);
   add("flow.inlet.node", Type::StringOrInteger, "", D::None);
   for (std::string w : {"pressure", "flow"}) {
-    const D d = w == "pressure" ? D::Pressure : D::FlowRate;
-    add("flow.inlet." + w, Type::NumberOrSection, "", d);
+    const bool p = w == "pressure";
+    const D d = p ? D::Pressure : D::FlowRate;
+    add("flow.inlet." + w, Type::NumberOrSection, p ? "{waveform: sine}" : "", d);
     add("flow.inlet." + w + ".waveform", Type::Enum, "", D::None, {"sine", "constant", "table"});
-    add("flow.inlet." + w + ".systolic", Type::Number, "", d);
-    add("flow.inlet." + w + ".diastolic", Type::Number, "", d);
-    add("flow.inlet." + w + ".period", Type::Number, "", D::Time);
+    add("flow.inlet." + w + ".systolic", Type::Number, p ? "120 mmHg" : "", d);
+    add("flow.inlet." + w + ".diastolic", Type::Number, p ? "80 mmHg" : "", d);
+    add("flow.inlet." + w + ".period", Type::Number, "0.8 s", D::Time);
     add("flow.inlet." + w + ".value", Type::Number, "", d);
     add("flow.inlet." + w + ".file", Type::String, "", D::None);
   }
@@ -110,6 +111,27 @@ flow:
     FAIL();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("node 5"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FlowSpec, ASineTakesOnlyTheDefaultsTheSchemaDeclares) {
+  const Network net = test::murray_tree(1);
+  // Nothing given: the declared default inlet, the 120/80 mmHg sine of 0.8 s.
+  const auto s = from_config(config::load_config_text("flow: {}\n", "s.yaml", flow_schema()), net);
+  ASSERT_EQ(s.inlets.size(), 1u);
+  EXPECT_EQ(s.inlets[0].type, InletBC::Type::Pressure);
+  EXPECT_NEAR(s.inlets[0].waveform(0.2), 120 * units::mmHg, 1e-9);
+  EXPECT_NEAR(s.inlets[0].waveform(0.6), 80 * units::mmHg, 1e-9);
+  // A flow sine has no default amplitude.
+  const auto cfg = config::load_config_text("flow:\n  inlet:\n    flow: {waveform: sine, diastolic: 1e-6}\n", "s.yaml",
+                                            flow_schema());
+  try {
+    (void)from_config(cfg, net);
+    FAIL() << "a flow sine without systolic was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("s.yaml:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("flow.inlet.flow.systolic"), std::string::npos) << e.what();
   }
 }
 

@@ -218,6 +218,61 @@ TEST(Cli, RunsAnSvZeroDSolverModel) {
   EXPECT_FALSE(fs::exists(dir / "b" / "svzerod_result.csv"));
 }
 
+TEST(Cli, AFlowSineWithoutAmplitudesIsRefusedNamingTheKey) {
+  // A flow waveform has no default amplitude (the 120/80 mmHg of a pressure sine are not
+  // m³/s): the key that is missing is named with the file and line of its section.
+  const auto dir = flowire::testing::scratch_dir("cli-flow-sine");
+  write(dir / "scene.yaml",
+        "vessels:\n  generator: {type: straight_tube}\nflow:\n  inlet:\n    flow: {waveform: sine}\n"
+        "solve: {dt: 10 ms, duration: 20 ms}\n");
+  const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "o").string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("flowire: error: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("scene.yaml:5"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("flow.inlet.flow.systolic"), std::string::npos) << r.err;
+  EXPECT_LE(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
+  // Given both amplitudes it runs; a pressure sine keeps its declared 120/80 mmHg defaults.
+  write(dir / "flow.yaml",
+        "vessels:\n  generator: {type: straight_tube}\nflow:\n  inlet:\n"
+        "    flow: {waveform: sine, systolic: 2e-6, diastolic: 1e-6}\nsolve: {dt: 10 ms, duration: 20 ms}\n");
+  const auto ok = run("run " + (dir / "flow.yaml").string() + " --out " + (dir / "f").string());
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  write(dir / "pressure.yaml",
+        "vessels:\n  generator: {type: straight_tube}\nflow:\n  inlet:\n    pressure: {waveform: sine}\n"
+        "solve: {dt: 10 ms, duration: 20 ms}\n");
+  const auto p = run("run " + (dir / "pressure.yaml").string() + " --out " + (dir / "p").string());
+  EXPECT_EQ(p.status, 0) << p.err;
+}
+
+TEST(Cli, SceneKeyDefaultsAgreeWithTheirUnits) {
+  // No key of flow rate (m³/s) shows a pressure in its default or its description.
+  const auto r = run("help scene");
+  ASSERT_EQ(r.status, 0);
+  std::istringstream rows(r.out);
+  int flow_rate_keys = 0;
+  for (std::string row; std::getline(rows, row);) {
+    if (row.find("| m^3/s |") == std::string::npos && row.find("| m³/s |") == std::string::npos) continue;
+    ++flow_rate_keys;
+    EXPECT_EQ(row.find("mmHg"), std::string::npos) << row;
+    EXPECT_EQ(row.find(" Pa"), std::string::npos) << row;
+  }
+  EXPECT_GE(flow_rate_keys, 4);
+}
+
+TEST(Cli, AnSvZeroDSolverModelIsNotAVesselsFile) {
+  // A 0D model has no geometry: `flowire run model.json` solves it, `vessels.file` refuses it.
+  FLOWIRE_REQUIRE_SHARED("peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json");
+  const auto dir = flowire::testing::scratch_dir("cli-svzerod-vessels");
+  const auto model = (flowire::testing::shared_dir() / "peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json").string();
+  write(dir / "scene.yaml", "vessels:\n  file: " + model + "\n");
+  const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "o").string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("flowire: error: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("steadyFlow_bifurcationR_R1.json"), std::string::npos) << r.err;
+  EXPECT_LE(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
 TEST(Cli, SceneKeyReferenceIsUpToDate) {
   // docs/scene-keys.md is generated from the one declaration: `flowire help scene > docs/scene-keys.md`.
   std::ifstream in(std::string(FLOWIRE_SOURCE_DIR) + "/docs/scene-keys.md");

@@ -654,6 +654,8 @@ void expect_identical(const Network& a, const Network& b) {
     EXPECT_EQ(a.segment(s).node_from, b.segment(s).node_from);
     EXPECT_EQ(a.segment(s).node_to, b.segment(s).node_to);
     EXPECT_EQ(a.segment(s).radius, b.segment(s).radius);
+    EXPECT_EQ(a.segment(s).radius_from, b.segment(s).radius_from) << "segment " << s;  // the taper
+    EXPECT_EQ(a.segment(s).radius_to, b.segment(s).radius_to) << "segment " << s;
     EXPECT_EQ(a.segment(s).length, b.segment(s).length);
     EXPECT_EQ(a.segment(s).branch, b.segment(s).branch);
   }
@@ -789,6 +791,93 @@ TEST_F(ReadersWithVtk, DisconnectedPiecesAreAnErrorOrTheInletPieceIsKept) {
   EXPECT_NEAR(net.counts().total_length, 0.05, 1e-15);
   ASSERT_EQ(w.warnings().size(), 1u);
   EXPECT_TRUE(w.contains("disconnected pieces"));
+}
+
+// ---------------------------------------------------------------------------------------
+// Trees written one polyline per branch, as a VTK writer or VMTK's branch export does: every
+// branch carries its own radius, the junction point is repeated at the start of each daughter.
+
+struct SplitTree {
+  TestPoly poly;
+  std::vector<double> branch_radius;  // per line cell
+};
+
+/// A Y (parent r0, daughters r1 and r2) as three polylines with their own point ids. The
+/// parent's points are a + (b − a)·i/n, as writers compute them; `gap` moves each daughter's
+/// first point away from b by that vector.
+SplitTree split_y(double r0, double r1, double r2, const Vec3& gap = Vec3::Zero()) {
+  SplitTree t;
+  std::vector<double> r;
+  const Vec3 a(0.0, 0.0, 0.0), b(0.0137, 0.0011, -0.0023);
+  auto branch = [&](const Vec3& from, const Vec3& to, double radius, int n) {
+    std::vector<long long> ids;
+    for (int i = 0; i <= n; ++i) {
+      ids.push_back(static_cast<long long>(t.poly.points.size()));
+      t.poly.points.push_back(from + (to - from) * (static_cast<double>(i) / n));
+      r.push_back(radius);
+    }
+    t.poly.lines.push_back(ids);
+    t.branch_radius.push_back(radius);
+  };
+  branch(a, b, r0, 7);
+  branch(b + gap, b + Vec3(0.011, 0.007, 0.001), r1, 5);
+  branch(b + gap, b + Vec3(0.009, -0.006, 0.002), r2, 3);
+  t.poly.point_data.push_back({"radius", r});
+  return t;
+}
+
+TEST(ReadSplitPolylines, EverySegmentTakesTheRadiusOfItsOwnBranch) {
+  const auto t = split_y(2e-3, 1.6e-3, 1.1e-3);
+  const auto file = write_file(scratch_dir("io_split_radius"), "y.vtk", legacy_text(t.poly));
+  ReadOptions opt;
+  opt.build.max_segment_length = 2e-3;
+  const auto net = read_network(file, opt);
+  const auto c = net.counts();
+  ASSERT_EQ(c.branches, 3);
+  EXPECT_EQ(c.junctions, 1);
+  EXPECT_EQ(c.ends, 3);
+  for (int s = 0; s < net.num_segments(); ++s) {
+    const auto& seg = net.segment(s);
+    // The branch of a segment: the line cell whose straight line holds its midpoint.
+    const Vec3 mid = 0.5 * (net.node(seg.node_from) + net.node(seg.node_to));
+    int cell = -1;
+    for (size_t k = 0; k < t.poly.lines.size(); ++k) {
+      const Vec3 p = t.poly.points[static_cast<size_t>(t.poly.lines[k].front())];
+      const Vec3 q = t.poly.points[static_cast<size_t>(t.poly.lines[k].back())];
+      if ((mid - p).cross(q - p).norm() <= 1e-12 * (q - p).norm() * (q - p).norm()) cell = static_cast<int>(k);
+    }
+    ASSERT_GE(cell, 0) << "segment " << s;
+    const double r = t.branch_radius[static_cast<size_t>(cell)];
+    EXPECT_DOUBLE_EQ(seg.radius, r) << "segment " << s;
+    EXPECT_DOUBLE_EQ(seg.radius_from, r) << "segment " << s;
+    EXPECT_DOUBLE_EQ(seg.radius_to, r) << "segment " << s;
+  }
+}
+
+TEST(ReadSplitPolylines, EndsThatDifferByRoundingAreOneNode) {
+  // The daughters start one unit in the last place away from the parent's end, on every
+  // axis: what two writers computing the same point in different orders produce.
+  const Vec3 b(0.0137, 0.0011, -0.0023);
+  const Vec3 ulp(std::nextafter(b.x(), 1.0) - b.x(), std::nextafter(b.y(), 1.0) - b.y(),
+                 std::nextafter(b.z(), 1.0) - b.z());
+  for (const Vec3& gap : {ulp, Vec3(-ulp), Vec3(3.0 * ulp)}) {
+    const auto t = split_y(2e-3, 1.6e-3, 1.1e-3, gap);
+    const auto file = write_file(scratch_dir("io_split_rounding"), "y.vtk", legacy_text(t.poly));
+    const auto c = read_network(file).counts();
+    EXPECT_EQ(c.components, 1);
+    EXPECT_EQ(c.junctions, 1);
+    EXPECT_EQ(c.ends, 3);
+    EXPECT_EQ(c.branches, 3);
+  }
+}
+
+TEST(ReadSplitPolylines, ARealGapIsStillAnError) {
+  // 1% of the smaller daughter's radius is a gap, not rounding: one clear error naming the pieces.
+  const auto t = split_y(2e-3, 1.6e-3, 1.1e-3, Vec3(0.0, 1.1e-5, 0.0));
+  const auto file = write_file(scratch_dir("io_split_gap"), "y.vtk", legacy_text(t.poly));
+  const auto msg = error_of([&] { (void)read_network(file); });
+  EXPECT_CONTAINS(msg, "y.vtk");
+  EXPECT_CONTAINS(msg, "disconnected pieces");
 }
 
 TEST(ReadBadInput, YamlErrorsNameFileLineAndPoint) {

@@ -269,8 +269,9 @@ std::optional<Network> yaml_network(const std::string& path, const YamlFile& f, 
   for (size_t s = 0; s < segs_n.size(); ++s) {
     const auto n = segs_n[s];
     const auto what = fmt::format("segment {}", s);
-    if (!n.IsSequence() || n.size() != 5)
-      throw_input_error(at(path, n), what + ": expected [node_from, node_to, radius, length, branch]");
+    if (!n.IsSequence() || (n.size() != 5 && n.size() != 7))
+      throw_input_error(at(path, n),
+                        what + ": expected [node_from, node_to, radius, length, branch(, radius_from, radius_to)]");
     Segment seg;
     const long long a = integer(path, n[0], what), b = integer(path, n[1], what);
     if (a < 0 || a >= nn || b < 0 || b >= nn)
@@ -282,6 +283,13 @@ std::optional<Network> yaml_network(const std::string& path, const YamlFile& f, 
     seg.length = number(path, n[3], what) * factor;
     if (!(seg.radius > 0.0) || !std::isfinite(seg.radius))
       throw_input_error(at(path, n), fmt::format("{}: radius is not positive and finite", what));
+    if (n.size() == 7) {
+      seg.radius_from = number(path, n[5], what) * factor;
+      seg.radius_to = number(path, n[6], what) * factor;
+      if (!(seg.radius_from > 0.0 && seg.radius_to > 0.0) || !std::isfinite(seg.radius_from) ||
+          !std::isfinite(seg.radius_to))
+        throw_input_error(at(path, n), fmt::format("{}: end radius is not positive and finite", what));
+    }
     if (!(seg.length > 0.0) || !std::isfinite(seg.length))
       throw_input_error(at(path, n), fmt::format("{}: length is not positive and finite", what));
     const long long br = integer(path, n[4], what);
@@ -586,7 +594,9 @@ Network deck_network(const std::string& path, const OneDDeck& deck, double f, co
         Segment seg;
         seg.node_from = prev;
         seg.node_to = next;
-        seg.radius = 0.5 * ((1.0 - w0) * r0 + w0 * r1 + (1.0 - w1) * r0 + w1 * r1);
+        seg.radius_from = (1.0 - w0) * r0 + w0 * r1;  // the deck's linear taper, exactly
+        seg.radius_to = (1.0 - w1) * r0 + w1 * r1;
+        seg.radius = 0.5 * (seg.radius_from + seg.radius_to);
         seg.length = len / n;
         seg.branch = static_cast<int>(branches.size());
         br.segments.push_back(static_cast<int>(segs.size()));

@@ -358,6 +358,8 @@ std::vector<Polyline> branch_split_vmtk(const PolyData& pd, const std::vector<do
       p.radii.push_back(parent.radii.back());
       if (rep.blank_cell) append_points(p, make_polyline(pd, radii, cell_ids(pd, *rep.blank_cell, true), {}), 1);
       append_points(p, own.at(g), p.points.size() == 1 && !rep.blank_cell ? 1 : 0);
+      // The junction point is the parent's; its radius on this branch is this branch's own.
+      if (p.radii.size() > 1) p.radii.front() = p.radii[1];
     } else {
       if (rep.blank_cell) append_points(p, make_polyline(pd, radii, cell_ids(pd, *rep.blank_cell, true), {}));
       append_points(p, own.at(g));
@@ -369,9 +371,17 @@ std::vector<Polyline> branch_split_vmtk(const PolyData& pd, const std::vector<do
 
 // ---------------------------------------------------------------------------------------
 
+/// The point ids a canonical edge {a, b} (a < b) was read from: `at_a` is the file point at a,
+/// `at_b` the one at b, in the first line cell holding the edge. Each cell keeps its own
+/// radius there (a junction point repeated in every branch carries each branch's radius).
+struct EdgeOrigin {
+  long long at_a = -1, at_b = -1;
+};
+using EdgeOrigins = std::map<std::pair<long long, long long>, EdgeOrigin>;
+
 /// Point adjacency from line cells (each consecutive pair of ids is an edge; duplicates merged).
 std::vector<std::vector<long long>> adjacency(const PolyData& pd, const std::vector<long long>& canon,
-                                              bool allow_duplicates) {
+                                              bool allow_duplicates, EdgeOrigins* origins = nullptr) {
   std::vector<std::vector<long long>> adj(pd.points.size());
   std::set<std::pair<long long, long long>> seen;
   for (size_t c = 0; c < pd.lines.size(); ++c) {
@@ -381,6 +391,8 @@ std::vector<std::vector<long long>> adjacency(const PolyData& pd, const std::vec
       long long b = canon[static_cast<size_t>(ids[k + 1])];
       if (a == b) continue;
       if (!seen.emplace(std::min(a, b), std::max(a, b)).second) continue;
+      if (origins)
+        (*origins)[{std::min(a, b), std::max(a, b)}] = a < b ? EdgeOrigin{ids[k], ids[k + 1]} : EdgeOrigin{ids[k + 1], ids[k]};
       adj[static_cast<size_t>(a)].push_back(b);
       adj[static_cast<size_t>(b)].push_back(a);
     }
@@ -388,25 +400,57 @@ std::vector<std::vector<long long>> adjacency(const PolyData& pd, const std::vec
   return adj;
 }
 
-/// Points with identical coordinates share the smallest id.
-std::vector<long long> canonical_ids(const PolyData& pd) {
-  struct Key {
-    double x, y, z;
-    bool operator<(const Key& o) const { return std::tie(x, y, z) < std::tie(o.x, o.y, o.z); }
+/// Points closer than kSamePoint × their radius are one point (sharing the smallest id): the
+/// end points two writers compute for the same junction differ in the last bits.
+constexpr double kSamePoint = 1e-6;
+
+std::vector<long long> canonical_ids(const PolyData& pd, const std::vector<double>& radii) {
+  const size_t n = pd.points.size();
+  double rmax = 0.0;
+  for (size_t i = 0; i < n; ++i)
+    if (std::isfinite(radii[i])) rmax = std::max(rmax, radii[i]);
+  const double cell = kSamePoint * rmax;
+  std::vector<long long> canon(n);
+  for (size_t i = 0; i < n; ++i) canon[i] = static_cast<long long>(i);
+  if (!(cell > 0.0)) return canon;
+  // Hash grid of cell size ≥ every tolerance: near points are in neighbouring cells.
+  using Cell = Eigen::Matrix<int64_t, 3, 1>;
+  auto key = [](const Cell& k) {
+    return (static_cast<uint64_t>(k.x() & 0x1FFFFF) << 42) ^ (static_cast<uint64_t>(k.y() & 0x1FFFFF) << 21) ^
+           static_cast<uint64_t>(k.z() & 0x1FFFFF);
   };
-  std::map<Key, long long> first;
-  std::vector<long long> canon(pd.points.size());
-  for (size_t i = 0; i < pd.points.size(); ++i) {
-    const auto& p = pd.points[i];
-    canon[i] = first.emplace(Key{p.x(), p.y(), p.z()}, static_cast<long long>(i)).first->second;
+  auto cell_of = [&](const Vec3& x) {
+    const Eigen::Array3d f = (x / cell).array().floor().max(-4e18).min(4e18);
+    return Cell(static_cast<int64_t>(f.x()), static_cast<int64_t>(f.y()), static_cast<int64_t>(f.z()));
+  };
+  std::unordered_multimap<uint64_t, long long> grid;
+  grid.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& x = pd.points[i];
+    if (!x.allFinite()) continue;  // validated (and reported) before the chains are built
+    const Cell k = cell_of(x);
+    for (int dx = -1; dx <= 1 && canon[i] == static_cast<long long>(i); ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto range = grid.equal_range(key(k + Cell(dx, dy, dz)));
+          for (auto it = range.first; it != range.second; ++it) {
+            const auto j = static_cast<size_t>(it->second);
+            if ((pd.points[j] - x).norm() <= kSamePoint * std::max(radii[i], radii[j]))
+              canon[i] = std::min(canon[i], canon[j]);
+          }
+        }
+    if (canon[i] == static_cast<long long>(i)) grid.emplace(key(k), static_cast<long long>(i));
   }
   return canon;
 }
 
 /// Chains between points of degree != 2 (ends, junctions); closed rings are cut in two.
+/// Each point of a chain takes the radius its own line cell gives it; a chain is also cut
+/// where two cells meet with different radii at their shared point.
 std::vector<Polyline> graph_chains(const PolyData& pd, const std::vector<double>& radii, bool allow_duplicates) {
-  const auto canon = canonical_ids(pd);
-  const auto adj = adjacency(pd, canon, allow_duplicates);
+  const auto canon = canonical_ids(pd, radii);
+  EdgeOrigins origins;
+  const auto adj = adjacency(pd, canon, allow_duplicates, &origins);
   std::vector<long long> order;  // vertices in order of first use
   {
     std::vector<char> seen(pd.points.size(), 0);
@@ -443,17 +487,28 @@ std::vector<Polyline> graph_chains(const PolyData& pd, const std::vector<double>
     for (const long long w : adj[static_cast<size_t>(v)])
       if (!used.count(edge(v, w))) walk(v, w);
 
+  // The file point that stands for chain vertex `v` on the edge {v, w}.
+  auto origin = [&](long long v, long long w) {
+    const auto& o = origins.at(edge(v, w));
+    return static_cast<size_t>(v < w ? o.at_a : o.at_b);
+  };
   std::vector<Polyline> out;
-  for (auto& chain : chains) {
-    if (chain.size() >= 4 && chain.front() == chain.back()) {  // ring: two branches
-      const size_t mid = chain.size() / 2;
-      std::vector<long long> a(chain.begin(), chain.begin() + static_cast<std::ptrdiff_t>(mid + 1));
-      std::vector<long long> b(chain.begin() + static_cast<std::ptrdiff_t>(mid), chain.end());
-      out.push_back(make_polyline(pd, radii, a, fmt::format("branch_{}", out.size())));
-      out.push_back(make_polyline(pd, radii, b, fmt::format("branch_{}", out.size())));
-    } else {
-      out.push_back(make_polyline(pd, radii, chain, fmt::format("branch_{}", out.size())));
+  auto emit = [&](const std::vector<long long>& chain, size_t lo, size_t hi) {
+    Polyline p;
+    p.name = fmt::format("branch_{}", out.size());
+    for (size_t k = lo; k <= hi; ++k) {
+      p.points.push_back(pd.points[static_cast<size_t>(chain[k])]);
+      p.radii.push_back(radii[k < hi ? origin(chain[k], chain[k + 1]) : origin(chain[k], chain[k - 1])]);
     }
+    out.push_back(std::move(p));
+  };
+  for (auto& chain : chains) {
+    std::vector<size_t> cuts{0};
+    for (size_t k = 1; k + 1 < chain.size(); ++k)
+      if (radii[origin(chain[k], chain[k - 1])] != radii[origin(chain[k], chain[k + 1])]) cuts.push_back(k);
+    if (cuts.size() == 1 && chain.size() >= 4 && chain.front() == chain.back()) cuts.push_back(chain.size() / 2);  // ring
+    cuts.push_back(chain.size() - 1);
+    for (size_t i = 0; i + 1 < cuts.size(); ++i) emit(chain, cuts[i], cuts[i + 1]);
   }
   return out;
 }
@@ -698,9 +753,9 @@ Centerlines polydata_to_centerlines(const PolyData& pd, double merge_tolerance) 
       p.name = br.name;
       for (size_t k = 0; k < br.nodes.size(); ++k) {
         p.points.push_back(net->node(br.nodes[k]));
-        const int s_before = k > 0 ? br.segments[k - 1] : br.segments[k];
-        const int s_after = k < br.segments.size() ? br.segments[k] : br.segments[k - 1];
-        p.radii.push_back(0.5 * (net->segment(s_before).radius + net->segment(s_after).radius));
+        // The radius this branch has at the node (the segment after it, the last one at the end).
+        p.radii.push_back(k < br.segments.size() ? net->segment(br.segments[k]).radius_from
+                                                 : net->segment(br.segments[k - 1]).radius_to);
       }
       c.branches.push_back(std::move(p));
     }
@@ -735,6 +790,10 @@ std::optional<Network> polydata_to_network(const PolyData& pd) {
   if (ns == 0) throw_input_error(src, "a flowire network file without line cells");
   const auto* radius = find_array(pd.cell_data, "radius");
   const auto* length = find_array(pd.cell_data, "length");
+  const auto* radius_from = find_array(pd.cell_data, "radius_from");  // absent before end radii: cylinders
+  const auto* radius_to = find_array(pd.cell_data, "radius_to");
+  if (radius_from) require_tuples(pd, *radius_from, ns, "cell");
+  if (radius_to) require_tuples(pd, *radius_to, ns, "cell");
   const auto* branch = find_array(pd.cell_data, "branch_id");
   if (!radius) throw_input_error(src, "flowire network file without the cell array 'radius'");
   if (!branch) throw_input_error(src, "flowire network file without the cell array 'branch_id'");
@@ -753,6 +812,12 @@ std::optional<Network> polydata_to_network(const PolyData& pd) {
     segs[s].node_from = static_cast<int>(ids[0]);
     segs[s].node_to = static_cast<int>(ids[1]);
     segs[s].radius = radius->values[s * static_cast<size_t>(radius->components)];
+    for (const auto& [arr, out] : {std::pair{radius_from, &segs[s].radius_from}, std::pair{radius_to, &segs[s].radius_to}}) {
+      if (!arr) continue;
+      *out = arr->values[s * static_cast<size_t>(arr->components)];
+      if (!(*out > 0.0 && std::isfinite(*out)))
+        throw_input_error(src, fmt::format("line cell {}: {} {} is not positive and finite", s, arr->name, *out));
+    }
     segs[s].length = length ? length->values[s * static_cast<size_t>(length->components)] : 0.0;
     if (length && !(segs[s].length > 0.0 && std::isfinite(segs[s].length)))
       throw_input_error(src, fmt::format("line cell {}: length {} is not positive and finite", s, segs[s].length));

@@ -84,7 +84,7 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
   const auto ns = static_cast<size_t>(net.num_segments());
   const auto nb = static_cast<size_t>(net.num_branches());
   check_arrays(point_data, nn, "point", {"radius"});
-  check_arrays(cell_data, ns, "cell", {"radius", "length", "branch_id", "segment_id"});
+  check_arrays(cell_data, ns, "cell", {"radius", "radius_from", "radius_to", "length", "branch_id", "segment_id"});
 
   Appended data;
   std::vector<ArrayXml> field, point, cell;
@@ -108,23 +108,29 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
   add(field, "branch_node_offsets", node_off);
   add(field, "branch_nodes", node_ids);
 
-  // Point data: node radius = mean radius of the segments at the node.
+  // Point data, for display only (a node has no radius of its own): the mean of the radii
+  // the segments meeting at the node have there.
   std::vector<double> node_r(nn, 0.0);
   for (size_t i = 0; i < nn; ++i) {
     const auto [b, e] = net.node_segments(static_cast<int>(i));
     double sum = 0.0;
-    for (const int* s = b; s != e; ++s) sum += net.segment(*s).radius;
+    for (const int* s = b; s != e; ++s) {
+      const auto& seg = net.segment(*s);
+      sum += seg.node_from == static_cast<int>(i) ? seg.radius_from : seg.radius_to;
+    }
     node_r[i] = e > b ? sum / static_cast<double>(e - b) : 0.0;
   }
   add(point, "radius", node_r);
   for (const auto& a : point_data) add(point, a.name, a.values, a.components);
 
-  std::vector<double> radius(ns), length(ns);
+  std::vector<double> radius(ns), radius_from(ns), radius_to(ns), length(ns);
   std::vector<int32_t> branch(ns), segment_id(ns);
   std::vector<int64_t> conn(2 * ns), offsets(ns);
   for (size_t s = 0; s < ns; ++s) {
     const auto& seg = net.segment(static_cast<int>(s));
     radius[s] = seg.radius;
+    radius_from[s] = seg.radius_from;
+    radius_to[s] = seg.radius_to;
     length[s] = seg.length;
     branch[s] = seg.branch;
     segment_id[s] = static_cast<int32_t>(s);
@@ -133,6 +139,8 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
     offsets[s] = static_cast<int64_t>(2 * s + 2);
   }
   add(cell, "radius", radius);
+  add(cell, "radius_from", radius_from);
+  add(cell, "radius_to", radius_to);
   add(cell, "length", length);
   add(cell, "branch_id", branch);
   add(cell, "segment_id", segment_id);
@@ -189,8 +197,8 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
 void write_network_yaml(const Network& net, const std::string& path) {
   std::string y;
   y += "# flowire vessel network. Positions and radii in metres. 'branches' gives each branch's points\n";
-  y += "# [x, y, z, r] (r: mean radius of the segments at the point); 'nodes' and 'segments'\n";
-  y += "# ([from, to, radius, length, branch]) give the exact network.\n";
+  y += "# [x, y, z, r] (r: the branch's radius at the point); 'nodes' and 'segments'\n";
+  y += "# ([from, to, radius, length, branch, radius_from, radius_to]) give the exact network.\n";
   y += "format: flowire-network\nversion: 1\nlength_unit: m\nbranches:\n";
   auto list = [](const std::vector<int>& v) {
     std::string s = "[";
@@ -217,12 +225,10 @@ void write_network_yaml(const Network& net, const std::string& path) {
     y += fmt::format("  - name: {}\n    points:\n", quoted);
     for (size_t k = 0; k < b.nodes.size(); ++k) {
       double r = 0.0;
-      int n = 0;
-      for (const size_t s : {k == 0 ? 0 : k - 1, k}) {
-        if (s < b.segments.size()) r += net.segment(b.segments[s]).radius, ++n;
-      }
+      if (k < b.segments.size()) r = net.segment(b.segments[k]).radius_from;
+      else if (k > 0 && k - 1 < b.segments.size()) r = net.segment(b.segments[k - 1]).radius_to;
       const auto& p = net.node(b.nodes[k]);
-      y += fmt::format("      - [{}, {}, {}, {}]\n", p.x(), p.y(), p.z(), n ? r / n : 0.0);
+      y += fmt::format("      - [{}, {}, {}, {}]\n", p.x(), p.y(), p.z(), r);
     }
     y += fmt::format("    nodes: {}\n    segments: {}\n", list(b.nodes), list(b.segments));
   }
@@ -230,7 +236,8 @@ void write_network_yaml(const Network& net, const std::string& path) {
   for (const auto& p : net.nodes()) y += fmt::format("  - [{}, {}, {}]\n", p.x(), p.y(), p.z());
   y += "segments:\n";
   for (const auto& s : net.segments())
-    y += fmt::format("  - [{}, {}, {}, {}, {}]\n", s.node_from, s.node_to, s.radius, s.length, s.branch);
+    y += fmt::format("  - [{}, {}, {}, {}, {}, {}, {}]\n", s.node_from, s.node_to, s.radius, s.length, s.branch,
+                     s.radius_from, s.radius_to);
   write_text_atomically(path, y);
 }
 

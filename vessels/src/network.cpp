@@ -181,6 +181,8 @@ Network Network::build(const Centerlines& c, const BuildOptions& opt) {
       seg.node_from = br.nodes[k];
       seg.node_to = br.nodes[k + 1];
       seg.radius = al.mean_radius(cuts[k], cuts[k + 1]);
+      seg.radius_from = al.radius(cuts[k]);
+      seg.radius_to = al.radius(cuts[k + 1]);
       seg.branch = static_cast<int>(b);
       br.segments.push_back(net.num_segments());
       net.segments_.push_back(seg);
@@ -227,6 +229,11 @@ void Network::finalize() {
       throw_input_error(source_, fmt::format("segment {} joins node {} to itself (self-loop)", s, seg.node_from));
     if (!(seg.radius > 0.0) || !std::isfinite(seg.radius))
       throw_input_error(source_, fmt::format("segment {}: radius {} is not positive and finite", s, seg.radius));
+    if (seg.radius_from <= 0.0) seg.radius_from = seg.radius;
+    if (seg.radius_to <= 0.0) seg.radius_to = seg.radius;
+    if (!std::isfinite(seg.radius_from) || !std::isfinite(seg.radius_to))
+      throw_input_error(source_, fmt::format("segment {}: end radius {} / {} is not finite", s, seg.radius_from,
+                                             seg.radius_to));
     const double len = (nodes_[static_cast<size_t>(seg.node_to)] - nodes_[static_cast<size_t>(seg.node_from)]).norm();
     if (seg.length <= 0.0) seg.length = len;
     if (!(seg.length > 0.0) || !std::isfinite(seg.length))
@@ -257,7 +264,8 @@ int Network::widest_end() const {
   int best = -1;
   double rbest = -1.0;
   for (int i : ends()) {
-    const double r = segment(*node_segments(i).first).radius;
+    const auto& seg = segment(*node_segments(i).first);
+    const double r = seg.node_from == i ? seg.radius_from : seg.radius_to;  // the radius at the end itself
     if (r > rbest) rbest = r, best = i;
   }
   return best;

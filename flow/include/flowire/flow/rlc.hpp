@@ -33,9 +33,15 @@ struct PeriodicInfo {
 };
 [[nodiscard]] PeriodicInfo periodic_info(const FlowSolver& solver);
 
-/// @brief Inertance of a segment (kg/m⁴).
+/// @brief Inertance of a cylindrical segment (kg/m⁴): ρl/(πr²), times 4/3 for `Womersley`.
 [[nodiscard]] double segment_inertance(Inertance kind, double density, double length, double radius);
-/// @brief Compliance of a segment (m³/Pa), 0 when `youngs_modulus` ≤ 0.
+/// @brief Inertance of a linearly tapered segment, ∫ρ/(π r(x)²) dx = ρl/(π r1 r2) (times 4/3 for `Womersley`).
+[[nodiscard]] double segment_inertance(Inertance kind, double density, double length, double r1, double r2);
+/// @brief Compliance of a cylindrical segment (m³/Pa), 3πr²l/(2E h/r) with h/r = `thickness_ratio`;
+/// 0 when `youngs_modulus` ≤ 0.
 [[nodiscard]] double segment_compliance(double youngs_modulus, double thickness_ratio, double length, double radius);
+/// @brief Compliance of a linearly tapered segment, ∫3π r(x)²/(2E h/r) dx = π l (r1² + r1 r2 + r2²)/(2E h/r).
+[[nodiscard]] double segment_compliance(double youngs_modulus, double thickness_ratio, double length, double r1,
+                                        double r2);
 
 }  // namespace flowire::flow

@@ -84,11 +84,7 @@ class FlowSolver {
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p) const;
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p, double t) const;
 
-  /// @brief Finalize PETSc if the petsc solver initialized it (it also runs at exit). A
-/// program that calls MPI_Init itself calls this before MPI_Finalize. No-op without PETSc.
-void finalize_petsc();
-
-/// @brief Poiseuille resistance of each segment (Pa·s/m³).
+  /// @brief Poiseuille resistance of each segment (Pa·s/m³).
   [[nodiscard]] double resistance(int segment) const { return resistance_[static_cast<size_t>(segment)]; }
   [[nodiscard]] const Network& network() const { return net_; }
   [[nodiscard]] const FlowSpec& spec() const { return spec_; }
@@ -140,6 +136,20 @@ void finalize_petsc();
 [[nodiscard]] inline double poiseuille_resistance(double viscosity, double length, double radius) {
   constexpr double pi = 3.14159265358979323846;
   return 8.0 * viscosity * length / (pi * radius * radius * radius * radius);
+}
+
+/// @brief Poiseuille resistance of a conical frustum whose radius runs linearly from r1 to
+/// r2 over the length l, the integral of 8η/(π r(x)⁴) along it:
+/// \f[ R = \frac{8\eta l\,(r_1^2 + r_1 r_2 + r_2^2)}{3\pi r_1^3 r_2^3} \f]
+/// (equal to `poiseuille_resistance` when r1 = r2; the mean radius would underestimate it).
+[[nodiscard]] inline double frustum_resistance(double viscosity, double length, double r1, double r2) {
+  constexpr double pi = 3.14159265358979323846;
+  return 8.0 * viscosity * length * (r1 * r1 + r1 * r2 + r2 * r2) / (3.0 * pi * r1 * r1 * r1 * r2 * r2 * r2);
+}
+
+/// @brief The resistance of a network segment: the frustum between its end radii.
+[[nodiscard]] inline double segment_resistance(double viscosity, const vessels::Segment& seg) {
+  return frustum_resistance(viscosity, seg.length, seg.radius_from, seg.radius_to);
 }
 
 /// @brief Wall-clock helper for timings.

@@ -14,8 +14,11 @@
 ///     along shared trunks): the paths are merged into one tree from their common inlet; a
 ///     path stays on the tree while its points are within `merge_tolerance` × local radius
 ///     of it, and the last such point becomes the junction;
-///   - any other set of polylines: cells sharing points (or coinciding end points) are joined,
-///     one branch per chain between junctions and ends.
+///   - any other set of polylines: cells sharing points, or points closer than 1e-6 of their
+///     radius (the last bits two writers round differently), are joined, one branch per chain
+///     between junctions and ends. A point repeated in several cells (a junction written once
+///     per branch) keeps in each branch the radius that branch's cell gives it; a chain is
+///     also cut where two cells meet with different radii.
 ///   The radius comes from the point array `radius` / `radii` (any case),
 ///   `MaximumInscribedSphereRadius`, or else `sqrt(CenterlineSectionArea / pi)`.
 /// - `.yaml` / `.yml`: flowire's network file,
@@ -81,10 +84,10 @@ struct DataArray {
 
 /// @brief Write a network as VTK XML poly data (`.vtp`, raw appended binary, opens in
 /// ParaView): points = nodes, one VTK_LINE cell per segment (cell `i` is segment `i`), cell data
-/// `radius`, `length`, `branch_id`, `segment_id`, point data `radius` (mean radius of the
-/// segments at the node), then the caller's arrays; field data `flowire_network`,
-/// `branch_names` and the branch node / segment lists, from which `read_network` rebuilds the
-/// identical network. Written atomically (no partial file on failure).
+/// `radius`, `radius_from`, `radius_to`, `length`, `branch_id`, `segment_id`, point data
+/// `radius` (for display: mean of the radii the segments at the node have there), then the
+/// caller's arrays; field data `flowire_network`, `branch_names` and the branch node /
+/// segment lists, from which `read_network` rebuilds the identical network. Written atomically (no partial file on failure).
 /// @throws flowire::Error (usage) if an array has the wrong size, (input) if the file cannot
 /// be written.
 void write_network_vtp(const Network& net, const std::string& path,

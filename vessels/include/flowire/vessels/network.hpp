@@ -4,8 +4,8 @@
 ///
 /// A network is built once from centerlines (`Centerlines`: one polyline with radii per
 /// branch, SI units) and is constant afterwards (constant model, changing state).
-/// Nodes are points of the graph; segments are straight cylinders between two nodes
-/// with one radius. Branch ends that meet within a tolerance share a node (junctions);
+/// Nodes are points of the graph; segments are straight tubes between two nodes whose
+/// radius runs linearly between the two end radii of their own branch (see `Segment`). Branch ends that meet within a tolerance share a node (junctions);
 /// nodes of degree one are ends (inlets/outlets). Loops are allowed and counted as the
 /// cyclomatic number E − V + C.
 #include <Eigen/Core>
@@ -40,12 +40,24 @@ struct BuildOptions {
   double join_tolerance = 0.0;
 };
 
+/// @brief A straight piece of vessel between two nodes: a conical frustum whose radius runs
+/// linearly from `radius_from` (at `node_from`) to `radius_to` (at `node_to`), both taken
+/// from the segment's own branch (a junction node has no radius of its own: each segment
+/// meeting there keeps its branch's radius).
+///
+/// `radius` is the single radius of the cylinder that stands for the segment wherever one
+/// radius is needed (wall contact and distance, spatial lookup, FEM meshing, VTK output,
+/// velocities from a flow rate): the arc-length mean radius, (radius_from + radius_to) / 2
+/// for a linear taper. The flow resistance, inertance and compliance integrate the taper
+/// exactly instead (flow/solver.hpp, `segment_resistance`).
 struct Segment {
   int node_from = -1;
   int node_to = -1;
-  double radius = 0.0;  ///< m
+  double radius = 0.0;  ///< m, mean radius (see above)
   double length = 0.0;  ///< m
   int branch = -1;
+  double radius_from = 0.0;  ///< m, at node_from; <= 0 on input: `radius` (a cylinder)
+  double radius_to = 0.0;    ///< m, at node_to; <= 0 on input: `radius`
 };
 
 struct Branch {
@@ -96,7 +108,7 @@ class Network {
 
   /// @brief Nodes of degree one, in index order.
   [[nodiscard]] std::vector<int> ends() const;
-  /// @brief The end with the largest radius (the default flow inlet).
+  /// @brief The end with the largest radius there (the default flow inlet).
   [[nodiscard]] int widest_end() const;
   /// @brief Connected component id of each node, and their number.
   [[nodiscard]] std::vector<int> components(int* count = nullptr) const;
