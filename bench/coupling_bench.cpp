@@ -51,7 +51,7 @@ struct Scene {
     cp.enabled = contact;
     cp.stiffness = 3e4;
     cp.friction = cp.tip_friction = friction;
-    coupling::DragParams dp;
+    coupling::DragModel dp;
     dp.law = drag ? coupling::DragLaw::SlenderBody : coupling::DragLaw::None;
     dp.wire_length = w.length;
     flow::FlowSolver* fs = flow.get();

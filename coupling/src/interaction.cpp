@@ -58,21 +58,4 @@ FrictionResult coulomb_friction(const Vec3& v, const Vec3& n, double normal_forc
   return r;
 }
 
-double slender_body_normal_coefficient(double eta, double L, double r) {
-  if (!(L > r) || !(r > 0.0))
-    throw_usage_error(fmt::format("slender-body drag needs length > radius > 0 (L = {}, r = {})", L, r));
-  return 4.0 * std::numbers::pi * eta / std::log(L / r);
-}
-
-DragResult slender_body_drag(const Vec3& u, const Vec3& v, const Vec3& t, double eta, double L, double r, double ell) {
-  const double cn = slender_body_normal_coefficient(eta, L, r);
-  const double ct = 0.5 * cn;
-  const Mat3 tt = t * t.transpose();
-  const Mat3 C = ell * (cn * (Mat3::Identity() - tt) + ct * tt);
-  DragResult d;
-  d.force = C * (u - v);
-  d.dfdv = -C;
-  return d;
-}
-
 }  // namespace flowire::coupling

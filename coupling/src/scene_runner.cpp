@@ -71,13 +71,16 @@ std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& c, const 
   cp.tip_friction = c.number_or("contact.tip_friction", cp.friction);
   cp.tip_length = c.has_section("wire.tip") ? c.number("wire.tip.length") : 0.0;
   cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
-  DragParams dp;
-  const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "slender_body";
+  DragModel dp;
+  const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "cylinder";
   dp.law = !flow || law == "none"          ? DragLaw::None
            : law == "velocity_offset" ? DragLaw::VelocityOffset
-                                      : DragLaw::SlenderBody;
+           : law == "slender_body"    ? DragLaw::SlenderBody
+                                      : DragLaw::Cylinder;
   dp.scale = c.number_or("coupling.drag_scale", 1.0);
   dp.viscosity = c.number_or("flow.viscosity", 3.5e-3);
+  dp.density = c.number_or("flow.density", 1060.0);
+  dp.wire_radius = spec.radius;
   dp.wire_length = spec.length;
   dp.mass_per_length = spec.density * std::numbers::pi * spec.radius * spec.radius;
   if (!cp.enabled && dp.law == DragLaw::None) return nullptr;
@@ -455,7 +458,7 @@ vessels::Network build_scene_network(const config::Config& c) {
   }
 }
 
-RunResult run_scene(const config::Config& c) {
+RunResult run_scene(const config::Config& c, const RunOptions& options) {
   const auto t_start = Clock::now();
   (void)take_warnings();
   RunResult result;
@@ -590,6 +593,10 @@ RunResult run_scene(const config::Config& c) {
           f.s.push_back(std::max(0.0, arc[static_cast<size_t>(i)]));
           f.force.push_back(forces && i < static_cast<int>(forces->force().size()) ? forces->force()[static_cast<size_t>(i)]
                                                                                    : Eigen::Vector3d::Zero());
+          auto part = [&](const std::vector<Eigen::Vector3d>& v) {
+            return forces && i < static_cast<int>(v.size()) ? v[static_cast<size_t>(i)] : Eigen::Vector3d::Zero();
+          };
+          if (forces) f.drag.push_back(part(forces->drag_force())), f.contact.push_back(part(forces->contact_force()));
           f.flow_velocity.push_back(forces && i < static_cast<int>(forces->fluid_velocity().size())
                                         ? forces->fluid_velocity()[static_cast<size_t>(i)]
                                         : Eigen::Vector3d::Zero());
@@ -644,6 +651,7 @@ RunResult run_scene(const config::Config& c) {
         if (wire_out) wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
       }
       if (series && (step + 1) % out_every == 0) record(t1);
+      if (options.progress) options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
     }
     if (!series && steps > 0) record(static_cast<double>(steps) * dt);
     s["steps"] = steps;
@@ -716,6 +724,15 @@ RunResult run_scene(const config::Config& c) {
                         {"max_outside", st.max_outside},
                         {"max_outside_over_wire_radius", st.max_outside / sim->discretization().edge_radius.front()},
                         {"contact_evaluations", st.contacts}};
+        if (forces->drag().law != DragLaw::None) {
+          const auto total = forces->total_drag();
+          s["drag"] = {{"law", c.string_or("coupling.drag", "cylinder")},
+                       {"total", {total.x(), total.y(), total.z()}},
+                       {"max_normal_reynolds", st.max_reynolds}};
+          if (forces->drag().law == DragLaw::Cylinder && st.max_reynolds > kCylinderDragMaxReynolds)
+            warn(fmt::format("drag: the normal Reynolds number reached {:.3g}, beyond the cylinder drag curve's range "
+                             "(up to {:.0e})", st.max_reynolds, kCylinderDragMaxReynolds));
+        }
         t_contact = st.seconds_lookup + st.seconds_contact;
         t_coupling = st.seconds_drag;
       }

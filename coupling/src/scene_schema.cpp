@@ -153,8 +153,11 @@ config::Schema make_schema() {
   add("obstacles[].force", Type::Number, "", D::Force, "resistance opposing the tip's advance while it is inside");
 
   add("coupling", Type::Section, "", D::None, "how blood acts on the wire");
-  add("coupling.drag", Type::Enum, "slender_body", D::None,
-      "slender_body | velocity_offset (the published form) | none", {"slender_body", "velocity_offset", "none"});
+  add("coupling.drag", Type::Enum, "cylinder", D::None,
+      "cylinder: cross-flow drag from the cylinder drag curve C_D(Re) (creeping flow to Re 2e5) and the exact "
+      "annular Poiseuille shear along the wire | slender_body: resistive-force (Stokes) drag, Re << 1 only | "
+      "velocity_offset: the published form (blood velocity added to the velocity update) | none",
+      {"cylinder", "slender_body", "velocity_offset", "none"});
   add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force");
   add("coupling.flow_every", Type::Integer, "1", D::None, "evaluate the flow every this many rod steps");
   add("coupling.steering", Type::Section, "", D::None, "a lateral force on the tip towards a chosen branch");

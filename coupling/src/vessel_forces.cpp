@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
+#include "flowire/common/error.hpp"
+
 namespace flowire::coupling {
 
 namespace {
@@ -11,10 +15,17 @@ double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 }  // namespace
 
 VesselForces::VesselForces(const vessels::SpatialIndex& index, double wire_radius, ContactParams contact,
-                           DragParams drag, VelocityField velocity)
+                           DragModel drag, VelocityField velocity)
     : index_(index), wire_radius_(wire_radius), contact_(contact), drag_(drag), velocity_(std::move(velocity)) {
-  if (drag_.law == DragLaw::SlenderBody)
-    drag_cn_ = slender_body_normal_coefficient(drag_.viscosity, drag_.wire_length, wire_radius_);
+  drag_.wire_radius = wire_radius;
+  // Checks the slender-body length once, at set-up, not in the first step.
+  if (drag_.law == DragLaw::SlenderBody) (void)slender_body_normal_coefficient(drag_.viscosity, drag_.wire_length, wire_radius);
+}
+
+Vec3 VesselForces::total_drag() const {
+  Vec3 sum = Vec3::Zero();
+  for (int i = 0; i < free_ && i < static_cast<int>(drag_force_.size()); ++i) sum += drag_force_[static_cast<size_t>(i)];
+  return sum;
 }
 
 void VesselForces::ensure_size(int n) {
@@ -22,6 +33,8 @@ void VesselForces::ensure_size(int n) {
     segment_.resize(static_cast<size_t>(n), -1);
     fluid_.resize(static_cast<size_t>(n), Vec3::Zero());
     force_.resize(static_cast<size_t>(n), Vec3::Zero());
+    drag_force_.resize(static_cast<size_t>(n), Vec3::Zero());
+    contact_force_.resize(static_cast<size_t>(n), Vec3::Zero());
     cur_normal_force_.resize(static_cast<size_t>(n), 0.0);
     cur_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
     lag_normal_force_.resize(static_cast<size_t>(n), 0.0);
@@ -33,6 +46,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
   const int n = rod.vertex_count();
   const int free = std::min(rod.first_clamped_vertex, n);
   ensure_size(n);
+  free_ = free;
   ++stats_.evaluations;
   const auto& net = index_.network();
 
@@ -53,6 +67,8 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
   const double tip_s = rod.arc_length.empty() ? 0.0 : rod.arc_length[0];
   for (int i = 0; i < free; ++i) {
     force_[static_cast<size_t>(i)].setZero();
+    drag_force_[static_cast<size_t>(i)].setZero();
+    contact_force_[static_cast<size_t>(i)].setZero();
     cur_normal_force_[static_cast<size_t>(i)] = 0.0;
     if (!contact_.enabled) continue;
     const int s = segment_[static_cast<size_t>(i)];
@@ -81,6 +97,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     cur_normal_force_[static_cast<size_t>(i)] = k_wall * pen.penetration;
     cur_normal_[static_cast<size_t>(i)] = n_wall;
     force_[static_cast<size_t>(i)] = f;
+    contact_force_[static_cast<size_t>(i)] = f;
   }
   // Friction with the normal force and normal of the step's start (lagged, as in IPC):
   // the friction force is then a function of the velocity alone and its Jacobian is
@@ -106,6 +123,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       }
       out.add_velocity_jacobian(i, fr.dfdv);
       force_[k] += fr.force;
+      contact_force_[k] += fr.force;
       if (contact_.viscous_friction > 0.0) {
         const Vec3& x = rod.position(i);
         const double ell = 0.5 * ((i > 0 ? (x - rod.position(i - 1)).norm() : 0.0) +
@@ -114,38 +132,39 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
         out.add_force(i, -C * rod.velocity(i));
         out.add_velocity_jacobian(i, -C);
         force_[k] -= C * rod.velocity(i);
+        contact_force_[k] -= C * rod.velocity(i);
       }
     }
   }
   stats_.seconds_contact += since(t0);
 
-  // 3) Blood drag from the local velocity profile.
+  // 3) Blood drag from the local velocity profile (drag.hpp), implicit in the wire velocity.
   t0 = Clock::now();
   if (drag_.law != DragLaw::None && velocity_) {
+    DragInput in;
+    in.dt = rod.dt;
     for (int i = 0; i < free; ++i) {
+      const auto k = static_cast<size_t>(i);
       const Vec3& x = rod.position(i);
-      const Vec3 u = velocity_(segment_[static_cast<size_t>(i)], x);
-      fluid_[static_cast<size_t>(i)] = u;
+      const int s = segment_[k];
+      in.u = velocity_(s, x);
+      fluid_[k] = in.u;
+      if (!in.u.allFinite())
+        throw_numerical_error(fmt::format("the blood velocity at wire vertex {} (segment {}) is not finite", i, s));
       const Vec3 prev = i > 0 ? rod.position(i - 1) : x;
       const Vec3 next = i + 1 < n ? rod.position(i + 1) : x;
-      const double ell = 0.5 * ((x - prev).norm() + (next - x).norm());
-      if (drag_.law == DragLaw::SlenderBody) {
-        Vec3 t = prev - next;
-        const double tn = t.norm();
-        t = tn > 0.0 ? Vec3(t / tn) : Vec3::UnitX();
-        const Mat3 tt = t * t.transpose();
-        const Mat3 C = drag_.scale * ell * drag_cn_ * (Mat3::Identity() - 0.5 * tt);
-        const Vec3 f = C * (u - rod.velocity(i));
-        out.add_force(i, f);
-        out.add_velocity_jacobian(i, -C);
-        force_[static_cast<size_t>(i)] += f;
-      } else if (rod.dt > 0.0) {
-        // The published form (eq. 10): the blood velocity is added to the velocity update,
-        // Δv += u, i.e. an impulse m·u per step, which as a force is m·u/Δt.
-        const Vec3 f = drag_.scale * drag_.mass_per_length * ell * u / rod.dt;
-        out.add_force(i, f);
-        force_[static_cast<size_t>(i)] += f;
-      }
+      in.ell = 0.5 * ((x - prev).norm() + (next - x).norm());
+      const Vec3 t = prev - next;
+      const double tn = t.norm();
+      in.t = tn > 0.0 ? Vec3(t / tn) : Vec3::UnitX();
+      in.v = rod.velocity(i);
+      in.vessel_radius = s >= 0 ? net.segment(s).radius : 0.0;
+      const auto d = blood_drag(drag_, in);
+      stats_.max_reynolds = std::max(stats_.max_reynolds, d.reynolds_normal);
+      out.add_force(i, d.force);
+      out.add_velocity_jacobian(i, d.dfdv);
+      force_[k] += d.force;
+      drag_force_[k] = d.force;
     }
   }
   stats_.seconds_drag += since(t0);

@@ -20,7 +20,7 @@ namespace flowire::coupling {
 
 WireOutput::WireOutput(std::filesystem::path dir, bool csv, bool vtk) : dir_(std::move(dir)), csv_(csv), vtk_(vtk) {
   if (csv_) {
-    wire_csv_ = "time,vertex,s,x,y,z\n";
+    wire_csv_ = "time,vertex,s,x,y,z,drag_x,drag_y,drag_z,contact_x,contact_y,contact_z\n";
     tip_csv_ = "time,inserted_length,x,y,z\n";
   }
 }
@@ -32,10 +32,13 @@ void WireOutput::add_tip(double time, double inserted_length, const Eigen::Vecto
 
 void WireOutput::add_frame(const WireFrame& f) {
   ++frame_count_;
+  auto at = [](const std::vector<Eigen::Vector3d>& v, size_t i) { return i < v.size() ? v[i] : Eigen::Vector3d::Zero(); };
   if (csv_)
-    for (size_t i = 0; i < f.x.size(); ++i)
-      wire_csv_ += fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g}\n", f.time, i, f.s[i], f.x[i].x(), f.x[i].y(),
-                               f.x[i].z());
+    for (size_t i = 0; i < f.x.size(); ++i) {
+      const Eigen::Vector3d d = at(f.drag, i), c = at(f.contact, i);
+      wire_csv_ += fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", f.time, i,
+                               f.s[i], f.x[i].x(), f.x[i].y(), f.x[i].z(), d.x(), d.y(), d.z(), c.x(), c.y(), c.z());
+    }
 #ifdef FLOWIRE_HAVE_VTK
   if (!vtk_) return;
   vtkNew<vtkPoints> pts;
@@ -70,6 +73,8 @@ void WireOutput::add_frame(const WireFrame& f) {
     };
   };
   add("force", 3, vec(f.force));
+  add("drag", 3, vec(f.drag));
+  add("contact", 3, vec(f.contact));
   add("flow_velocity", 3, vec(f.flow_velocity));
   const std::string name = fmt::format("wire_{:05d}.vtp", frame_count_ - 1);
   write_atomically(dir_ / name, [&](const std::filesystem::path& tmp) {

@@ -23,7 +23,7 @@ for speed in 1 1.5 2; do
     extra=(--set output.every=1s --set output.png=false)   # CI: no X server needed
   fi
   for mode in on off; do
-    drag=slender_body
+    drag=cylinder
     [ "$mode" = off ] && drag=none
     "${XR[@]}" "$FLOWIRE" run "$here/scene.yaml" --out "$OUT/v${speed}_$mode" \
       --set "insertion.speed=${speed} cm/s" --set "solve.duration=${length_s} s" \

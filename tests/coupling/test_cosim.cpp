@@ -34,7 +34,7 @@ TEST(CoSim, UniformCrossFlowBendsAClampedWireLikeABeamUnderUniformLoad) {
   const double eta = 3.5e-3, u = 0.01;
   auto forces = std::make_shared<VesselForces>(
       index, spec.radius, ContactParams{.enabled = false},
-      DragParams{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = spec.length},
+      DragModel{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = spec.length},
       [&](int, const Vec3&) { return Vec3(0, u, 0); });
   sim.add_external(forces);
   const auto rep = sim.solve_static();
@@ -66,7 +66,7 @@ TEST(CoSim, ContactForcesBalanceThePushInAStaticCheck) {
   cp.stiffness = 1e5;
   cp.friction = 0.0;
   cp.tip_friction = 0.0;
-  auto forces = std::make_shared<VesselForces>(index, spec.radius, cp, DragParams{});
+  auto forces = std::make_shared<VesselForces>(index, spec.radius, cp, DragModel{.law = DragLaw::None});
   sim.add_external(forces);
   const Vec3 F(-0.05, 0.0, 0.0);
   sim.set_tip_force(F);

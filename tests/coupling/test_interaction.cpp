@@ -113,17 +113,3 @@ TEST(Interaction, FrictionForceIsMinusTheGradientOfItsDissipationPotential) {
   const auto slide = coulomb_friction(Vec3(0.1, 0, 0), Vec3::UnitZ(), 2.0, 0.5, 1e-5);
   EXPECT_NEAR(slide.force.x(), -1.0, 1e-8);
 }
-
-TEST(Interaction, SlenderBodyDragCoefficientsAndJacobian) {
-  const double eta = 3.5e-3, L = 1.0, r = 0.45e-3, ell = 1e-3;
-  const double cn = 4 * std::numbers::pi * eta / std::log(L / r);
-  const Vec3 t = Vec3(1, 1, 0).normalized();
-  // Sideways: c⊥; along the axis: c⊥/2.
-  const Vec3 side = Vec3(1, -1, 0).normalized();
-  EXPECT_NEAR(slender_body_drag(side, Vec3::Zero(), t, eta, L, r, ell).force.dot(side), cn * ell, 1e-15);
-  EXPECT_NEAR(slender_body_drag(t, Vec3::Zero(), t, eta, L, r, ell).force.dot(t), 0.5 * cn * ell, 1e-15);
-  const Vec3 u(0.3, -0.1, 0.05), v(0.01, 0.02, -0.03);
-  auto F = [&](const Vec3& w) { return slender_body_drag(u, w, t, eta, L, r, ell).force; };
-  EXPECT_LT((slender_body_drag(u, v, t, eta, L, r, ell).dfdv - fd_jacobian(F, v)).norm(), 1e-12);
-  EXPECT_THROW(slender_body_normal_coefficient(eta, 1e-4, r), flowire::Error);
-}

@@ -83,13 +83,13 @@ TEST(VesselForces, SlenderBodyTerminalVelocityAlongTheAxis) {
   RigidWire pm(x0, 1e-4);  // relaxation time ρA/c∥ ≈ 35 ms
   const double c_par = 2 * std::numbers::pi * eta / std::log(L / a);
   const double F = 0.5 * c_par * u;  // per unit length: halves the terminal velocity
-  VesselForces f(index, a, ContactParams{.enabled = false}, DragParams{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
+  VesselForces f(index, a, ContactParams{.enabled = false}, DragModel{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
                  [&](int, const Vec3&) { return Vec3(u, 0, 0); });
   for (int k = 0; k < 2000; ++k) pm.step(f, 1e-3, Vec3(-F, 0, 0));
   EXPECT_NEAR(pm.V.x(), u - F / c_par, 1e-9 * u);
   // Sideways flow drags twice as hard: c⊥ = 2 c∥.
   RigidWire side(x0, 1e-4);
-  VesselForces g(index, a, ContactParams{.enabled = false}, DragParams{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
+  VesselForces g(index, a, ContactParams{.enabled = false}, DragModel{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
                  [&](int, const Vec3&) { return Vec3(0, u, 0); });
   for (int k = 0; k < 2000; ++k) side.step(g, 1e-3, Vec3(0, -F, 0));
   EXPECT_NEAR(side.V.y(), u - F / (2 * c_par), 1e-9 * u);
@@ -106,7 +106,7 @@ TEST(VesselForces, VelocityOffsetIsTheImpulsePerStepOfThePublishedForm) {
   for (double dt : {1e-3, 2e-3}) {
     RigidWire pm(x0, rhoA);
     VesselForces f(index, 0.45e-3, ContactParams{.enabled = false},
-                   DragParams{.law = DragLaw::VelocityOffset, .mass_per_length = rhoA},
+                   DragModel{.law = DragLaw::VelocityOffset, .mass_per_length = rhoA},
                    [&](int, const Vec3&) { return Vec3(u, 0, 0); });
     for (int k = 0; k < 4000; ++k) pm.step(f, dt, Vec3::Zero(), c);
     EXPECT_NEAR(pm.V.x(), rhoA * u / (c * dt), 1e-6 * u) << dt;
@@ -128,7 +128,7 @@ TEST(VesselForces, CoulombFrictionOnTheWallNeedsMuTimesNToSlide) {
   for (double F : {2.0, 3.0, 6.0, 10.0}) {
     RigidWire pm(x0, 1.0 / len);
     ContactParams cp{.stiffness = k_wall, .friction = mu, .tip_friction = mu, .slip_speed = 1e-5};
-    VesselForces f(index, a, cp, DragParams{});
+    VesselForces f(index, a, cp, DragModel{.law = DragLaw::None});
     const double dt = 1e-3;
     for (int k = 0; k < 1000; ++k) pm.step(f, dt, Vec3(F / len, 0, -g / len));
     const double ke = 0.5 * pm.m * pm.length * pm.V.squaredNorm();
@@ -145,7 +145,7 @@ TEST(VesselForces, LookupUsesTheWindowForAMovingWire) {
   std::vector<Vec3> x0;
   for (int i = 0; i < 30; ++i) x0.push_back(entry + Vec3(0, 0, 1e-3 * i));
   RigidWire pm(x0, 1e-2);
-  VesselForces f(index, 0.45e-3, ContactParams{.stiffness = 1e4}, DragParams{});
+  VesselForces f(index, 0.45e-3, ContactParams{.stiffness = 1e4}, DragModel{.law = DragLaw::None});
   for (int k = 0; k < 50; ++k) pm.step(f, 1e-3, Vec3(0, 0, 0.1));
   EXPECT_GT(index.stats().window_hits, 10 * index.stats().fallbacks);
 }
@@ -161,7 +161,7 @@ TEST(VesselForces, WallStiffnessScalesWithTheVertexEdgesOfARefinedWire) {
   cp.stiffness = 1e4;
   cp.friction = 0.0;
   cp.tip_friction = 0.0;
-  VesselForces forces(index, 0.3e-3, cp, DragParams{});
+  VesselForces forces(index, 0.3e-3, cp, DragModel{.law = DragLaw::None});
   const double h = 1e-3;
   // Vertices 0..4 along the wall (y = 1.8 mm: 0.1 mm into it with a 0.3 mm wire).
   std::vector<Vec3> x, v(5, Vec3::Zero());

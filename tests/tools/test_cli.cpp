@@ -252,3 +252,25 @@ TEST(Cli, CompareTipTracesPrintsTheTableAndPlots) {
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("bad.csv:2"), std::string::npos) << bad.err;
 }
+
+TEST(Cli, ProgressLineOnATerminalOnly) {
+  const auto dir = flowire::testing::scratch_dir("cli-progress");
+  const std::string scene = std::string(FLOWIRE_SOURCE_DIR) + "/examples/aorta_flow/scene.yaml";
+  // Into a file (as in a pipe or a log): no progress at all.
+  const auto piped = run("run " + scene + " --out " + (dir / "piped").string() + " --set output.vtk=false --set output.png=false");
+  ASSERT_EQ(piped.status, 0) << piped.err;
+  EXPECT_EQ(piped.err.find("ETA"), std::string::npos) << piped.err;
+  EXPECT_EQ(piped.err.find('\r'), std::string::npos);
+  // On a terminal (a pseudo-terminal made by util-linux `script`): the line is drawn.
+  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "util-linux `script` is not installed";
+  const std::string cmd = "script -qec '" + std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire run " + scene + " --out " +
+                          (dir / "tty").string() + " --set output.vtk=false --set output.png=false' /dev/null > " + (dir / "tty.txt").string() +
+                          " 2>&1 </dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(dir / "tty.txt");
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("100.0%"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("ETA"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("ok in"), std::string::npos) << text.str();
+}

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <new>
+#include <unistd.h>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
@@ -73,12 +74,48 @@ int cmd_run_svzerod(const std::string& model, const std::string& out, const std:
   return 0;
 }
 
+/// A progress line on stderr, redrawn in place at most 5 times a second: only on a terminal,
+/// never into a pipe or a log file.
+class ProgressLine {
+ public:
+  ProgressLine() : enabled_(isatty(fileno(stderr)) == 1) {}
+  ~ProgressLine() { clear(); }
+  ProgressLine(const ProgressLine&) = delete;
+  ProgressLine& operator=(const ProgressLine&) = delete;
+  [[nodiscard]] bool enabled() const { return enabled_; }
+  void update(const flowire::coupling::Progress& p) {
+    if (p.steps <= 0 || (p.wall_seconds - last_ < 0.2 && p.step < p.steps)) return;
+    last_ = p.wall_seconds;
+    const double done = static_cast<double>(p.step) / static_cast<double>(p.steps);
+    const double eta = done > 0 ? p.wall_seconds * (1.0 - done) / done : 0.0;
+    std::fprintf(stderr, "\r\033[Kflowire: %5.1f%%  t = %.4g of %.4g s  elapsed %.0f s  ETA %.0f s", 100.0 * done, p.time,
+                 p.duration, p.wall_seconds, eta);
+    std::fflush(stderr);
+    drawn_ = true;
+  }
+  void clear() {
+    if (!drawn_) return;
+    std::fprintf(stderr, "\r\033[K");
+    std::fflush(stderr);
+    drawn_ = false;
+  }
+
+ private:
+  bool enabled_;
+  bool drawn_ = false;
+  double last_ = -1.0;
+};
+
 int cmd_run(const std::string& scene, const std::string& out, const std::vector<std::string>& sets) {
   namespace fs = std::filesystem;
   if (!fs::exists(scene)) throw flowire::Error(ErrorKind::Input, fmt::format("{}: no such file", scene));
   if (fs::path(scene).extension() == ".json") return cmd_run_svzerod(scene, out, sets);
   const auto cfg = flowire::coupling::load_scene(scene, sets, out);
-  const auto res = flowire::coupling::run_scene(cfg);
+  flowire::coupling::RunOptions options;
+  ProgressLine line;
+  if (line.enabled()) options.progress = [&line](const flowire::coupling::Progress& p) { line.update(p); };
+  const auto res = flowire::coupling::run_scene(cfg, options);
+  line.clear();
   print_warnings();
   const auto& s = res.summary;
   std::printf("flowire: %s: %s in %.3f s, %d steps; outputs in %s\n", scene.c_str(),

@@ -2,11 +2,13 @@
 """Plot guidewire tip traces and their distance by inserted length (PNG).
 
 usage: plot_traces.py OUT.png LABEL=trace.csv [LABEL=trace.csv ...] [--compare compare.csv]
+                      [--views H:V,H:V]
 
 Each trace is a flowire tip_trace.csv (time,inserted_length,x,y,z). The figure shows the
-traces seen from the front (x-z) and from the side (y-z), and, if a comparison table from
-`flowire compare --out` is given, the RMS distance by inserted length (the published
-Table 2 layout).
+traces seen from the front (x-z) and from the side (y-z), or the two views given by
+--views (columns of the trace, e.g. x:y,time:y for a tip that moves in the x-y plane),
+and, if a comparison table from `flowire compare --out` is given, the RMS distance by
+inserted length (the published Table 2 layout).
 """
 import csv
 import sys
@@ -29,9 +31,14 @@ def main(argv):
         return 2
     out = argv[1]
     traces, compare = [], None
+    views = [("x", "z"), ("y", "z")]
     args = argv[2:]
     i = 0
     while i < len(args):
+        if args[i] == "--views":
+            views = [tuple(v.split(":")) for v in args[i + 1].split(",")]
+            i += 2
+            continue
         if args[i] == "--compare":
             compare = args[i + 1]
             i += 2
@@ -41,16 +48,24 @@ def main(argv):
         i += 1
     ncols = 3 if compare else 2
     fig, axes = plt.subplots(1, ncols, figsize=(5 * ncols, 5))
+    def scale(key, values):
+        return values if key == "time" else [v * 1e3 for v in values]
+
+    def unit(key):
+        return "time (s)" if key == "time" else f"{key} (mm)"
+
     for label, t in traces:
-        axes[0].plot([v * 1e3 for v in t["x"]], [v * 1e3 for v in t["z"]], label=label)
-        axes[1].plot([v * 1e3 for v in t["y"]], [v * 1e3 for v in t["z"]], label=label)
-    for ax, h in ((axes[0], "x (mm)"), (axes[1], "y (mm)")):
-        ax.set_xlabel(h)
-        ax.set_ylabel("z (mm)")
-        ax.set_aspect("equal", adjustable="datalim")
+        for ax, (h, v) in zip(axes, views):
+            ax.plot(scale(h, t[h]), scale(v, t[v]), label=label)
+    for ax, (h, v) in zip(axes, views):
+        ax.set_xlabel(unit(h))
+        ax.set_ylabel(unit(v))
+        if "time" not in (h, v):
+            ax.set_aspect("equal", adjustable="datalim")
         ax.grid(True, alpha=0.3)
-    axes[0].set_title("tip trace, front")
-    axes[1].set_title("tip trace, side")
+    default = views == [("x", "z"), ("y", "z")]
+    axes[0].set_title("tip trace, front" if default else f"tip trace, {views[0][0]}-{views[0][1]}")
+    axes[1].set_title("tip trace, side" if default else f"tip trace, {views[1][0]}-{views[1][1]}")
     axes[0].legend(fontsize=8)
     if compare:
         with open(compare, newline="") as f:

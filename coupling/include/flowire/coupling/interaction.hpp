@@ -1,15 +1,14 @@
 #pragma once
 /// @file interaction.hpp
-/// @brief Wire–vessel and wire–blood interaction laws as pure functions, each with its
-/// derivatives (value / gradient / Hessian or force / Jacobian), checked against finite
-/// differences in tests/coupling/test_interaction.cpp.
+/// @brief Wire–vessel interaction laws (wall penalty, friction) as pure functions, each with
+/// its derivatives (value / gradient / Hessian or force / Jacobian), checked against finite
+/// differences in tests/coupling/test_interaction.cpp. The wire–blood laws are in drag.hpp.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-namespace flowire::coupling {
+#include "flowire/coupling/drag.hpp"  // the blood drag laws
 
-using Vec3 = Eigen::Vector3d;
-using Mat3 = Eigen::Matrix3d;
+namespace flowire::coupling {
 
 /// @brief Wall penalty on a wire vertex of radius a.
 ///
@@ -43,21 +42,5 @@ struct FrictionResult {
   Mat3 dfdv = Mat3::Zero();
 };
 FrictionResult coulomb_friction(const Vec3& v, const Vec3& n, double normal_force, double mu, double eps);
-
-/// @brief Resistive-force (slender-body) drag per unit length on a thin cylinder with unit
-/// tangent t moving at v through fluid moving at u (Stokes flow, Gazzola et al. 2018, eq. 4.13):
-/// \f[ f = c_\perp (I - t t^T)(u - v) + c_\parallel\, t t^T (u - v),\quad
-///     c_\perp = \frac{4\pi\eta}{\ln(L/r)},\ c_\parallel = c_\perp/2 \f]
-/// (leading order in 1/ln(L/r) of Cox's slender-body theory: a cylinder of length L and
-/// radius r feels twice the drag moving sideways as moving along its axis).
-/// `ell` is the length the vertex represents; the force returned is f·ell.
-struct DragResult {
-  Vec3 force = Vec3::Zero();
-  Mat3 dfdv = Mat3::Zero();  ///< −ell·(c⊥(I − t tᵀ) + c∥ t tᵀ)
-};
-DragResult slender_body_drag(const Vec3& u, const Vec3& v, const Vec3& t, double eta, double L, double r, double ell);
-
-/// @brief c⊥ = 4πη/ln(L/r) (per unit length). @throws flowire::Error if L ≤ r.
-double slender_body_normal_coefficient(double eta, double L, double r);
 
 }  // namespace flowire::coupling

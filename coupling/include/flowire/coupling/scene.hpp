@@ -2,6 +2,7 @@
 /// @file scene.hpp
 /// @brief Scenes: the declaration of every scene key, and the runner that executes only the
 /// sections a scene has (no `flow:` → no flow assembly, no `wire:` → no rod, no output → no I/O).
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -47,8 +48,23 @@ struct RunResult {
   std::string out_dir;
 };
 
+/// @brief Where a run stands, reported after every time step.
+struct Progress {
+  long step = 0;            ///< steps done
+  long steps = 0;           ///< steps in the run
+  double time = 0.0;        ///< simulated time reached [s]
+  double duration = 0.0;    ///< simulated time of the whole run [s]
+  double wall_seconds = 0.0;  ///< since the run started
+};
+
+/// @brief How a caller follows a run (a terminal's progress line, a GUI, a script).
+struct RunOptions {
+  /// Called after every step; keep it cheap (the command line redraws at most 5× a second).
+  std::function<void(const Progress&)> progress;
+};
+
 /// @brief Run a validated scene and write its outputs (summary.json always).
 /// @throws flowire::Error; a numerical error still leaves summary.json with status "error".
-RunResult run_scene(const config::Config& scene);
+RunResult run_scene(const config::Config& scene, const RunOptions& options = {});
 
 }  // namespace flowire::coupling

@@ -3,7 +3,8 @@
 /// @brief What the vessels and the blood do to the wire, as one rod::ExternalForce:
 /// locate every free vertex in a segment (window search seeded by the same vertex's
 /// previous segment, fallback AABB tree), wall contact (penalty, implicit), Coulomb
-/// friction (smooth stick/slip, implicit in velocity), blood drag from the local velocity.
+/// friction (smooth stick/slip, implicit in velocity), blood drag from the local velocity
+/// (the laws of drag.hpp, with their exact velocity Jacobian).
 /// The penalty is reported as a conservative force with its energy k/2·δ₊², so the rod's
 /// line search uses the exact contact potential; friction and drag are non-conservative.
 ///
@@ -19,8 +20,6 @@
 
 namespace flowire::coupling {
 
-enum class DragLaw { None, SlenderBody, VelocityOffset };
-
 struct ContactParams {
   bool enabled = true;
   double stiffness = 0.0;        ///< penalty stiffness per vertex [N/m]
@@ -29,14 +28,6 @@ struct ContactParams {
   double tip_length = 0.03;      ///< [m] distal length using tip_friction
   double slip_speed = 1e-4;      ///< [m/s] smooth stick/slip transition width ε
   double viscous_friction = 0.0; ///< [N s/m²] tangential viscous wall friction per unit length
-};
-
-struct DragParams {
-  DragLaw law = DragLaw::None;
-  double scale = 1.0;
-  double viscosity = 3.5e-3;      ///< [Pa s]
-  double wire_length = 1.0;       ///< L in c⊥ = 4πη/ln(L/r) [m]
-  double mass_per_length = 0.0;   ///< velocity_offset: m_i = ρA·ℓ_i [kg/m]
 };
 
 /// @brief Blood velocity at a point located in a segment (e.g. FlowSolver::velocity_at).
@@ -49,13 +40,15 @@ struct InteractionStats {
   double max_penetration = 0.0;        ///< over accepted steps [m]
   double max_outside = 0.0;            ///< max over accepted steps of (wall distance of a vertex centre) [m]
   double seconds_lookup = 0.0, seconds_contact = 0.0, seconds_drag = 0.0;
+  double max_reynolds = 0.0;           ///< largest normal Reynolds number of the drag law [-]
 };
 
 class VesselForces : public rod::ExternalForce {
  public:
   /// @param index  spatial index of the network (outlives this object)
   /// @param wire_radius radius of the wire [m]
-  VesselForces(const vessels::SpatialIndex& index, double wire_radius, ContactParams contact, DragParams drag,
+  /// @param drag the blood drag law (its wire_radius is set to `wire_radius`)
+  VesselForces(const vessels::SpatialIndex& index, double wire_radius, ContactParams contact, DragModel drag,
                VelocityField velocity = {});
 
   void evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) override;
@@ -73,6 +66,13 @@ class VesselForces : public rod::ExternalForce {
   [[nodiscard]] const std::vector<vessels::Vec3>& fluid_velocity() const { return fluid_; }
   /// @brief Total interaction force on each vertex at the last evaluation [N].
   [[nodiscard]] const std::vector<vessels::Vec3>& force() const { return force_; }
+  /// @brief The blood's share of force() (drag) [N].
+  [[nodiscard]] const std::vector<vessels::Vec3>& drag_force() const { return drag_force_; }
+  /// @brief The wall's share of force() (normal contact and friction) [N].
+  [[nodiscard]] const std::vector<vessels::Vec3>& contact_force() const { return contact_force_; }
+  /// @brief Sum of the drag on the free vertices at the last evaluation [N].
+  [[nodiscard]] vessels::Vec3 total_drag() const;
+  [[nodiscard]] const DragModel& drag() const { return drag_; }
   [[nodiscard]] const InteractionStats& stats() const { return stats_; }
   void set_velocity_field(VelocityField v) { velocity_ = std::move(v); }
   [[nodiscard]] const ContactParams& contact() const { return contact_; }
@@ -83,11 +83,11 @@ class VesselForces : public rod::ExternalForce {
   const vessels::SpatialIndex& index_;
   double wire_radius_;
   ContactParams contact_;
-  DragParams drag_;
+  DragModel drag_;
   VelocityField velocity_;
-  double drag_cn_ = 0.0;
   std::vector<int> segment_;
-  std::vector<vessels::Vec3> fluid_, force_;
+  std::vector<vessels::Vec3> fluid_, force_, drag_force_, contact_force_;
+  int free_ = 0;  ///< free vertices at the last evaluation
   std::vector<double> cur_normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;
   bool lagged_ = false;

@@ -1,8 +1,8 @@
 #pragma once
 /// @file wire_output.hpp
-/// @brief Wire outputs: wire.csv (time,vertex,s,x,y,z), tip_trace.csv
-/// (time,inserted_length,x,y,z), and a ParaView series wire.pvd + wire_NNNNN.vtp with point
-/// data s, force and flow_velocity. Rows are buffered in memory and every file is written
+/// @brief Wire outputs: wire.csv (time,vertex,s,x,y,z,drag_x,drag_y,drag_z,contact_x,
+/// contact_y,contact_z), tip_trace.csv (time,inserted_length,x,y,z), and a ParaView series
+/// wire.pvd + wire_NNNNN.vtp with point data s, force, drag, contact and flow_velocity. Rows are buffered in memory and every file is written
 /// atomically, so a failed run leaves no half-written file.
 #include <filesystem>
 #include <string>
@@ -17,7 +17,9 @@ struct WireFrame {
   double time = 0.0;
   std::vector<Eigen::Vector3d> x;
   std::vector<double> s;
-  std::vector<Eigen::Vector3d> force;          ///< interaction force per vertex (N)
+  std::vector<Eigen::Vector3d> force;          ///< interaction force per vertex (N): drag + contact
+  std::vector<Eigen::Vector3d> drag;           ///< blood drag per vertex (N)
+  std::vector<Eigen::Vector3d> contact;        ///< wall force per vertex, normal and friction (N)
   std::vector<Eigen::Vector3d> flow_velocity;  ///< blood velocity at each vertex (m/s)
 };
 
