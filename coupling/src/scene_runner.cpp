@@ -18,6 +18,7 @@
 #include "flowire/coupling/tip_forces.hpp"
 #ifdef FLOWIRE_HAVE_FEM
 #include "flowire/fem/compare.hpp"
+#include "flowire/fem/obstacle.hpp"
 #endif
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/vessel_path.hpp"
@@ -247,8 +248,52 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
 }
 #endif
 
+bool fem_on_network(const config::Config& c) {
+  return !c.has_section("fem") || c.string("fem.geometry") == "network";
+}
+
+/// Input checks of a fem: section on a built-in geometry (no network), done at setup.
+void check_fem_geometry(const config::Config& c) {
+  for (const char* key : {"fem.mesh_size", "fem.obstacle_mesh_size"})
+    if (c.has(key) && !(c.number(key) > 0.0)) throw_input_error(c.where(key), "must be > 0");
+  if (!(c.number("fem.mesh_growth") > 0.0)) throw_input_error(c.where("fem.mesh_growth"), "must be > 0");
+  if (c.integer("fem.frames") != 0) throw_input_error(c.where("fem.frames"), "is for fem.geometry: network");
+  if (c.string("fem.solver") == "fieldsplit")
+    throw_input_error(c.where("fem.solver"),
+                      "navier_stokes needs mumps (the fieldsplit Schur approximation ignores convection)");
+}
+
+/// The DFG benchmark 3D-1Z (fem.geometry: dfg_3d_1z): forces, c_D, c_L, Δp.
+nlohmann::json run_fem_geometry(const config::Config& c, const std::filesystem::path& out) {
+#ifdef FLOWIRE_HAVE_FEM
+  fem::ObstacleMesh sizes;
+  sizes.mesh_size = c.has("fem.mesh_size") ? c.number("fem.mesh_size") : 0.08;
+  sizes.obstacle_mesh_size = c.has("fem.obstacle_mesh_size") ? c.number("fem.obstacle_mesh_size") : 0.25 * sizes.mesh_size;
+  sizes.growth = c.number("fem.mesh_growth");
+  const auto stab = c.string("fem.stabilization") == "none" ? fem::Stabilization::None : fem::Stabilization::Supg;
+  const fem::ObstacleResult r = fem::dfg_3d_1z(sizes, stab, out.string(), c.boolean("output.vtk"));
+  nlohmann::json forces = nlohmann::json::object();
+  for (const auto& [name, f] : r.forces) forces[name] = {f.x(), f.y(), f.z()};
+  return {{"geometry", "dfg_3d_1z"},
+          {"tets", r.tets},
+          {"unknowns", r.unknowns},
+          {"newton_iterations", r.newton_iterations},
+          {"drag_coefficient", r.drag_coefficient},
+          {"lift_coefficient", r.lift_coefficient},
+          {"pressure_difference", r.pressure_difference},
+          {"forces", forces},
+          {"mesh_seconds", r.mesh_seconds},
+          {"solve_seconds", r.solve_seconds}};
+#else
+  (void)out;
+  throw_input_error(c.where("fem"),
+                    "this flowire was built without the FEM path (FLOWIRE_WITH_FEM needs gmsh and PETSc)");
+#endif
+}
+
 /// Input checks of the fem: section that need the flow spec, done at setup.
 void check_fem(const config::Config& c, const flow::FlowSolver* fs) {
+  if (!fem_on_network(c)) return check_fem_geometry(c);
   if (!fs) throw_input_error(c.where("fem"), "fem: compares the flow, so the scene needs a flow: section");
   const int frames = c.integer("fem.frames");
   if (frames < 0) throw_input_error(c.where("fem.frames"), "must be 0 (steady only) or a number of frames");
@@ -431,7 +476,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
   const std::filesystem::path out(result.out_dir);
   const bool has_flow = c.has_section("flow");
   const bool has_wire = c.has_section("wire");
-  if ((has_flow || c.has_section("contact") || c.has_section("fem")) && !c.has_section("vessels"))
+  if ((has_flow || c.has_section("contact") || (c.has_section("fem") && fem_on_network(c))) && !c.has_section("vessels"))
     throw_input_error(c.where("flow"), "flow, contact and fem need a vessels: section");
 
   auto finish = [&](const std::string& status) {
@@ -659,7 +704,11 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     t_out += seconds_since(to);
 
     // ---------------- finite-element comparison of the flow (fem:)
-    if (c.has_section("fem")) {
+    if (c.has_section("fem") && !fem_on_network(c)) {
+      const auto tf = Clock::now();
+      s["fem"] = run_fem_geometry(c, out);
+      timings["fem"] = seconds_since(tf);
+    } else if (c.has_section("fem")) {
       if (!fsolver) throw_input_error(c.where("fem"), "fem: compares the flow, so the scene needs a flow: section");
       const auto tf = Clock::now();
       s["fem"] = run_fem(c, *net, *fsolver, out);

@@ -188,7 +188,18 @@ config::Schema make_schema() {
   add("solve.integrator", Type::Enum, "implicit_euler", D::None, "rod time integrator", {"implicit_euler", "implicit_midpoint"});
 
   add("fem", Type::Section, "", D::None, "finite-element comparison of the flow (needs FLOWIRE_WITH_FEM)");
-  add("fem.mesh_size", Type::Number, "", D::Length, "target tetrahedron size (default from the smallest radius)");
+  add("fem.geometry", Type::Enum, "network", D::None,
+      "network: the lumen of the vessels (compared with the flow); dfg_3d_1z: the DFG benchmark 3D-1Z channel "
+      "around a cylinder with its own fluid and inflow (needs no vessels or flow; writes fem_forces.csv, c_D, c_L "
+      "and the pressure difference in summary.json)",
+      {"network", "dfg_3d_1z"});
+  add("fem.mesh_size", Type::Number, "", D::Length,
+      "target tetrahedron size (network: default from the smallest radius; dfg_3d_1z: far field, default 0.08 m)");
+  add("fem.obstacle_mesh_size", Type::Number, "", D::Length,
+      "dfg_3d_1z: tetrahedron size on the cylinder (default a quarter of fem.mesh_size), growing with the distance "
+      "from it by fem.mesh_growth");
+  add("fem.mesh_growth", Type::Number, "0.3", D::None,
+      "dfg_3d_1z: increase of the tetrahedron size per unit distance from the obstacle");
   add("fem.equations", Type::Enum, "stokes", D::None, "stokes | navier_stokes", {"stokes", "navier_stokes"});
   add("fem.solver", Type::Enum, "mumps", D::None, "direct (mumps) or iterative (fieldsplit, Stokes only)", {"mumps", "fieldsplit"});
   add("fem.stabilization", Type::Enum, "supg", D::None,

@@ -21,6 +21,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/fem/element.hpp"
+#include "flowire/fem/obstacle.hpp"
 #include "flowire/fem/sample.hpp"
 #include "flowire/flow/solver.hpp"
 
@@ -142,37 +143,6 @@ std::string outlet_row(const OutletFlow& q) {
   return o.str();
 }
 
-void write_vtu(const std::filesystem::path& path, const TetMesh& mesh, const StokesSolution& sol) {
-  // Edge nodes take the mean pressure of their two vertices (the P1 field).
-  std::vector<std::array<int, 2>> ev(mesh.nodes.size(), {-1, -1});
-  for (const auto& t : mesh.tets)
-    for (size_t e = 0; e < 6; ++e) ev[static_cast<size_t>(t[4 + e])] = {t[static_cast<size_t>(kTetEdges[e][0])], t[static_cast<size_t>(kTetEdges[e][1])]};
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    std::ofstream f(tmp);
-    if (!f) throw_input_error(path.string(), "cannot write");
-    f.precision(10);
-    f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.tets.size()
-      << "\">\n<PointData Scalars=\"pressure\" Vectors=\"velocity\">\n"
-      << "<DataArray type=\"Float64\" Name=\"pressure\" format=\"ascii\">\n";
-    for (size_t n = 0; n < mesh.nodes.size(); ++n) f << pressure_at_node(mesh, sol, n, ev) << '\n';
-    f << "</DataArray>\n<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (const Vec3& u : sol.velocity) f << u.x() << ' ' << u.y() << ' ' << u.z() << '\n';
-    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (const Vec3& x : mesh.nodes) f << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
-    f << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-    // VTK_QUADRATIC_TETRA edge order: (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — the same as ours.
-    for (const auto& t : mesh.tets) {
-      for (int k = 0; k < 10; ++k) f << t[static_cast<size_t>(k)] << (k == 9 ? '\n' : ' ');
-    }
-    f << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-    for (size_t e = 0; e < mesh.tets.size(); ++e) f << 10 * (e + 1) << '\n';
-    f << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-    for (size_t e = 0; e < mesh.tets.size(); ++e) f << "24\n";
-    f << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-    if (!f) throw_input_error(path.string(), "write failed");
-  });
-}
 
 std::string plot_script() {
   if (const char* env = std::getenv("FLOWIRE_FEM_PLOT_SCRIPT")) return env;
@@ -206,6 +176,38 @@ void write_png(const std::filesystem::path& png, const std::filesystem::path& cs
 }
 
 }  // namespace
+
+void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolution& sol) {
+  // Edge nodes take the mean pressure of their two vertices (the P1 field).
+  std::vector<std::array<int, 2>> ev(mesh.nodes.size(), {-1, -1});
+  for (const auto& t : mesh.tets)
+    for (size_t e = 0; e < 6; ++e) ev[static_cast<size_t>(t[4 + e])] = {t[static_cast<size_t>(kTetEdges[e][0])], t[static_cast<size_t>(kTetEdges[e][1])]};
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp);
+    if (!f) throw_input_error(path, "cannot write");
+    f.precision(10);
+    f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.tets.size()
+      << "\">\n<PointData Scalars=\"pressure\" Vectors=\"velocity\">\n"
+      << "<DataArray type=\"Float64\" Name=\"pressure\" format=\"ascii\">\n";
+    for (size_t n = 0; n < mesh.nodes.size(); ++n) f << pressure_at_node(mesh, sol, n, ev) << '\n';
+    f << "</DataArray>\n<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (const Vec3& u : sol.velocity) f << u.x() << ' ' << u.y() << ' ' << u.z() << '\n';
+    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (const Vec3& x : mesh.nodes) f << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+    f << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+    // VTK_QUADRATIC_TETRA edge order: (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — the same as ours.
+    for (const auto& t : mesh.tets) {
+      for (int k = 0; k < 10; ++k) f << t[static_cast<size_t>(k)] << (k == 9 ? '\n' : ' ');
+    }
+    f << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+    for (size_t e = 0; e < mesh.tets.size(); ++e) f << 10 * (e + 1) << '\n';
+    f << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (size_t e = 0; e < mesh.tets.size(); ++e) f << "24\n";
+    f << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+    if (!f) throw_input_error(path, "write failed");
+  });
+}
 
 BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, double t) {
   if (spec.inlets.size() != 1)
@@ -495,7 +497,8 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
                      100 * res.max_flow_split_error, res.mesh_seconds, res.assemble_seconds, res.solve_seconds);
     write_text_atomically(dir / "fem_compare.md", o.str());
   }
-  if (opt.write_vtu) write_vtu(dir / "fem.vtu", mesh, sol);
+  if (opt.write_vtu) write_vtu((dir / "fem.vtu").string(), mesh, sol);
+  write_forces(dir.string(), res.forces);
   if (opt.write_png) write_png(dir / "fem_compare.png", dir / "fem_compare.csv");
 }
 
@@ -620,6 +623,7 @@ CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOpt
   const StokesSolution sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), stokes_options(opt, bv));
   const NetworkFlow nf = network_flow(net, bv);
   CompareResult res = compare_fields(net, mesh, sol, nf, inlet_of(net, bv), opt.samples_per_branch);
+  res.forces = named_forces(mesh, sol, stokes_options(opt, bv));
   res.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!out_dir.empty()) write_outputs(out_dir, net, mesh, sol, res, opt);
   return res;
@@ -720,7 +724,7 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
            "<Collection>\n";
     for (size_t i = 0; i < frames.size(); ++i) {
       const std::string name = fmt::format("fem_{:04d}.vtu", i);
-      write_vtu(dir / name, mesh, sols[i]);
+      write_vtu((dir / name).string(), mesh, sols[i]);
       pvd << "<DataSet timestep=\"" << times[i] << "\" part=\"0\" file=\"" << name << "\"/>\n";
     }
     pvd << "</Collection>\n</VTKFile>\n";

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -291,6 +292,10 @@ double tet_volume_linear(const TetMesh& m, const std::array<int, 10>& t) {
              .dot(m.nodes[static_cast<size_t>(t[3])] - x0) / 6.0;
 }
 
+void generate(const MeshOptions& opt);
+void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
+                  const std::string& at);
+
 TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& opt) {
   const auto start = std::chrono::steady_clock::now();
   const std::string at = where(net);
@@ -394,10 +399,23 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
       return factor * r;
     });
   }
+  generate(opt);
+  extract_mesh(mesh, surfs, surf_group, at);
+  mesh.mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return mesh;
+}
+
+/// Second-order tetrahedra of the current model (one thread), written to `save_msh`.
+void generate(const MeshOptions& opt) {
   gmsh::model::mesh::generate(3);
   gmsh::model::mesh::setOrder(2);
   if (!opt.save_msh.empty()) gmsh::write(opt.save_msh);
+}
 
+/// Nodes, tetrahedra and boundary triangles (by group: `surf_group[k]` for surface
+/// `surfs[k]`) of the meshed model into `mesh`.
+void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
+                  const std::string& at) {
   // Nodes and tetrahedra.
   std::vector<std::size_t> node_tags;
   std::vector<double> coords, param;
@@ -489,8 +507,188 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
   }
   for (char o : oriented)
     if (!o) throw_numerical_error(fmt::format("{}: a boundary triangle has no tetrahedron", at));
+}
+
+
+/// Distance from x to the segment [a, b] and the axial parameter t of its projection
+/// (t in units of length from a, unclamped).
+double axis_distance(const Vec3& x, const Vec3& a, const Vec3& b, double& t) {
+  const Vec3 d = b - a;
+  const double l = d.norm();
+  t = (x - a).dot(d) / l;
+  return (x - a - t * d / l).norm();
+}
+
+/// Which face of `s` the point x lies on (tolerance tol), or -1.
+int face_of_solid(const Solid& s, const Vec3& x, double tol) {
+  if (s.shape == Solid::Shape::Box) {
+    for (int f = 0; f < 6; ++f) {
+      const int axis = f / 2;
+      const double plane = f % 2 == 0 ? s.a[axis] : s.b[axis];
+      if (std::abs(x[axis] - plane) > tol) continue;
+      bool inside = true;
+      for (int c = 0; c < 3; ++c)
+        if (c != axis && (x[c] < s.a[c] - tol || x[c] > s.b[c] + tol)) inside = false;
+      if (inside) return f;
+    }
+    return -1;
+  }
+  double t = 0.0;
+  const double r = axis_distance(x, s.a, s.b, t);
+  const double l = (s.b - s.a).norm();
+  if (std::abs(r - s.radius) <= tol && t >= -tol && t <= l + tol) return 0;
+  if (r <= s.radius + tol && std::abs(t) <= tol) return 1;
+  if (r <= s.radius + tol && std::abs(t - l) <= tol) return 2;
+  return -1;
+}
+
+/// Distance from x to the lateral surface of a cylinder (0 inside it), or to a box.
+double solid_distance(const Solid& s, const Vec3& x) {
+  if (s.shape == Solid::Shape::Box) {
+    double d2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      const double e = std::max({s.a[c] - x[c], 0.0, x[c] - s.b[c]});
+      d2 += e * e;
+    }
+    return std::sqrt(d2);
+  }
+  return std::max(0.0, point_segment_distance(x, s.a, s.b) - s.radius);
+}
+
+int add_solid(const Solid& s) {
+  namespace occ = gmsh::model::occ;
+  if (s.shape == Solid::Shape::Box) {
+    const Vec3 d = s.b - s.a;
+    return occ::addBox(s.a.x(), s.a.y(), s.a.z(), d.x(), d.y(), d.z());
+  }
+  const Vec3 d = s.b - s.a;
+  return occ::addCylinder(s.a.x(), s.a.y(), s.a.z(), d.x(), d.y(), d.z(), s.radius);
+}
+
+void check_domain(const ShapeDomain& dom) {
+  const std::string& at = dom.name;
+  if (dom.groups.empty() || !dom.groups.front().no_slip())
+    throw_input_error(at, "the first boundary group must be a no-slip wall");
+  if (!(dom.mesh_size > 0.0)) throw_input_error(at, "mesh_size must be > 0");
+  if (!(dom.growth > 0.0)) throw_input_error(at, "growth must be > 0");
+  for (size_t i = 0; i < dom.groups.size(); ++i)
+    for (size_t j = i + 1; j < dom.groups.size(); ++j)
+      if (dom.groups[i].name == dom.groups[j].name)
+        throw_input_error(at, fmt::format("two boundary groups are called '{}'", dom.groups[i].name));
+  auto check_solid = [&](const Solid& s, const std::string& what) {
+    if (s.shape == Solid::Shape::Box) {
+      for (int c = 0; c < 3; ++c)
+        if (!(s.b[c] > s.a[c])) throw_input_error(at, fmt::format("{}: the box has no volume", what));
+    } else if (!(s.radius > 0.0) || !((s.b - s.a).norm() > 0.0)) {
+      throw_input_error(at, fmt::format("{}: zero cylinder radius or length", what));
+    }
+    for (int g : s.face_group)
+      if (g < -1 || g >= static_cast<int>(dom.groups.size()))
+        throw_input_error(at, fmt::format("{}: face group {} is not one of the {} groups", what, g, dom.groups.size()));
+  };
+  check_solid(dom.outer, "outer solid");
+  for (size_t h = 0; h < dom.holes.size(); ++h) check_solid(dom.holes[h], fmt::format("hole {}", h));
+}
+
+TetMesh mesh_domain(const ShapeDomain& dom, const MeshOptions& opt) {
+  const auto start = std::chrono::steady_clock::now();
+  check_domain(dom);
+  const std::string& at = dom.name;
+  TetMesh mesh;
+  mesh.groups = dom.groups;
+  for (auto& g : mesh.groups) g.node = -1;
+
+  GmshModel model(opt.verbose);
+  namespace occ = gmsh::model::occ;
+  const int outer = add_solid(dom.outer);
+  if (!dom.holes.empty()) {
+    gmsh::vectorpair tools, out;
+    for (const Solid& h : dom.holes) tools.push_back({3, add_solid(h)});
+    std::vector<gmsh::vectorpair> map;
+    occ::cut({{3, outer}}, tools, out, map);
+  }
+  occ::synchronize();
+  gmsh::vectorpair vols, surfs;
+  gmsh::model::getEntities(vols, 3);
+  if (vols.size() != 1)
+    throw_input_error(at, fmt::format("the fluid is {} separate volumes, not one (does a hole cut the domain in two?)",
+                                      vols.size()));
+  gmsh::model::getEntities(surfs, 2);
+  // A point of each surface (the middle of its parameter range: on the underlying
+  // plane or cylinder even where the face is trimmed) names the solid face it lies on.
+  double xmin = 0, ymin = 0, zmin = 0, xmax = 0, ymax = 0, zmax = 0;
+  gmsh::model::getBoundingBox(-1, -1, xmin, ymin, zmin, xmax, ymax, zmax);
+  const double tol = 1e-7 * (Vec3(xmax, ymax, zmax) - Vec3(xmin, ymin, zmin)).norm();
+  std::vector<int> surf_group(surfs.size(), 0);
+  std::vector<char> used(mesh.groups.size(), 0);
+  for (size_t k = 0; k < surfs.size(); ++k) {
+    std::vector<double> lo, hi, xyz;
+    gmsh::model::getParametrizationBounds(2, surfs[k].second, lo, hi);
+    gmsh::model::getValue(2, surfs[k].second, {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])}, xyz);
+    const Vec3 x(xyz[0], xyz[1], xyz[2]);
+    int group = -2;
+    for (size_t sidx = 0; sidx <= dom.holes.size() && group == -2; ++sidx) {
+      const Solid& sol = sidx == 0 ? dom.outer : dom.holes[sidx - 1];
+      const int f = face_of_solid(sol, x, tol);
+      if (f >= 0) group = std::max(0, sol.face_group[static_cast<size_t>(f)]);
+    }
+    if (group == -2)
+      throw_input_error(at, fmt::format("a face of the fluid (near {:.4g}, {:.4g}, {:.4g}) lies on no face of the solids",
+                                        x.x(), x.y(), x.z()));
+    surf_group[k] = group;
+    used[static_cast<size_t>(group)] = 1;
+  }
+  for (size_t g = 0; g < mesh.groups.size(); ++g)
+    if (!used[g]) throw_input_error(at, fmt::format("boundary group '{}' has no face", mesh.groups[g].name));
+  gmsh::model::addPhysicalGroup(3, {vols[0].second}, 1);
+  gmsh::model::setPhysicalName(3, 1, "fluid");
+  for (size_t gi = 0; gi < mesh.groups.size(); ++gi) {
+    std::vector<int> tags;
+    for (size_t k = 0; k < surfs.size(); ++k)
+      if (surf_group[k] == static_cast<int>(gi)) tags.push_back(surfs[k].second);
+    const int tag = static_cast<int>(gi) + 1;
+    gmsh::model::addPhysicalGroup(2, tags, tag);
+    gmsh::model::setPhysicalName(2, tag, mesh.groups[gi].name);
+  }
+  gmsh::option::setNumber("General.NumThreads", 1);
+  gmsh::option::setNumber("Mesh.Algorithm3D", opt.algorithm3d);
+  gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+  gmsh::option::setNumber("Mesh.ElementOrder", 1);
+  gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
+  gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-3);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.0);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", 1e22);
+  const ShapeDomain* d = &dom;
+  gmsh::model::mesh::setSizeCallback([d](int, int, double x, double y, double z) {
+    const Vec3 p(x, y, z);
+    double h = d->mesh_size;
+    for (const Solid& hole : d->holes) {
+      const double hh = hole.mesh_size > 0.0 ? hole.mesh_size : d->mesh_size;
+      h = std::min(h, hh + d->growth * solid_distance(hole, p));
+    }
+    return h;
+  });
+  generate(opt);
+  extract_mesh(mesh, surfs, surf_group, at);
   mesh.mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return mesh;
+}
+
+/// Run `build` with gmsh's exceptions turned into flowire errors naming `at`.
+TetMesh guarded(const std::string& at, const std::function<TetMesh()>& build) {
+  try {
+    return build();
+  } catch (const Error&) {
+    throw;
+  } catch (const std::string& s) {
+    throw_numerical_error(fmt::format("{}: gmsh failed: {}", at, s));
+  } catch (const std::exception& e) {
+    throw_numerical_error(fmt::format("{}: gmsh failed: {}", at, e.what()));
+  } catch (...) {
+    throw_numerical_error(fmt::format("{}: gmsh failed", at));
+  }
 }
 
 template <class T>
@@ -501,22 +699,80 @@ void bcast_vector(std::vector<T>& v, int rank) {
   if (n > 0) MPI_Bcast(v.data(), static_cast<int>(n * sizeof(T)), MPI_BYTE, 0, MPI_COMM_WORLD);
 }
 
-TetMesh build_local(const Network& net, const MeshOptions& opt) {
-  const Geometry g = make_geometry(net);
-  try {
-    return mesh_geometry(net, g, opt);
-  } catch (const Error&) {
-    throw;
-  } catch (const std::string& s) {
-    throw_numerical_error(fmt::format("{}: gmsh failed: {}", where(net), s));
-  } catch (const std::exception& e) {
-    throw_numerical_error(fmt::format("{}: gmsh failed: {}", where(net), e.what()));
-  } catch (...) {
-    throw_numerical_error(fmt::format("{}: gmsh failed", where(net)));
+/// Mesh on rank 0 with `build`; under MPI with more than one rank every rank receives
+/// the mesh (or rank 0's error).
+TetMesh build_shared(const std::function<TetMesh()>& build) {
+  int mpi_up = 0, size = 1, rank = 0;
+  MPI_Initialized(&mpi_up);
+  if (mpi_up) {
+    int done = 0;
+    MPI_Finalized(&done);
+    if (!done) {
+      MPI_Comm_size(MPI_COMM_WORLD, &size);
+      MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    }
   }
+  if (size == 1) return build();
+
+  // Rank 0 meshes; the outcome (or the error) goes to every rank.
+  TetMesh mesh;
+  int status = 0;  // 0 ok, else 1 + ErrorKind
+  std::string message;
+  if (rank == 0) {
+    try {
+      mesh = build();
+    } catch (const Error& e) {
+      status = 1 + static_cast<int>(e.kind());
+      message = e.what();
+    }
+  }
+  MPI_Bcast(&status, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (status != 0) {
+    std::vector<char> text(message.begin(), message.end());
+    bcast_vector(text, rank);
+    throw Error(static_cast<ErrorKind>(status - 1), std::string(text.begin(), text.end()));
+  }
+  std::vector<double> xyz;
+  if (rank == 0)
+    for (const Vec3& x : mesh.nodes) xyz.insert(xyz.end(), {x.x(), x.y(), x.z()});
+  bcast_vector(xyz, rank);
+  bcast_vector(mesh.tets, rank);
+  bcast_vector(mesh.faces, rank);
+  bcast_vector(mesh.face_group, rank);
+  bcast_vector(mesh.vertex_index, rank);
+  std::vector<int> groups;
+  std::vector<char> names;  // group names, each ended by a 0
+  if (rank == 0)
+    for (const auto& g : mesh.groups) {
+      groups.insert(groups.end(), {static_cast<int>(g.kind), g.node});
+      names.insert(names.end(), g.name.begin(), g.name.end());
+      names.push_back('\0');
+    }
+  bcast_vector(groups, rank);
+  bcast_vector(names, rank);
+  MPI_Bcast(&mesh.num_vertices, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  MPI_Bcast(&mesh.mesh_seconds, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  if (rank != 0) {
+    mesh.nodes.resize(xyz.size() / 3);
+    for (size_t i = 0; i < mesh.nodes.size(); ++i) mesh.nodes[i] = Vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    mesh.groups.clear();
+    const char* name = names.data();
+    for (size_t k = 0; k + 1 < groups.size(); k += 2) {
+      mesh.groups.push_back({static_cast<BoundaryGroup::Kind>(groups[k]), groups[k + 1], std::string(name)});
+      name += mesh.groups.back().name.size() + 1;
+    }
+  }
+  return mesh;
 }
 
+
 }  // namespace
+
+int TetMesh::group_named(const std::string& name) const {
+  for (size_t g = 0; g < groups.size(); ++g)
+    if (groups[g].name == name) return static_cast<int>(g);
+  return -1;
+}
 
 int TetMesh::group_of_node(int network_node) const {
   for (size_t g = 0; g < groups.size(); ++g)
@@ -558,64 +814,14 @@ double TetMesh::area(int group) const {
 }
 
 TetMesh build_mesh(const Network& net, const MeshOptions& opt) {
-  int mpi_up = 0, size = 1, rank = 0;
-  MPI_Initialized(&mpi_up);
-  if (mpi_up) {
-    int done = 0;
-    MPI_Finalized(&done);
-    if (!done) {
-      MPI_Comm_size(MPI_COMM_WORLD, &size);
-      MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    }
-  }
-  if (size == 1) return build_local(net, opt);
+  return build_shared([&] {
+    const Geometry g = make_geometry(net);
+    return guarded(where(net), [&] { return mesh_geometry(net, g, opt); });
+  });
+}
 
-  // Rank 0 meshes; the outcome (or the error) goes to every rank.
-  TetMesh mesh;
-  int status = 0;  // 0 ok, else 1 + ErrorKind
-  std::string message;
-  if (rank == 0) {
-    try {
-      mesh = build_local(net, opt);
-    } catch (const Error& e) {
-      status = 1 + static_cast<int>(e.kind());
-      message = e.what();
-    }
-  }
-  MPI_Bcast(&status, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (status != 0) {
-    std::vector<char> text(message.begin(), message.end());
-    bcast_vector(text, rank);
-    throw Error(static_cast<ErrorKind>(status - 1), std::string(text.begin(), text.end()));
-  }
-  std::vector<double> xyz;
-  if (rank == 0)
-    for (const Vec3& x : mesh.nodes) xyz.insert(xyz.end(), {x.x(), x.y(), x.z()});
-  bcast_vector(xyz, rank);
-  bcast_vector(mesh.tets, rank);
-  bcast_vector(mesh.faces, rank);
-  bcast_vector(mesh.face_group, rank);
-  bcast_vector(mesh.vertex_index, rank);
-  std::vector<int> groups;
-  if (rank == 0)
-    for (const auto& g : mesh.groups) groups.insert(groups.end(), {static_cast<int>(g.kind), g.node});
-  bcast_vector(groups, rank);
-  MPI_Bcast(&mesh.num_vertices, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  MPI_Bcast(&mesh.mesh_seconds, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
-  if (rank != 0) {
-    mesh.nodes.resize(xyz.size() / 3);
-    for (size_t i = 0; i < mesh.nodes.size(); ++i) mesh.nodes[i] = Vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
-    mesh.groups.clear();
-    for (size_t k = 0; k + 1 < groups.size(); k += 2) {
-      const auto kind = static_cast<BoundaryGroup::Kind>(groups[k]);
-      const int node = groups[k + 1];
-      mesh.groups.push_back({kind, node,
-                             kind == BoundaryGroup::Kind::Wall    ? std::string("wall")
-                             : kind == BoundaryGroup::Kind::Inlet ? std::string("inlet")
-                                                                  : fmt::format("outlet_{}", node)});
-    }
-  }
-  return mesh;
+TetMesh build_mesh(const ShapeDomain& domain, const MeshOptions& opt) {
+  return build_shared([&] { return guarded(domain.name, [&] { return mesh_domain(domain, opt); }); });
 }
 
 }  // namespace flowire::fem

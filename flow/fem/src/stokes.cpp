@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 
@@ -1573,6 +1574,122 @@ double UnsteadyStokes::time() const { return impl_->time; }
 double UnsteadyStokes::dt() const { return impl_->dt; }
 const std::vector<std::vector<double>>& UnsteadyStokes::unit_flux() const { return impl_->flux; }
 const std::vector<int>& UnsteadyStokes::open_groups() const { return impl_->open; }
+
+std::vector<Vec3> boundary_forces(const TetMesh& mesh, const StokesSolution& sol, const StokesOptions& opt) {
+  if (sol.velocity.size() != mesh.nodes.size() || sol.pressure.size() != static_cast<size_t>(mesh.num_vertices) ||
+      sol.group_pressure.size() != mesh.groups.size())
+    throw_usage_error("fem: boundary_forces: the solution belongs to another mesh");
+  static const ReferenceNs ref;
+  NsParams prm = ns_params(opt);
+  if (opt.equations == Equations::Stokes) prm.rho = 0.0;
+  const State st{&sol.velocity, &sol.pressure, &sol.group_pressure};
+  // A profile inlet carries a prescribed velocity: its traction is not part of the
+  // residual.
+  const bool profile = opt.equations == Equations::NavierStokes && opt.inlet == InletCondition::Profile;
+  std::vector<Vec3> force(mesh.groups.size(), Vec3::Zero());
+  std::vector<int> mark(mesh.nodes.size(), -1);
+  double res[34], jac[34 * 34], fres[18], fjac[18 * 18];
+  for (size_t g = 0; g < mesh.groups.size(); ++g) {
+    if (!mesh.groups[g].no_slip()) continue;
+    const int tag = static_cast<int>(g);
+    for (size_t f = 0; f < mesh.faces.size(); ++f)
+      if (mesh.face_group[f] == tag)
+        for (int n : mesh.faces[f]) mark[static_cast<size_t>(n)] = tag;
+    Vec3 sum = Vec3::Zero();
+    for (int e = 0; e < mesh.num_tets(); ++e) {
+      const auto& t = mesh.tets[static_cast<size_t>(e)];
+      bool touches = false;
+      for (int n : t) touches = touches || mark[static_cast<size_t>(n)] == tag;
+      if (!touches) continue;
+      if (!ns_element(mesh, ref, e, prm, st, res, jac))
+        throw_numerical_error(fmt::format("fem: tetrahedron {} is inverted or degenerate", e));
+      for (int i = 0; i < 10; ++i)
+        if (mark[static_cast<size_t>(t[static_cast<size_t>(i)])] == tag)
+          sum -= Vec3(res[3 * i], res[3 * i + 1], res[3 * i + 2]);
+    }
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      const auto& grp = mesh.groups[static_cast<size_t>(mesh.face_group[f])];
+      if (grp.no_slip() || (profile && grp.kind == BoundaryGroup::Kind::Inlet)) continue;
+      const auto& tri = mesh.faces[f];
+      bool touches = false;
+      for (int n : tri) touches = touches || mark[static_cast<size_t>(n)] == tag;
+      if (!touches) continue;
+      bool any = false;
+      ns_face(mesh, f, prm, st, fres, fjac, any);
+      for (int k = 0; k < 6; ++k)
+        if (mark[static_cast<size_t>(tri[static_cast<size_t>(k)])] == tag)
+          sum -= Vec3(fres[3 * k], fres[3 * k + 1], fres[3 * k + 2]);
+    }
+    force[g] = sum;
+  }
+  return force;
+}
+
+std::vector<Vec3> surface_forces(const TetMesh& mesh, const StokesSolution& sol, double viscosity) {
+  if (sol.velocity.size() != mesh.nodes.size() || sol.pressure.size() != static_cast<size_t>(mesh.num_vertices))
+    throw_usage_error("fem: surface_forces: the solution belongs to another mesh");
+  // The tetrahedron behind each boundary triangle and the local vertices of the triangle.
+  struct Key {
+    std::array<int, 3> v;
+    bool operator<(const Key& o) const { return v < o.v; }
+  };
+  std::map<Key, size_t> face_of;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (!mesh.groups[static_cast<size_t>(mesh.face_group[f])].no_slip()) continue;
+    Key k{{mesh.faces[f][0], mesh.faces[f][1], mesh.faces[f][2]}};
+    std::sort(k.v.begin(), k.v.end());
+    face_of.emplace(k, f);
+  }
+  static constexpr int kFaceVerts[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  static const std::array<std::array<double, 3>, 4> kVert{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  std::vector<Vec3> force(mesh.groups.size(), Vec3::Zero());
+  double phi[6], dphi[6][2], g10[10][3], psi[4];
+  for (const auto& t : mesh.tets)
+    for (const auto& fv : kFaceVerts) {
+      Key k{{t[static_cast<size_t>(fv[0])], t[static_cast<size_t>(fv[1])], t[static_cast<size_t>(fv[2])]}};
+      std::sort(k.v.begin(), k.v.end());
+      const auto it = face_of.find(k);
+      if (it == face_of.end()) continue;
+      const auto& tri = mesh.faces[it->second];
+      // Tetrahedron-local vertex of each triangle vertex.
+      int local[3];
+      for (int a = 0; a < 3; ++a)
+        for (int l = 0; l < 4; ++l)
+          if (t[static_cast<size_t>(l)] == tri[static_cast<size_t>(a)]) local[a] = l;
+      Vec3 sum = Vec3::Zero();
+      for (const QuadPoint& q : tri_quadrature()) {
+        tri_p2(q.xi, phi);
+        tri_p2_grad(q.xi, dphi);
+        Vec3 ts = Vec3::Zero(), tt = Vec3::Zero();
+        for (int m = 0; m < 6; ++m) {
+          ts += dphi[m][0] * mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(m)])];
+          tt += dphi[m][1] * mesh.nodes[static_cast<size_t>(tri[static_cast<size_t>(m)])];
+        }
+        const Vec3 nds = ts.cross(tt);  // outward normal times the area element
+        const double lam[3] = {1.0 - q.xi[0] - q.xi[1], q.xi[0], q.xi[1]};
+        std::array<double, 3> xi{};
+        for (int a = 0; a < 3; ++a)
+          for (int c = 0; c < 3; ++c) xi[static_cast<size_t>(c)] += lam[a] * kVert[static_cast<size_t>(local[a])][static_cast<size_t>(c)];
+        tet_p2_grad(xi, g10);
+        tet_p1(xi, psi);
+        Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
+        for (int i = 0; i < 10; ++i)
+          j += mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(i)])] * Eigen::RowVector3d(g10[i][0], g10[i][1], g10[i][2]);
+        const Eigen::Matrix3d jinv_t = j.inverse().transpose();
+        Eigen::Matrix3d grad = Eigen::Matrix3d::Zero();
+        for (int i = 0; i < 10; ++i)
+          grad += sol.velocity[static_cast<size_t>(t[static_cast<size_t>(i)])] *
+                  (jinv_t * Eigen::Vector3d(g10[i][0], g10[i][1], g10[i][2])).transpose();
+        double p = 0.0;
+        for (int l = 0; l < 4; ++l)
+          p += psi[l] * sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
+        const Eigen::Matrix3d sigma = -p * Eigen::Matrix3d::Identity() + viscosity * (grad + grad.transpose());
+        sum -= q.weight * (sigma * nds);
+      }
+      force[static_cast<size_t>(mesh.face_group[it->second])] += sum;
+    }
+  return force;
+}
 
 namespace detail {
 

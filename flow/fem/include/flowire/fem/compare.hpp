@@ -25,7 +25,8 @@
 /// rel_diff_drop,path_distance,near_junction`), fem_outlets.csv
 /// (`outlet,flow_network,flow_fem` then `rel_diff,pressure_network,pressure_fem`), fem_compare.md (tables like the
 /// paper's Table 1, flows, branch drops, timings), fem.vtu (quadratic tetrahedra, point
-/// data `velocity` and `pressure`), fem_compare.png (network vs FEM pressure along the
+/// data `velocity` and `pressure`), fem_forces.csv (`boundary,fx,fy,fz`: the force of the
+/// fluid on the wall, boundary_forces), fem_compare.png (network vs FEM pressure along the
 /// path from the inlet, drawn by flow/fem/scripts/plot_fem_compare.py with matplotlib;
 /// a warning, not an error, when python3/matplotlib is missing).
 #include <functional>
@@ -126,6 +127,8 @@ struct CompareResult {
   double max_flow_split_error = 0.0;        ///< max |Q_fem/ΣQ_fem − Q_net/ΣQ_net| over outlets
   double max_flow_error = 0.0;              ///< max |Q_fem/Q_net − 1| over outlets
   int tets = 0, unknowns = 0;
+  /// Force of the fluid on each no-slip group (boundary_forces; `compare` only), N.
+  std::vector<std::pair<std::string, Vec3>> forces;
   double reynolds = 0.0;       ///< inlet Reynolds number of the FEM flow (ρ ū D / η)
   int newton_iterations = 0;   ///< Navier–Stokes: Newton steps (0 for Stokes)
   double mesh_seconds = 0.0, assemble_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
@@ -147,7 +150,11 @@ std::vector<GroupCondition> group_conditions(const TetMesh& mesh, const Boundary
 CompareResult compare_fields(const Network& net, const TetMesh& mesh, const StokesSolution& sol,
                              const NetworkFlow& flow, int inlet_node, int samples_per_branch);
 
-/// @brief Write the output files into `out_dir` (created if needed). Only rank 0 writes.
+/// @brief Write a solution as quadratic tetrahedra (.vtu, point data `velocity` and
+/// `pressure`; edge nodes take the mean pressure of their vertices).
+void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolution& sol);
+/// @brief Write the output files into `out_dir` (created if needed), fem_forces.csv
+/// (`boundary,fx,fy,fz`: the `forces`) too. Only rank 0 writes.
 void write_outputs(const std::string& out_dir, const Network& net, const TetMesh& mesh, const StokesSolution& sol,
                    const CompareResult& result, const FemOptions& opt);
 

@@ -219,6 +219,26 @@ class UnsteadyStokes {
   std::unique_ptr<Impl> impl_;
 };
 
+/// @brief The force of the fluid on every no-slip group (N; open groups: zero), for a
+/// steady solution `sol` of `solve_stokes` with the same options:
+/// \f[ F_g = -\int_{\Gamma_g} \sigma n\, dS, \qquad \sigma = -pI + \eta(\nabla u + \nabla u^T) \f]
+/// (n the outward normal of the fluid). Evaluated in the weak ("variational") form,
+/// \f$ F_g\cdot e_i = -R(u, p; \phi_i) \f$ with R the discrete residual the solver
+/// drives to zero (viscous, pressure, convection, stabilization, body force and the
+/// open-boundary terms) and \f$ \phi_i \f$ the P2 field equal to \f$ e_i \f$ on the nodes
+/// of group g and 0 on every other node: a volume integral over the elements touching
+/// Γ_g, which converges at the rate of the energy error squared, faster than the surface
+/// integral of the stress (`surface_forces`). On a no-slip wall of a divergence-free
+/// flow η∂u/∂n − pn = σn, so the solver's η∇u:∇v form gives the same force. Nodes
+/// shared with another group (a wire meeting the channel wall) count for g. A profile
+/// inlet (Navier–Stokes) has unknown traction; its faces are left out.
+std::vector<Vec3> boundary_forces(const TetMesh& mesh, const StokesSolution& sol, const StokesOptions& opt);
+
+/// @brief The same force as boundary_forces by the surface integral of
+/// \f$ -\sigma n \f$ with the stress of the element behind each boundary triangle (for
+/// comparison; on the coaxial-wire test its error is some 90 times that of the weak form).
+std::vector<Vec3> surface_forces(const TetMesh& mesh, const StokesSolution& sol, double viscosity);
+
 /// @brief Outward flux \f$ \int_{\Gamma_g} u\cdot n \f$ of a velocity field through each group.
 std::vector<double> group_fluxes(const TetMesh& mesh, const std::vector<Vec3>& velocity);
 
