@@ -280,3 +280,44 @@ TEST(CylinderDrag, ANonFiniteBloodVelocityIsANumericalError) {
     EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
   }
 }
+
+TEST(CylinderDrag, TheLargestReynoldsNumberIsThatOfAcceptedStates) {
+  // The runner warns when it passes the curve's range; what it reads is the largest normal
+  // Reynolds number of the states the rod accepted (end_step), not of trial iterates.
+  const auto net = vessels::Network::build(vessels::straight_tube({.length = 0.05, .radius = 2e-3}), {.max_segment_length = 5e-3});
+  const vessels::SpatialIndex index(net);
+  const Vec3 A = net.node(net.segment(0).node_from);
+  const Vec3 axis = (net.node(net.segment(net.num_segments() - 1).node_to) - A).normalized();
+  std::vector<Vec3> x = {A + 0.02 * axis, A + 0.021 * axis, A + 0.022 * axis}, v(3, Vec3::Zero());
+  std::vector<double> arc = {3e-3, 2e-3, 1e-3}, radius(2, 0.2e-3);
+  rod::RodView view;
+  view.positions = x;
+  view.velocities = v;
+  view.arc_length = arc;
+  view.radius = radius;
+  view.first_clamped_vertex = 3;
+  view.dt = 1e-3;
+  const Vec3 across = axis.unitOrthogonal();
+  double speed = 0.5;
+  VesselForces forces(index, 0.2e-3, ContactParams{.enabled = false}, DragModel{},
+                      [&](int, const Vec3&) { return Vec3(speed * across); });
+  rod::ForceAccumulator acc;
+  acc.reset(3);
+  forces.evaluate(view, acc);
+  forces.end_step(view);
+  const double re = 1060 * 0.5 * 0.4e-3 / 3.5e-3;
+  EXPECT_NEAR(forces.stats().max_reynolds, re, 1e-9 * re);
+  speed = 5e3;  // a trial iterate far beyond the curve's range, then the accepted state again
+  acc.reset(3);
+  forces.evaluate(view, acc);
+  speed = 0.5;
+  acc.reset(3);
+  forces.evaluate(view, acc);
+  forces.end_step(view);
+  EXPECT_NEAR(forces.stats().max_reynolds, re, 1e-9 * re);
+  speed = 5e3;  // accepted: now beyond the range
+  acc.reset(3);
+  forces.evaluate(view, acc);
+  forces.end_step(view);
+  EXPECT_GT(forces.stats().max_reynolds, kCylinderDragMaxReynolds);
+}
