@@ -44,6 +44,29 @@ const Reference kReferences[] = {
 /// Lamb's (1911) Oseen drag, the leading term of the creeping-flow expansion.
 double lamb(double re) { return 8.0 * kPi / (re * (0.5 - 0.5772156649 - std::log(re / 8.0))); }
 
+/// Three vertices of a wire at rest, 1 mm apart, on the axis of a 2 mm tube.
+struct ShortWire {
+  vessels::Network net = vessels::Network::build(vessels::straight_tube({.length = 0.05, .radius = 2e-3}),
+                                                 {.max_segment_length = 5e-3});
+  vessels::SpatialIndex index{net};
+  Vec3 axis = (net.node(net.segment(net.num_segments() - 1).node_to) - net.node(net.segment(0).node_from)).normalized();
+  std::vector<Vec3> x, v = std::vector<Vec3>(3, Vec3::Zero());
+  std::vector<double> arc = {3e-3, 2e-3, 1e-3}, radius = std::vector<double>(2, 0.2e-3);
+  rod::RodView view;
+  ShortWire() {
+    const Vec3 a = net.node(net.segment(0).node_from);
+    x = {a + 0.02 * axis, a + 0.021 * axis, a + 0.022 * axis};
+    view.positions = x;
+    view.velocities = v;
+    view.arc_length = arc;
+    view.radius = radius;
+    view.first_clamped_vertex = 3;
+    view.dt = 1e-3;
+  }
+  ShortWire(const ShortWire&) = delete;
+  ShortWire& operator=(const ShortWire&) = delete;
+};
+
 Mat3 fd_velocity_jacobian(const DragModel& m, DragInput in, double h) {
   Mat3 J;
   for (int k = 0; k < 3; ++k) {
@@ -255,19 +278,9 @@ TEST(CylinderDrag, CoaxialWireInATubeReceivesTheExactAnnularForce) {
 }
 
 TEST(CylinderDrag, ANonFiniteBloodVelocityIsANumericalError) {
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 0.05, .radius = 2e-3}), {.max_segment_length = 5e-3});
-  const vessels::SpatialIndex index(net);
-  const Vec3 A = net.node(net.segment(0).node_from);
-  const Vec3 axis = (net.node(net.segment(net.num_segments() - 1).node_to) - A).normalized();
-  std::vector<Vec3> x = {A + 0.02 * axis, A + 0.021 * axis, A + 0.022 * axis}, v(3, Vec3::Zero());
-  std::vector<double> arc = {3e-3, 2e-3, 1e-3}, radius(2, 0.2e-3);
-  rod::RodView view;
-  view.positions = x;
-  view.velocities = v;
-  view.arc_length = arc;
-  view.radius = radius;
-  view.first_clamped_vertex = 3;
-  view.dt = 1e-3;
+  const ShortWire w;
+  const auto& index = w.index;
+  const rod::RodView& view = w.view;
   VesselForces forces(index, 0.2e-3, ContactParams{.enabled = false}, DragModel{},
                       [](int, const Vec3&) { return Vec3(std::nan(""), 0, 0); });
   rod::ForceAccumulator acc;
@@ -284,19 +297,10 @@ TEST(CylinderDrag, ANonFiniteBloodVelocityIsANumericalError) {
 TEST(CylinderDrag, TheLargestReynoldsNumberIsThatOfAcceptedStates) {
   // The runner warns when it passes the curve's range; what it reads is the largest normal
   // Reynolds number of the states the rod accepted (end_step), not of trial iterates.
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 0.05, .radius = 2e-3}), {.max_segment_length = 5e-3});
-  const vessels::SpatialIndex index(net);
-  const Vec3 A = net.node(net.segment(0).node_from);
-  const Vec3 axis = (net.node(net.segment(net.num_segments() - 1).node_to) - A).normalized();
-  std::vector<Vec3> x = {A + 0.02 * axis, A + 0.021 * axis, A + 0.022 * axis}, v(3, Vec3::Zero());
-  std::vector<double> arc = {3e-3, 2e-3, 1e-3}, radius(2, 0.2e-3);
-  rod::RodView view;
-  view.positions = x;
-  view.velocities = v;
-  view.arc_length = arc;
-  view.radius = radius;
-  view.first_clamped_vertex = 3;
-  view.dt = 1e-3;
+  const ShortWire w;
+  const auto& index = w.index;
+  const Vec3& axis = w.axis;
+  const rod::RodView& view = w.view;
   const Vec3 across = axis.unitOrthogonal();
   double speed = 0.5;
   VesselForces forces(index, 0.2e-3, ContactParams{.enabled = false}, DragModel{},

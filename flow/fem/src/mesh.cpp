@@ -292,6 +292,31 @@ double tet_volume_linear(const TetMesh& m, const std::array<int, 10>& t) {
              .dot(m.nodes[static_cast<size_t>(t[3])] - x0) / 6.0;
 }
 
+/// The physical groups both mesh builders need (the volume, and every boundary group under
+/// its name, tagged group index + 1) and their common meshing options (one thread, so the
+/// same geometry gives the same mesh; first order here, raised to second order later).
+void tag_groups_and_set_options(int volume, const char* volume_name, const std::vector<BoundaryGroup>& groups,
+                                const gmsh::vectorpair& surfs, const std::vector<int>& surf_group, int algorithm3d) {
+  gmsh::model::addPhysicalGroup(3, {volume}, 1);
+  gmsh::model::setPhysicalName(3, 1, volume_name);
+  for (size_t gi = 0; gi < groups.size(); ++gi) {
+    std::vector<int> tags;
+    for (size_t k = 0; k < surfs.size(); ++k)
+      if (surf_group[k] == static_cast<int>(gi)) tags.push_back(surfs[k].second);
+    const int tag = static_cast<int>(gi) + 1;
+    gmsh::model::addPhysicalGroup(2, tags, tag);
+    gmsh::model::setPhysicalName(2, tag, groups[gi].name);
+  }
+  gmsh::option::setNumber("General.NumThreads", 1);
+  gmsh::option::setNumber("Mesh.Algorithm3D", algorithm3d);
+  gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+  gmsh::option::setNumber("Mesh.ElementOrder", 1);
+  gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
+  gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-3);
+}
+
 void generate(const MeshOptions& opt);
 void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
                   const std::string& at);
@@ -354,26 +379,8 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
                                         "or a junction sphere covers it)", node));
     surf_group[static_cast<size_t>(found)] = static_cast<int>(gi);
   }
-  gmsh::model::addPhysicalGroup(3, {vols[0].second}, 1);
-  gmsh::model::setPhysicalName(3, 1, "lumen");
-  for (size_t gi = 0; gi < mesh.groups.size(); ++gi) {
-    std::vector<int> tags;
-    for (size_t k = 0; k < surfs.size(); ++k)
-      if (surf_group[k] == static_cast<int>(gi)) tags.push_back(surfs[k].second);
-    const int tag = static_cast<int>(gi) + 1;
-    gmsh::model::addPhysicalGroup(2, tags, tag);
-    gmsh::model::setPhysicalName(2, tag, mesh.groups[gi].name);
-  }
-
+  tag_groups_and_set_options(vols[0].second, "lumen", mesh.groups, surfs, surf_group, opt.algorithm3d);
   // Sizes: fixed, or a fraction of the radius of the nearest piece.
-  gmsh::option::setNumber("General.NumThreads", 1);
-  gmsh::option::setNumber("Mesh.Algorithm3D", opt.algorithm3d);
-  gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
-  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
-  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
-  gmsh::option::setNumber("Mesh.ElementOrder", 1);
-  gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
-  gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-3);
   double hmin = std::numeric_limits<double>::infinity();
   for (const Piece& p : g.pieces) hmin = std::min(hmin, opt.size_factor * p.radius);
   if (opt.mesh_size > 0.0) {
@@ -640,24 +647,7 @@ TetMesh mesh_domain(const ShapeDomain& dom, const MeshOptions& opt) {
   }
   for (size_t g = 0; g < mesh.groups.size(); ++g)
     if (!used[g]) throw_input_error(at, fmt::format("boundary group '{}' has no face", mesh.groups[g].name));
-  gmsh::model::addPhysicalGroup(3, {vols[0].second}, 1);
-  gmsh::model::setPhysicalName(3, 1, "fluid");
-  for (size_t gi = 0; gi < mesh.groups.size(); ++gi) {
-    std::vector<int> tags;
-    for (size_t k = 0; k < surfs.size(); ++k)
-      if (surf_group[k] == static_cast<int>(gi)) tags.push_back(surfs[k].second);
-    const int tag = static_cast<int>(gi) + 1;
-    gmsh::model::addPhysicalGroup(2, tags, tag);
-    gmsh::model::setPhysicalName(2, tag, mesh.groups[gi].name);
-  }
-  gmsh::option::setNumber("General.NumThreads", 1);
-  gmsh::option::setNumber("Mesh.Algorithm3D", opt.algorithm3d);
-  gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
-  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
-  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
-  gmsh::option::setNumber("Mesh.ElementOrder", 1);
-  gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
-  gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-3);
+  tag_groups_and_set_options(vols[0].second, "fluid", mesh.groups, surfs, surf_group, opt.algorithm3d);
   gmsh::option::setNumber("Mesh.MeshSizeMin", 0.0);
   gmsh::option::setNumber("Mesh.MeshSizeMax", 1e22);
   const ShapeDomain* d = &dom;
