@@ -1,6 +1,8 @@
 // The scene runner: builds only what a scene has (vessels, flow, wire) and steps it.
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -205,15 +207,37 @@ void apply_loads(const config::Config& c, rod::RodSimulator& sim) {
 }
 
 /// output.png: the network coloured by pressure (or plain, without flow) with the wire over
-/// it, seen from the front and from the side.
-void render_pictures(const config::Config& c, const vessels::Network& net, const flow::FlowSolver* fs,
+/// it. network.png looks along the network's thinnest direction (its shape in the plane it
+/// spreads in: the arch of an aorta, the fork of a Y), network_side.png across it. With a
+/// periodic inlet the pressure is that of the instant of peak inlet pressure (or flow) in the
+/// cycle after the run's end (systole: the range of pressures that drives the flow; the
+/// quasi-steady model), else of the end.
+void render_pictures(const config::Config& c, const vessels::Network& net, flow::FlowSolver* fs,
                      const rod::RodSimulator* sim, const std::filesystem::path& out) {
   std::vector<double> p(static_cast<size_t>(net.num_nodes()), 0.0);
-  if (fs) fs->node_pressures(p);
   flow::RenderOptions ro;
   ro.title = c.string_or("name", "flowire");
-  ro.view_direction = vessels::Vec3(0.35, -1.0, 0.0).normalized();  // front, slightly oblique: the arch opens up
-  if (!fs) ro.scalar_name = "no flow";
+  if (fs) {
+    const double period = fs->spec().cycle();
+    double t_show = fs->time();
+    // The quasi-steady model goes to any instant and back; the rlc model only forwards.
+    const bool quasi_steady = fs->spec().model == flow::Model::Poiseuille;
+    if (quasi_steady && period > 0.0 && !fs->spec().inlets.empty()) {
+      const auto& inlet = fs->spec().inlets.front().waveform;
+      double best = -std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 256; ++k) {
+        const double t = fs->time() + period * k / 256.0;
+        if (inlet(t) > best) best = inlet(t), t_show = t;
+      }
+      ro.title += fmt::format("  (peak inlet, t = {:.3f} s)", t_show);
+    }
+    const double t_end = fs->time();
+    std::vector<double> q(static_cast<size_t>(net.num_segments()));
+    fs->solve_at(t_show, p, q);
+    if (t_show != t_end) fs->advance(t_end);
+  } else {
+    ro.scalar_name = "no flow";
+  }
   if (sim) {
     flow::RenderOverlay wire;
     const auto x = sim->positions();
@@ -222,8 +246,19 @@ void render_pictures(const config::Config& c, const vessels::Network& net, const
     wire.radius = std::max(3.0 * sim->model().edge_radius.front(), 1.2e-3);  // drawn thicker to be seen
     ro.overlays.push_back(std::move(wire));
   }
+  // Principal directions of the network's nodes: look along the smallest.
+  vessels::Vec3 mean = vessels::Vec3::Zero();
+  for (int i = 0; i < net.num_nodes(); ++i) mean += net.node(i);
+  mean /= std::max(1, net.num_nodes());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < net.num_nodes(); ++i) cov += (net.node(i) - mean) * (net.node(i) - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);  // ascending eigenvalues
+  const vessels::Vec3 thin = eig.eigenvectors().col(0), middle = eig.eigenvectors().col(1), along = eig.eigenvectors().col(2);
+  // Up: the longest direction, pointing to +z where it has a z part (a body stands upright).
+  ro.view_up = along.z() < 0.0 ? vessels::Vec3(-along) : along;
+  ro.view_direction = thin;
   flow::render_network_png(net, p, out / "network.png", ro);
-  ro.view_direction = vessels::Vec3(1.0, 0.0, 0.0);
+  ro.view_direction = middle;
   flow::render_network_png(net, p, out / "network_side.png", ro);
 }
 
