@@ -782,6 +782,18 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
                         {"max_outside", st.max_outside},
                         {"max_outside_over_wire_radius", st.max_outside / sim->discretization().edge_radius.front()},
                         {"contact_evaluations", st.contacts}};
+        if (st.outside_time >= 0.0) {
+          const double a = sim->discretization().edge_radius.front();
+          s["contact"]["outside"] = {
+              {"time", st.outside_time},
+              {"arc_length", st.outside_arc_length},
+              {"position", {st.outside_position.x(), st.outside_position.y(), st.outside_position.z()}},
+              {"wire_radii", st.outside_distance / a},
+              {"message", fmt::format("the wire left the lumen: at t = {:.4g} s the vertex {:.4g} m from the entry, at "
+                                      "({:.4g}, {:.4g}, {:.4g}) m, was {:.3g} wire radii outside the wall",
+                                      st.outside_time, st.outside_arc_length, st.outside_position.x(),
+                                      st.outside_position.y(), st.outside_position.z(), st.outside_distance / a)}};
+        }
         if (forces->drag().law != DragLaw::None) {
           const auto total = forces->total_drag();
           s["drag"] = {{"law", c.string_or("coupling.drag", "cylinder")},
@@ -806,6 +818,15 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       finish("error");
     }
     throw;
+  }
+  // A wire that left the lumen by more than its radius is no result to trust: said with
+  // where and when, status "outside", and a numerical failure unless the scene allows it.
+  if (const auto& o = result.summary["contact"]; o.contains("outside")) {
+    const std::string msg = o["outside"]["message"];
+    warn(msg);
+    finish("outside");
+    if (!(c.has("contact.allow_outside") && c.boolean("contact.allow_outside"))) throw_numerical_error(msg + " (contact.allow_outside: true accepts such a run)");
+    return result;
   }
   finish("ok");
   return result;

@@ -160,6 +160,9 @@ config::Schema make_schema() {
   add("contact.settle", Type::Bool, "true", D::None,
       "start a dynamic run from the static equilibrium of the initial wire against the walls (a pre-shaped tip "
       "squeezed into the lumen) instead of from its free shape");
+  add("contact.allow_outside", Type::Bool, "false", D::None,
+      "a wire that ends up more than its radius outside the lumen makes the run fail (status outside, exit 3) "
+      "unless this is true (status outside, exit 0)");
   add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
 
   add("obstacles", Type::List, "", D::None, "regions that resist the tip (a clot, a tight lesion)");

@@ -204,6 +204,12 @@ void VesselForces::end_step(const rod::RodView& rod) {
       lag_normal_[static_cast<size_t>(i)] = nrm;
     }
     stats_.max_outside = std::max(stats_.max_outside, d);
+    if (d > wire_radius_ && stats_.outside_time < 0.0) {
+      stats_.outside_time = rod.time;
+      stats_.outside_arc_length = rod.arc_length.empty() ? 0.0 : rod.arc_length[k];
+      stats_.outside_distance = d;
+      stats_.outside_position = rod.position(i);
+    }
     stats_.max_penetration = std::max(stats_.max_penetration, d + wire_radius_);
   }
 }

@@ -329,3 +329,36 @@ TEST(Cli, ProgressLineOnATerminalOnly) {
   EXPECT_NE(text.str().find("ETA"), std::string::npos) << text.str();
   EXPECT_NE(text.str().find("ok in"), std::string::npos) << text.str();
 }
+
+TEST(Cli, AWireOutsideTheLumenIsNoSuccess) {
+  // Without wall contact the wire runs straight out of the iliac artery: the run must say so
+  // (where and when), end with status "outside" and exit 3, unless the scene allows it.
+  const auto dir = flowire::testing::scratch_dir("cli-outside");
+  write(dir / "scene.yaml", R"(name: leaves_the_lumen
+vessels: {generator: {type: aortic_arch}, max_segment_length: 5 mm}
+flow:
+  inlet: {pressure: {waveform: sine, systolic: 120 mmHg, diastolic: 80 mmHg, period: 0.833 s}}
+  outlets: {resistance: 1 mmHg*s/mL, scaling: murray}
+wire: {length: 0.6, radius: 0.445 mm, youngs_modulus: 60 GPa, segment_length: 5 mm}
+insertion: {speed: 10 cm/s, initial_length: 2 cm}
+contact: {enabled: false}
+solve: {dt: 10 ms, duration: 2 s}
+output: {vtk: false}
+)");
+  const auto refused = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "a").string());
+  EXPECT_EQ(refused.status, 3) << refused.err;
+  EXPECT_NE(refused.err.find("the wire left the lumen: at t = "), std::string::npos) << refused.err;
+  std::ifstream sa(dir / "a" / "summary.json");
+  const auto ja = nlohmann::json::parse(sa);
+  EXPECT_EQ(ja["status"], "outside");
+  EXPECT_GT(ja["contact"]["outside"]["wire_radii"].get<double>(), 1.0);
+  const auto allowed =
+      run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "b").string() + " --set contact.allow_outside=true");
+  EXPECT_EQ(allowed.status, 0) << allowed.err;
+  std::ifstream sb(dir / "b" / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(sb)["status"], "outside");
+  // Inside the lumen (contact on) the same push is ok.
+  const auto inside = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "c").string() +
+                          " --set contact.enabled=true");
+  EXPECT_EQ(inside.status, 0) << inside.err;
+}

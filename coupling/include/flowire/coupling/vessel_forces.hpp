@@ -39,6 +39,12 @@ struct InteractionStats {
   std::uint64_t contacts = 0;          ///< vertex evaluations in contact
   double max_penetration = 0.0;        ///< over accepted steps [m]
   double max_outside = 0.0;            ///< max over accepted steps of (wall distance of a vertex centre) [m]
+  /// Where and when a vertex centre was first more than a wire radius outside the lumen
+  /// (outside_time < 0: never).
+  double outside_time = -1.0;          ///< [s]
+  double outside_arc_length = 0.0;     ///< of that vertex, from the entry [m]
+  double outside_distance = 0.0;       ///< its distance outside the wall [m]
+  Eigen::Vector3d outside_position = Eigen::Vector3d::Zero();
   double seconds_lookup = 0.0, seconds_contact = 0.0, seconds_drag = 0.0;
   double max_reynolds = 0.0;           ///< largest normal Reynolds number of the drag law over accepted steps [-]
 };
