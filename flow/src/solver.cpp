@@ -48,7 +48,34 @@ void FlowSolver::solve_at(double t, std::span<double> node_pressures_out, std::s
 
 double FlowSolver::segment_flow(int segment) const {
   const auto& seg = net_.segment(segment);
-  return (node_pressure(seg.node_from) - node_pressure(seg.node_to)) / resistance_[static_cast<size_t>(segment)];
+  return (node_pressure(seg.node_from) - node_pressure(seg.node_to)) / effective_resistance(segment);
+}
+
+void FlowSolver::set_occlusion(std::span<const SegmentOcclusion> occlusion) {
+  if (!supports_occlusion())
+    throw_usage_error(fmt::format("flow: the {} solver keeps its matrix; occlusion needs superposition, sparse or rlc",
+                                  name()));
+  if (occlusion.size() != static_cast<size_t>(net_.num_segments()))
+    throw_usage_error(fmt::format("flow: occlusion for {} segments, the network has {}", occlusion.size(),
+                                  net_.num_segments()));
+  bool changed = occlusion_.empty();
+  for (size_t s = 0; s < occlusion.size(); ++s) {
+    const auto& o = occlusion[s];
+    if (!(o.resistance_factor >= 1.0) || !(o.inertance_factor >= 1.0) || !(o.gradient_factor >= 1.0) ||
+        !std::isfinite(o.resistance_factor) || !std::isfinite(o.inertance_factor) || !std::isfinite(o.gradient_factor))
+      throw_usage_error(fmt::format("flow: occlusion of segment {}: factors {}, {}, {} must be finite and >= 1", s,
+                                    o.resistance_factor, o.inertance_factor, o.gradient_factor));
+    if (!changed && (o.resistance_factor != occlusion_[s].resistance_factor ||
+                     o.inertance_factor != occlusion_[s].inertance_factor))
+      changed = true;
+  }
+  occlusion_.assign(occlusion.begin(), occlusion.end());
+  if (!changed) return;
+  Stopwatch sw;
+  apply_occlusion();
+  if (!harmonic_.empty()) compute_harmonics();
+  timings_.occlusion += sw.seconds();
+  ++timings_.occlusion_updates;
 }
 
 void FlowSolver::node_pressures(std::span<double> out) const {
@@ -81,33 +108,31 @@ double FlowSolver::profile_velocity(int segment, double rho2, double t) const {
   const double r = seg.radius;
   const double area = kPi * r * r;
   const double q = t == time_ ? segment_flow(segment) : segment_flow_at(segment, t);
+  // Where a wire lies, the undisturbed velocity is the empty tube's under the occupied
+  // part's pressure gradient (the annulus passes the segment's flow at a steeper one).
+  const double g = occlusion_.empty() ? 1.0 : occlusion_[static_cast<size_t>(segment)].gradient_factor;
   const double laminar = 2.0 / area * (1.0 - rho2);  // the parabola per unit flow
   double u = laminar * q;
-  if (harmonic_.empty()) return u;
+  if (harmonic_.empty()) return g * u;
   // Each harmonic swaps its quasi-steady parabola for its Womersley profile.
   const auto base = static_cast<size_t>(segment) * kHarmonics;
-  if (!shape_ready_[static_cast<size_t>(segment)]) {
-    shape_ready_[static_cast<size_t>(segment)] = 1;
-    const double alpha = womersley_number(r, omega_, spec_.density, spec_.viscosity);
-    for (int n = 1; n <= kHarmonics; ++n) {
-      if (harmonic_[base + static_cast<size_t>(n - 1)] == 0.0) continue;
-      const double a_n = alpha * std::sqrt(static_cast<double>(n));
-      auto& cached = shape_by_alpha_[a_n];
-      if (!cached) cached = std::make_shared<const WomersleyShape>(a_n);
-      shape_[base + static_cast<size_t>(n - 1)] = cached;
-    }
-  }
   const double rho = std::sqrt(rho2);
   const std::complex<double> step = std::polar(1.0, omega_ * t);
   std::complex<double> phase = 1.0;
   for (int n = 1; n <= kHarmonics; ++n) {
     phase *= step;  // e^{inωt}
     const auto k = base + static_cast<size_t>(n - 1);
-    if (!shape_[k]) continue;
+    if (harmonic_[k] == 0.0) continue;
+    if (!shape_[k]) {
+      const double a_n = womersley_number(r, omega_, spec_.density, spec_.viscosity) * std::sqrt(static_cast<double>(n));
+      auto& cached = shape_by_alpha_[a_n];
+      if (!cached) cached = std::make_shared<const WomersleyShape>(a_n);
+      shape_[k] = cached;
+    }
     const std::complex<double> qn = harmonic_[k] * phase;
     u += ((*shape_[k])(rho) * qn).real() / area - laminar * qn.real();
   }
-  return u;
+  return g * u;
 }
 
 double FlowSolver::axial_velocity_at(int segment, const Vec3& p) const { return axial_velocity_at(segment, p, time_); }
@@ -141,7 +166,14 @@ void FlowSolver::prepare_profile() {
          "using the laminar profile");
     return;
   }
+  const auto ne = static_cast<size_t>(net_.num_segments());
+  shape_.assign(ne * kHarmonics, nullptr);
+  compute_harmonics();
+}
+
+void FlowSolver::compute_harmonics() {
   // Q̂_n = (2/M) Σ_m Q(t_m) e^{−inωt_m} over one period (the quasi-steady model gives Q at any t).
+  const double period = spec_.cycle();
   const auto ne = static_cast<size_t>(net_.num_segments());
   harmonic_.assign(ne * kHarmonics, 0.0);
   std::vector<double> magnitude(ne, 0.0);
@@ -158,13 +190,15 @@ void FlowSolver::prepare_profile() {
       }
     }
   }
+  drop_negligible_harmonics(magnitude);
+}
+
+void FlowSolver::drop_negligible_harmonics(std::span<const double> scale) {
   // A harmonic the waveform does not have (a sine has one) is left to the parabola.
-  for (size_t s = 0; s < ne; ++s)
+  for (size_t s = 0; s < scale.size(); ++s)
     for (int n = 0; n < kHarmonics; ++n)
-      if (std::abs(harmonic_[s * kHarmonics + static_cast<size_t>(n)]) <= 1e-9 * magnitude[s])
+      if (std::abs(harmonic_[s * kHarmonics + static_cast<size_t>(n)]) <= 1e-9 * scale[s])
         harmonic_[s * kHarmonics + static_cast<size_t>(n)] = 0.0;
-  shape_.assign(ne * kHarmonics, nullptr);
-  shape_ready_.assign(ne, 0);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -204,7 +238,53 @@ void ResponseSolver::set_responses(const Eigen::MatrixXd& x) {
     for (const auto& [node, value] : a_.sources[k].node_values)
       if (a_.dirichlet[static_cast<size_t>(node)]) p_[static_cast<size_t>(node) * kk + k] += value;
   coef_.assign(kk, 0.0);
-  a_.coefficients(0.0, coef_.data());
+  a_.coefficients(time_, coef_.data());
+}
+
+void ResponseSolver::update_conductances() {
+  for (size_t s = 0; s < a_.conductance.size(); ++s) a_.conductance[s] = 1.0 / effective_resistance(static_cast<int>(s));
+}
+
+void ResponseSolver::compute_harmonics() {
+  // The flow is linear in the sources: Q̂_{s,n} = g_s Σ_k (p_k,from − p_k,to) f̂_{k,n}, with
+  // f̂_{k,n} the harmonics of source k's waveform, sampled once; a new occlusion then costs
+  // num_segments × k × kHarmonics, not a resampling of every segment.
+  const double period = spec_.cycle();
+  const auto kk = static_cast<size_t>(k_);
+  if (source_harmonic_.empty()) {
+    source_harmonic_.assign(kk * kHarmonics, 0.0);
+    for (size_t k = 1; k < kk; ++k) {
+      const Waveform& w = *a_.sources[k].waveform;
+      for (int m = 0; m < kSamplesPerPeriod; ++m) {
+        const double tm = period * m / kSamplesPerPeriod;
+        const std::complex<double> step = std::polar(1.0, -omega_ * tm);
+        std::complex<double> phase = 1.0;
+        for (int n = 1; n <= kHarmonics; ++n) {
+          phase *= step;
+          source_harmonic_[k * kHarmonics + static_cast<size_t>(n - 1)] += (2.0 / kSamplesPerPeriod) * w(tm) * phase;
+        }
+      }
+    }
+  }
+  const auto ne = static_cast<size_t>(net_.num_segments());
+  harmonic_.assign(ne * kHarmonics, 0.0);
+  std::vector<double> magnitude(ne, 0.0);
+  for (size_t s = 0; s < ne; ++s) {
+    const auto& seg = net_.segment(static_cast<int>(s));
+    const double* a = p_.data() + static_cast<size_t>(seg.node_from) * kk;
+    const double* b = p_.data() + static_cast<size_t>(seg.node_to) * kk;
+    const double g = a_.conductance[s];
+    magnitude[s] = std::abs(g * (a[0] - b[0]));
+    for (size_t k = 1; k < kk; ++k) {
+      const double dq = g * (a[k] - b[k]);
+      for (int n = 0; n < kHarmonics; ++n) {
+        const auto h = source_harmonic_[k * kHarmonics + static_cast<size_t>(n)] * dq;
+        harmonic_[s * kHarmonics + static_cast<size_t>(n)] += h;
+        magnitude[s] += std::abs(h);
+      }
+    }
+  }
+  drop_negligible_harmonics(magnitude);
 }
 
 double ResponseSolver::node_pressure(int node) const {
@@ -251,27 +331,45 @@ void ResponseSolver::segment_flows(std::span<double> out) const {
   }
 }
 
-/// Superposition: the responses solved with one CHOLMOD factorization.
+/// Superposition: the responses solved with one CHOLMOD factorization; an occlusion
+/// refactors the same pattern (numeric only) and re-solves the responses.
 class SuperpositionSolver final : public ResponseSolver {
  public:
   SuperpositionSolver(const Network& net, FlowSpec spec) : ResponseSolver(net, std::move(spec)) {
     Stopwatch sw;
-    const Eigen::SparseMatrix<double> g = nodal_matrix(net_, a_);
-    const Eigen::MatrixXd b = source_rhs();
+    g_ = nodal_matrix(net_, a_);
+    b_ = source_rhs();
     timings_.assemble += sw.seconds();
     Stopwatch sf;
-    Eigen::MatrixXd x(b.rows(), b.cols());
-    if (b.rows() > 0) {
-      Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol;
-      chol.compute(g);
-      if (chol.info() != Eigen::Success)
-        throw_numerical_error("flow: the nodal conductance matrix could not be factored (not positive definite)");
-      x = chol.solve(b);
-    }
-    set_responses(x);
+    if (b_.rows() > 0) chol_.analyzePattern(g_);
+    solve_responses();
     timings_.factor = sf.seconds();
   }
   [[nodiscard]] std::string_view name() const override { return "superposition"; }
+  [[nodiscard]] bool supports_occlusion() const override { return true; }
+
+ protected:
+  void apply_occlusion() override {
+    update_conductances();
+    g_ = nodal_matrix(net_, a_);
+    b_ = source_rhs();  // a pressure source enters through the conductances next to it
+    solve_responses();
+  }
+
+ private:
+  void solve_responses() {
+    Eigen::MatrixXd x(b_.rows(), b_.cols());
+    if (b_.rows() > 0) {
+      chol_.factorize(g_);
+      if (chol_.info() != Eigen::Success)
+        throw_numerical_error("flow: the nodal conductance matrix could not be factored (not positive definite)");
+      x = chol_.solve(b_);
+    }
+    set_responses(x);
+  }
+  Eigen::SparseMatrix<double> g_;
+  Eigen::MatrixXd b_;
+  Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
 };
 
 /// Base of the solvers that compute full arrays every frame.
@@ -331,8 +429,23 @@ class SparseSolver final : public FrameSolver {
     init_arrays();
   }
   [[nodiscard]] std::string_view name() const override { return "sparse"; }
+  [[nodiscard]] bool supports_occlusion() const override { return true; }
 
  protected:
+  void apply_occlusion() override {
+    for (size_t s = 0; s < a_.conductance.size(); ++s) a_.conductance[s] = 1.0 / effective_resistance(static_cast<int>(s));
+    for (size_t k = 0; k < b_.size(); ++k) {  // a pressure source enters through the conductances next to it
+      b_[k].setZero();
+      add_nodal_rhs(net_, a_, a_.sources[k], 1.0, b_[k]);
+    }
+    if (a_.num_unknowns() > 0) {
+      ldlt_.factorize(nodal_matrix(net_, a_));
+      if (ldlt_.info() != Eigen::Success) throw_numerical_error("flow: the nodal conductance matrix is singular");
+    }
+    scratch_q_.clear();
+    compute(time_, p_.data(), q_.data());
+  }
+
   void compute(double t, double* p, double* q) const override {
     a_.coefficients(t, coef_.data());
     rhs_.setZero();

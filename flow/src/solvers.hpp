@@ -3,6 +3,7 @@
 #include <memory>
 
 #include <Eigen/Dense>
+#include <complex>
 #include <vector>
 
 #include "assembly.hpp"
@@ -28,10 +29,15 @@ class ResponseSolver : public FlowSolver {
   [[nodiscard]] Eigen::MatrixXd source_rhs() const;
   /// Store the solutions over unknown nodes (num_unknowns x k).
   void set_responses(const Eigen::MatrixXd& x);
+  /// Conductances 1/(R × resistance_factor) after an occlusion.
+  void update_conductances();
+  /// Harmonics from the sources' waveform harmonics (no resampling of the segments).
+  void compute_harmonics() override;
   Assembly a_;
   int k_ = 0;
   std::vector<double> p_;     // (num_nodes x k) node pressure response to each source
   std::vector<double> coef_;  // (k) f_k(time)
+  std::vector<std::complex<double>> source_harmonic_;  // (k x kHarmonics) of each waveform, once
 };
 
 /// Bytes the dense_inverse solver needs for K and K⁻¹.

@@ -44,12 +44,27 @@ struct SegmentState {
   double womersley = 0.0;          ///< r·sqrt(ωρ/η) at the spec's cycle, 0 if steady
 };
 
+/// @brief What a body lying in a segment (a guidewire) does to the segment's flow; the
+/// coupling computes it (coupling/occlusion.hpp) from the annular flow around the wire
+/// (annulus.hpp). The default value is an empty segment.
+struct SegmentOcclusion {
+  double occupied_fraction = 0.0;  ///< occupied axial length / segment length, in [0, 1]
+  double resistance_factor = 1.0;  ///< resistance with the body / without, ≥ 1
+  double inertance_factor = 1.0;   ///< inertance with the body / without, ≥ 1 (flow.model: rlc)
+  /// pressure gradient where the body lies / the empty tube's at equal flow (≥ 1): the
+  /// undisturbed velocity that the drag law sees there is the empty tube's profile under
+  /// that gradient
+  double gradient_factor = 1.0;
+};
+
 /// @brief Seconds spent per phase of a solver's life.
 struct SolverTimings {
-  double assemble = 0.0;  ///< building the matrices
-  double factor = 0.0;    ///< factorization / inverse / per-source solves / periodic search
-  double frames = 0.0;    ///< accumulated time in advance()
+  double assemble = 0.0;   ///< building the matrices
+  double factor = 0.0;     ///< factorization / inverse / per-source solves / periodic search
+  double frames = 0.0;     ///< accumulated time in advance()
   long frame_count = 0;
+  double occlusion = 0.0;  ///< refactorizations and re-solves after set_occlusion
+  long occlusion_updates = 0;  ///< set_occlusion calls that changed a resistance or inertance
 };
 
 class FlowSolver {
@@ -84,8 +99,27 @@ class FlowSolver {
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p) const;
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p, double t) const;
 
-  /// @brief Poiseuille resistance of each segment (Pa·s/m³).
+  /// @brief Poiseuille resistance of each segment without occlusion (Pa·s/m³).
   [[nodiscard]] double resistance(int segment) const { return resistance_[static_cast<size_t>(segment)]; }
+  /// @brief The resistance with the segment's occlusion, resistance × resistance_factor.
+  [[nodiscard]] double effective_resistance(int segment) const {
+    return occlusion_.empty() ? resistance(segment)
+                              : resistance(segment) * occlusion_[static_cast<size_t>(segment)].resistance_factor;
+  }
+
+  /// @brief Whether set_occlusion is available: superposition, sparse and rlc; the
+  /// dense_inverse (the published fixed K⁻¹) and petsc solvers keep their matrix.
+  [[nodiscard]] virtual bool supports_occlusion() const { return false; }
+  /// @brief Set every segment's occlusion (size num_segments). Quasi-steady solvers
+  /// refactor the nodal system (the symbolic analysis is kept) and re-solve their source
+  /// responses, so the state at the current time is that of the new resistances; rlc
+  /// refactors its step matrix and integrates on from its current state. Nothing is redone
+  /// when no resistance or inertance factor changed.
+  /// @throws flowire::Error (usage) if the size is wrong, a factor is below 1 or not
+  /// finite, or the solver does not support occlusion.
+  void set_occlusion(std::span<const SegmentOcclusion> occlusion);
+  /// @brief The occlusion of every segment; empty until set_occlusion is called.
+  [[nodiscard]] std::span<const SegmentOcclusion> occlusion() const { return occlusion_; }
   [[nodiscard]] const Network& network() const { return net_; }
   [[nodiscard]] const FlowSpec& spec() const { return spec_; }
   [[nodiscard]] const SolverTimings& timings() const { return timings_; }
@@ -95,6 +129,13 @@ class FlowSolver {
   FlowSolver(const Network& net, FlowSpec spec);
   /// Move the state to time t.
   virtual void do_advance(double t) = 0;
+  /// Rebuild after occlusion_ changed (resistance or inertance factors).
+  virtual void apply_occlusion() {}
+  /// The flow harmonics of every segment for the Womersley profile (harmonic_); the
+  /// default samples segment_flow_at over one period.
+  virtual void compute_harmonics();
+  /// Drop harmonics below 1e-9 of `scale[s]` (a harmonic the waveform does not have).
+  void drop_negligible_harmonics(std::span<const double> scale);
   /// Axial velocity given the segment, squared distance ratio d²/r² and time.
   [[nodiscard]] double profile_velocity(int segment, double rho2, double t) const;
 
@@ -112,11 +153,11 @@ class FlowSolver {
   /// empty unless the Womersley profile is on
   std::vector<std::complex<double>> harmonic_;
   /// (num_segments × kHarmonics) the Womersley shape of α√n, tabulated the first time a
-  /// velocity in that segment is asked for; null for a negligible harmonic
+  /// velocity in that segment is asked for; null until then and for a negligible harmonic
   mutable std::vector<std::shared_ptr<const WomersleyShape>> shape_;
-  mutable std::vector<char> shape_ready_;  ///< (num_segments) its shapes are made
   mutable std::map<double, std::shared_ptr<const WomersleyShape>> shape_by_alpha_;  ///< shared by equal α
-  std::vector<double> resistance_;  // (num_segments)
+  std::vector<double> resistance_;  // (num_segments) without occlusion
+  std::vector<SegmentOcclusion> occlusion_;  // (num_segments) or empty: no occlusion set
   double time_ = 0.0;
   double omega_ = 0.0;              // angular frequency of the spec's cycle
   SolverTimings timings_;
