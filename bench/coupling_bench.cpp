@@ -8,6 +8,7 @@
 
 #include "flowire/common/config.hpp"
 #include "flowire/coupling/scene.hpp"
+#include "flowire/coupling/occlusion.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/vessel_path.hpp"
 #include "flowire/flow/solver.hpp"
@@ -92,16 +93,19 @@ void run(benchmark::State& state, bool contact, bool drag, double friction) {
 
 /// The aortic-arch example (J tip, 2 mm segments, friction 0.2/0.05, cylinder drag,
 /// pulsatile flow, dt = 10 ms) with `inserted` metres of wire laid on the vessel path and
-/// settled against the walls, held there; the network sampled at `network_h`.
+/// settled against the walls, held there; the network sampled at `network_h`. With
+/// `two_way` the wire occludes the segments it lies in (coupling.occlusion: annulus): the
+/// flow is refactored and re-solved before every flow evaluation.
 struct ArchExample {
   vessels::Network net;
   std::unique_ptr<vessels::SpatialIndex> index;
   std::unique_ptr<flow::FlowSolver> flow;
   std::unique_ptr<rod::RodSimulator> rod;
   std::shared_ptr<coupling::VesselForces> forces;
+  std::unique_ptr<coupling::WireOcclusion> occlusion;
   double t = 0;
 
-  ArchExample(double network_h, double inserted) {
+  ArchExample(double network_h, double inserted, bool two_way = false) {
     net = vessels::Network::build(vessels::aortic_arch(), {.max_segment_length = network_h});
     index = std::make_unique<vessels::SpatialIndex>(net, 4);
     // The example's flow: 120/80 mmHg at 72 bpm, 1 mmHg·s/mL split over the outlets by r³.
@@ -148,18 +152,23 @@ flow:
     forces = std::make_shared<coupling::VesselForces>(*index, w.radius, cp, dp,
                                                       [fs](int s, const Vec3& p) { return fs->velocity_at(s, p); });
     rod->add_external(forces);
+    if (two_way) occlusion = std::make_unique<coupling::WireOcclusion>(*flow);
     (void)rod->solve_static();  // settle against the walls, as a scene does
     for (int i = 0; i < 20; ++i) step(0.01);
   }
   void step(double dt) {
     t += dt;
+    if (occlusion)
+      flow->set_occlusion(occlusion->update(rod->positions(), rod->first_clamped_vertex(), forces->segments(),
+                                            rod->discretization().edge_radius));
     flow->advance(t);
     rod->step(dt);
   }
 };
 
-void run_arch(benchmark::State& state, double network_h) {
-  ArchExample s(network_h, 0.78);
+void run_arch(benchmark::State& state, double network_h, bool two_way = false) {
+  ArchExample s(network_h, 0.78, two_way);
+  const auto flow_before = s.flow->timings();
   const auto before = s.forces->stats();
   const auto rod_before = s.rod->phase_seconds();
   long newton = 0, unconverged = 0;
@@ -181,12 +190,20 @@ void run_arch(benchmark::State& state, double network_h) {
   state.counters["line_search_us"] = 1e6 * (ph.line_search - rod_before.line_search) / n;
   state.counters["newton_per_step"] = static_cast<double>(newton) / n;
   state.counters["unconverged"] = static_cast<double>(unconverged);
+  state.counters["flow_us"] = 1e6 * (s.flow->timings().frames - flow_before.frames) / n;
+  state.counters["occlusion_us"] = 1e6 * (s.flow->timings().occlusion - flow_before.occlusion) / n;
+  if (s.occlusion) state.counters["occupied_segments"] = s.occlusion->stats().occupied_segments;
 }
 
 void BM_ArchExample78cm_5mmNetwork(benchmark::State& st) { run_arch(st, 5e-3); }
 void BM_ArchExample78cm_1mmNetwork(benchmark::State& st) { run_arch(st, 1e-3); }
 BENCHMARK(BM_ArchExample78cm_5mmNetwork)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_ArchExample78cm_1mmNetwork)->Unit(benchmark::kMillisecond)->Iterations(200);
+// Two-way coupling (the wire occludes the flow) against the one-way case above.
+void BM_ArchExample78cm_5mmNetwork_TwoWay(benchmark::State& st) { run_arch(st, 5e-3, true); }
+void BM_ArchExample78cm_1mmNetwork_TwoWay(benchmark::State& st) { run_arch(st, 1e-3, true); }
+BENCHMARK(BM_ArchExample78cm_5mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->Iterations(200);
+BENCHMARK(BM_ArchExample78cm_1mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->Iterations(200);
 
 void BM_CoSimStep_All(benchmark::State& st) { run(st, true, true, 0.1); }
 void BM_CoSimStep_NoFriction(benchmark::State& st) { run(st, true, true, 0.0); }

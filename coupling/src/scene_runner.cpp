@@ -16,6 +16,7 @@
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
+#include "flowire/coupling/occlusion.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #ifdef FLOWIRE_HAVE_FEM
@@ -663,8 +664,30 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       t_out += seconds_since(to);
     };
 
+    // The wire acts on the blood (occlusion.hpp): set before every flow evaluation from the
+    // wire of the last accepted step (staggered: the flow of step n+1 sees the wire of step n).
+    std::optional<WireOcclusion> occlusion;
+    if (fsolver && forces && sim) {
+      const bool asked = c.has("coupling.occlusion");
+      const bool annulus = !asked || c.string("coupling.occlusion") == "annulus";
+      if (annulus && fsolver->supports_occlusion()) {
+        occlusion.emplace(*fsolver);
+      } else if (annulus && asked) {
+        throw_input_error(c.where("coupling.occlusion"),
+                          fmt::format("annulus needs flow.solver superposition or sparse (or flow.model rlc); the {} "
+                                      "solver keeps its matrix",
+                                      fsolver->name()));
+      }
+    }
+    auto occlude = [&]() {
+      if (!occlusion) return;
+      const auto positions = sim->positions();
+      fsolver->set_occlusion(occlusion->update(positions, sim->first_clamped_vertex(), forces->segments(),
+                                               sim->discretization().edge_radius));
+    };
     if (fsolver) {
       const auto tf = Clock::now();
+      occlude();  // the vertices are located once the wire has settled or stepped
       fsolver->advance(0.0);
       t_flow += seconds_since(tf);
     }
@@ -688,12 +711,19 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       settle = {{"converged", rep.converged()}, {"newton_iterations", rep.newton_iterations}};
       if (!rep.converged()) warn("the initial wire did not settle against the walls; starting from its last iterate");
     }
+    if (occlusion && (is_static || !settle.is_null())) {  // the flow around the settled wire
+      const auto tf = Clock::now();
+      occlude();
+      fsolver->advance(0.0);
+      t_flow += seconds_since(tf);
+    }
     if (series || steps == 0) record(0.0);
     long step = 0;
     for (; step < steps; ++step) {
       const double t1 = (static_cast<double>(step) + 1.0) * dt;
       if (fsolver && (step % flow_every == 0 || !sim)) {
         const auto tf = Clock::now();
+        occlude();
         fsolver->advance(t1);
         t_flow += seconds_since(tf);
       }
@@ -728,10 +758,11 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     if (wire_out) wire_out->finish();
     if (net && !fsolver && write_csv) {
       std::string csv =
-          "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds\n";
+          "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
+          "occupied_fraction,resistance_factor\n";
       for (int i = 0; i < net->num_segments(); ++i) {
         const auto& seg = net->segment(i);
-        csv += fmt::format("0,{},{},{},{:.17g},{:.17g},,,,,\n", i, seg.node_from, seg.node_to, seg.length, seg.radius);
+        csv += fmt::format("0,{},{},{},{:.17g},{:.17g},,,,,,,\n", i, seg.node_from, seg.node_to, seg.length, seg.radius);
       }
       write_text_atomically(out / "segments.csv", csv);
     }
@@ -757,6 +788,17 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       s["flow"]["factor_seconds"] = ft.factor;
       s["flow"]["frames"] = ft.frame_count;
       s["flow"]["seconds_per_frame"] = ft.frame_count ? ft.frames / static_cast<double>(ft.frame_count) : 0.0;
+      if (occlusion) {
+        const auto& os = occlusion->stats();
+        s["occlusion"] = {{"model", "annulus"},
+                          {"occupied_segments", os.occupied_segments},
+                          {"max_resistance_factor", os.max_resistance_factor},
+                          {"updates", ft.occlusion_updates},
+                          {"seconds", ft.occlusion},
+                          {"radius_ratio_clamped", os.radius_ratio_clamped}};
+      } else if (sim && forces) {
+        s["occlusion"] = {{"model", "none"}};
+      }
     }
     double t_contact = 0, t_coupling = 0;
     if (sim) {

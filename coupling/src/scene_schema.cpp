@@ -177,6 +177,11 @@ config::Schema make_schema() {
       "velocity_offset: the published form (blood velocity added to the velocity update) | none",
       {"cylinder", "slender_body", "velocity_offset", "none"});
   add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force");
+  add("coupling.occlusion", Type::Enum, "annulus", D::None,
+      "annulus: the wire raises the resistance of the segments it lies in (concentric to eccentric annular "
+      "Poiseuille flow at its offset; updated every flow evaluation; needs flow.solver superposition, sparse or "
+      "flow.model rlc) | none: the flow ignores the wire",
+      {"annulus", "none"});
   add("coupling.flow_every", Type::Integer, "1", D::None, "evaluate the flow every this many rod steps");
   add("coupling.steering", Type::Section, "", D::None, "a lateral force on the tip towards a chosen branch");
   add("coupling.steering.branch", Type::String, "", D::None, "name of the branch to steer into");

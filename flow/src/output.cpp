@@ -21,7 +21,10 @@ std::ofstream open_out(const std::filesystem::path& p) {
 }
 
 void check_frame(const Network& net, const FlowFrame& f) {
-  if (f.pressure.size() != static_cast<size_t>(net.num_nodes()) || f.flow.size() != static_cast<size_t>(net.num_segments()))
+  const auto ne = static_cast<size_t>(net.num_segments());
+  if (f.pressure.size() != static_cast<size_t>(net.num_nodes()) || f.flow.size() != ne ||
+      (!f.occupied_fraction.empty() && f.occupied_fraction.size() != ne) ||
+      (!f.resistance_factor.empty() && f.resistance_factor.size() != ne))
     throw_usage_error("flow output: a frame's arrays do not match the network");
 }
 }  // namespace
@@ -33,6 +36,10 @@ FlowFrame capture_frame(const FlowSolver& solver) {
   f.flow.resize(static_cast<size_t>(solver.network().num_segments()));
   solver.node_pressures(f.pressure);
   solver.segment_flows(f.flow);
+  for (const auto& o : solver.occlusion()) {
+    f.occupied_fraction.push_back(o.occupied_fraction);
+    f.resistance_factor.push_back(o.resistance_factor);
+  }
   return f;
 }
 
@@ -73,7 +80,8 @@ void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> fra
   for (const auto& f : frames) check_frame(net, f);
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     auto out = open_out(tmp);
-    out << "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds\n";
+    out << "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
+           "occupied_fraction,resistance_factor\n";
     std::string buf;
     for (const auto& f : frames) {
       for (int s = 0; s < net.num_segments(); ++s) {
@@ -82,9 +90,10 @@ void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> fra
         const double r = seg.radius;
         const double v = q / (kPi * r * r);
         buf.clear();
-        fmt::format_to(std::back_inserter(buf), "{:.9g},{},{},{},{:.9g},{:.9g},{:.9g},{:.12g},{:.12g},{:.12g},{:.9g}\n", f.time,
-                       s, seg.node_from, seg.node_to, seg.length, r, solver.resistance(s), q, v,
-                       4.0 * eta * std::abs(q) / (kPi * r * r * r), rho * std::abs(v) * 2.0 * r / eta);
+        fmt::format_to(std::back_inserter(buf), "{:.9g},{},{},{},{:.9g},{:.9g},{:.9g},{:.12g},{:.12g},{:.12g},{:.9g},{:.9g},{:.12g}\n",
+                       f.time, s, seg.node_from, seg.node_to, seg.length, r, solver.resistance(s), q, v,
+                       4.0 * eta * std::abs(q) / (kPi * r * r * r), rho * std::abs(v) * 2.0 * r / eta,
+                       f.occupied(static_cast<size_t>(s)), f.factor(static_cast<size_t>(s)));
         out << buf;
       }
     }
@@ -101,13 +110,17 @@ void write_network_vtp(const FlowSolver& solver, const FlowFrame& frame, const s
   vessels::DataArray v{"mean_velocity", std::vector<double>(ne), 1};
   vessels::DataArray w{"wall_shear_stress", std::vector<double>(ne), 1};
   vessels::DataArray re{"reynolds", std::vector<double>(ne), 1};
+  vessels::DataArray occ{"occupied_fraction", std::vector<double>(ne), 1};
+  vessels::DataArray fac{"resistance_factor", std::vector<double>(ne), 1};
   for (size_t s = 0; s < ne; ++s) {
+    occ.values[s] = frame.occupied(s);
+    fac.values[s] = frame.factor(s);
     const double r = net.segment(static_cast<int>(s)).radius;
     v.values[s] = frame.flow[s] / (kPi * r * r);
     w.values[s] = 4.0 * eta * std::abs(frame.flow[s]) / (kPi * r * r * r);
     re.values[s] = rho * std::abs(v.values[s]) * 2.0 * r / eta;
   }
-  vessels::write_network_vtp(net, path.string(), {vessels::DataArray{"pressure", frame.pressure, 1}}, {q, v, w, re});
+  vessels::write_network_vtp(net, path.string(), {vessels::DataArray{"pressure", frame.pressure, 1}}, {q, v, w, re, occ, fac});
 }
 
 void write_network_series(const FlowSolver& solver, std::span<const FlowFrame> frames, const std::filesystem::path& dir,

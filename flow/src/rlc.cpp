@@ -56,7 +56,8 @@ class RlcSolver final : public FlowSolver {
     af_ = 1.0 / (1.0 + rho);
     gamma_ = 0.5 + am_ - af_;
     const Eigen::SparseMatrix<double> j = am_ * e_ + (af_ * gamma_ * spec_.dt) * f_;
-    lu_.compute(j);
+    lu_.analyzePattern(j);
+    lu_.factorize(j);
     if (lu_.info() != Eigen::Success)
       throw_numerical_error("flow (rlc): the time-step matrix is singular; check that every piece of the network "
                             "has a pressure reference");
@@ -69,6 +70,7 @@ class RlcSolver final : public FlowSolver {
   }
 
   [[nodiscard]] std::string_view name() const override { return "rlc"; }
+  [[nodiscard]] bool supports_occlusion() const override { return true; }
   [[nodiscard]] double node_pressure(int node) const override { return out_[static_cast<size_t>(node)]; }
   [[nodiscard]] double segment_flow(int s) const override { return out_[n_nodes_ + static_cast<size_t>(s)]; }
   [[nodiscard]] double segment_flow_at(int s, double t) const override {
@@ -93,6 +95,19 @@ class RlcSolver final : public FlowSolver {
     interpolate(t);
   }
 
+  /// A wire in a segment scales its resistance and inertance: the step matrix is rebuilt
+  /// and refactored (same pattern); the state integrates on from where it is.
+  void apply_occlusion() override {
+    for (size_t s = 0; s < static_cast<size_t>(net_.num_segments()); ++s) {
+      const auto row = static_cast<Eigen::Index>(n_nodes_ + s);
+      const auto& o = occlusion_[s];
+      f_.coeffRef(row, row) = resistance_[s] * o.resistance_factor;
+      e_.coeffRef(row, row) = inertance_[s] * o.inertance_factor;
+    }
+    lu_.factorize(am_ * e_ + (af_ * gamma_ * spec_.dt) * f_);
+    if (lu_.info() != Eigen::Success) throw_numerical_error("flow (rlc): the time-step matrix with the wire is singular");
+  }
+
  private:
   void build() {
     n_nodes_ = static_cast<size_t>(net_.num_nodes());
@@ -106,7 +121,8 @@ class RlcSolver final : public FlowSolver {
     for (size_t s = 0; s < ne; ++s) {
       const auto& seg = net_.segment(static_cast<int>(s));
       const int row = qi(s);
-      te.emplace_back(row, row, segment_inertance(spec_.inertance, spec_.density, seg.length, seg.radius_from, seg.radius_to));
+      inertance_.push_back(segment_inertance(spec_.inertance, spec_.density, seg.length, seg.radius_from, seg.radius_to));
+      te.emplace_back(row, row, inertance_.back());
       tf.emplace_back(row, row, resistance_[s]);
       tf.emplace_back(row, seg.node_from, -1.0);
       tf.emplace_back(row, seg.node_to, 1.0);
@@ -218,6 +234,7 @@ class RlcSolver final : public FlowSolver {
 
   Assembly a_;
   std::vector<const OutletBC*> rcr_;
+  std::vector<double> inertance_;  // (num_segments) without occlusion
   size_t n_nodes_ = 0;
   Eigen::Index n_ = 0;
   Eigen::SparseMatrix<double> e_, f_;

@@ -141,6 +141,47 @@ TEST(FlowOcclusion, TheDragSeesTheOccupiedPartsPressureGradient) {
   EXPECT_NEAR(solver->axial_velocity_at(0, p), u_empty * q_ratio * 1.8, 1e-12 * u_empty);
 }
 
+TEST(FlowOcclusion, RlcTubeRelaxesWithTheOccludedResistanceAndInertance) {
+  // A rigid tube (no compliance) is an R–L circuit: after the wire goes in at t0 the flow
+  // relaxes from Q0 to Q∞ = Δp/(F_R R) with the time constant F_L L/(F_R R), exactly
+  // Q(t) = Q∞ + (Q0 − Q∞) exp(−(t − t0) F_R R/(F_L L)). The integrator's error falls with
+  // its step (the slope is asserted; the jump in the parameters costs the restart its
+  // second order).
+  const double r = 1.5e-3, l = 0.05, dp = 100.0;
+  const Network net = tube(l, r, 1);
+  std::vector<double> log_dt, log_err;
+  for (double dt : {8e-4, 4e-4, 2e-4, 1e-4}) {
+    FlowSpec spec = pressure_drop_spec(net, dp);
+    spec.model = Model::Rlc;
+    spec.wall_youngs_modulus = 0.0;  // rigid
+    spec.dt = dt;
+    auto solver = make_solver(net, spec);
+    solver->advance(0.008);
+    const double big_r = 8.0 * kEta * l / (kPi * std::pow(r, 4)), big_l = spec.density * l / (kPi * r * r);
+    const double q0 = solver->segment_flow(0);
+    EXPECT_NEAR(q0, dp / big_r, 1e-9 * q0);
+    std::vector<SegmentOcclusion> occ(1);
+    occ[0].occupied_fraction = 1.0;
+    occ[0].resistance_factor = occ[0].gradient_factor = 1.84;
+    occ[0].inertance_factor = 1.016;
+    solver->set_occlusion(occ);
+    const double q_inf = dp / (1.84 * big_r), tau = 1.016 * big_l / (1.84 * big_r);
+    double err = 0.0;
+    for (int k = 1; k <= 100; ++k) {  // every step over 0.8 s (17 time constants)
+      const double t = k * 0.008;
+      solver->advance(0.008 + t);
+      err = std::max(err, std::abs(solver->segment_flow(0) - (q_inf + (q0 - q_inf) * std::exp(-t / tau))) / q0);
+    }
+    std::printf("rlc tube, dt %.0e s (tau %.3f s): max |Q - exact|/Q0 = %.2e\n", dt, tau, err);
+    log_dt.push_back(std::log(dt));
+    log_err.push_back(std::log(err));
+    if (dt == 1e-4) EXPECT_LT(err, 2e-4);
+  }
+  const double slope = (log_err.back() - log_err.front()) / (log_dt.back() - log_dt.front());
+  std::printf("rlc tube: error slope %.2f\n", slope);
+  EXPECT_GT(slope, 0.9);
+}
+
 TEST(FlowOcclusion, SolversThatKeepTheirMatrixAndBadFactorsAreRefused) {
   const Network net = tube(0.05, 1.5e-3, 2);
   FlowSpec spec = pressure_drop_spec(net, 100.0);

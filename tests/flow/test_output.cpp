@@ -39,13 +39,16 @@ TEST(FlowOutput, CsvFilesFollowTheContract) {
   const auto segs = lines_of(dir / "segments.csv");
   ASSERT_EQ(segs.size(), 1u + 4u * static_cast<size_t>(net.num_segments()));
   EXPECT_EQ(segs[0],
-            "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds");
+            "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
+            "occupied_fraction,resistance_factor");
   // Row of segment 0 at t = 0.2: flow equals the solver's.
   std::stringstream row(segs[1 + static_cast<size_t>(net.num_segments())]);
   std::vector<double> v;
   for (std::string c; std::getline(row, c, ',');) v.push_back(std::stod(c));
-  ASSERT_EQ(v.size(), 11u);
+  ASSERT_EQ(v.size(), 13u);
   EXPECT_DOUBLE_EQ(v[0], 0.2);
+  EXPECT_EQ(v[11], 0.0);  // no wire: nothing occupied,
+  EXPECT_EQ(v[12], 1.0);  // the resistance unchanged
   EXPECT_NEAR(v[7], frames[1].flow[0], 1e-11 * std::abs(frames[1].flow[0]));
   EXPECT_NEAR(v[6], s->resistance(0), 1e-8 * s->resistance(0));
   // No temporary files left behind.

@@ -68,6 +68,20 @@ ShapeDomain wire_in_tube_domain(double tube_radius, double length, double wire_r
   return d;
 }
 
+ShapeDomain wire_along_tube_domain(double tube_radius, double length, double wire_radius, double offset,
+                                   const ObstacleMesh& sizes) {
+  if (!(wire_radius > 0.0) || !(offset >= 0.0) || !(offset + wire_radius < tube_radius))
+    throw_usage_error(fmt::format("wire_along_tube_domain: a wire of radius {} at offset {} does not fit in a tube of "
+                                  "radius {}",
+                                  wire_radius, offset, tube_radius));
+  ShapeDomain d = wire_in_tube_domain(tube_radius, length, wire_radius, false, 0.0, sizes);
+  d.holes.front() = Solid::cylinder(Vec3(-0.1 * length, offset, 0), Vec3(1.1 * length, offset, 0), wire_radius);
+  d.holes.front().face_group = {1, -1, -1, -1, -1, -1};
+  d.holes.front().mesh_size = sizes.obstacle_mesh_size;
+  d.name = "wire along a tube, off axis";
+  return d;
+}
+
 std::vector<std::pair<std::string, Vec3>> named_forces(const TetMesh& mesh, const StokesSolution& sol,
                                                        const StokesOptions& opt) {
   const std::vector<Vec3> f = boundary_forces(mesh, sol, opt);

@@ -18,6 +18,11 @@ struct FlowFrame {
   double time = 0.0;
   std::vector<double> pressure;  ///< (num_nodes) Pa
   std::vector<double> flow;      ///< (num_segments) m³/s
+  /// (num_segments) or empty (no wire: 0 and 1): occluded length fraction and resistance
+  /// factor of each segment (SegmentOcclusion)
+  std::vector<double> occupied_fraction, resistance_factor;
+  [[nodiscard]] double occupied(size_t s) const { return occupied_fraction.empty() ? 0.0 : occupied_fraction[s]; }
+  [[nodiscard]] double factor(size_t s) const { return resistance_factor.empty() ? 1.0 : resistance_factor[s]; }
 };
 
 /// @brief Copy the solver's current state (its time, all pressures and flows).
@@ -33,12 +38,16 @@ std::vector<FlowFrame> sample_frames(FlowSolver& solver, double t0, double durat
 void write_nodes_csv(const Network& net, std::span<const FlowFrame> frames, const std::filesystem::path& path);
 
 /// @brief `time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,
-/// wall_shear_stress,reynolds`, one block of rows per frame (solver gives R, η, ρ).
+/// wall_shear_stress,reynolds,occupied_fraction,resistance_factor`, one block of rows per
+/// frame (solver gives R, η, ρ). `resistance` is the empty segment's; with a wire in it the
+/// segment's resistance is resistance × resistance_factor. Mean velocity, wall shear stress
+/// and Reynolds number are those of the flow in the empty tube.
 void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> frames,
                         const std::filesystem::path& path);
 
 /// @brief One frame as VTK poly data: point data `pressure`; cell data `flow_rate`,
-/// `mean_velocity`, `wall_shear_stress`, `reynolds` (plus the network writer's `radius`, ...).
+/// `mean_velocity`, `wall_shear_stress`, `reynolds`, `occupied_fraction`, `resistance_factor`
+/// (plus the network writer's `radius`, ...).
 void write_network_vtp(const FlowSolver& solver, const FlowFrame& frame, const std::filesystem::path& path);
 
 /// @brief A time series in `dir`: `<stem>_NNNNNN.vtp` per frame, `<stem>.pvd` listing them

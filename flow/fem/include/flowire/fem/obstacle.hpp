@@ -55,6 +55,15 @@ ObstacleResult dfg_3d_1z(const ObstacleMesh& sizes, Stabilization stabilization,
 ShapeDomain wire_in_tube_domain(double tube_radius, double length, double wire_radius, bool across, double wire_x,
                                 const ObstacleMesh& sizes);
 
+/// @brief A guidewire lying along a straight vessel: a tube of radius `tube_radius` along x
+/// from 0 to `length` and a parallel wire of radius `wire_radius` whose axis is `offset`
+/// from the tube's (along +y; 0: coaxial; below tube_radius − wire_radius), reaching past
+/// both ends. The exact Stokes flow under a pressure drop is the annular Poiseuille flow
+/// (flow/annulus.hpp): the geometry does not vary along x and the open ends carry a
+/// uniform pressure. Groups: wall, obstacle, inlet (x = 0), outlet (x = length).
+ShapeDomain wire_along_tube_domain(double tube_radius, double length, double wire_radius, double offset,
+                                   const ObstacleMesh& sizes);
+
 /// @brief Write fem_forces.csv (`boundary,fx,fy,fz`) into `dir` (rank 0 only).
 void write_forces(const std::string& dir, const std::vector<std::pair<std::string, Vec3>>& forces);
 
