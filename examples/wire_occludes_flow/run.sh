@@ -8,12 +8,16 @@ here=$(cd "$(dirname "$0")" && pwd)
 out=${1:-out/wire_occludes_flow}
 flowire=${FLOWIRE:-$here/../../build/tools/flowire}
 mkdir -p "$out"
+XR=()  # the pictures need an X server: a virtual one when there is no display
+if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then XR=(xvfb-run -a -s "-screen 0 1024x768x24"); fi
 run() {  # name, extra --set arguments
   local name=$1; shift
   "$flowire" run "$here/scene.yaml" --out "$out/$name" "$@" >/dev/null
 }
-run conduit_annulus
-run conduit_none --set coupling.occlusion=none
+# The pressure field with the wire in it, and without it for comparison.
+"${XR[@]}" "$flowire" run "$here/scene.yaml" --out "$out/conduit_annulus" --set output.png=true >/dev/null
+"${XR[@]}" "$flowire" run "$here/scene.yaml" --out "$out/conduit_none" --set output.png=true \
+  --set coupling.occlusion=none >/dev/null
 # Coronary microvascular resistance at rest: ~90 mmHg over ~0.5 mL/s per daughter.
 micro=(--set flow.inlet.pressure=100mmHg --set flow.outlets.resistance=180mmHg*s/mL)
 run micro_annulus "${micro[@]}"
