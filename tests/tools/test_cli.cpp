@@ -330,6 +330,37 @@ TEST(Cli, ProgressLineOnATerminalOnly) {
   EXPECT_NE(text.str().find("ok in"), std::string::npos) << text.str();
 }
 
+TEST(Cli, OcclusionNeedsASolverThatCanRefactor) {
+  // The published dense K⁻¹ cannot take the wire's resistance: asked for, that is bad input
+  // (exit 2, the key named, no output); by default the run says the flow ignores the wire.
+  const auto dir = flowire::testing::scratch_dir("cli-occlusion");
+  write(dir / "scene.yaml", R"(name: occluded
+vessels: {generator: {type: straight_tube, length: 0.05, radius: 1.5 mm}, max_segment_length: 5 mm}
+flow: {solver: dense_inverse, inlet: {pressure: 100 Pa}, outlets: {pressure: 0 Pa}}
+wire: {length: 0.1, radius: 0.178 mm, youngs_modulus: 60 GPa, segment_length: 2 mm}
+insertion: {speed: 1 cm/s, initial_length: 2 cm}
+solve: {dt: 10 ms, duration: 0.1 s}
+output: {vtk: false}
+)");
+  const auto refused = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "a").string() +
+                           " --set coupling.occlusion=annulus");
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  EXPECT_NE(refused.err.find("coupling.occlusion"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "a" / "summary.json"));
+  const auto plain = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "b").string());
+  EXPECT_EQ(plain.status, 0) << plain.err;
+  std::ifstream sb(dir / "b" / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(sb)["occlusion"]["model"], "none");
+  // With the superposition solver the wire occludes the tube.
+  const auto two_way = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "c").string() +
+                           " --set flow.solver=superposition");
+  EXPECT_EQ(two_way.status, 0) << two_way.err;
+  std::ifstream sc(dir / "c" / "summary.json");
+  const auto jc = nlohmann::json::parse(sc);
+  EXPECT_EQ(jc["occlusion"]["model"], "annulus");
+  EXPECT_GT(jc["occlusion"]["max_resistance_factor"].get<double>(), 1.0);
+}
+
 TEST(Cli, AWireOutsideTheLumenIsNoSuccess) {
   // Without wall contact the wire runs straight out of the iliac artery: the run must say so
   // (where and when), end with status "outside" and exit 3, unless the scene allows it.
