@@ -119,6 +119,7 @@ void System::set_phase(bool steady, double t) {
   std::fill(c_.begin(), c_.end(), 0.0);
   std::fill(c_nl_.begin(), c_nl_.end(), 0.0);
   changed_ = true;
+  if (klu_->numeric) klu_free_numeric(&klu_->numeric, &klu_->common);  // new phase: pivot afresh
   for (Block* b : blocks_) b->assemble(asm_, t);
 }
 
@@ -152,11 +153,22 @@ void System::factorize(double a_yd, double a_y) {
   if (!changed_ && a_yd == a_yd_ && a_y == a_y_ && klu_->numeric) return;
   const size_t nnz = rows_.size();
   for (size_t k = 0; k < nnz; ++k) j_[k] = a_yd * (e_[k] + dyd_[k]) + a_y * (f_[k] + dy_[k]);
-  if (klu_->numeric) klu_free_numeric(&klu_->numeric, &klu_->common);
-  klu_->numeric = klu_factor(colptr_.data(), rows_.data(), j_.data(), klu_->symbolic, &klu_->common);
-  if (!klu_->numeric || klu_->common.status != KLU_OK)
-    throw_numerical_error(fmt::format(
-        "{}: the system is singular; check the model's connections, boundary conditions and parameters", file_));
+  // Within a phase the values change (stenosis, tables) but rarely the good pivots: refactorize
+  // on the previous pivot order, without allocating, unless its pivots got much smaller
+  // (KLU's rcond estimate, min/max |U_ii|) than those of the last factorization with pivoting.
+  bool done = false;
+  if (klu_->numeric) {
+    done = klu_refactor(colptr_.data(), rows_.data(), j_.data(), klu_->symbolic, klu_->numeric, &klu_->common) == 1 &&
+           klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common) == 1 && klu_->common.rcond >= 1e-3 * rcond_pivoted_;
+    if (!done) klu_free_numeric(&klu_->numeric, &klu_->common);
+  }
+  if (!done) {
+    klu_->numeric = klu_factor(colptr_.data(), rows_.data(), j_.data(), klu_->symbolic, &klu_->common);
+    if (!klu_->numeric || klu_->common.status != KLU_OK)
+      throw_numerical_error(fmt::format(
+          "{}: the system is singular; check the model's connections, boundary conditions and parameters", file_));
+    rcond_pivoted_ = klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common) == 1 ? klu_->common.rcond : 0.0;
+  }
   changed_ = false;
   a_yd_ = a_yd;
   a_y_ = a_y;

@@ -10,7 +10,8 @@
 ///
 /// The iteration matrix \f$ J = a_{\dot y}(E + D_{\dot y}) + a_y(F + D_y) \f$ is factorized
 /// with KLU: the symbolic analysis (block triangular form, AMD ordering) once for the
-/// pattern, the numeric factorization again only when a value of J changed.
+/// pattern, the numeric factorization with pivoting once per phase, and again only when a
+/// value of J changed: then on the same pivots (no allocation) unless they got much worse.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <memory>
@@ -106,6 +107,7 @@ class System {
   bool changed_ = true;
   double a_yd_ = 0.0, a_y_ = 0.0;
   long factorizations_ = 0;
+  double rcond_pivoted_ = 0.0;  // KLU's rcond of the last factorization with pivoting
   struct Klu;
   std::unique_ptr<Klu> klu_;
 };
