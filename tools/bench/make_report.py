@@ -259,6 +259,14 @@ if fails:
 else:
     L.append("No failures.")
 L.append("")
+# The svZeroDSolver comparison needs the peer, built outside the project, and takes minutes
+# at 25,000 vessels: measured apart with scripts/bench_svzerod.sh, kept verbatim from
+# docs/performance/svzerod.md.
+svzerod_md = os.path.join(figdir, "svzerod.md")
+if os.path.exists(svzerod_md):
+    with open(svzerod_md) as f:
+        L.append(f.read().rstrip("\n"))
+    L.append("")
 L.append("## Data\n")
 L.append(f"The CSVs behind every table and figure are in `{out.replace(root + '/', '')}/` "
          "(rod_work_precision.csv, flow_frame_cost.csv, rlc_womersley.csv, cosim_work_precision.csv, "

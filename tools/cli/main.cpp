@@ -18,8 +18,8 @@
 #include "flowire/common/units.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
-#include "flowire/flow/svzerod.hpp"
 #include "flowire/vessels/io.hpp"
+#include "svzerod_command.hpp"
 
 namespace {
 
@@ -40,38 +40,6 @@ flowire::vessels::ReadOptions read_options(const std::string& unit, double max_s
   ro.length_unit = unit;
   if (max_seg > 0) ro.build.max_segment_length = max_seg;
   return ro;
-}
-
-/// An svZeroDSolver model: simulated as svZeroDSolver does, svzerod_result.csv written like it.
-int cmd_run_svzerod(const std::string& model, const std::string& out, const std::vector<std::string>& sets) {
-  if (!sets.empty())
-    throw flowire::Error(ErrorKind::Usage, fmt::format("{}: --set applies to YAML scenes, not svZeroDSolver models", model));
-  const std::filesystem::path dir = out.empty() ? std::filesystem::path("out") : std::filesystem::path(out);
-  const auto t0 = std::chrono::steady_clock::now();
-  flowire::flow::svzerod::Summary s;
-  try {
-    s = flowire::flow::svzerod::run(model, dir);
-  } catch (const flowire::Error& e) {
-    if (e.kind() == ErrorKind::Numerical) {
-      nlohmann::json j = {{"status", "error"}, {"error", e.what()}, {"model", model}};
-      flowire::write_text_atomically(dir / "summary.json", j.dump(2) + "\n");
-    }
-    throw;
-  }
-  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  nlohmann::json j = {{"status", "ok"},
-                      {"model", model},
-                      {"steps", s.steps},
-                      {"svzerod", {{"vessels", s.vessels}, {"junctions", s.junctions},
-                                   {"boundary_conditions", s.boundary_conditions}, {"unknowns", s.unknowns},
-                                   {"cycles", s.cycles}, {"period", s.period}, {"dt", s.dt}, {"rows", s.rows},
-                                   {"newton_iterations_per_step", s.newton_iterations_per_step}}},
-                      {"timings", {{"setup", 0.0}, {"flow", s.seconds}, {"rod", 0.0}, {"contact", 0.0},
-                                   {"coupling", 0.0}, {"output", std::max(0.0, total - s.seconds)}, {"total", total}}},
-                      {"warnings", flowire::take_warnings()}};
-  flowire::write_text_atomically(dir / "summary.json", j.dump(2) + "\n");
-  std::printf("flowire: %s: ok in %.3f s, %d steps; %s\n", model.c_str(), total, s.steps, s.result_file.c_str());
-  return 0;
 }
 
 /// A progress line on stderr, redrawn in place at most 5 times a second: only on a terminal,
@@ -109,7 +77,7 @@ class ProgressLine {
 int cmd_run(const std::string& scene, const std::string& out, const std::vector<std::string>& sets) {
   namespace fs = std::filesystem;
   if (!fs::exists(scene)) throw flowire::Error(ErrorKind::Input, fmt::format("{}: no such file", scene));
-  if (fs::path(scene).extension() == ".json") return cmd_run_svzerod(scene, out, sets);
+  if (fs::path(scene).extension() == ".json") return flowire::cli::run_svzerod(scene, out, sets);
   const auto cfg = flowire::coupling::load_scene(scene, sets, out);
   flowire::coupling::RunOptions options;
   ProgressLine line;

@@ -21,7 +21,9 @@
 /// A parameter is a number or a periodic table over `t` (linear interpolation).
 ///
 /// Time integration as svZeroDSolver: generalized-α (`rho_infty`, default 0.5) on
-/// \f$ E\dot y + F y + c(y, \dot y, t) = 0 \f$ with Newton iterations to `absolute_tolerance`;
+/// \f$ E\dot y + F y + c(y, \dot y, t) = 0 \f$ (svzerod/integrator.hpp): one factorization per
+/// phase for a linear model, Newton iterations to `absolute_tolerance` where a block is
+/// nonlinear. Blocks by name: svzerod/blocks.hpp;
 /// a steady initial state (time tables replaced by their mean, RCR capacitors removed,
 /// 31 steps of one tenth of the period) unless `steady_initial: false`; the number of
 /// cycles from the largest RCR time constant when `use_cycle_to_cycle_error` is set (without
@@ -50,7 +52,8 @@ struct Summary {
   int vessels = 0, junctions = 0, boundary_conditions = 0, unknowns = 0;
   int cycles = 0, steps = 0, rows = 0;
   double period = 0.0, dt = 0.0;
-  double newton_iterations_per_step = 0.0;
+  double newton_iterations_per_step = 0.0;  ///< linear solves per step (1 for a linear model)
+  long factorizations = 0;                  ///< numeric factorizations (2 for a linear model: steady, pulsatile)
   double seconds = 0.0;
 };
 

@@ -1,0 +1,57 @@
+#pragma once
+/// @file model.hpp
+/// @brief An svZeroDSolver JSON model read into blocks (through the Registry), connection
+/// nodes, unknowns and simulation parameters.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "flowire/flow/svzerod/block.hpp"
+#include "flowire/flow/svzerod/integrator.hpp"
+
+namespace flowire::flow::svzerod {
+
+/// @brief `simulation_parameters` of the model, with svZeroDSolver's defaults.
+struct SimulationParameters {
+  int cycles = 1;                   ///< number_of_cardiac_cycles
+  int pts = 2;                      ///< number_of_time_pts_per_cardiac_cycle
+  double atol = 1e-8;               ///< absolute_tolerance
+  int max_iter = 30;                ///< maximum_nonlinear_iterations
+  bool steady_initial = true;       ///< steady_initial
+  double rho = 0.5;                 ///< rho_infty
+  bool variable_based = false;      ///< output_variable_based
+  bool mean_only = false;           ///< output_mean_only
+  bool derivative = false;          ///< output_derivative
+  bool all_cycles = false;          ///< output_all_cycles
+  int output_interval = 1;          ///< output_interval
+  double period = -1.0;             ///< cardiac_period (-1: from the tables)
+  bool cycle_error = false;         ///< use_cycle_to_cycle_error
+  double cycle_error_value = 0.01;  ///< sim_cycle_to_cycle_percent_error / 100
+};
+
+/// @brief A vessel as the output lists it; `cap`: 1 inlet vessel, 2 outlet vessel, 3 both, 0 inside.
+struct Vessel {
+  const Block* block = nullptr;
+  int cap = 0;
+};
+
+struct Model {
+  std::string file;
+  std::vector<std::unique_ptr<Block>> blocks;  ///< vessels, boundary conditions, junctions, in input order
+  std::vector<Node> nodes;                     ///< one per connection, in connection order
+  std::vector<std::string> dofs;               ///< (unknowns) names: flow:A:B, pressure:A:B, pressure_c:X, ...
+  std::vector<Vessel> vessels;                 ///< in input order
+  int unknowns = 0, junctions = 0, boundary_conditions = 0;
+  double period = 1.0;   ///< cardiac period
+  bool has_rcr = false;
+  double max_tau = 0.0;  ///< largest RCR time constant Rd·C
+  SimulationParameters sim;
+  State initial;  ///< from `initial_condition` (zero elsewhere)
+
+  [[nodiscard]] std::vector<Block*> block_pointers() const;
+};
+
+/// @brief Read a model file. @throws flowire::Error (input) naming the file and the block.
+Model read_model(const std::string& json_path);
+
+}  // namespace flowire::flow::svzerod

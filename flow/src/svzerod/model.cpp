@@ -1,0 +1,215 @@
+#include "flowire/flow/svzerod/model.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "flowire/common/error.hpp"
+
+namespace flowire::flow::svzerod {
+namespace {
+
+using json = nlohmann::json;
+
+SimulationParameters read_sim(const std::string& file, const json& cfg) {
+  if (!cfg.contains("simulation_parameters")) throw_input_error(file, "simulation_parameters is missing");
+  const json& s = cfg.at("simulation_parameters");
+  SimulationParameters p;
+  if (s.value("coupled_simulation", false)) throw_input_error(file, "coupled_simulation is not supported");
+  if (!s.contains("number_of_cardiac_cycles") || !s.contains("number_of_time_pts_per_cardiac_cycle"))
+    throw_input_error(file,
+                      "simulation_parameters needs number_of_cardiac_cycles and number_of_time_pts_per_cardiac_cycle");
+  p.cycles = s.at("number_of_cardiac_cycles").get<int>();
+  p.pts = s.at("number_of_time_pts_per_cardiac_cycle").get<int>();
+  if (p.cycles < 1 || p.pts < 2) throw_input_error(file, "need at least 1 cycle and 2 time points per cycle");
+  p.cycle_error = s.value("use_cycle_to_cycle_error", false);
+  p.cycle_error_value = s.value("sim_cycle_to_cycle_percent_error", 1.0) / 100.0;
+  p.atol = s.value("absolute_tolerance", 1e-8);
+  p.max_iter = s.value("maximum_nonlinear_iterations", 30);
+  p.steady_initial = s.value("steady_initial", true);
+  p.rho = s.value("rho_infty", 0.5);
+  p.variable_based = s.value("output_variable_based", false);
+  p.output_interval = std::max(1, s.value("output_interval", 1));
+  p.mean_only = s.value("output_mean_only", false);
+  p.derivative = s.value("output_derivative", false);
+  p.all_cycles = s.value("output_all_cycles", false);
+  p.period = s.value("cardiac_period", -1.0);
+  return p;
+}
+
+void read_blocks(Model& m, const json& cfg) {
+  const auto& registry = Registry::instance();
+  std::vector<std::pair<std::string, std::string>> connections;
+  std::map<int, std::string> vessel_ids;
+  std::map<std::string, size_t> by_name;
+  double period = -1.0;
+  const json empty = json::object();
+  auto add = [&](std::unique_ptr<Block> b) {
+    if (by_name.count(b->name())) throw_input_error(m.file, fmt::format("two blocks are named '{}'", b->name()));
+    by_name[b->name()] = m.blocks.size();
+    m.blocks.push_back(std::move(b));
+    return m.blocks.back().get();
+  };
+  if (!cfg.contains("boundary_conditions")) throw_input_error(m.file, "define at least one boundary condition");
+  if (cfg.contains("vessels")) {
+    for (const auto& v : cfg.at("vessels")) {
+      const std::string name = v.at("vessel_name").get<std::string>();
+      const std::string type = v.value("zero_d_element_type", std::string("BloodVessel"));
+      BlockInput in(v.contains("zero_d_element_values") ? v.at("zero_d_element_values") : empty, m.file, name, period);
+      const Block* b = add(registry.create(Section::Vessel, type, in));
+      vessel_ids[v.at("vessel_id").get<int>()] = name;
+      Vessel out{b, 0};
+      if (v.contains("boundary_conditions")) {
+        const json& bc = v.at("boundary_conditions");
+        if (bc.contains("inlet")) {
+          connections.emplace_back(bc.at("inlet").get<std::string>(), name);
+          out.cap = bc.contains("outlet") ? 3 : 1;
+        }
+        if (bc.contains("outlet")) {
+          connections.emplace_back(name, bc.at("outlet").get<std::string>());
+          out.cap = 2;  // as the peer: an outlet BC marks the vessel as an outlet vessel
+        }
+      }
+      m.vessels.push_back(out);
+    }
+  }
+  for (const auto& bc : cfg.at("boundary_conditions")) {
+    const std::string name = bc.at("bc_name").get<std::string>();
+    const std::string type = bc.at("bc_type").get<std::string>();
+    BlockInput in(bc.contains("bc_values") ? bc.at("bc_values") : empty, m.file, name, period);
+    const Block* b = add(registry.create(Section::BoundaryCondition, type, in));
+    if (type == "RCR") {
+      m.has_rcr = true;
+      m.max_tau = std::max(m.max_tau, b->time_constant());
+    }
+    ++m.boundary_conditions;
+  }
+  if (cfg.contains("junctions")) {
+    for (const auto& j : cfg.at("junctions")) {
+      const std::string name = j.at("junction_name").get<std::string>();
+      const std::string type = j.at("junction_type").get<std::string>();
+      BlockInput in(j.contains("junction_values") ? j.at("junction_values") : empty, m.file, name, period);
+      add(registry.create(Section::Junction, type, in));
+      ++m.junctions;
+      if (j.contains("inlet_vessels") && j.contains("outlet_vessels")) {
+        auto vessel = [&](int id) {
+          const auto it = vessel_ids.find(id);
+          if (it == vessel_ids.end())
+            throw_input_error(m.file, fmt::format("junction '{}': no vessel with id {}", name, id));
+          return it->second;
+        };
+        for (int id : j.at("inlet_vessels")) connections.emplace_back(vessel(id), name);
+        for (int id : j.at("outlet_vessels")) connections.emplace_back(name, vessel(id));
+      } else if (j.contains("inlet_blocks") && j.contains("outlet_blocks")) {
+        for (const auto& b2 : j.at("inlet_blocks")) connections.emplace_back(b2.get<std::string>(), name);
+        for (const auto& b2 : j.at("outlet_blocks")) connections.emplace_back(name, b2.get<std::string>());
+      } else {
+        throw_input_error(
+            m.file, fmt::format("junction '{}' needs inlet_vessels/outlet_vessels or inlet_blocks/outlet_blocks", name));
+      }
+    }
+  }
+  for (const char* unsupported : {"closed_loop_blocks", "valves", "chambers", "external_solver_coupling_blocks"})
+    if (cfg.contains(unsupported)) throw_input_error(m.file, fmt::format("'{}' is not supported", unsupported));
+
+  // Period: from the time tables, or simulation_parameters.cardiac_period, else 1.
+  const double sp = m.sim.period;
+  if (period < 0.0 && sp < 0.0) {
+    m.period = 1.0;
+  } else if (period >= 0.0) {
+    if (sp >= 0.0 && period != sp)
+      throw_input_error(m.file, fmt::format("inconsistent cardiac cycle period: {} in the time tables, {} in "
+                                            "simulation_parameters.cardiac_period",
+                                            period, sp));
+    m.period = period;
+  } else {
+    m.period = sp;
+  }
+
+  // One node (P, Q) per connection, in connection order.
+  for (const auto& [a, b] : connections) {
+    const auto ia = by_name.find(a), ib = by_name.find(b);
+    if (ia == by_name.end()) throw_input_error(m.file, fmt::format("connection to an unknown block '{}'", a));
+    if (ib == by_name.end()) throw_input_error(m.file, fmt::format("connection to an unknown block '{}'", b));
+    Node nd;
+    nd.name = a + ":" + b;
+    nd.q = m.unknowns++;
+    nd.p = m.unknowns++;
+    m.dofs.push_back("flow:" + nd.name);
+    m.dofs.push_back("pressure:" + nd.name);
+    m.nodes.push_back(nd);
+    m.blocks[ia->second]->add_outlet(nd);
+    m.blocks[ib->second]->add_inlet(nd);
+  }
+  for (const auto& b : m.blocks) {
+    const std::string why = b->check_connections();
+    if (!why.empty()) throw_input_error(m.file, why);
+  }
+  int row = 0;
+  for (auto& b : m.blocks) {
+    b->place(row, m.unknowns);
+    row += b->num_equations();
+    for (const auto& prefix : b->internal_unknowns()) {
+      m.dofs.push_back(prefix + ":" + b->name());
+      ++m.unknowns;
+    }
+  }
+  if (row != m.unknowns)
+    throw_input_error(m.file,
+                      fmt::format("the model has {} equations for {} unknowns; check the connections", row, m.unknowns));
+}
+
+State read_initial(const Model& m, const json& cfg) {
+  State s{Eigen::VectorXd::Zero(m.unknowns), Eigen::VectorXd::Zero(m.unknowns)};
+  if (!cfg.contains("initial_condition")) return s;
+  const json& ic = cfg.at("initial_condition");
+  for (int i = 0; i < m.unknowns; ++i) {
+    const auto& name = m.dofs[static_cast<size_t>(i)];
+    if (ic.contains(name)) {
+      s.y[i] = ic.at(name).get<double>();
+    } else if (ic.contains("pressure_all") && (name.rfind("pressure", 0) == 0)) {
+      s.y[i] = ic.at("pressure_all").get<double>();
+    } else if (ic.contains("flow_all") && name.rfind("flow:", 0) == 0) {
+      s.y[i] = ic.at("flow_all").get<double>();
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+std::vector<Block*> Model::block_pointers() const {
+  std::vector<Block*> out;
+  out.reserve(blocks.size());
+  for (const auto& b : blocks) out.push_back(b.get());
+  return out;
+}
+
+Model read_model(const std::string& json_path) {
+  json cfg;
+  {
+    std::ifstream in(json_path, std::ios::binary);
+    if (!in) throw_input_error(json_path, "cannot open the svZeroDSolver model");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    try {
+      cfg = json::parse(text);
+    } catch (const json::parse_error& e) {
+      throw_input_error(json_path, fmt::format("not valid JSON: {}", e.what()));
+    }
+  }
+  Model m;
+  m.file = json_path;
+  try {
+    m.sim = read_sim(json_path, cfg);
+    read_blocks(m, cfg);
+    m.initial = read_initial(m, cfg);
+  } catch (const json::exception& e) {
+    throw_input_error(json_path, fmt::format("unexpected content: {}", e.what()));
+  }
+  return m;
+}
+
+}  // namespace flowire::flow::svzerod

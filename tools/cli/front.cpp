@@ -1,0 +1,83 @@
+// The flowire command line's front. `flowire run MODEL.json [--out DIR]` (an svZeroDSolver
+// model) runs here, in a program that loads no rendering, PETSc or gmsh library: loading
+// those takes longer than simulating a model of thousands of vessels. Every other command
+// line is handed unchanged to flowire-full (beside this program, or where it is installed).
+// Exit status as flowire-full: 0 success; 2 bad usage or bad input; 3 numerical failure.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <new>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "svzerod_command.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// The model and output folder when the command line is `run MODEL.json [--out DIR]`.
+bool svzerod_run(int argc, char** argv, std::string& model, std::string& out) {
+  if (argc < 3 || std::string_view(argv[1]) != "run") return false;
+  model = argv[2];
+  std::error_code ec;
+  if (model.size() < 6 || model.compare(model.size() - 5, 5, ".json") != 0 || !fs::is_regular_file(model, ec))
+    return false;
+  for (int i = 3; i < argc;) {
+    const std::string_view a = argv[i];
+    if (a == "--out" && i + 1 < argc) {
+      out = argv[i + 1];
+      i += 2;
+    } else if (a.substr(0, 6) == "--out=") {
+      out = std::string(a.substr(6));
+      ++i;
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+int error_exit(const std::string& message, int status) {
+  for (const auto& w : flowire::take_warnings()) std::fprintf(stderr, "flowire: warning: %s\n", w.c_str());
+  std::fprintf(stderr, "flowire: error: %s\n", message.c_str());
+  return status;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string model, out;
+  if (svzerod_run(argc, argv, model, out)) {
+    try {
+      return flowire::cli::run_svzerod(model, out, {});
+    } catch (const flowire::Error& e) {
+      return error_exit(e.what(), e.kind() == flowire::ErrorKind::Numerical ? 3 : 2);
+    } catch (const std::bad_alloc&) {
+      return error_exit("out of memory", 3);
+    } catch (const std::exception& e) {
+      return error_exit(std::string("unexpected failure: ") + e.what(), 3);
+    }
+  }
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  std::vector<fs::path> candidates;
+  if (!ec) {
+    candidates.push_back(self.parent_path() / "flowire-full");                               // build tree
+    candidates.push_back(self.parent_path().parent_path() / "libexec/flowire/flowire-full");  // installed, moved
+  }
+  candidates.push_back(fs::path(FLOWIRE_LIBEXECDIR) / "flowire-full");
+  for (const auto& p : candidates) {
+    if (access(p.c_str(), X_OK) == 0) {
+      execv(p.c_str(), argv);
+      std::perror(("flowire: error: cannot start " + p.string()).c_str());
+      return 3;
+    }
+  }
+  std::fprintf(stderr, "flowire: error: flowire-full is neither beside this program nor in %s\n", FLOWIRE_LIBEXECDIR);
+  return 3;
+}
