@@ -390,6 +390,24 @@ LumenSurface prepare_lumen(const Network& net, SurfaceMesh s, const LumenOptions
 
 namespace {
 
+/// Whether the curved tetrahedron's Jacobian is non-positive at a quadrature point or a vertex.
+bool folded(const TetMesh& m, const std::array<int, 10>& t) {
+  double grads[10][3];
+  auto det_at = [&](const std::array<double, 3>& xi) {
+    tet_p2_grad(xi, grads);
+    Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < 10; ++k)
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) j(a, b) += m.nodes[static_cast<size_t>(t[static_cast<size_t>(k)])][a] * grads[k][b];
+    return j.determinant();
+  };
+  for (const QuadPoint& q : tet_quadrature())
+    if (!(det_at(q.xi) > 0.0)) return true;
+  for (const std::array<double, 3>& v : {std::array<double, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}})
+    if (!(det_at(v) > 0.0)) return true;
+  return false;
+}
+
 TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOptions& opt) {
   const auto start = std::chrono::steady_clock::now();
   const std::string& at = lumen.surface.source;
@@ -506,6 +524,20 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
       const Vec3& b = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][1])])];
       if (!x.allFinite() || (x - 0.5 * (a + b)).norm() > 0.5 * (b - a).norm()) x = 0.5 * (a + b);
     }
+  // A curved element that the rough image-derived surface folds (non-positive Jacobian at a
+  // quadrature point or a vertex) gets straight edges; repeated while any is left.
+  for (int pass = 0; pass < 8; ++pass) {
+    int straightened = 0;
+    for (const auto& t : mesh.tets) {
+      if (!folded(mesh, t)) continue;
+      for (size_t k = 0; k < kTetEdges.size(); ++k)
+        mesh.nodes[static_cast<size_t>(t[4 + k])] =
+            0.5 * (mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][0])])] +
+                   mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][1])])]);
+      ++straightened;
+    }
+    if (straightened == 0) break;
+  }
   mesh.mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return mesh;
 }
