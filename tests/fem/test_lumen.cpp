@@ -19,12 +19,15 @@
 #include <vtkXMLPolyDataWriter.h>
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <numbers>
 #include <string>
 
 #include "flowire/common/error.hpp"
+#include "flowire/fem/compare.hpp"
 #include "flowire/fem/lumen.hpp"
+#include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/io.hpp"
 #include "flowire_test.hpp"
 
@@ -225,6 +228,71 @@ TEST(FemLumen, CapsThatMatchNoCenterlineEndAreRefused) {
   // The closed abdominal surface with the arch centerlines: nothing to cut at their ends.
   expect_input_error([&] { (void)prepare_lumen(network_of(a), read_surface(b.surface, b.factor)); }, b.surface,
                      "0 open ends");
+}
+
+// The whole real-lumen path (surface file -> caps -> tags -> Stokes -> comparison) on a lumen
+// whose answer is known: a straight tube given as an STL of 64 facets around, open at both
+// ends, with a straight centerline. Hagen–Poiseuille for a regular n-gon is, to 1e-3, that of
+// the circle of equal area, r_eq² = (n / 2π) r² sin(2π / n).
+TEST(FemLumen, FacetedTubeSurfaceMatchesHagenPoiseuille) {
+  const double r = 2e-3, length = 16e-3, q = 1e-6, eta = 3.5e-3;
+  constexpr int kAround = 64, kAlong = 16;
+  const fs::path dir = testing::scratch_dir("fem_lumen_tube");
+  const std::string stl = (dir / "tube.stl").string();
+  {
+    std::ofstream o(stl);
+    o.precision(17);
+    o << "solid tube\n";
+    auto at = [&](int i, int k) {
+      const double phi = 2.0 * std::numbers::pi * (k % kAround) / kAround;
+      return Vec3(length * i / kAlong, r * std::cos(phi), r * std::sin(phi));
+    };
+    auto facet = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+      o << "facet normal 0 0 0\nouter loop\n";
+      for (const Vec3* x : {&a, &b, &c}) o << "vertex " << x->x() << ' ' << x->y() << ' ' << x->z() << '\n';
+      o << "endloop\nendfacet\n";
+    };
+    for (int i = 0; i < kAlong; ++i)
+      for (int k = 0; k < kAround; ++k) {
+        facet(at(i, k), at(i + 1, k), at(i + 1, k + 1));
+        facet(at(i, k), at(i + 1, k + 1), at(i, k + 1));
+      }
+    o << "endsolid tube\n";
+  }
+  vessels::StraightTubeParams tp;
+  tp.length = length;
+  tp.radius = r;
+  vessels::BuildOptions bo;
+  bo.max_segment_length = 2e-3;
+  const vessels::Network net = vessels::Network::build(vessels::straight_tube(tp), bo);
+  BoundaryValues bv;
+  bv.inlet_type = BoundaryValues::Inlet::Flow;
+  bv.inlet_flow = q;
+  bv.outlet_pressure = 0.0;
+  bv.viscosity = eta;
+  FemOptions fo;
+  fo.surface = stl;
+  fo.size_factor = 0.4;
+  fo.samples_per_branch = 5;
+  const CompareResult res = compare(net, bv, fo, "");
+  const double n = kAround;
+  const double r_eq = r * std::sqrt(n / (2.0 * std::numbers::pi) * std::sin(2.0 * std::numbers::pi / n));
+  const double p_exact = 8.0 * eta * length * q / (std::numbers::pi * std::pow(r_eq, 4));
+  std::printf("faceted tube: %d tets; inlet pressure FEM %.6g Pa, Hagen-Poiseuille (r_eq) %.6g Pa, network "
+              "(r) %.6g Pa\n", res.tets, res.inlet_pressure_fem, p_exact, res.inlet_pressure_network);
+  EXPECT_NEAR(res.inlet_pressure_fem / p_exact, 1.0, 0.01);
+  EXPECT_NEAR(res.inlet_flow_fem / q, 1.0, 1e-9);
+  int interior = 0;
+  for (const SamplePoint& sp : res.samples) {
+    if (sp.s < 1e-9 || sp.s > length - 1e-9) continue;
+    ++interior;
+    std::printf("  s = %.1f mm: flow FEM / Q = %.5f, r_fem / r_eq = %.5f, p FEM / exact = %.5f\n", sp.s * 1e3,
+                sp.flow_fem / q, sp.radius_fem / r_eq, sp.pressure_fem / (p_exact * (1.0 - sp.s / length)));
+    EXPECT_NEAR(sp.flow_fem / q, 1.0, 0.01);          // the section flux quadrature
+    EXPECT_NEAR(sp.radius_fem / r_eq, 1.0, 0.01);     // the section area
+    EXPECT_NEAR(sp.pressure_fem / (p_exact * (1.0 - sp.s / length)), 1.0, 0.02);
+  }
+  EXPECT_EQ(interior, 3);
 }
 
 }  // namespace

@@ -106,13 +106,18 @@ std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const 
 /// FEM flux along `axis` through the lumen's cross-section at `c`: polar midpoint rule on
 /// the plane normal to the axis, each ray from the centre stopping where it first leaves
 /// the mesh (so a neighbouring vessel cut by the plane does not count), at most 2 r.
-double section_flow(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r) {
+double section_flow(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r, double& area) {
   const Vec3 t = axis.normalized();
   const Vec3 a = (std::abs(t.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(t).normalized();
   const Vec3 b = t.cross(a);
   constexpr int kRings = 40, kAngles = 48;
   const double rmax = 2.0 * r, dr = rmax / kRings, dphi = 2.0 * std::numbers::pi / kAngles;
   double q = 0.0;
+  area = 0.0;
+  if (!fs.at(c, 1e-6)) {
+    area = std::numeric_limits<double>::quiet_NaN();
+    return area;
+  }
   for (int k = 0; k < kAngles; ++k) {
     const double phi = (k + 0.5) * dphi;
     const Vec3 dir = std::cos(phi) * a + std::sin(phi) * b;
@@ -121,6 +126,7 @@ double section_flow(const FieldSampler& fs, const Vec3& c, const Vec3& axis, dou
       const auto v = fs.at(c + rho * dir, 1e-6);
       if (!v) break;
       q += v->velocity.dot(t) * rho * dr * dphi;
+      area += rho * dr * dphi;
     }
   }
   return q;
@@ -151,13 +157,14 @@ std::string sample_row(const Network& net, const SamplePoint& sp) {
   o << csv_field(branch_label(net, sp.branch)) << ',' << sp.s << ',' << sp.x.x() << ',' << sp.x.y() << ',' << sp.x.z()
     << ',' << sp.pressure_network << ',' << sp.pressure_fem << ',' << sp.rel_diff << ',' << sp.pressure_fem_centre
     << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ',' << (sp.near_junction ? 1 : 0) << ','
-    << sp.flow_network << ',' << sp.flow_fem << ',' << sp.rel_diff_flow;
+    << sp.flow_network << ',' << sp.flow_fem << ',' << sp.rel_diff_flow << ',' << sp.radius_network << ','
+    << sp.radius_fem;
   return o.str();
 }
 
 constexpr const char* kSampleHeader =
     "branch,s,x,y,z,pressure_network,pressure_fem,rel_diff,pressure_fem_centre,rel_diff_drop,path_distance,"
-    "near_junction,flow_network,flow_fem,rel_diff_flow";
+    "near_junction,flow_network,flow_fem,rel_diff_flow,radius_network,radius_fem";
 
 std::string outlet_row(const OutletFlow& q) {
   std::ostringstream o;
@@ -394,7 +401,10 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       const auto& seg = net.segment(br.segments[k]);
       sp.flow_network = seg.node_from == br.nodes[k] ? flow.segment_flow[static_cast<size_t>(br.segments[k])]
                                                      : -flow.segment_flow[static_cast<size_t>(br.segments[k])];
-      if (found) sp.flow_fem = section_flow(fs, sp.x, c - a, r);
+      sp.radius_network = r;
+      double area = std::numeric_limits<double>::quiet_NaN();
+      sp.flow_fem = found ? section_flow(fs, sp.x, c - a, r, area) : std::numeric_limits<double>::quiet_NaN();
+      sp.radius_fem = std::sqrt(area / std::numbers::pi);
       sp.rel_diff_flow = sp.flow_network != 0.0 ? (sp.flow_fem - sp.flow_network) / std::abs(sp.flow_network) : 0.0;
       for (const auto& [jx, jr] : junctions)
         if ((sp.x - jx).norm() < 2.0 * jr) sp.near_junction = true;
@@ -413,10 +423,17 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       else
         res.max_rel_diff_drop_away = std::max(res.max_rel_diff_drop_away, a);
     }
-    SamplePoint first, last;
-    sample(0.0, first);
-    sample(len, last);
-    res.branches.push_back({b, first.pressure_network - last.pressure_network, first.pressure_fem - last.pressure_fem});
+    // The drop between the first and the last sample inside the mesh (a real lumen's caps
+    // may lie inside the centerline's ends).
+    const SamplePoint* first = nullptr;
+    const SamplePoint* last = nullptr;
+    for (const auto& sp : res.samples)
+      if (sp.branch == b) {
+        if (!first) first = &sp;
+        last = &sp;
+      }
+    if (first && last != first)
+      res.branches.push_back({b, first->pressure_network - last->pressure_network, first->pressure_fem - last->pressure_fem});
   }
   double qn_total = 0.0, qf_total = 0.0;
   for (int e : net.ends()) {
@@ -510,6 +527,8 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
       for (const auto* p : pts) o << fmt::format(" {:.4g} |", p->flow_fem * 1e6);
       o << "\n| Q difference |";
       for (const auto* p : pts) o << fmt::format(" {:+.2f}% |", 100 * p->rel_diff_flow);
+      o << "\n| r network / FEM (mm) |";
+      for (const auto* p : pts) o << fmt::format(" {:.2f} / {:.2f} |", p->radius_network * 1e3, p->radius_fem * 1e3);
       o << "\n\n";
     }
     o << fmt::format("## Boundary\n\nInlet: network {:.5g} Pa, {:.5g} mL/s; FEM {:.5g} Pa, {:.5g} mL/s (the "
