@@ -20,7 +20,9 @@
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #ifdef FLOWIRE_HAVE_FEM
+#include "flowire/common/units.hpp"
 #include "flowire/fem/compare.hpp"
+#include "flowire/fem/lumen.hpp"
 #include "flowire/fem/obstacle.hpp"
 #endif
 #include "flowire/coupling/vessel_forces.hpp"
@@ -285,7 +287,7 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
 #endif
 
 bool fem_on_network(const config::Config& c) {
-  return !c.has_section("fem") || c.string("fem.geometry") == "network";
+  return !c.has_section("fem") || c.string("fem.geometry") == "network" || c.string("fem.geometry") == "lumen";
 }
 
 /// Input checks of a fem: section on a built-in geometry (no network), done at setup.
@@ -328,9 +330,23 @@ nlohmann::json run_fem_geometry(const config::Config& c, const std::filesystem::
 }
 
 /// Input checks of the fem: section that need the flow spec, done at setup.
-void check_fem(const config::Config& c, const flow::FlowSolver* fs) {
+void check_fem(const config::Config& c, const flow::FlowSolver* fs, const vessels::Network* net = nullptr) {
   if (!fem_on_network(c)) return check_fem_geometry(c);
   if (!fs) throw_input_error(c.where("fem"), "fem: compares the flow, so the scene needs a flow: section");
+  if (!(c.number("fem.size_factor") > 0.0)) throw_input_error(c.where("fem.size_factor"), "must be > 0");
+  if (c.string("fem.geometry") == "lumen") {
+    if (!c.has("vessels.surface")) throw_input_error(c.where("fem.geometry"), "lumen needs vessels.surface");
+    const std::string surface = c.resolve_path(c.string("vessels.surface"));
+    if (!std::filesystem::is_regular_file(surface))
+      throw_input_error(fmt::format("{}: {}", c.where("vessels.surface"), surface), "the lumen surface file does not exist");
+#ifdef FLOWIRE_HAVE_FEM
+    // Read it and match its open ends now (cheap), so that bad input stops the run before any output.
+    if (net)
+      (void)fem::prepare_lumen(*net, fem::read_surface(surface, units::length_unit_factor(
+                                                                    c.string_or("vessels.length_unit", "m"),
+                                                                    c.where("vessels.length_unit"))));
+#endif
+  }
   const int frames = c.integer("fem.frames");
   if (frames < 0) throw_input_error(c.where("fem.frames"), "must be 0 (steady only) or a number of frames");
   if (frames > 100000) throw_input_error(c.where("fem.frames"), "too many frames (at most 100000)");
@@ -376,6 +392,12 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   fo.inlet = c.string("fem.inlet") == "traction" ? fem::InletCondition::Traction : fem::InletCondition::Profile;
   fo.backflow = c.number("fem.backflow");
   fo.samples_per_branch = c.integer("fem.samples_per_branch");
+  fo.size_factor = c.number("fem.size_factor");
+  if (c.string("fem.geometry") == "lumen") {  // the real lumen of vessels.surface (checked by check_fem)
+    fo.surface = c.resolve_path(c.string("vessels.surface"));
+    const std::string unit = c.string_or("vessels.length_unit", "m");
+    fo.surface_length_factor = units::length_unit_factor(unit, c.where("vessels.length_unit"));
+  }
   fo.write_vtu = c.boolean("output.vtk");
   fo.write_png = c.boolean("output.png");
   const long frames = c.integer("fem.frames");  // checked by check_fem
@@ -542,7 +564,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       fsolver = flow::make_solver(*net, flow::from_config(c, *net));
       s["flow"] = {{"solver", std::string(fsolver->name())}, {"model", c.string("flow.model")}};
     }
-    if (c.has_section("fem")) check_fem(c, fsolver.get());  // before the run, not after it
+    if (c.has_section("fem")) check_fem(c, fsolver.get(), net ? &*net : nullptr);  // before the run, not after it
     std::unique_ptr<rod::RodSimulator> sim;
     std::optional<vessels::SpatialIndex> index;
     std::shared_ptr<VesselForces> forces;

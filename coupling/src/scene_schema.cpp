@@ -24,6 +24,9 @@ config::Schema make_schema() {
       "centerline / network file: VMTK or SimVascular .vtp, legacy .vtk, flowire .vtp/.yaml, svOneDSolver .in");
   add("vessels.length_unit", Type::Enum, "", D::None, "unit of the file's coordinates and radii (default: the file's own, else m)",
       {"m", "cm", "mm", "um"});
+  add("vessels.surface", Type::String, "", D::None,
+      "the lumen surface (.vtp, .stl, .obj, legacy .vtk; in vessels.length_unit) of the same anatomy as vessels.file; "
+      "fem.geometry: lumen meshes it");
   add("vessels.max_segment_length", Type::Number, "5 mm", D::Length, "branches are split into cylinders no longer than this");
   add("vessels.radius_change", Type::Number, "0.1", D::None, "also split where the radius changes by more than this fraction");
   add("vessels.keep_inlet_piece", Type::Bool, "false", D::None,
@@ -199,10 +202,13 @@ config::Schema make_schema() {
   add("fem.geometry", Type::Enum, "network", D::None,
       "network: the lumen of the vessels (compared with the flow); dfg_3d_1z: the DFG benchmark 3D-1Z channel "
       "around a cylinder with its own fluid and inflow (needs no vessels or flow; writes fem_forces.csv, c_D, c_L "
-      "and the pressure difference in summary.json)",
-      {"network", "dfg_3d_1z"});
+      "and the pressure difference in summary.json); lumen: the real lumen of vessels.surface, its open ends "
+      "tagged by the nearest centerline ends, compared with the flow as network is",
+      {"network", "dfg_3d_1z", "lumen"});
   add("fem.mesh_size", Type::Number, "", D::Length,
       "target tetrahedron size (network: default from the smallest radius; dfg_3d_1z: far field, default 0.08 m)");
+  add("fem.size_factor", Type::Number, "0.3", D::None,
+      "network / lumen without fem.mesh_size: tetrahedron size = this times the radius of the nearest vessel");
   add("fem.obstacle_mesh_size", Type::Number, "", D::Length,
       "dfg_3d_1z: tetrahedron size on the cylinder (default a quarter of fem.mesh_size), growing with the distance "
       "from it by fem.mesh_growth");

@@ -21,6 +21,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/fem/element.hpp"
+#include "flowire/fem/lumen.hpp"
 #include "flowire/fem/obstacle.hpp"
 #include "flowire/fem/sample.hpp"
 #include "flowire/flow/solver.hpp"
@@ -102,6 +103,35 @@ std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const 
   return {mean, std::isnan(centre) ? mean : centre, true};
 }
 
+/// FEM flux along `axis` through the lumen's cross-section at `c`: polar midpoint rule on
+/// the plane normal to the axis, each ray from the centre stopping where it first leaves
+/// the mesh (so a neighbouring vessel cut by the plane does not count), at most 2 r.
+double section_flow(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r, double& area) {
+  const Vec3 t = axis.normalized();
+  const Vec3 a = (std::abs(t.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(t).normalized();
+  const Vec3 b = t.cross(a);
+  constexpr int kRings = 40, kAngles = 48;
+  const double rmax = 2.0 * r, dr = rmax / kRings, dphi = 2.0 * std::numbers::pi / kAngles;
+  double q = 0.0;
+  area = 0.0;
+  if (!fs.at(c, 1e-6)) {
+    area = std::numeric_limits<double>::quiet_NaN();
+    return area;
+  }
+  for (int k = 0; k < kAngles; ++k) {
+    const double phi = (k + 0.5) * dphi;
+    const Vec3 dir = std::cos(phi) * a + std::sin(phi) * b;
+    for (int i = 0; i < kRings; ++i) {
+      const double rho = (i + 0.5) * dr;
+      const auto v = fs.at(c + rho * dir, 1e-6);
+      if (!v) break;
+      q += v->velocity.dot(t) * rho * dr * dphi;
+      area += rho * dr * dphi;
+    }
+  }
+  return q;
+}
+
 double pressure_at_node(const TetMesh& mesh, const StokesSolution& sol, size_t n, const std::vector<std::array<int, 2>>& ev) {
   const int v = mesh.vertex_index[n];
   if (v >= 0) return sol.pressure[static_cast<size_t>(v)];
@@ -126,13 +156,15 @@ std::string sample_row(const Network& net, const SamplePoint& sp) {
   o.precision(10);
   o << csv_field(branch_label(net, sp.branch)) << ',' << sp.s << ',' << sp.x.x() << ',' << sp.x.y() << ',' << sp.x.z()
     << ',' << sp.pressure_network << ',' << sp.pressure_fem << ',' << sp.rel_diff << ',' << sp.pressure_fem_centre
-    << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ',' << (sp.near_junction ? 1 : 0);
+    << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ',' << (sp.near_junction ? 1 : 0) << ','
+    << sp.flow_network << ',' << sp.flow_fem << ',' << sp.rel_diff_flow << ',' << sp.radius_network << ','
+    << sp.radius_fem;
   return o.str();
 }
 
 constexpr const char* kSampleHeader =
     "branch,s,x,y,z,pressure_network,pressure_fem,rel_diff,pressure_fem_centre,rel_diff_drop,path_distance,"
-    "near_junction";
+    "near_junction,flow_network,flow_fem,rel_diff_flow,radius_network,radius_fem";
 
 std::string outlet_row(const OutletFlow& q) {
   std::ostringstream o;
@@ -366,6 +398,14 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       const double diff = mean - sp.pressure_network;
       sp.rel_diff = std::abs(sp.pressure_network) > 1e-12 * pscale ? diff / std::abs(sp.pressure_network) : 0.0;
       sp.rel_diff_drop = diff / pscale;
+      const auto& seg = net.segment(br.segments[k]);
+      sp.flow_network = seg.node_from == br.nodes[k] ? flow.segment_flow[static_cast<size_t>(br.segments[k])]
+                                                     : -flow.segment_flow[static_cast<size_t>(br.segments[k])];
+      sp.radius_network = r;
+      double area = std::numeric_limits<double>::quiet_NaN();
+      sp.flow_fem = found ? section_flow(fs, sp.x, c - a, r, area) : std::numeric_limits<double>::quiet_NaN();
+      sp.radius_fem = std::sqrt(area / std::numbers::pi);
+      sp.rel_diff_flow = sp.flow_network != 0.0 ? (sp.flow_fem - sp.flow_network) / std::abs(sp.flow_network) : 0.0;
       for (const auto& [jx, jr] : junctions)
         if ((sp.x - jx).norm() < 2.0 * jr) sp.near_junction = true;
     };
@@ -383,10 +423,17 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       else
         res.max_rel_diff_drop_away = std::max(res.max_rel_diff_drop_away, a);
     }
-    SamplePoint first, last;
-    sample(0.0, first);
-    sample(len, last);
-    res.branches.push_back({b, first.pressure_network - last.pressure_network, first.pressure_fem - last.pressure_fem});
+    // The drop between the first and the last sample inside the mesh (a real lumen's caps
+    // may lie inside the centerline's ends).
+    const SamplePoint* first = nullptr;
+    const SamplePoint* last = nullptr;
+    for (const auto& sp : res.samples)
+      if (sp.branch == b) {
+        if (!first) first = &sp;
+        last = &sp;
+      }
+    if (first && last != first)
+      res.branches.push_back({b, first->pressure_network - last->pressure_network, first->pressure_fem - last->pressure_fem});
   }
   double qn_total = 0.0, qf_total = 0.0;
   for (int e : net.ends()) {
@@ -474,6 +521,14 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
       for (const auto* p : pts) o << fmt::format(" {:.4f} |", p->pressure_fem * 1e-3);
       o << "\n| Difference |";
       for (const auto* p : pts) o << fmt::format(" {:+.2f}% ({:+.2f}%) |", 100 * p->rel_diff, 100 * p->rel_diff_drop);
+      o << "\n| Q network (mL/s) |";
+      for (const auto* p : pts) o << fmt::format(" {:.4g} |", p->flow_network * 1e6);
+      o << "\n| Q FEM (mL/s) |";
+      for (const auto* p : pts) o << fmt::format(" {:.4g} |", p->flow_fem * 1e6);
+      o << "\n| Q difference |";
+      for (const auto* p : pts) o << fmt::format(" {:+.2f}% |", 100 * p->rel_diff_flow);
+      o << "\n| r network / FEM (mm) |";
+      for (const auto* p : pts) o << fmt::format(" {:.2f} / {:.2f} |", p->radius_network * 1e3, p->radius_fem * 1e3);
       o << "\n\n";
     }
     o << fmt::format("## Boundary\n\nInlet: network {:.5g} Pa, {:.5g} mL/s; FEM {:.5g} Pa, {:.5g} mL/s (the "
@@ -510,6 +565,13 @@ MeshOptions mesh_options(const FemOptions& opt, const BoundaryValues& bv) {
   mo.size_factor = opt.size_factor;
   mo.inlet_node = bv.inlet_node;
   return mo;
+}
+
+/// The network's own lumen, or the real lumen of `opt.surface` tagged by the network's ends.
+TetMesh mesh_for(const Network& net, const FemOptions& opt, const BoundaryValues& bv) {
+  if (opt.surface.empty()) return build_mesh(net, mesh_options(opt, bv));
+  return build_mesh(net, prepare_lumen(net, read_surface(opt.surface, opt.surface_length_factor)),
+                    mesh_options(opt, bv));
 }
 
 StokesOptions stokes_options(const FemOptions& opt, const BoundaryValues& bv) {
@@ -618,7 +680,7 @@ void accumulate(PulsatileResult& p, const CompareResult& r) {
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir) {
   const auto t0 = std::chrono::steady_clock::now();
   initialize();  // MPI up before meshing, so that rank 0 meshes for everyone
-  const TetMesh mesh = build_mesh(net, mesh_options(opt, bv));
+  const TetMesh mesh = mesh_for(net, opt, bv);
   const auto cond = group_conditions(mesh, bv);
   const StokesSolution sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), stokes_options(opt, bv));
   const NetworkFlow nf = network_flow(net, bv);
@@ -641,7 +703,7 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
     if (inlet_of(net, f) != inlet) throw_usage_error("fem: every frame must have the same inlet node");
   const auto t_start = std::chrono::steady_clock::now();
   initialize();
-  const TetMesh mesh = build_mesh(net, mesh_options(opt, steady));
+  const TetMesh mesh = mesh_for(net, opt, steady);
   const StokesOptions so = stokes_options(opt, steady);
   PulsatileResult out;
   std::optional<StokesBasis> basis;

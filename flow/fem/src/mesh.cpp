@@ -18,6 +18,7 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/fem/element.hpp"
+#include "mesh_detail.hpp"
 
 namespace flowire::fem {
 namespace {
@@ -221,29 +222,6 @@ Geometry make_geometry(const Network& net) {
   return g;
 }
 
-/// gmsh is initialized once per process and kept; each build uses its own model.
-class GmshModel {
- public:
-  explicit GmshModel(bool verbose) {
-    static bool initialized = false;
-    if (!initialized) {
-      gmsh::initialize(0, nullptr, false);
-      initialized = true;
-    }
-    gmsh::option::setNumber("General.Terminal", verbose ? 1 : 0);
-    gmsh::option::setNumber("General.Verbosity", verbose ? 5 : 0);
-    gmsh::model::add("flowire_fem");
-  }
-  ~GmshModel() {
-    try {
-      gmsh::model::mesh::removeSizeCallback();
-      gmsh::model::remove();
-    } catch (...) {  // NOLINT(bugprone-empty-catch): nothing to do while unwinding
-    }
-  }
-  GmshModel(const GmshModel&) = delete;
-  GmshModel& operator=(const GmshModel&) = delete;
-};
 
 /// Reference coordinates of the nodes of a gmsh element type -> our local node order.
 std::vector<int> local_order(int gmsh_type, int dim) {
@@ -292,6 +270,10 @@ double tet_volume_linear(const TetMesh& m, const std::array<int, 10>& t) {
              .dot(m.nodes[static_cast<size_t>(t[3])] - x0) / 6.0;
 }
 
+}  // namespace
+
+namespace detail {
+
 /// The physical groups both mesh builders need (the volume, and every boundary group under
 /// its name, tagged group index + 1) and their common meshing options (one thread, so the
 /// same geometry gives the same mesh; first order here, raised to second order later).
@@ -317,9 +299,15 @@ void tag_groups_and_set_options(int volume, const char* volume_name, const std::
   gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-3);
 }
 
-void generate(const MeshOptions& opt);
-void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
-                  const std::string& at);
+
+}  // namespace detail
+
+namespace {
+
+using detail::extract_mesh;
+using detail::generate;
+using detail::tag_groups_and_set_options;
+using detail::GmshModel;
 
 TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& opt) {
   const auto start = std::chrono::steady_clock::now();
@@ -411,6 +399,10 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
   mesh.mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return mesh;
 }
+
+}  // namespace
+
+namespace detail {
 
 /// Second-order tetrahedra of the current model (one thread), written to `save_msh`.
 void generate(const MeshOptions& opt) {
@@ -515,6 +507,11 @@ void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vecto
   for (char o : oriented)
     if (!o) throw_numerical_error(fmt::format("{}: a boundary triangle has no tetrahedron", at));
 }
+
+
+}  // namespace detail
+
+namespace {
 
 
 /// Distance from x to the segment [a, b] and the axial parameter t of its projection
@@ -666,6 +663,10 @@ TetMesh mesh_domain(const ShapeDomain& dom, const MeshOptions& opt) {
   return mesh;
 }
 
+}  // namespace
+
+namespace detail {
+
 /// Run `build` with gmsh's exceptions turned into flowire errors naming `at`.
 TetMesh guarded(const std::string& at, const std::function<TetMesh()>& build) {
   try {
@@ -756,6 +757,11 @@ TetMesh build_shared(const std::function<TetMesh()>& build) {
 }
 
 
+}  // namespace detail
+
+namespace {
+
+
 }  // namespace
 
 int TetMesh::group_named(const std::string& name) const {
@@ -804,14 +810,14 @@ double TetMesh::area(int group) const {
 }
 
 TetMesh build_mesh(const Network& net, const MeshOptions& opt) {
-  return build_shared([&] {
+  return detail::build_shared([&] {
     const Geometry g = make_geometry(net);
-    return guarded(where(net), [&] { return mesh_geometry(net, g, opt); });
+    return detail::guarded(where(net), [&] { return mesh_geometry(net, g, opt); });
   });
 }
 
 TetMesh build_mesh(const ShapeDomain& domain, const MeshOptions& opt) {
-  return build_shared([&] { return guarded(domain.name, [&] { return mesh_domain(domain, opt); }); });
+  return detail::build_shared([&] { return detail::guarded(domain.name, [&] { return mesh_domain(domain, opt); }); });
 }
 
 }  // namespace flowire::fem

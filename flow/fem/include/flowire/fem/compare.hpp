@@ -22,7 +22,8 @@
 ///
 /// Output files (`write_outputs`, rank 0 only): fem_compare.csv
 /// (`branch,s,x,y,z,pressure_network,pressure_fem,rel_diff` then `pressure_fem_centre,
-/// rel_diff_drop,path_distance,near_junction`), fem_outlets.csv
+/// rel_diff_drop,path_distance,near_junction,flow_network,flow_fem,rel_diff_flow,radius_network,
+/// radius_fem`), fem_outlets.csv
 /// (`outlet,flow_network,flow_fem` then `rel_diff,pressure_network,pressure_fem`), fem_compare.md (tables like the
 /// paper's Table 1, flows, branch drops, timings), fem.vtu (quadratic tetrahedra, point
 /// data `velocity` and `pressure`), fem_forces.csv (`boundary,fx,fy,fz`: the force of the
@@ -51,6 +52,10 @@ struct FemOptions {
   InletCondition inlet = InletCondition::Profile;     ///< Navier–Stokes
   double backflow = 1.0;                              ///< Navier–Stokes: outlet backflow β
   int samples_per_branch = 10;
+  /// A lumen surface file (lumen.hpp): the FEM domain is this real lumen, tagged by the
+  /// network's ends, instead of the network's cylinders. Empty: the network's own lumen.
+  std::string surface;
+  double surface_length_factor = 1.0;  ///< metres per unit of the surface file
   bool write_png = true;
   bool write_vtu = true;
 };
@@ -99,6 +104,13 @@ struct SamplePoint {
   double pressure_fem_centre = 0.0;
   double rel_diff = 0.0;           ///< (fem − network) / |network|
   double rel_diff_drop = 0.0;      ///< (fem − network) / driving pressure drop
+  /// Flow along the branch direction: the network segment's, and the FEM flux through the
+  /// lumen's cross-section (the plane normal to the centerline, out to where each ray from
+  /// the centre first leaves the mesh, at most 2 radii; NaN when the centre is outside it).
+  double flow_network = 0.0, flow_fem = 0.0;
+  double rel_diff_flow = 0.0;      ///< (fem − network) / |network|
+  double radius_network = 0.0;     ///< the segment's radius (m)
+  double radius_fem = 0.0;         ///< sqrt(A/π) of that cross-section's area A (m); NaN as flow_fem
   bool near_junction = false;
   bool found = false;              ///< false if the point is outside the mesh
 };
@@ -111,7 +123,7 @@ struct OutletFlow {
 
 struct BranchDrop {
   int branch = -1;
-  double drop_network = 0.0, drop_fem = 0.0;  ///< p(first node) − p(last node), Pa
+  double drop_network = 0.0, drop_fem = 0.0;  ///< p(first) − p(last sample inside the mesh), Pa
 };
 
 struct CompareResult {
