@@ -18,6 +18,7 @@
 #include "flowire/common/output.hpp"
 #include "flowire/coupling/cosimulation.hpp"
 #include "flowire/coupling/occlusion.hpp"
+#include "flowire/coupling/paraview_script.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #ifdef FLOWIRE_HAVE_FEM
@@ -284,6 +285,17 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
           {"solve_seconds", r.solve_seconds}};
 }
 #endif
+
+/// What view.py shows: the files of this run's VTK output that were written.
+ParaViewScene paraview_scene(const config::Config& c, const std::filesystem::path& out, bool network_series,
+                             bool wire) {
+  ParaViewScene pv;
+  const std::string network = network_series ? "network.pvd" : "network.vtp";
+  if (c.has_section("vessels") && std::filesystem::exists(out / network)) pv.network = network;
+  if (wire && std::filesystem::exists(out / "wire.pvd")) pv.wire = "wire.pvd", pv.wire_radius = c.number("wire.radius");
+  pv.title = c.string_or("name", "");
+  return pv;
+}
 
 bool fem_on_network(const config::Config& c) {
   return !c.has_section("fem") || c.string("fem.geometry") == "network";
@@ -830,6 +842,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       write_text_atomically(out / "segments.csv", csv);
     }
     if (net && !fsolver && write_vtk) vessels::write_network_vtp(*net, (out / "network.vtp").string());
+    if (write_vtk) write_paraview_script(out, paraview_scene(c, out, net && fsolver && series, sim != nullptr));
     t_out += seconds_since(to);
 
     // ---------------- finite-element comparison of the flow (fem:)
