@@ -53,6 +53,11 @@ endif()
 
 # The Python module is built for Debian's own python3 (its numpy, its dist-packages), not
 # for another python3 first on PATH: -DPython3_EXECUTABLE=... chooses another.
+if(FLOWIRE_WITH_PYTHON AND CMAKE_CXX_FLAGS MATCHES "-fsanitize")
+  # python3 would have to preload the sanitizer runtime to load the module.
+  message(STATUS "flowire: the Python module is off in a sanitizer build")
+  set(FLOWIRE_WITH_PYTHON OFF)
+endif()
 if(FLOWIRE_WITH_PYTHON)
   if(NOT Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
     set(Python3_EXECUTABLE /usr/bin/python3 CACHE FILEPATH "Python the flowire module is built for")
