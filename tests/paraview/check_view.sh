@@ -14,12 +14,13 @@ rm -rf "$WORK" && mkdir -p "$WORK"
   --set solve.duration=0.3s --set output.every=0.1s --set output.png=false >/dev/null
 test -f "$WORK/run/view.py"
 # ParaView 5.11's X window sometimes fails to open its display on a virtual X server ("bad
-# X server connection", then SIGABRT, before any check ran): that start is retried, twice.
-for attempt in 1 2 3; do
+# X server connection", then SIGABRT, before any check ran): that start is retried.
+for attempt in 1 2 3 4 5; do
   rc=0
   "$PVPYTHON" --force-offscreen-rendering "$HERE/check_view.py" "$WORK/run" "$WORK/view.png" >"$WORK/pvpython.log" 2>&1 || rc=$?
   grep -avE '^[[:space:]]*[0-9]+[[:space:]]+0x' "$WORK/pvpython.log" || true
   if [ "$rc" -lt 128 ] || ! grep -aq "bad X server connection" "$WORK/pvpython.log"; then exit "$rc"; fi
-  echo "pvpython could not open the X display (attempt $attempt of 3)"
+  echo "pvpython could not open the X display (attempt $attempt of 5)"
+  sleep 2
 done
 exit 1
