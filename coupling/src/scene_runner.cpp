@@ -16,7 +16,9 @@
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
+#include "flowire/coupling/cosimulation.hpp"
 #include "flowire/coupling/occlusion.hpp"
+#include "flowire/coupling/paraview_script.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #ifdef FLOWIRE_HAVE_FEM
@@ -286,6 +288,17 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
 }
 #endif
 
+/// What view.py shows: the files of this run's VTK output that were written.
+ParaViewScene paraview_scene(const config::Config& c, const std::filesystem::path& out, bool network_series,
+                             bool wire) {
+  ParaViewScene pv;
+  const std::string network = network_series ? "network.pvd" : "network.vtp";
+  if (c.has_section("vessels") && std::filesystem::exists(out / network)) pv.network = network;
+  if (wire && std::filesystem::exists(out / "wire.pvd")) pv.wire = "wire.pvd", pv.wire_radius = c.number("wire.radius");
+  pv.title = c.string_or("name", "");
+  return pv;
+}
+
 bool fem_on_network(const config::Config& c) {
   return !c.has_section("fem") || c.string("fem.geometry") == "network" || c.string("fem.geometry") == "lumen";
 }
@@ -517,6 +530,234 @@ vessels::Network build_scene_network(const config::Config& c) {
   }
 }
 
+CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) : scene_(scene) {
+  const config::Config& c = scene_;
+  nlohmann::json ignored;
+  nlohmann::json& s = facts ? *facts : ignored;
+  const bool has_flow = c.has_section("flow");
+  const bool has_wire = c.has_section("wire");
+  if ((has_flow || c.has_section("contact") || (c.has_section("fem") && fem_on_network(c))) && !c.has_section("vessels"))
+    throw_input_error(c.where("flow"), "flow, contact and fem need a vessels: section");
+
+  // ---------------- setup: only what the scene has
+  auto& net = net_;
+  auto& fsolver = fsolver_;
+  auto& sim = sim_;
+  auto& index = index_;
+  auto& forces = forces_;
+  auto& tip_forces = tip_forces_;
+  auto& initial_layout = initial_layout_;
+  if (c.has_section("vessels")) {
+    net = build_scene_network(c);
+    s["network"] = counts_json(net->counts());
+  }
+  if (has_flow) {
+    fsolver = flow::make_solver(*net, flow::from_config(c, *net));
+    s["flow"] = {{"solver", std::string(fsolver->name())}, {"model", c.string("flow.model")}};
+  }
+  if (c.has_section("fem")) check_fem(c, fsolver.get(), net ? &*net : nullptr);  // before the run, not after it
+  int wire_entry = -1;
+  if (has_wire) {
+    auto spec = scene_wire_spec(c);
+    if (net) {
+      const int inlet = net->widest_end();
+      int entry = -1;
+      const auto entry_key = c.string("wire.entry");
+      if (entry_key == "auto") {
+        entry = net->farthest_end(inlet);
+      } else {
+        try {
+          entry = std::stoi(entry_key);
+        } catch (const std::exception&) {
+          throw_input_error(c.where("wire.entry"), fmt::format("'{}' is not a node id or auto", entry_key));
+        }
+        if (entry < 0 || entry >= net->num_nodes() || net->degree(entry) != 1)
+          throw_input_error(c.where("wire.entry"), fmt::format("node {} is not an end of the network", entry));
+      }
+      const auto& seg = net->segment(*net->node_segments(entry).first);
+      const int other = seg.node_from == entry ? seg.node_to : seg.node_from;
+      if (!c.has_section("wire.base")) {
+        spec.base_position = net->node(entry);
+        spec.base_direction = (net->node(other) - net->node(entry)).normalized();
+      }
+      if (spec.inserted_length < 0) spec.inserted_length = 0.02;
+      s["wire_entry_node"] = entry;
+      wire_entry = entry;
+    }
+    sim = std::make_unique<rod::RodSimulator>(spec);
+    sim->set_integrator(c.string("solve.integrator") == "implicit_midpoint" ? rod::Integrator::ImplicitMidpoint
+                                                                            : rod::Integrator::ImplicitEuler);
+    apply_loads(c, *sim);
+    if (c.has_section("insertion")) {
+      sim->set_insertion_speed(c.number("insertion.speed"));
+      sim->set_rotation_speed(c.number("insertion.rotation_speed"));
+      sim->set_base_angle(c.number("insertion.rotation_angle"));
+      if (c.has("insertion.max_force")) {
+        const double f = c.number("insertion.max_force");
+        if (!(f > 0.0)) throw_input_error(c.where("insertion.max_force"), "max_force must be > 0 N");
+        sim->set_max_insertion_force(f);
+      }
+    }
+    if (net) {
+      index.emplace(*net, 4);
+      if (wire_entry >= 0 && !c.has_section("wire.base")) {
+        // A wire inserted farther than the entry vessel runs straight leaves the lumen
+        // when laid out straight (the shaft crosses the walls, centimetres deep, and no
+        // penalty pulls it back in one step): lay it along the vessel path instead.
+        const double shaft = sim->inserted_length() - spec.tip.length;
+        bool leaves = false;
+        for (double a = 0.0; a < shaft && !leaves; a += 0.5 * sim->model().h)
+          leaves = index->wall_distance(spec.base_position + a * spec.base_direction) + spec.radius > 0.0;
+        if (leaves) {
+          const VesselPath path(*net, wire_entry);
+          if (sim->inserted_length() > path.max_wire_length())
+            throw_input_error(c.where("insertion.initial_length"),
+                              fmt::format("{:.4g} m is longer than the vessel path from the entry and back ({:.4g} m)",
+                                          sim->inserted_length(), path.max_wire_length()));
+          sim->lay_along([&path](double a) { return path.wire_point(a); });
+          initial_layout = "vessel_path";
+        }
+      }
+      forces = make_vessel_forces(c, *index, spec, fsolver.get());
+      if (forces) sim->add_external(forces);
+    }
+    tip_forces = make_tip_forces(c, net ? &*net : nullptr);
+    if (tip_forces) sim->add_external(tip_forces);
+  }
+
+  // ---------------- stepping
+  const double dt = c.number("solve.dt");
+  const double duration = c.number("solve.duration");
+  if (!(dt > 0)) throw_input_error(c.where("solve.dt"), "must be positive");
+  if (duration < 0) throw_input_error(c.where("solve.duration"), "must not be negative");
+  is_static_ = c.string("solve.mode") == "static";
+  dt_ = dt;
+  steps_ = is_static_ ? 0 : static_cast<long>(std::llround(duration / dt));
+  flow_every_ = std::max(1, static_cast<int>(c.number_or("coupling.flow_every", 1)));
+  max_length_ = c.number_or("insertion.max_length", std::numeric_limits<double>::infinity());
+  if (sim && c.has_section("insertion")) {
+    insertion_speed_ = c.number("insertion.speed");
+    rotation_speed_ = c.number("insertion.rotation_speed");
+  }
+
+  // The wire acts on the blood (occlusion.hpp): set before every flow evaluation from the
+  // wire of the last accepted step (staggered: the flow of step n+1 sees the wire of step n).
+  if (fsolver && forces && sim) {
+    const bool asked = c.has("coupling.occlusion");
+    const bool annulus = !asked || c.string("coupling.occlusion") == "annulus";
+    if (annulus && fsolver->supports_occlusion()) {
+      occlusion_ = std::make_unique<WireOcclusion>(*fsolver);
+    } else if (annulus && asked) {
+      throw_input_error(c.where("coupling.occlusion"),
+                        fmt::format("annulus needs flow.solver superposition or sparse (or flow.model rlc); the {} "
+                                    "solver keeps its matrix",
+                                    fsolver->name()));
+    }
+  }
+}
+
+void CoSimulation::occlude() {
+  if (!occlusion_) return;
+  const auto positions = sim_->positions();
+  fsolver_->set_occlusion(occlusion_->update(positions, sim_->first_clamped_vertex(), forces_->segments(),
+                                             sim_->discretization().edge_radius));
+}
+
+CoSimulation::~CoSimulation() = default;
+
+void CoSimulation::set_insertion_speed(double speed) {
+  if (!sim_) throw_usage_error("set_insertion_speed: the scene has no wire");
+  sim_->set_insertion_speed(speed);
+  insertion_speed_ = speed;
+}
+
+void CoSimulation::set_rotation_speed(double omega) {
+  if (!sim_) throw_usage_error("set_rotation_speed: the scene has no wire");
+  sim_->set_rotation_speed(omega);
+  rotation_speed_ = omega;
+}
+
+void CoSimulation::start() {
+  const config::Config& c = scene_;
+  if (fsolver_) {
+    const auto tf = Clock::now();
+    occlude();  // the vertices are located once the wire has settled or stepped
+    fsolver_->advance(0.0);
+    t_flow_ += seconds_since(tf);
+  }
+  if (sim_ && is_static_) {
+    const auto tr = Clock::now();
+    const auto rep = sim_->solve_static();
+    t_rod_ += seconds_since(tr);
+    if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
+      throw_numerical_error(fmt::format("static solve failed: {}", rod::to_string(rep.status)));
+    if (!rep.converged()) ++failures_;
+  }
+  const bool settle_on = !c.has("contact.settle") || c.boolean("contact.settle");
+  if (sim_ && !is_static_ && forces_ && forces_->contact().enabled && settle_on) {
+    // The free initial shape may not fit the lumen (a J tip wider than the vessel): start
+    // from its equilibrium against the walls, or the first steps take a large impulse.
+    const auto tr = Clock::now();
+    const auto rep = sim_->solve_static();
+    t_rod_ += seconds_since(tr);
+    settle_ = {{"converged", rep.converged()}, {"newton_iterations", rep.newton_iterations}};
+    if (!rep.converged()) warn("the initial wire did not settle against the walls; starting from its last iterate");
+  }
+  if (occlusion_ && (is_static_ || !settle_.is_null())) {  // the flow around the settled wire
+    const auto tf = Clock::now();
+    occlude();
+    fsolver_->advance(0.0);
+    t_flow_ += seconds_since(tf);
+  }
+}
+
+void CoSimulation::step() {
+  const long step = step_;
+  const double t1 = (static_cast<double>(step) + 1.0) * dt_;
+  if (fsolver_ && (step % flow_every_ == 0 || !sim_)) {
+    const auto tf = Clock::now();
+    occlude();
+    fsolver_->advance(t1);
+    t_flow_ += seconds_since(tf);
+  }
+  if (sim_) {
+    if (sim_->inserted_length() >= max_length_) sim_->set_insertion_speed(insertion_speed_ = 0.0);
+    const auto tr = Clock::now();
+    const auto rep = sim_->step(dt_);
+    t_rod_ += seconds_since(tr);
+    if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
+      throw_numerical_error(fmt::format("rod step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(rep.status)));
+    if (!rep.converged()) ++failures_;
+  }
+  ++step_;
+}
+
+WireFrame CoSimulation::wire_frame() const {
+  WireFrame f;
+  f.time = time();
+  if (!sim_) return f;
+  const auto& sim = sim_;
+  const auto& forces = forces_;
+  const auto x = sim->positions();
+  const auto arc = sim->arc_lengths();
+  for (int i = sim->first_clamped_vertex(); i >= 0; --i) {  // base → tip
+    if (i >= sim->vertex_count()) continue;
+    f.x.push_back(x[static_cast<size_t>(i)]);
+    f.s.push_back(std::max(0.0, arc[static_cast<size_t>(i)]));
+    f.force.push_back(forces && i < static_cast<int>(forces->force().size()) ? forces->force()[static_cast<size_t>(i)]
+                                                                             : Eigen::Vector3d::Zero());
+    auto part = [&](const std::vector<Eigen::Vector3d>& v) {
+      return forces && i < static_cast<int>(v.size()) ? v[static_cast<size_t>(i)] : Eigen::Vector3d::Zero();
+    };
+    if (forces) f.drag.push_back(part(forces->drag_force())), f.contact.push_back(part(forces->contact_force()));
+    f.flow_velocity.push_back(forces && i < static_cast<int>(forces->fluid_velocity().size())
+                                  ? forces->fluid_velocity()[static_cast<size_t>(i)]
+                                  : Eigen::Vector3d::Zero());
+  }
+  return f;
+}
+
+
 RunResult run_scene(const config::Config& c, const RunOptions& options) {
   const auto t_start = Clock::now();
   (void)take_warnings();
@@ -532,11 +773,6 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
   nlohmann::json timings = {{"setup", 0.0}, {"flow", 0.0},   {"rod", 0.0},  {"contact", 0.0},
                             {"coupling", 0.0}, {"output", 0.0}, {"total", 0.0}};
   const std::filesystem::path out(result.out_dir);
-  const bool has_flow = c.has_section("flow");
-  const bool has_wire = c.has_section("wire");
-  if ((has_flow || c.has_section("contact") || (c.has_section("fem") && fem_on_network(c))) && !c.has_section("vessels"))
-    throw_input_error(c.where("flow"), "flow, contact and fem need a vessels: section");
-
   auto finish = [&](const std::string& status) {
     s["status"] = status;
     timings["total"] = seconds_since(t_start);
@@ -554,216 +790,55 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
   try {
     // ---------------- setup: only what the scene has
     auto t0 = Clock::now();
-    std::optional<vessels::Network> net;
-    if (c.has_section("vessels")) {
-      net = build_scene_network(c);
-      s["network"] = counts_json(net->counts());
-    }
-    std::unique_ptr<flow::FlowSolver> fsolver;
-    if (has_flow) {
-      fsolver = flow::make_solver(*net, flow::from_config(c, *net));
-      s["flow"] = {{"solver", std::string(fsolver->name())}, {"model", c.string("flow.model")}};
-    }
-    if (c.has_section("fem")) check_fem(c, fsolver.get(), net ? &*net : nullptr);  // before the run, not after it
-    std::unique_ptr<rod::RodSimulator> sim;
-    std::optional<vessels::SpatialIndex> index;
-    std::shared_ptr<VesselForces> forces;
-    std::shared_ptr<TipForces> tip_forces;
-    int wire_entry = -1;
-    std::string initial_layout = "straight";
-    if (has_wire) {
-      auto spec = scene_wire_spec(c);
-      if (net) {
-        const int inlet = net->widest_end();
-        int entry = -1;
-        const auto entry_key = c.string("wire.entry");
-        if (entry_key == "auto") {
-          entry = net->farthest_end(inlet);
-        } else {
-          try {
-            entry = std::stoi(entry_key);
-          } catch (const std::exception&) {
-            throw_input_error(c.where("wire.entry"), fmt::format("'{}' is not a node id or auto", entry_key));
-          }
-          if (entry < 0 || entry >= net->num_nodes() || net->degree(entry) != 1)
-            throw_input_error(c.where("wire.entry"), fmt::format("node {} is not an end of the network", entry));
-        }
-        const auto& seg = net->segment(*net->node_segments(entry).first);
-        const int other = seg.node_from == entry ? seg.node_to : seg.node_from;
-        if (!c.has_section("wire.base")) {
-          spec.base_position = net->node(entry);
-          spec.base_direction = (net->node(other) - net->node(entry)).normalized();
-        }
-        if (spec.inserted_length < 0) spec.inserted_length = 0.02;
-        s["wire_entry_node"] = entry;
-        wire_entry = entry;
-      }
-      sim = std::make_unique<rod::RodSimulator>(spec);
-      sim->set_integrator(c.string("solve.integrator") == "implicit_midpoint" ? rod::Integrator::ImplicitMidpoint
-                                                                              : rod::Integrator::ImplicitEuler);
-      apply_loads(c, *sim);
-      if (c.has_section("insertion")) {
-        sim->set_insertion_speed(c.number("insertion.speed"));
-        sim->set_rotation_speed(c.number("insertion.rotation_speed"));
-        sim->set_base_angle(c.number("insertion.rotation_angle"));
-        if (c.has("insertion.max_force")) {
-          const double f = c.number("insertion.max_force");
-          if (!(f > 0.0)) throw_input_error(c.where("insertion.max_force"), "max_force must be > 0 N");
-          sim->set_max_insertion_force(f);
-        }
-      }
-      if (net) {
-        index.emplace(*net, 4);
-        if (wire_entry >= 0 && !c.has_section("wire.base")) {
-          // A wire inserted farther than the entry vessel runs straight leaves the lumen
-          // when laid out straight (the shaft crosses the walls, centimetres deep, and no
-          // penalty pulls it back in one step): lay it along the vessel path instead.
-          const double shaft = sim->inserted_length() - spec.tip.length;
-          bool leaves = false;
-          for (double a = 0.0; a < shaft && !leaves; a += 0.5 * sim->model().h)
-            leaves = index->wall_distance(spec.base_position + a * spec.base_direction) + spec.radius > 0.0;
-          if (leaves) {
-            const VesselPath path(*net, wire_entry);
-            if (sim->inserted_length() > path.max_wire_length())
-              throw_input_error(c.where("insertion.initial_length"),
-                                fmt::format("{:.4g} m is longer than the vessel path from the entry and back ({:.4g} m)",
-                                            sim->inserted_length(), path.max_wire_length()));
-            sim->lay_along([&path](double a) { return path.wire_point(a); });
-            initial_layout = "vessel_path";
-          }
-        }
-        forces = make_vessel_forces(c, *index, spec, fsolver.get());
-        if (forces) sim->add_external(forces);
-      }
-      tip_forces = make_tip_forces(c, net ? &*net : nullptr);
-      if (tip_forces) sim->add_external(tip_forces);
-    }
+    CoSimulation cosim(c, &s);
+    const vessels::Network* net = cosim.network();
+    flow::FlowSolver* fsolver = cosim.flow();
+    rod::RodSimulator* sim = cosim.rod();
+    const VesselForces* forces = cosim.forces();
+    const TipForces* tip_forces = cosim.tip_forces();
+    const vessels::SpatialIndex* index = cosim.index();
+    const WireOcclusion* occlusion = cosim.occlusion();
     timings["setup"] = seconds_since(t0);
 
     // ---------------- stepping
-    const double dt = c.number("solve.dt");
-    const double duration = c.number("solve.duration");
-    if (!(dt > 0)) throw_input_error(c.where("solve.dt"), "must be positive");
-    if (duration < 0) throw_input_error(c.where("solve.duration"), "must not be negative");
+    const double dt = cosim.dt();
     const double every = c.number("output.every");
-    const bool is_static = c.string("solve.mode") == "static";
-    const long steps = is_static ? 0 : static_cast<long>(std::llround(duration / dt));
+    const long steps = cosim.planned_steps();
     const long out_every = every > 0 ? std::max(1L, static_cast<long>(std::llround(every / dt))) : 0;
-    const int flow_every = std::max(1, static_cast<int>(c.number_or("coupling.flow_every", 1)));
     const bool series = out_every > 0;
-    const double max_length = c.number_or("insertion.max_length", std::numeric_limits<double>::infinity());
 
     std::vector<flow::FlowFrame> flow_frames;  // captured at output times, written at the end
     const bool flow_out = fsolver && (write_csv || write_vtk);
     std::optional<WireOutput> wire_out;
     if (sim && (write_csv || write_vtk)) wire_out.emplace(out, write_csv, write_vtk);
 
-    double t_flow = 0, t_rod = 0, t_out = 0;
+    double t_out = 0;
     auto record = [&](double t) {
       const auto to = Clock::now();
       if (flow_out) flow_frames.push_back(flow::capture_frame(*fsolver));
       if (wire_out) {
-        WireFrame f;
+        WireFrame f = cosim.wire_frame();
         f.time = t;
-        const auto x = sim->positions();
-        const auto arc = sim->arc_lengths();
-        for (int i = sim->first_clamped_vertex(); i >= 0; --i) {  // base → tip
-          if (i >= sim->vertex_count()) continue;
-          f.x.push_back(x[static_cast<size_t>(i)]);
-          f.s.push_back(std::max(0.0, arc[static_cast<size_t>(i)]));
-          f.force.push_back(forces && i < static_cast<int>(forces->force().size()) ? forces->force()[static_cast<size_t>(i)]
-                                                                                   : Eigen::Vector3d::Zero());
-          auto part = [&](const std::vector<Eigen::Vector3d>& v) {
-            return forces && i < static_cast<int>(v.size()) ? v[static_cast<size_t>(i)] : Eigen::Vector3d::Zero();
-          };
-          if (forces) f.drag.push_back(part(forces->drag_force())), f.contact.push_back(part(forces->contact_force()));
-          f.flow_velocity.push_back(forces && i < static_cast<int>(forces->fluid_velocity().size())
-                                        ? forces->fluid_velocity()[static_cast<size_t>(i)]
-                                        : Eigen::Vector3d::Zero());
-        }
         wire_out->add_frame(f);
       }
       t_out += seconds_since(to);
     };
 
-    // The wire acts on the blood (occlusion.hpp): set before every flow evaluation from the
-    // wire of the last accepted step (staggered: the flow of step n+1 sees the wire of step n).
-    std::optional<WireOcclusion> occlusion;
-    if (fsolver && forces && sim) {
-      const bool asked = c.has("coupling.occlusion");
-      const bool annulus = !asked || c.string("coupling.occlusion") == "annulus";
-      if (annulus && fsolver->supports_occlusion()) {
-        occlusion.emplace(*fsolver);
-      } else if (annulus && asked) {
-        throw_input_error(c.where("coupling.occlusion"),
-                          fmt::format("annulus needs flow.solver superposition or sparse (or flow.model rlc); the {} "
-                                      "solver keeps its matrix",
-                                      fsolver->name()));
-      }
-    }
-    auto occlude = [&]() {
-      if (!occlusion) return;
-      const auto positions = sim->positions();
-      fsolver->set_occlusion(occlusion->update(positions, sim->first_clamped_vertex(), forces->segments(),
-                                               sim->discretization().edge_radius));
-    };
-    if (fsolver) {
-      const auto tf = Clock::now();
-      occlude();  // the vertices are located once the wire has settled or stepped
-      fsolver->advance(0.0);
-      t_flow += seconds_since(tf);
-    }
-    int failures = 0;
-    if (sim && is_static) {
-      const auto tr = Clock::now();
-      const auto rep = sim->solve_static();
-      t_rod += seconds_since(tr);
-      if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
-        throw_numerical_error(fmt::format("static solve failed: {}", rod::to_string(rep.status)));
-      if (!rep.converged()) ++failures;
-    }
-    nlohmann::json settle;
-    const bool settle_on = !c.has("contact.settle") || c.boolean("contact.settle");
-    if (sim && !is_static && forces && forces->contact().enabled && settle_on) {
-      // The free initial shape may not fit the lumen (a J tip wider than the vessel): start
-      // from its equilibrium against the walls, or the first steps take a large impulse.
-      const auto tr = Clock::now();
-      const auto rep = sim->solve_static();
-      t_rod += seconds_since(tr);
-      settle = {{"converged", rep.converged()}, {"newton_iterations", rep.newton_iterations}};
-      if (!rep.converged()) warn("the initial wire did not settle against the walls; starting from its last iterate");
-    }
-    if (occlusion && (is_static || !settle.is_null())) {  // the flow around the settled wire
-      const auto tf = Clock::now();
-      occlude();
-      fsolver->advance(0.0);
-      t_flow += seconds_since(tf);
-    }
+    cosim.start();
     if (series || steps == 0) record(0.0);
-    long step = 0;
-    for (; step < steps; ++step) {
+    for (long step = 0; step < steps; ++step) {
       const double t1 = (static_cast<double>(step) + 1.0) * dt;
-      if (fsolver && (step % flow_every == 0 || !sim)) {
-        const auto tf = Clock::now();
-        occlude();
-        fsolver->advance(t1);
-        t_flow += seconds_since(tf);
-      }
-      if (sim) {
-        if (sim->inserted_length() >= max_length) sim->set_insertion_speed(0.0);
-        const auto tr = Clock::now();
-        const auto rep = sim->step(dt);
-        t_rod += seconds_since(tr);
-        if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
-          throw_numerical_error(fmt::format("rod step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(rep.status)));
-        if (!rep.converged()) ++failures;
-        if (wire_out) wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
-      }
+      cosim.step();
+      if (sim && wire_out) wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
       if (series && (step + 1) % out_every == 0) record(t1);
       if (options.progress) options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
     }
     if (!series && steps > 0) record(static_cast<double>(steps) * dt);
     s["steps"] = steps;
+    const double t_flow = cosim.flow_seconds(), t_rod = cosim.rod_seconds();
+    const int failures = cosim.unconverged_steps();
+    const nlohmann::json& settle = cosim.settle();
+    const std::string& initial_layout = cosim.initial_layout();
 
     const auto to = Clock::now();
     if (flow_out) {
@@ -776,7 +851,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
         else flow::write_network_vtp(*fsolver, flow_frames.back(), out / "network.vtp");
       }
     }
-    if (c.boolean("output.png") && net) render_pictures(c, *net, fsolver.get(), sim.get(), out);
+    if (c.boolean("output.png") && net) render_pictures(c, *net, fsolver, sim, out);
     if (wire_out) wire_out->finish();
     if (net && !fsolver && write_csv) {
       std::string csv =
@@ -789,6 +864,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       write_text_atomically(out / "segments.csv", csv);
     }
     if (net && !fsolver && write_vtk) vessels::write_network_vtp(*net, (out / "network.vtp").string());
+    if (write_vtk) write_paraview_script(out, paraview_scene(c, out, net && fsolver && series, sim != nullptr));
     t_out += seconds_since(to);
 
     // ---------------- finite-element comparison of the flow (fem:)

@@ -1,0 +1,127 @@
+#pragma once
+/// @file cosimulation.hpp
+/// @brief A scene's co-simulation, one step at a time: what `run_scene` steps, for a caller
+/// that steers it between steps (the insertion speed, a script, a GUI) and reads the wire
+/// and the flow as it goes. It writes nothing; `run_scene` adds the outputs around it.
+///
+/// Usage:
+/// @code
+/// auto scene = load_scene("scene.yaml", {});
+/// CoSimulation sim(scene);
+/// sim.start();                       // flow at t = 0, the wire settled against the walls
+/// while (sim.step_count() < sim.planned_steps()) {
+///   sim.set_insertion_speed(0.01);   // [m/s], before any step
+///   sim.step();                      // solve.dt of simulated time
+///   auto frame = sim.wire_frame();   // vertices base → tip, forces per vertex
+/// }
+/// @endcode
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "flowire/common/config.hpp"
+#include "flowire/coupling/wire_output.hpp"
+#include "flowire/vessels/network.hpp"
+#include "flowire/vessels/spatial.hpp"
+
+namespace flowire::flow {
+class FlowSolver;
+}
+namespace flowire::rod {
+class RodSimulator;
+}
+
+namespace flowire::coupling {
+
+class VesselForces;
+class TipForces;
+class WireOcclusion;
+
+class CoSimulation {
+ public:
+  /// @brief Build what the scene has (vessels, flow, wire, contact, drag) and check its
+  /// solve: and output: values. @p facts (optional) receives the summary entries known at
+  /// setup (`network` counts, `flow` solver and model, `wire_entry_node`) as soon as each
+  /// is known, so a run that fails later still reports them.
+  /// @throws flowire::Error (input) naming the scene file and key at fault.
+  explicit CoSimulation(const config::Config& scene, nlohmann::json* facts = nullptr);
+  ~CoSimulation();
+  CoSimulation(const CoSimulation&) = delete;
+  CoSimulation& operator=(const CoSimulation&) = delete;
+
+  /// @brief The flow at t = 0; a static scene's equilibrium, or a dynamic wire's initial
+  /// shape settled against the walls (`contact.settle`). Call once, before step().
+  /// @throws flowire::Error (numerical) if the static solve fails.
+  void start();
+  /// @brief Advance by solve.dt: the flow (every coupling.flow_every steps), then the rod.
+  /// @throws flowire::Error (numerical) if the rod step fails (NaN, singular matrix).
+  void step();
+
+  // --- controls (take effect at the next step) ---------------------------------------------
+  /// @brief Feeding speed [m/s] (> 0 pushes in); insertion.max_length still stops it.
+  void set_insertion_speed(double speed);
+  /// @brief Clamp rotation speed about the insertion direction [rad/s].
+  void set_rotation_speed(double omega);
+  /// @brief The feeding and rotation speeds of the next step (insertion.speed and
+  /// rotation_speed until set; 0 once insertion.max_length is reached).
+  [[nodiscard]] double insertion_speed() const { return insertion_speed_; }
+  [[nodiscard]] double rotation_speed() const { return rotation_speed_; }
+
+  // --- the run ----------------------------------------------------------------------------
+  [[nodiscard]] const config::Config& scene() const { return scene_; }
+  [[nodiscard]] double dt() const { return dt_; }
+  /// @brief Steps of solve.duration (0 for a static scene).
+  [[nodiscard]] long planned_steps() const { return steps_; }
+  /// @brief Steps taken so far.
+  [[nodiscard]] long step_count() const { return step_; }
+  /// @brief Simulated time reached [s].
+  [[nodiscard]] double time() const { return static_cast<double>(step_) * dt_; }
+  /// @brief Rod steps (and the static solve) that did not converge.
+  [[nodiscard]] int unconverged_steps() const { return failures_; }
+  /// @brief The settling solve's report (`converged`, `newton_iterations`); null if none.
+  [[nodiscard]] const nlohmann::json& settle() const { return settle_; }
+  /// @brief How the wire was laid out at the start: "straight" or "vessel_path".
+  [[nodiscard]] const std::string& initial_layout() const { return initial_layout_; }
+  /// @brief Seconds spent in the flow and in the rod (contact and drag included) so far.
+  [[nodiscard]] double flow_seconds() const { return t_flow_; }
+  [[nodiscard]] double rod_seconds() const { return t_rod_; }
+
+  // --- the parts (null when the scene has none) ----------------------------------------------
+  [[nodiscard]] const vessels::Network* network() const { return net_ ? &*net_ : nullptr; }
+  [[nodiscard]] flow::FlowSolver* flow() const { return fsolver_.get(); }
+  [[nodiscard]] rod::RodSimulator* rod() const { return sim_.get(); }
+  [[nodiscard]] const VesselForces* forces() const { return forces_.get(); }
+  [[nodiscard]] const TipForces* tip_forces() const { return tip_forces_.get(); }
+  [[nodiscard]] const vessels::SpatialIndex* index() const { return index_ ? &*index_ : nullptr; }
+  /// @brief The wire's occlusion of the flow (coupling.occlusion: annulus), null if none.
+  [[nodiscard]] const WireOcclusion* occlusion() const { return occlusion_.get(); }
+
+  /// @brief The wire now, as the outputs write it: free vertices from the base (s = 0) to the
+  /// tip, with the interaction, drag, contact forces and blood velocity at each (zero without
+  /// contact and drag). Empty without a wire.
+  [[nodiscard]] WireFrame wire_frame() const;
+
+ private:
+  /// Sets the flow's segment occlusion from the wire of the last accepted step.
+  void occlude();
+  config::Config scene_;
+  std::optional<vessels::Network> net_;
+  std::unique_ptr<flow::FlowSolver> fsolver_;
+  std::unique_ptr<rod::RodSimulator> sim_;
+  std::optional<vessels::SpatialIndex> index_;
+  std::shared_ptr<VesselForces> forces_;
+  std::shared_ptr<TipForces> tip_forces_;
+  std::unique_ptr<WireOcclusion> occlusion_;
+  std::string initial_layout_ = "straight";
+  nlohmann::json settle_;
+  double dt_ = 0.0, max_length_ = 0.0;
+  double insertion_speed_ = 0.0, rotation_speed_ = 0.0;
+  long steps_ = 0, step_ = 0;
+  int flow_every_ = 1;
+  bool is_static_ = false;
+  int failures_ = 0;
+  double t_flow_ = 0.0, t_rod_ = 0.0;
+};
+
+}  // namespace flowire::coupling
