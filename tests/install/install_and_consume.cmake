@@ -1,6 +1,7 @@
-# cmake -DBINARY_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -P install_and_consume.cmake
+# cmake -DBINARY_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DC_COMPILER=... -DCXX_COMPILER=...
+#       -DC_FLAGS=... -DCXX_FLAGS=... -DEXE_LINKER_FLAGS=...] -P install_and_consume.cmake
 # Installs the build to a scratch prefix, then configures, builds and runs an outside project
-# that uses find_package(flowire).
+# that uses find_package(flowire), with the given compilers and flags (those of the build).
 file(REMOVE_RECURSE "${WORK_DIR}")
 execute_process(COMMAND "${CMAKE_COMMAND}" --install "${BINARY_DIR}" --prefix "${WORK_DIR}/prefix"
                 RESULT_VARIABLE rc OUTPUT_QUIET)
@@ -12,8 +13,15 @@ foreach(f bin/flowire include/flowire/vessels/network.hpp lib/cmake/flowire/flow
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
+set(consumer_args "-DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix")
+foreach(var C_COMPILER CXX_COMPILER C_FLAGS CXX_FLAGS EXE_LINKER_FLAGS)
+  string(STRIP "${${var}}" value)
+  if(value)
+    list(APPEND consumer_args "-DCMAKE_${var}=${value}")
+  endif()
+endforeach()
 execute_process(COMMAND "${CMAKE_COMMAND}" -S "${SOURCE_DIR}/outside" -B "${WORK_DIR}/consumer" -G Ninja
-                "-DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+                ${consumer_args} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "find_package(flowire) from an outside project failed:\n${out}\n${err}")
 endif()
