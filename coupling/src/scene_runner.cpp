@@ -16,6 +16,7 @@
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
+#include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #ifdef FLOWIRE_HAVE_FEM
@@ -544,6 +545,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     if (c.has_section("fem")) check_fem(c, fsolver.get());  // before the run, not after it
     std::unique_ptr<rod::RodSimulator> sim;
     std::optional<vessels::SpatialIndex> index;
+    std::unique_ptr<vessels::LumenSurface> surface;  // vessels.surface: the wall the wire touches
     std::shared_ptr<VesselForces> forces;
     std::shared_ptr<TipForces> tip_forces;
     int wire_entry = -1;
@@ -610,7 +612,18 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
           }
         }
         forces = make_vessel_forces(c, *index, spec, fsolver.get());
-        if (forces) sim->add_external(forces);
+        if (forces) {
+          nlohmann::json info;
+          double smoothing = 0.0;
+          surface = make_scene_surface(c, *net, info, smoothing);
+          if (surface) forces->set_surface(surface.get(), smoothing), s["surface"] = info;
+          if (wire_entry >= 0 && (!c.has("contact.introducer") || c.boolean("contact.introducer"))) {
+            // The introducer sheath's mouth: as wide as the entry vessel, twice over.
+            const auto& es = net->segment(*net->node_segments(wire_entry).first);
+            forces->set_introducer(spec.base_position, spec.base_direction, 2.0 * es.radius);
+          }
+          sim->add_external(forces);
+        }
       }
       tip_forces = make_tip_forces(c, net ? &*net : nullptr);
       if (tip_forces) sim->add_external(tip_forces);
@@ -781,7 +794,8 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
         s["contact"] = {{"max_penetration", st.max_penetration},
                         {"max_outside", st.max_outside},
                         {"max_outside_over_wire_radius", st.max_outside / sim->discretization().edge_radius.front()},
-                        {"contact_evaluations", st.contacts}};
+                        {"contact_evaluations", st.contacts},
+                        {"introducer_contacts", forces->introducer_contacts()}};
         if (st.outside_time >= 0.0) {
           const double a = sim->discretization().edge_radius.front();
           s["contact"]["outside"] = {

@@ -47,13 +47,39 @@ int remove_end_caps(SurfaceMesh& mesh, const std::vector<VesselEnd>& ends) {
     for (const auto& e : ends) {
       if (cap || !(nn > 0.0)) break;
       bool near = true;
-      for (const Vec3* p : {&a, &b, &c})
-        near = near && std::abs((*p - e.point).dot(e.direction)) <= 0.25 * e.radius &&
-               (*p - e.point).norm() <= 2.5 * e.radius;
+      for (const Vec3* p : {&a, &b, &c}) {
+        const Vec3 r = *p - e.point;
+        const double along = r.dot(e.direction);
+        near = near && along >= -0.25 * e.radius && along <= 3.0 * e.radius &&
+               (r - along * e.direction).norm() <= 1.6 * e.radius;
+      }
       cap = near && std::abs(n.dot(e.direction)) >= cos_max * nn;
     }
     if (cap) ++removed;
     else kept.push_back(t);
+  }
+  if (removed > 0) {
+    // A cap's rim triangles may be tilted beyond the normal test and be left as islands cut
+    // off from the wall: keep only the pieces holding at least a tenth of the triangles.
+    std::map<std::array<double, 3>, int> id;
+    std::vector<int> vid(mesh.vertices.size());
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Vec3& p = mesh.vertices[i];
+      vid[i] = id.emplace(std::array<double, 3>{p.x(), p.y(), p.z()}, static_cast<int>(id.size())).first->second;
+    }
+    UnionFind uf(id.size());
+    for (const auto& t : kept) {
+      uf.unite(vid[static_cast<size_t>(t[0])], vid[static_cast<size_t>(t[1])]);
+      uf.unite(vid[static_cast<size_t>(t[0])], vid[static_cast<size_t>(t[2])]);
+    }
+    std::unordered_map<int, size_t> size;
+    for (const auto& t : kept) ++size[uf.find(vid[static_cast<size_t>(t[0])])];
+    std::vector<std::array<int, 3>> big;
+    for (const auto& t : kept) {
+      if (10 * size[uf.find(vid[static_cast<size_t>(t[0])])] >= kept.size()) big.push_back(t);
+      else ++removed;
+    }
+    kept = std::move(big);
   }
   mesh.triangles = std::move(kept);
   return removed;
@@ -431,6 +457,71 @@ SurfaceDistance LumenSurface::distance(const Vec3& x, int hint, Mat3* hessian) c
   int local;
   const int f = nearest(x, hint, c, feat, local);
   return finish(x, f, c, feat, local, hessian);
+}
+
+void LumenSurface::gather(const Vec3& x, double radius, std::vector<int>& out) const {
+  out.clear();
+  const double r2 = radius * radius;
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = bvh_[static_cast<size_t>(stack[--top])];
+    if (box_distance2(n.box, x) > r2) continue;
+    if (n.left < 0) {
+      for (int i = n.first; i < n.first + n.count; ++i) out.push_back(order_[static_cast<size_t>(i)]);
+    } else if (top + 2 <= 128) {
+      stack[top++] = n.left;
+      stack[top++] = n.right;
+    }
+  }
+}
+
+SurfaceDistance LumenSurface::smooth_distance(const Vec3& x, double tau, int hint, Mat3* hessian) const {
+  SurfaceDistance r = distance(x, hint, nullptr);
+  if (!(tau > 0.0)) {
+    if (hessian) r = distance(x, r.triangle, hessian);
+    return r;
+  }
+  const double u_min = std::abs(r.distance);
+  const double s = r.distance < 0.0 ? -1.0 : 1.0;
+  thread_local std::vector<int> cand;
+  gather(x, u_min + 10.0 * tau, cand);
+  // Soft minimum, shifted by u_min for range: u_τ = u_min − τ log Σ exp(−(u_f − u_min)/τ).
+  double z = 0.0;
+  Vec3 g = Vec3::Zero();
+  Mat3 Hw = Mat3::Zero(), C = Mat3::Zero();
+  for (int f : cand) {
+    Vec3 c;
+    Feature feat;
+    int local;
+    const double u = std::sqrt(closest_on(f, x, c, feat, local));
+    const double w = std::exp(-(u - u_min) / tau);
+    if (w < 1e-300) continue;
+    z += w;
+    const Vec3 e = u > 0.0 ? Vec3((x - c) / u) : face_normal_[static_cast<size_t>(f)];
+    g += w * e;
+    if (hessian) {
+      C += w * e * e.transpose();
+      if (u > 0.0 && feat != Feature::Face) {
+        Mat3 P = Mat3::Identity() - e * e.transpose();
+        if (feat == Feature::Edge) {
+          const auto& t = tri_[static_cast<size_t>(f)];
+          const Vec3 tan = (v_[static_cast<size_t>(t[static_cast<size_t>((local + 1) % 3)])] -
+                            v_[static_cast<size_t>(t[static_cast<size_t>(local)])])
+                               .normalized();
+          P -= tan * tan.transpose();
+        }
+        Hw += (w / u) * P;
+      }
+    }
+  }
+  // z ≥ 1: the nearest triangle is among the candidates with weight 1.
+  g /= z;
+  r.distance = s * (u_min - tau * std::log(z));
+  r.gradient = s * g;
+  if (hessian) *hessian = s * (Hw / z - (C / z - g * g.transpose()) / tau);
+  return r;
 }
 
 SurfaceDistance LumenSurface::distance_brute_force(const Vec3& x) const {

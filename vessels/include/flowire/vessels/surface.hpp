@@ -51,9 +51,10 @@ SurfaceMesh read_surface(const std::string& path, double length_factor = 1.0);
 /// @brief Remove the planar caps that close a surface at the ends of its centerlines (a capped
 /// VMTK or SimVascular model), so that the surface is open there as the vessel is.
 ///
-/// At an end with point @p p, unit direction @p t out of the vessel and radius @p r, a
-/// triangle is part of the cap when its vertices lie within 0.25 r of the plane through p
-/// normal to t and within 2.5 r of p, and its normal is within 25° of ±t.
+/// At an end with point p, unit direction t out of the vessel and radius r, a triangle is
+/// part of the cap when its vertices lie ahead of p (from 0.25 r behind to 3 r ahead along
+/// t, a centerline may stop short of its cap) within 1.6 r of the axis, and its normal is
+/// within 25° of ±t (the wall's normals are across t).
 /// @return the number of triangles removed.
 struct VesselEnd {
   Vec3 point;
@@ -96,6 +97,19 @@ class LumenSurface {
   /// search from the start, the answer does not depend on it.
   SurfaceDistance distance(const Vec3& x, int hint = -1, Eigen::Matrix3d* hessian = nullptr) const;
 
+  /// @brief The smoothed signed distance a contact uses: d_τ = s·u_τ with the soft minimum
+  /// \f[ u_\tau = -\tau \log \sum_f e^{-u_f/\tau} \f]
+  /// of the distances u_f to the triangles near x (those within u + 10τ; the rest weigh less
+  /// than e⁻¹⁰) and s the sign of distance(). Unlike d, whose gradient jumps from one face
+  /// normal to the next where two faces are equally near, d_τ is continuously differentiable
+  /// (Newton converges on it) and 1-Lipschitz, with u − τ log k ≤ u_τ ≤ u (k: the triangles
+  /// near x): inside, d ≤ d_τ ≤ d + τ log k, the wall seen slightly early. Gradient
+  /// s Σ w_f e_f (softmax weights w_f, e_f the unit vector from triangle f's closest point);
+  /// Hessian s [Σ w_f H_f − (Σ w_f e_f e_fᵀ − ḡ ḡᵀ)/τ] (H_f: Hessian of u_f, ḡ = Σ w_f e_f),
+  /// positive semi-definite inside a convex section.
+  /// τ ≤ 0 gives distance().
+  SurfaceDistance smooth_distance(const Vec3& x, double tau, int hint = -1, Eigen::Matrix3d* hessian = nullptr) const;
+
   /// @brief Reference answer by checking every triangle (tests and benchmarks).
   SurfaceDistance distance_brute_force(const Vec3& x) const;
 
@@ -112,6 +126,8 @@ class LumenSurface {
     int first = 0, count = 0;
   };
   int build(int first, int count);
+  /// Triangles whose box lies within `radius` of x.
+  void gather(const Vec3& x, double radius, std::vector<int>& out) const;
   void orient(const std::vector<Vec3>& inside);
   void pseudonormals();
   /// Closest point on triangle f: squared distance, point, feature and its local index.
