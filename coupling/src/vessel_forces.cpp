@@ -51,9 +51,10 @@ void VesselForces::ensure_size(int n) {
 
 bool VesselForces::surface_wall(int i, const Vec3& x, double a, double* d, Vec3* n, Mat3* H) {
   const auto k = static_cast<size_t>(i);
-  // The signed distance is 1-Lipschitz (away from open ends): a vertex that was deeper than
-  // its radius plus the distance it moved since cannot touch the wall now.
-  if (surf_tri_[k] >= 0 && !surf_open_[k] && surf_d_[k] + (x - surf_x_[k]).norm() + a < 0.0) return false;
+  // The signed distance is 1-Lipschitz (beyond an open end too: there it is minus the
+  // distance to the rim; it flips sign only outside the wall, past the rim): a vertex that
+  // was deeper than its radius plus the distance it moved since cannot touch the wall now.
+  if (surf_tri_[k] >= 0 && surf_d_[k] + (x - surf_x_[k]).norm() + a < 0.0) return false;
   const auto q = surface_->smooth_distance(x, smoothing_, surf_tri_[k], H);
   surf_tri_[k] = q.triangle;
   surf_d_[k] = q.distance;
