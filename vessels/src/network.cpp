@@ -197,6 +197,14 @@ Network Network::build(const Centerlines& c, const BuildOptions& opt) {
   for (size_t b = 0; b < nb; ++b) {
     const Polyline& p = c.branches[b];
     const ArcLength al(p);
+    if (end_node[2 * b] == end_node[2 * b + 1]) {
+      // A branch back to its own start is one self-looping segment unless its length or
+      // taper cut it (the bend criterion would always cut it: judged without it).
+      BuildOptions plain = opt;
+      plain.max_chord_deviation = 0.0;
+      if (cut_positions(al, plain).size() == 2)
+        throw_input_error(src, fmt::format("{} starts and ends at the same point (self-loop)", branch_label(p, b)));
+    }
     const auto cuts = cut_positions(al, opt);
     Branch br;
     br.name = p.name.empty() ? fmt::format("branch_{}", b) : p.name;
