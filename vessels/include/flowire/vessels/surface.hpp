@@ -21,9 +21,7 @@
 /// outside, d = −u (the distance to the rim, as a wall seen from inside).
 ///
 /// Orientation. The triangles' winding is made consistent over each connected piece and turned
-/// so that the normals point out of the lumen (for an open tube: away from the mean of its
-/// boundary loops' centroids... see orient()); `LumenSurface` checks the result on the points it
-/// is told are inside (`orient_by`).
+/// so that the normals point out of the lumen (see the constructor).
 #include <array>
 #include <cstdint>
 #include <string>
