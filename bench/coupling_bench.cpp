@@ -3,6 +3,9 @@
 // the same step with each feature off. Per-phase times are reported as counters.
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <numbers>
 
@@ -213,5 +216,45 @@ BENCHMARK(BM_CoSimStep_All)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_CoSimStep_NoFriction)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_CoSimStep_NoDrag)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_CoSimStep_NoContact)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+/// Surface contact against cylinder contact per step on the Feel++ aortic arch
+/// (examples/real/feelpp_arch.yaml as it is: the J tip pushed from 2 to 12 cm over the arch
+/// against the flow): the same scene run once with its lumen surface as the wall and once with
+/// the network's cylinders; contact = lookup + wall distance + penalty + friction, per step.
+/// The shared data is found in FLOWIRE_SHARED_DIR or ../shared next to the source tree.
+void BM_RealArch_SurfaceVsCylinderContact(benchmark::State& state) {
+  const char* env = std::getenv("FLOWIRE_SHARED_DIR");
+  const std::filesystem::path shared =
+      env ? std::filesystem::path(env) : std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR).parent_path() / "shared";
+  const auto data = shared / "data/real/feelpp-aortic-arch";
+  if (!std::filesystem::exists(data / "aorta2.stl")) {
+    state.SkipWithError(("shared data not found at " + data.string()).c_str());
+    return;
+  }
+  const auto scene = std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR) / "examples/real/feelpp_arch.yaml";
+  const auto out = std::filesystem::temp_directory_path() / "flowire-bench-real-arch";
+  auto contact_per_step = [&](bool surface) {
+    std::vector<std::string> sets = {"vessels.file=" + (data / "centerlinesAORTA.vtk").string(),
+                                     "output.vtk=false", "output.csv=false",
+                                     "output.dir=" + out.string()};
+    std::ifstream in(scene);
+    std::string text, line;
+    while (std::getline(in, line))
+      if (line.find("  surface:") != 0) text += line + "\n";  // the scene without its surface
+    if (surface) sets.push_back("vessels.surface=" + (data / "aorta2.stl").string());
+    const auto cfg = config::load_config_text(text, scene.string(), coupling::scene_schema(), sets);
+    const auto r = coupling::run_scene(cfg);
+    return r.summary["timings"]["contact"].get<double>() / r.summary["steps"].get<double>();
+  };
+  double s_surface = 0, s_cyl = 0;
+  for (auto _ : state) {
+    s_surface = contact_per_step(true);
+    s_cyl = contact_per_step(false);
+  }
+  state.counters["surface_contact_us_per_step"] = 1e6 * s_surface;
+  state.counters["cylinder_contact_us_per_step"] = 1e6 * s_cyl;
+  state.counters["surface_over_cylinder"] = s_surface / s_cyl;
+}
+BENCHMARK(BM_RealArch_SurfaceVsCylinderContact)->Unit(benchmark::kSecond)->Iterations(1);
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include "flowire/coupling/cosimulation.hpp"
 #include "flowire/coupling/occlusion.hpp"
 #include "flowire/coupling/paraview_script.hpp"
+#include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #ifdef FLOWIRE_HAVE_FEM
@@ -619,7 +620,18 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
         }
       }
       forces = make_vessel_forces(c, *index, spec, fsolver.get());
-      if (forces) sim->add_external(forces);
+      if (forces) {
+        nlohmann::json info;
+        double smoothing = 0.0;
+        surface_ = make_scene_surface(c, *net, info, smoothing);  // vessels.surface: the wall the wire touches
+        if (surface_) forces->set_surface(surface_.get(), smoothing), s["surface"] = info;
+        if (wire_entry >= 0 && (!c.has("contact.introducer") || c.boolean("contact.introducer"))) {
+          // The introducer sheath's mouth: as wide as the entry vessel, twice over.
+          const auto& es = net->segment(*net->node_segments(wire_entry).first);
+          forces->set_introducer(spec.base_position, spec.base_direction, 2.0 * es.radius);
+        }
+        sim->add_external(forces);
+      }
     }
     tip_forces = make_tip_forces(c, net ? &*net : nullptr);
     if (tip_forces) sim->add_external(tip_forces);
@@ -921,7 +933,8 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
         s["contact"] = {{"max_penetration", st.max_penetration},
                         {"max_outside", st.max_outside},
                         {"max_outside_over_wire_radius", st.max_outside / sim->discretization().edge_radius.front()},
-                        {"contact_evaluations", st.contacts}};
+                        {"contact_evaluations", st.contacts},
+                        {"introducer_contacts", forces->introducer_contacts()}};
         if (st.outside_time >= 0.0) {
           const double a = sim->discretization().edge_radius.front();
           s["contact"]["outside"] = {

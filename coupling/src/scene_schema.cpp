@@ -25,8 +25,12 @@ config::Schema make_schema() {
   add("vessels.length_unit", Type::Enum, "", D::None, "unit of the file's coordinates and radii (default: the file's own, else m)",
       {"m", "cm", "mm", "um"});
   add("vessels.surface", Type::String, "", D::None,
-      "the lumen surface (.vtp, .stl, .obj, legacy .vtk; in vessels.length_unit) of the same anatomy as vessels.file; "
-      "fem.geometry: lumen meshes it");
+      "lumen surface (.vtp, .stl, .obj; in length_unit): the wall the wire touches instead of the network's "
+      "cylinders (signed distance to the triangles, open ends open, caps at the network's ends removed); the "
+      "network still carries the flow; fem.geometry: lumen meshes it for the FEM comparison");
+  add("vessels.surface_smoothing", Type::Number, "", D::Length,
+      "width of the soft minimum over nearby triangles that makes the surface's distance smooth for Newton "
+      "(default a fifth of the mean edge length; 0: the exact distance)");
   add("vessels.max_segment_length", Type::Number, "5 mm", D::Length, "branches are split into cylinders no longer than this");
   add("vessels.radius_change", Type::Number, "0.1", D::None, "also split where the radius changes by more than this fraction");
   add("vessels.keep_inlet_piece", Type::Bool, "false", D::None,
@@ -166,6 +170,9 @@ config::Schema make_schema() {
   add("contact.allow_outside", Type::Bool, "false", D::None,
       "a wire that ends up more than its radius outside the lumen makes the run fail (status outside, exit 3) "
       "unless this is true (status outside, exit 0)");
+  add("contact.introducer", Type::Bool, "true", D::None,
+      "the entry is an introducer sheath: the wire cannot come back out behind the entry plane (within twice the "
+      "entry vessel's radius of its axis)");
   add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
 
   add("obstacles", Type::List, "", D::None, "regions that resist the tip (a clot, a tight lesion)");

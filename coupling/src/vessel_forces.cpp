@@ -42,7 +42,27 @@ void VesselForces::ensure_size(int n) {
     cur_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
     lag_normal_force_.resize(static_cast<size_t>(n), 0.0);
     lag_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
+    surf_tri_.resize(static_cast<size_t>(n), -1);
+    surf_d_.resize(static_cast<size_t>(n), 0.0);
+    surf_x_.resize(static_cast<size_t>(n), Vec3::Zero());
+    surf_open_.resize(static_cast<size_t>(n), 1);
   }
+}
+
+bool VesselForces::surface_wall(int i, const Vec3& x, double a, double* d, Vec3* n, Mat3* H) {
+  const auto k = static_cast<size_t>(i);
+  // The signed distance is 1-Lipschitz (beyond an open end too: there it is minus the
+  // distance to the rim; it flips sign only outside the wall, past the rim): a vertex that
+  // was deeper than its radius plus the distance it moved since cannot touch the wall now.
+  if (surf_tri_[k] >= 0 && surf_d_[k] + (x - surf_x_[k]).norm() + a < 0.0) return false;
+  const auto q = surface_->smooth_distance(x, smoothing_, surf_tri_[k], H);
+  surf_tri_[k] = q.triangle;
+  surf_d_[k] = q.distance;
+  surf_x_[k] = x;
+  surf_open_[k] = q.open ? 1 : 0;
+  *d = q.distance;
+  *n = q.gradient;
+  return true;
 }
 
 void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) {
@@ -77,21 +97,43 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     contact_force_[static_cast<size_t>(i)].setZero();
     cur_normal_force_[static_cast<size_t>(i)] = 0.0;
     if (!contact_.enabled) continue;
-    const int s = segment_[static_cast<size_t>(i)];
-    const auto& seg = net.segment(s);
     const Vec3& x = rod.position(i);
-    const Vec3& A = net.node(seg.node_from);
-    const Vec3& B = net.node(seg.node_to);
-    const double d_cap = capsule_distance(x, A, B, seg.radius, nullptr, nullptr);
-    // The union's distance is at most this capsule's: deep inside it, no wall is near.
-    if (d_cap + a < 0.0) continue;
-    Vec3 n_wall;
-    Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
-    const double d = index_.wall_distance(x, location_[static_cast<size_t>(i)], near_[static_cast<size_t>(i)],
-                                          &n_wall, &H_wall);
     // Stiffness per vertex of the feeding grid, scaled with the vertex's edges where the
     // rod is resampled (so the wall stays equally stiff per unit length).
     const double k_wall = contact_.stiffness * rod.cell_weight(i);
+    if (intro_reach_ > 0.0) {
+      // The introducer: no way back out behind the entry plane near the entry axis.
+      const Vec3 r = x - intro_point_;
+      const double along = r.dot(intro_dir_);
+      if ((r - along * intro_dir_).norm() < intro_reach_) {
+        // The plane lies one wire radius behind the entry, so that vertices fed in at the
+        // entry itself are free: δ = −along − a + a > 0 once a vertex is behind it.
+        const auto pen = wall_penalty(-along - 2.0 * a, -intro_dir_, Mat3::Zero(), a, k_wall);
+        if (pen.penetration > 0.0) {
+          ++intro_contacts_;
+          out.add_conservative_force(i, -pen.gradient);
+          out.add_energy(pen.energy);
+          out.add_position_jacobian(i, -pen.hessian);
+          force_[static_cast<size_t>(i)] -= pen.gradient;
+          contact_force_[static_cast<size_t>(i)] -= pen.gradient;
+        }
+      }
+    }
+    double d = 0.0;
+    Vec3 n_wall;
+    Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
+    if (surface_) {
+      if (!surface_wall(i, x, a, &d, &n_wall, &H_wall)) continue;
+    } else {
+      const int s = segment_[static_cast<size_t>(i)];
+      const auto& seg = net.segment(s);
+      const Vec3& A = net.node(seg.node_from);
+      const Vec3& B = net.node(seg.node_to);
+      const double d_cap = capsule_distance(x, A, B, seg.radius, nullptr, nullptr);
+      // The union's distance is at most this capsule's: deep inside it, no wall is near.
+      if (d_cap + a < 0.0) continue;
+      d = index_.wall_distance(x, location_[static_cast<size_t>(i)], near_[static_cast<size_t>(i)], &n_wall, &H_wall);
+    }
     const auto pen = wall_penalty(d, n_wall, H_wall, a, k_wall);
     if (pen.penetration <= 0.0) continue;
     ++stats_.contacts;
@@ -103,8 +145,8 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     out.add_position_jacobian(i, -pen.hessian);
     cur_normal_force_[static_cast<size_t>(i)] = k_wall * pen.penetration;
     cur_normal_[static_cast<size_t>(i)] = n_wall;
-    force_[static_cast<size_t>(i)] = f;
-    contact_force_[static_cast<size_t>(i)] = f;
+    force_[static_cast<size_t>(i)] += f;
+    contact_force_[static_cast<size_t>(i)] += f;
   }
   // Friction with the normal force and normal of the step's start (lagged, as in IPC):
   // the friction force is then a function of the velocity alone and its Jacobian is
@@ -187,6 +229,23 @@ void VesselForces::end_step(const rod::RodView& rod) {
     stats_.max_reynolds = std::max(stats_.max_reynolds, reynolds_[static_cast<size_t>(i)]);
   for (int i = 0; i < rod.vertex_count(); ++i) lag_normal_force_[static_cast<size_t>(i)] = 0.0;
   for (int i = 0; i < free; ++i) {
+    const auto k = static_cast<size_t>(i);
+    Vec3 nrm;
+    double d = 0.0;
+    if (surface_) {
+      // The friction's normal force from the contact's own (smoothed) distance; the exact
+      // distance measures how far outside the wire is.
+      const auto q = surface_->smooth_distance(rod.position(i), smoothing_, surf_tri_[k]);
+      surf_tri_[k] = q.triangle, surf_d_[k] = q.distance, surf_x_[k] = rod.position(i), surf_open_[k] = q.open;
+      nrm = q.gradient;
+      if (q.distance + wire_radius_ > 0.0) {
+        lag_normal_force_[k] = contact_.stiffness * rod.cell_weight(i) * (q.distance + wire_radius_);
+        lag_normal_[k] = nrm;
+      }
+      d = surface_->distance(rod.position(i), q.triangle).distance;
+      // The wire passes the open inlet near the entry: measured from entry_margin on.
+      if (!rod.arc_length.empty() && rod.arc_length[k] < entry_margin_) continue;
+    } else {
     const int s = segment_[static_cast<size_t>(i)];
     if (s < 0) continue;
     const auto& seg = index_.network().segment(s);
@@ -195,13 +254,12 @@ void VesselForces::end_step(const rod::RodView& rod) {
     if (capsule_distance(rod.position(i), net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr,
                          nullptr) + wire_radius_ < 0.0)
       continue;
-    Vec3 nrm;
-    const auto k = static_cast<size_t>(i);
     const auto loc = index_.locate(rod.position(i), s, near_[k]);
-    const double d = index_.wall_distance(rod.position(i), loc, near_[k], &nrm);
+    d = index_.wall_distance(rod.position(i), loc, near_[k], &nrm);
     if (d + wire_radius_ > 0.0) {
       lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * rod.cell_weight(i) * (d + wire_radius_);
       lag_normal_[static_cast<size_t>(i)] = nrm;
+    }
     }
     stats_.max_outside = std::max(stats_.max_outside, d);
     if (d > wire_radius_ && stats_.outside_time < 0.0) {
@@ -217,6 +275,7 @@ void VesselForces::end_step(const rod::RodView& rod) {
 void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
   const int n = rod.vertex_count();
   remap_segments_.assign(segment_.begin(), segment_.end());
+  remap_tri_.assign(surf_tri_.begin(), surf_tri_.end());
   remap_near_.swap(near_);
   near_.resize(remap_near_.size());
   ensure_size(n);
@@ -224,6 +283,8 @@ void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
     const int k = source[static_cast<size_t>(i)];
     const bool kept = k >= 0 && k < static_cast<int>(remap_segments_.size());
     segment_[static_cast<size_t>(i)] = kept ? remap_segments_[static_cast<size_t>(k)] : -1;
+    surf_tri_[static_cast<size_t>(i)] = kept && k < static_cast<int>(remap_tri_.size()) ? remap_tri_[static_cast<size_t>(k)] : -1;
+    surf_open_[static_cast<size_t>(i)] = 1;  // no bound carried over: queried afresh
     auto& nb = near_[static_cast<size_t>(i)];
     if (kept && k < static_cast<int>(remap_near_.size()))
       nb = remap_near_[static_cast<size_t>(k)];  // within capacity after the first remaps

@@ -393,3 +393,21 @@ output: {vtk: false}
                           " --set contact.enabled=true");
   EXPECT_EQ(inside.status, 0) << inside.err;
 }
+
+TEST(Cli, ABadLumenSurfaceExitsTwoNamingTheFile) {
+  const auto dir = flowire::testing::scratch_dir("cli-bad-surface");
+  write(dir / "lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n");
+  write(dir / "nan.stl", "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nvertex 0 1 0\n"
+                         "endloop\nendfacet\nendsolid s\n");
+  for (const char* surface : {"missing.vtp", "lines.obj", "nan.stl"}) {
+    write(dir / "scene.yaml", std::string(R"(vessels: {generator: {type: straight_tube}, surface: )") + surface + R"(}
+wire: {length: 0.2, segment_length: 5 mm}
+insertion: {initial_length: 1 cm}
+solve: {duration: 0.01 s, dt: 10 ms}
+output: {vtk: false, csv: false}
+)");
+    const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "out").string());
+    EXPECT_EQ(r.status, 2) << surface << ": " << r.err;
+    EXPECT_NE(r.err.find(surface), std::string::npos) << r.err;
+  }
+}

@@ -99,6 +99,38 @@ std::vector<double> cut_positions(const ArcLength& al, const BuildOptions& opt) 
     const int pieces = std::max(1, static_cast<int>(want));
     for (int j = 1; j <= pieces; ++j) cuts.push_back(coarse[k] + len * j / pieces);
   }
+  if (opt.max_chord_deviation > 0.0) {
+    // Where a branch bends, a straight segment cuts the bend: halve a piece until no point of
+    // the polyline between its ends lies farther from its chord than max_chord_deviation of
+    // the radius there.
+    std::vector<double> fine{cuts.front()};
+    for (size_t k = 0; k + 1 < cuts.size(); ++k) {
+      std::vector<std::pair<double, double>> todo{{cuts[k], cuts[k + 1]}};
+      std::vector<double> here;
+      while (!todo.empty()) {
+        const auto [a, b] = todo.back();
+        todo.pop_back();
+        const Vec3 pa = al.point(a), pb = al.point(b);
+        double worst = 0.0;
+        for (size_t i = 0; i < al.s.size(); ++i) {
+          if (al.s[i] <= a || al.s[i] >= b) continue;
+          const Vec3& x = al.p.points[i];
+          const Vec3 ab = pb - pa;
+          const double t = std::clamp((x - pa).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+          worst = std::max(worst, (x - (pa + t * ab)).norm() / (opt.max_chord_deviation * al.p.radii[i]));
+        }
+        if (worst > 1.0 && b - a > 1e-9 * std::max(1.0, al.total())) {
+          const double m = 0.5 * (a + b);
+          todo.push_back({m, b});
+          todo.push_back({a, m});
+        } else {
+          here.push_back(b);
+        }
+      }
+      fine.insert(fine.end(), here.begin(), here.end());
+    }
+    cuts = std::move(fine);
+  }
   return cuts;
 }
 
@@ -165,6 +197,14 @@ Network Network::build(const Centerlines& c, const BuildOptions& opt) {
   for (size_t b = 0; b < nb; ++b) {
     const Polyline& p = c.branches[b];
     const ArcLength al(p);
+    if (end_node[2 * b] == end_node[2 * b + 1]) {
+      // A branch back to its own start is one self-looping segment unless its length or
+      // taper cut it (the bend criterion would always cut it: judged without it).
+      BuildOptions plain = opt;
+      plain.max_chord_deviation = 0.0;
+      if (cut_positions(al, plain).size() == 2)
+        throw_input_error(src, fmt::format("{} starts and ends at the same point (self-loop)", branch_label(p, b)));
+    }
     const auto cuts = cut_positions(al, opt);
     Branch br;
     br.name = p.name.empty() ? fmt::format("branch_{}", b) : p.name;

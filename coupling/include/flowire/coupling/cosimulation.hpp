@@ -31,6 +31,9 @@ class FlowSolver;
 namespace flowire::rod {
 class RodSimulator;
 }
+namespace flowire::vessels {
+class LumenSurface;
+}
 
 namespace flowire::coupling {
 
@@ -110,6 +113,7 @@ class CoSimulation {
   std::unique_ptr<flow::FlowSolver> fsolver_;
   std::unique_ptr<rod::RodSimulator> sim_;
   std::optional<vessels::SpatialIndex> index_;
+  std::unique_ptr<vessels::LumenSurface> surface_;  // vessels.surface, null without
   std::shared_ptr<VesselForces> forces_;
   std::shared_ptr<TipForces> tip_forces_;
   std::unique_ptr<WireOcclusion> occlusion_;

@@ -17,6 +17,7 @@
 #include "flowire/coupling/interaction.hpp"
 #include "flowire/rod/external.hpp"
 #include "flowire/vessels/spatial.hpp"
+#include "flowire/vessels/surface.hpp"
 
 namespace flowire::coupling {
 
@@ -83,9 +84,32 @@ class VesselForces : public rod::ExternalForce {
   void set_velocity_field(VelocityField v) { velocity_ = std::move(v); }
   [[nodiscard]] const ContactParams& contact() const { return contact_; }
 
+  /// @brief Wall contact against a triangulated lumen surface (outlives this object) instead
+  /// of the network's capsules: the same penalty law on its signed distance (surface.hpp),
+  /// the same friction; the network still locates the vertices for the blood velocity.
+  /// Vertices closer than @p entry_margin (arc length) to the entry are not measured for
+  /// `outside` (the wire passes the open inlet there).
+  /// The wall is the surface's smoothed signed distance of width @p smoothing
+  /// (LumenSurface::smooth_distance), whose gradient is continuous.
+  void set_surface(const vessels::LumenSurface* surface, double smoothing, double entry_margin = 3e-3) {
+    surface_ = surface;
+    smoothing_ = smoothing;
+    entry_margin_ = entry_margin;
+  }
+  /// @brief The entry as an introducer sheath: a wire vertex within @p reach of the entry
+  /// axis may not come back out behind the entry (point @p p, unit direction @p t into the
+  /// vessel): the wall penalty on the signed distance (p − x)·t − a to the plane one wire
+  /// radius a behind the entry (vertices fed in at the entry itself stay free).
+  void set_introducer(const vessels::Vec3& p, const vessels::Vec3& t, double reach) {
+    intro_point_ = p;
+    intro_dir_ = t.normalized();
+    intro_reach_ = reach;
+  }
+  [[nodiscard]] std::uint64_t introducer_contacts() const { return intro_contacts_; }
+
  private:
   void ensure_size(int n);
-  std::vector<int> remap_segments_;
+  std::vector<int> remap_segments_, remap_tri_;
   std::vector<vessels::Neighbourhood> remap_near_;
   std::vector<vessels::Location> location_;     ///< (vertices) at the last evaluation
   std::vector<vessels::Neighbourhood> near_;    ///< (vertices) segments near each vertex, kept across steps
@@ -102,6 +126,18 @@ class VesselForces : public rod::ExternalForce {
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;
   bool lagged_ = false;
   InteractionStats stats_;
+  /// Wall distance of vertex i from the surface: d(x) or (no contact, skipped) a bound.
+  bool surface_wall(int i, const vessels::Vec3& x, double a, double* d, vessels::Vec3* n, Mat3* H);
+  const vessels::LumenSurface* surface_ = nullptr;
+  double entry_margin_ = 0.0;
+  double smoothing_ = 0.0;
+  std::vector<int> surf_tri_;           ///< (vertices) closest triangle at the last query (hint)
+  std::vector<double> surf_d_;          ///< (vertices) signed distance at the last query
+  std::vector<vessels::Vec3> surf_x_;   ///< (vertices) where it was made
+  std::vector<char> surf_open_;         ///< (vertices) beyond an open end at the last query
+  vessels::Vec3 intro_point_ = vessels::Vec3::Zero(), intro_dir_ = vessels::Vec3::Zero();
+  double intro_reach_ = 0.0;            ///< 0: no introducer
+  std::uint64_t intro_contacts_ = 0;
 };
 
 }  // namespace flowire::coupling

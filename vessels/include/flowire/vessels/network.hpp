@@ -36,6 +36,10 @@ struct BuildOptions {
   double max_segment_length = 5e-3;
   /// Also split where the radius changes by more than this fraction of the segment's radius.
   double radius_change = 0.1;
+  /// Also split where the branch bends: no centerline point lies farther from its segment's
+  /// axis than this fraction of its radius (a straight segment cuts a bend by its sagitta).
+  /// <= 0: no such split.
+  double max_chord_deviation = 0.1;
   /// Branch ends closer than this (m) are the same node. <= 0: 1e-3 of the smallest radius.
   double join_tolerance = 0.0;
 };
