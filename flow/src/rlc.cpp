@@ -144,6 +144,7 @@ class RlcSolver final : public FlowSolver {
     return (1.0 - w) * prev_y_[k] + w * st_.y[k];
   }
   [[nodiscard]] const PeriodicInfo& periodic() const { return periodic_; }
+  [[nodiscard]] long factorizations() const { return system_->factorizations(); }
 
  protected:
   void do_advance(double t) override {
@@ -328,6 +329,11 @@ std::unique_ptr<FlowSolver> make_rlc_solver(const Network& net, FlowSpec spec) {
 PeriodicInfo periodic_info(const FlowSolver& solver) {
   if (const auto* r = dynamic_cast<const detail::RlcSolver*>(&solver)) return r->periodic();
   return {};
+}
+
+long rlc_factorizations(const FlowSolver& solver) {
+  if (const auto* r = dynamic_cast<const detail::RlcSolver*>(&solver)) return r->factorizations();
+  return 0;
 }
 
 }  // namespace flowire::flow

@@ -32,6 +32,9 @@ struct PeriodicInfo {
   double last_change = 0.0;  ///< relative change between the last two cycle starts
 };
 [[nodiscard]] PeriodicInfo periodic_info(const FlowSolver& solver);
+/// @brief Numeric factorizations of the rlc model's system so far: one for the steady
+/// initial state, one for the time step, one more per occlusion change (0 for another model).
+[[nodiscard]] long rlc_factorizations(const FlowSolver& solver);
 
 /// @brief Inertance of a cylindrical segment (kg/m⁴): ρl/(πr²), times 4/3 for `Womersley`.
 [[nodiscard]] double segment_inertance(Inertance kind, double density, double length, double radius);
