@@ -15,8 +15,10 @@
 /// - RCR outlet: Q_bc = −(p_i − p_c)/R_p, \f$ C \dot p_c = (p_i - p_c)/R_p - (p_c - P_d)/R_d \f$.
 ///
 /// Time stepping: generalized-α (second order, spectral radius `rho_infinity` at infinite
-/// step) with the matrix \f$ \alpha_m E + \alpha_f\gamma\Delta t F \f$ factored once for the
-/// fixed step `dt`. The initial state is the steady solution at t = 0. With a periodic inlet,
+/// step), the one of svzerod::GeneralizedAlpha: the network is two blocks of an
+/// svzerod::System, E and F (written again only when an occlusion changes a segment) and the
+/// boundary values c(t), so the matrix \f$ \alpha_m E + \alpha_f\gamma\Delta t F \f$ is factored
+/// (KLU) once for the fixed step `dt` and again only after an occlusion change. The initial state is the steady solution at t = 0. With a periodic inlet,
 /// setup runs whole cycles until two consecutive cycle starts differ by less than
 /// `periodic_tolerance` (relative), at most `max_cycles`, and that periodic state becomes
 /// t = 0. `advance(t)` steps the grid k·dt to t and interpolates linearly between steps.
