@@ -6,6 +6,8 @@
 //    and a sparse direct solve per frame. BM_FrameRatio measures both in one run.
 // 2. Setup (assembly + CHOLMOD factorization + per-source solves) of binary trees from
 //    10³ to 10⁶ segments with superposition: time, retained memory, full-frame cost.
+// 3. flow.model: rlc on binary trees of 2^(depth+1) − 1 segments: one time step, and one
+//    change of the occlusion (refactorization of the step matrix) followed by a step.
 //
 // Run: build-flow/bench/bench_flow --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -222,5 +224,47 @@ void BM_TreeSetup(benchmark::State& state) {
   state.counters["retained_MB"] = mem;
 }
 BENCHMARK(BM_TreeSetup)->DenseRange(9, 19, 1)->Unit(benchmark::kMillisecond)->Iterations(1)->Complexity(benchmark::oN);
+
+/// The rlc model on a binary tree: one generalized-α step (BM_RlcStep) and one occlusion
+/// change with its refactorization plus a step (BM_RlcOcclusion).
+std::unique_ptr<flow::FlowSolver> rlc_tree(int depth, Network& net) {
+  vessels::BinaryTreeParams bp;
+  bp.depth = depth;
+  net = vessels::binary_tree(bp);
+  FlowSpec spec = flow::default_spec(net, flow::Waveform::sine(16000.0, 10666.0, 0.8));
+  spec.model = flow::Model::Rlc;
+  spec.max_cycles = 2;  // setup is not measured
+  return flow::make_solver(net, spec);
+}
+
+void BM_RlcStep(benchmark::State& state) {
+  Network net;
+  auto s = rlc_tree(static_cast<int>(state.range(0)), net);
+  double t = 0.0;
+  for (auto _ : state) {
+    t += 1e-3;
+    s->advance(t);
+    benchmark::DoNotOptimize(s->segment_flow(0));
+  }
+  state.counters["segments"] = net.num_segments();
+}
+BENCHMARK(BM_RlcStep)->Arg(8)->Arg(11)->Arg(14)->Unit(benchmark::kMicrosecond);
+
+void BM_RlcOcclusion(benchmark::State& state) {
+  Network net;
+  auto s = rlc_tree(static_cast<int>(state.range(0)), net);
+  std::vector<flow::SegmentOcclusion> occ(static_cast<size_t>(net.num_segments()));
+  double t = 0.0;
+  long k = 0;
+  for (auto _ : state) {
+    occ[1].resistance_factor = occ[1].inertance_factor = (++k % 2) ? 1.5 : 1.2;
+    s->set_occlusion(occ);
+    t += 1e-3;
+    s->advance(t);
+    benchmark::DoNotOptimize(s->segment_flow(0));
+  }
+  state.counters["segments"] = net.num_segments();
+}
+BENCHMARK(BM_RlcOcclusion)->Arg(8)->Arg(11)->Arg(14)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

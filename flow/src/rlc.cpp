@@ -3,12 +3,16 @@
 #include <fmt/format.h>
 
 #include <Eigen/Sparse>
-#include <Eigen/SparseLU>
+#include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "assembly.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/flow/svzerod/block.hpp"
+#include "flowire/flow/svzerod/integrator.hpp"
+#include "flowire/flow/svzerod/system.hpp"
 #include "solvers.hpp"
 
 namespace flowire::flow {
@@ -39,7 +43,75 @@ double segment_compliance(double youngs_modulus, double thickness_ratio, double 
 namespace detail {
 namespace {
 
-/// Unknown layout: [p (num_nodes) | Q (num_segments) | p_c (num RCR outlets)].
+/// E and F of the network, rows and unknowns [p (num_nodes) | Q (num_segments) | p_c (RCR
+/// outlets)]: constant within a phase, rewritten only when a wire changes a segment.
+class RlcNetwork final : public svzerod::Block {
+ public:
+  RlcNetwork(Eigen::SparseMatrix<double> e, Eigen::SparseMatrix<double> f)
+      : Block("rlc network"), e_(std::move(e)), f_(std::move(f)) {}
+  [[nodiscard]] const char* type() const override { return "RlcNetwork"; }
+  [[nodiscard]] std::string check_connections() const override { return {}; }
+  [[nodiscard]] int num_equations() const override { return static_cast<int>(f_.rows()); }
+  /// The steady phase has no capacitor or inductor terms: E = 0.
+  void assemble(svzerod::Assembler& a, double /*t*/) const override {
+    if (!a.steady())
+      for (Eigen::Index j = 0; j < e_.outerSize(); ++j)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(e_, j); it; ++it)
+          a.e(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
+    for (Eigen::Index j = 0; j < f_.outerSize(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(f_, j); it; ++it)
+        a.f(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
+  }
+  /// Resistance and inertance of the segment whose flow is unknown `row`.
+  void set_segment(Eigen::Index row, double resistance, double inertance) {
+    f_.coeffRef(row, row) = resistance;
+    e_.coeffRef(row, row) = inertance;
+  }
+
+ private:
+  Eigen::SparseMatrix<double> e_, f_;
+};
+
+/// The boundary values c(t) = −Σ_k w_k(t) s_k: imposed pressures on Dirichlet rows, injected
+/// flows on node rows, R_d⁻¹ P_d on RCR rows. Writes no matrix entry, so J stays constant.
+class RlcBoundary final : public svzerod::Block {
+ public:
+  RlcBoundary(const Assembly& a, const std::vector<Eigen::VectorXd>& sources)
+      : Block("rlc boundary"), a_(a), coef_(sources.size()) {
+    const Eigen::Index n = sources.empty() ? 0 : sources[0].size();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      bool any = false;
+      for (const auto& s : sources) any = any || s[i] != 0.0;
+      if (!any) continue;
+      rows_.push_back(static_cast<int>(i));
+      for (const auto& s : sources) values_.push_back(s[i]);
+    }
+    for (const auto& s : a_.sources) time_dependent_ = time_dependent_ || s.waveform != nullptr;
+  }
+  [[nodiscard]] const char* type() const override { return "RlcBoundary"; }
+  [[nodiscard]] std::string check_connections() const override { return {}; }
+  [[nodiscard]] int num_equations() const override { return 0; }
+  void assemble(svzerod::Assembler& a, double t) const override {
+    a_.coefficients(t, coef_.data());
+    const size_t nk = coef_.size();
+    for (size_t r = 0; r < rows_.size(); ++r) {
+      double b = 0.0;
+      for (size_t k = 0; k < nk; ++k) b += coef_[k] * values_[r * nk + k];
+      a.c(rows_[r], -b);
+    }
+  }
+
+ private:
+  const Assembly& a_;
+  mutable std::vector<double> coef_;
+  std::vector<int> rows_;       // rows with a boundary value
+  std::vector<double> values_;  // (rows × sources)
+};
+
+/// Unknown layout: [p (num_nodes) | Q (num_segments) | p_c (num RCR outlets)]. The equations
+/// E ẏ + F y + c(t) = 0 are two blocks on an svzerod::System, stepped by its generalized-α
+/// integrator: J = α_m E + α_f γ Δt F is factorized (KLU) once for the phase and again only
+/// when a wire changes a segment.
 class RlcSolver final : public FlowSolver {
  public:
   RlcSolver(const Network& net, FlowSpec spec) : FlowSolver(net, std::move(spec)) {
@@ -51,20 +123,12 @@ class RlcSolver final : public FlowSolver {
     build();
     timings_.assemble = sw.seconds();
     Stopwatch sf;
-    const double rho = std::clamp(spec_.rho_infinity, 0.0, 1.0);
-    am_ = 0.5 * (3.0 - rho) / (1.0 + rho);
-    af_ = 1.0 / (1.0 + rho);
-    gamma_ = 0.5 + am_ - af_;
-    const Eigen::SparseMatrix<double> j = am_ * e_ + (af_ * gamma_ * spec_.dt) * f_;
-    lu_.analyzePattern(j);
-    lu_.factorize(j);
-    if (lu_.info() != Eigen::Success)
-      throw_numerical_error("flow (rlc): the time-step matrix is singular; check that every piece of the network "
-                            "has a pressure reference");
     initial_state();
+    system_->set_phase(/*steady=*/false, 0.0);
+    factorize("the time-step matrix is singular; check that every piece of the network has a pressure reference");
     settle();
     timings_.factor = sf.seconds();
-    prev_y_ = y_;
+    prev_y_ = st_.y;
     prev_t_ = cur_t_ = 0.0;
     interpolate(0.0);
   }
@@ -74,12 +138,13 @@ class RlcSolver final : public FlowSolver {
   [[nodiscard]] double node_pressure(int node) const override { return out_[static_cast<size_t>(node)]; }
   [[nodiscard]] double segment_flow(int s) const override { return out_[n_nodes_ + static_cast<size_t>(s)]; }
   [[nodiscard]] double segment_flow_at(int s, double t) const override {
-    const size_t k = n_nodes_ + static_cast<size_t>(s);
-    if (cur_t_ <= prev_t_) return y_[static_cast<Eigen::Index>(k)];
+    const auto k = static_cast<Eigen::Index>(n_nodes_ + static_cast<size_t>(s));
+    if (cur_t_ <= prev_t_) return st_.y[k];
     const double w = std::clamp((t - prev_t_) / (cur_t_ - prev_t_), 0.0, 1.0);
-    return (1.0 - w) * prev_y_[static_cast<Eigen::Index>(k)] + w * y_[static_cast<Eigen::Index>(k)];
+    return (1.0 - w) * prev_y_[k] + w * st_.y[k];
   }
   [[nodiscard]] const PeriodicInfo& periodic() const { return periodic_; }
+  [[nodiscard]] long factorizations() const { return system_->factorizations(); }
 
  protected:
   void do_advance(double t) override {
@@ -87,25 +152,24 @@ class RlcSolver final : public FlowSolver {
       throw_usage_error(fmt::format("flow (rlc): cannot go back in time from {} to {}", cur_t_, t));
     }
     while (cur_t_ < t - 1e-12 * spec_.dt) {
-      prev_y_ = y_;
+      prev_y_ = st_.y;
       prev_t_ = cur_t_;
-      step(cur_t_ + t_offset_);
+      integrator_->step(st_, cur_t_ + t_offset_);
       cur_t_ += spec_.dt;
     }
     interpolate(t);
   }
 
-  /// A wire in a segment scales its resistance and inertance: the step matrix is rebuilt
-  /// and refactored (same pattern); the state integrates on from where it is.
+  /// A wire in a segment scales its resistance and inertance: the segment rows are written
+  /// again and J refactorized on the same pattern; the state integrates on from where it is.
   void apply_occlusion() override {
     for (size_t s = 0; s < static_cast<size_t>(net_.num_segments()); ++s) {
-      const auto row = static_cast<Eigen::Index>(n_nodes_ + s);
       const auto& o = occlusion_[s];
-      f_.coeffRef(row, row) = resistance_[s] * o.resistance_factor;
-      e_.coeffRef(row, row) = inertance_[s] * o.inertance_factor;
+      network_->set_segment(static_cast<Eigen::Index>(n_nodes_ + s), resistance_[s] * o.resistance_factor,
+                            inertance_[s] * o.inertance_factor);
     }
-    lu_.factorize(am_ * e_ + (af_ * gamma_ * spec_.dt) * f_);
-    if (lu_.info() != Eigen::Success) throw_numerical_error("flow (rlc): the time-step matrix with the wire is singular");
+    system_->update_block(*network_, cur_t_ + t_offset_);
+    factorize("the time-step matrix with the wire is singular");
   }
 
  private:
@@ -151,54 +215,60 @@ class RlcSolver final : public FlowSolver {
       // Outflow (p_i - p_c)/Rp leaves node i.
       tf.emplace_back(o.node, o.node, 1.0 / o.rp);
       tf.emplace_back(o.node, row, -1.0 / o.rp);
-      // C dp_c/dt - (p_i - p_c)/Rp + (p_c - Pd)/Rd = 0  (Pd in the source vector).
+      // C dp_c/dt - (p_i - p_c)/Rp + (p_c - Pd)/Rd = 0  (Pd in the boundary values).
       if (o.c > 0.0) te.emplace_back(row, row, o.c);
       tf.emplace_back(row, o.node, -1.0 / o.rp);
       tf.emplace_back(row, row, 1.0 / o.rp + 1.0 / o.rd);
     }
-    e_.resize(n_, n_);
-    f_.resize(n_, n_);
-    e_.setFromTriplets(te.begin(), te.end());
-    f_.setFromTriplets(tf.begin(), tf.end());
-    // Source vectors per BC source: rows of the node values (pressure at Dirichlet rows,
+    Eigen::SparseMatrix<double> e(n_, n_), f(n_, n_);
+    e.setFromTriplets(te.begin(), te.end());
+    f.setFromTriplets(tf.begin(), tf.end());
+    // Boundary values per BC source: rows of the node values (pressure at Dirichlet rows,
     // injected flow elsewhere), RCR distal pressures in the constant part.
-    src_.assign(a_.sources.size(), Eigen::VectorXd::Zero(n_));
+    std::vector<Eigen::VectorXd> src(a_.sources.size(), Eigen::VectorXd::Zero(n_));
     for (size_t k = 0; k < a_.sources.size(); ++k)
-      for (const auto& [node, value] : a_.sources[k].node_values) src_[k][node] += value;
+      for (const auto& [node, value] : a_.sources[k].node_values) src[k][node] += value;
     for (size_t k = 0; k < rcr_.size(); ++k)
-      src_[0][static_cast<Eigen::Index>(n_nodes_ + ne + k)] += rcr_[k]->distal_pressure / rcr_[k]->rd;
-    coef_.resize(a_.sources.size());
-    y_ = Eigen::VectorXd::Zero(n_);
-    yd_ = Eigen::VectorXd::Zero(n_);
+      src[0][static_cast<Eigen::Index>(n_nodes_ + ne + k)] += rcr_[k]->distal_pressure / rcr_[k]->rd;
+    network_ = std::make_unique<RlcNetwork>(std::move(e), std::move(f));
+    boundary_ = std::make_unique<RlcBoundary>(a_, src);
+    network_->place(0, static_cast<int>(n_nodes_));
+    system_ = std::make_unique<svzerod::System>(std::vector<svzerod::Block*>{network_.get(), boundary_.get()},
+                                                static_cast<int>(n_), spec_.cycle(), "flow (rlc)");
+    // A linear system: one solve per step (tolerance 0 never skips it).
+    integrator_ = std::make_unique<svzerod::GeneralizedAlpha>(*system_, std::clamp(spec_.rho_infinity, 0.0, 1.0),
+                                                              spec_.dt, 0.0, 1, "flow (rlc)");
+    st_.y = Eigen::VectorXd::Zero(n_);
+    st_.yd = Eigen::VectorXd::Zero(n_);
+    prev_y_ = Eigen::VectorXd::Zero(n_);
     out_.assign(static_cast<size_t>(n_), 0.0);
   }
 
-  /// b(t): the residual is E ydot + F y - b(t) = 0.
-  void source(double t, Eigen::VectorXd& b) const {
-    a_.coefficients(t, coef_.data());
-    b.setZero(n_);
-    for (size_t k = 0; k < src_.size(); ++k) b.noalias() += coef_[k] * src_[k];
+  /// J = α_m E + α_f γ Δt F for the step; `what` names a singular J.
+  void factorize(const char* what) {
+    try {
+      system_->factorize(integrator_->alpha_m(), integrator_->alpha_f() * integrator_->gamma() * spec_.dt);
+    } catch (const Error& e) {
+      if (e.kind() != ErrorKind::Numerical) throw;
+      throw_numerical_error(fmt::format("flow (rlc): {}", what));
+    }
   }
 
+  /// The steady solution at t = 0: F y + c(0) = 0 (J = F in the steady phase).
   void initial_state() {
-    Eigen::SparseLU<Eigen::SparseMatrix<double>> steady(f_);
-    if (steady.info() != Eigen::Success) throw_numerical_error("flow (rlc): the steady system is singular");
-    source(0.0, b_);
-    y_ = steady.solve(b_);
-    yd_.setZero();
-    if (!y_.allFinite()) throw_numerical_error("flow (rlc): the initial state is not finite");
-  }
-
-  void step(double t) {
-    // Unknown x = ydot_{n+1}: (am E + af γ dt F) x = b(t + af dt) - E (1 - am) ydot_n - F (y_n + af dt (1 - γ) ydot_n).
-    const double dt = spec_.dt;
-    source(t + af_ * dt, b_);
-    tmp_ = y_ + (af_ * dt * (1.0 - gamma_)) * yd_;
-    b_.noalias() -= f_ * tmp_;
-    b_.noalias() -= (1.0 - am_) * (e_ * yd_);
-    x_ = lu_.solve(b_);
-    y_ += dt * ((1.0 - gamma_) * yd_ + gamma_ * x_);
-    yd_ = x_;
+    system_->set_phase(/*steady=*/true, 0.0);
+    try {
+      system_->factorize(0.0, 1.0);
+    } catch (const Error& e) {
+      if (e.kind() != ErrorKind::Numerical) throw;
+      throw_numerical_error("flow (rlc): the steady system is singular");
+    }
+    st_.y.setZero();
+    st_.yd.setZero();
+    system_->residual(st_.y, st_.yd, prev_y_);  // c(0)
+    system_->solve(prev_y_);
+    st_.y = -prev_y_;
+    if (!st_.y.allFinite()) throw_numerical_error("flow (rlc): the initial state is not finite");
   }
 
   void settle() {
@@ -208,19 +278,19 @@ class RlcSolver final : public FlowSolver {
     if (std::abs(steps * spec_.dt - period) > 1e-9 * period)
       warn(fmt::format("flow (rlc): the step {} s does not divide the period {} s; periodic detection is approximate",
                        spec_.dt, period));
-    Eigen::VectorXd start = y_;
+    Eigen::VectorXd start = st_.y;
     double t = 0.0;
     for (int c = 1; c <= spec_.max_cycles; ++c) {
-      for (long k = 0; k < steps; ++k, t += spec_.dt) step(t);
-      const double scale = std::max(y_.lpNorm<Eigen::Infinity>(), 1e-300);
+      for (long k = 0; k < steps; ++k, t += spec_.dt) integrator_->step(st_, t);
+      const double scale = std::max(st_.y.lpNorm<Eigen::Infinity>(), 1e-300);
       periodic_.cycles = c;
-      periodic_.last_change = (y_ - start).lpNorm<Eigen::Infinity>() / scale;
+      periodic_.last_change = (st_.y - start).lpNorm<Eigen::Infinity>() / scale;
       if (periodic_.last_change <= spec_.periodic_tolerance) {
         periodic_.converged = true;
         t_offset_ = static_cast<double>(steps) * spec_.dt * c - static_cast<double>(c) * period;
         return;
       }
-      start = y_;
+      start = st_.y;
     }
     periodic_.converged = false;
     warn(fmt::format("flow (rlc): no periodic state after {} cycles (last relative change {:.3g}); continuing",
@@ -229,7 +299,7 @@ class RlcSolver final : public FlowSolver {
 
   void interpolate(double t) {
     const double w = cur_t_ > prev_t_ ? std::clamp((t - prev_t_) / (cur_t_ - prev_t_), 0.0, 1.0) : 1.0;
-    for (Eigen::Index i = 0; i < n_; ++i) out_[static_cast<size_t>(i)] = (1.0 - w) * prev_y_[i] + w * y_[i];
+    for (Eigen::Index i = 0; i < n_; ++i) out_[static_cast<size_t>(i)] = (1.0 - w) * prev_y_[i] + w * st_.y[i];
   }
 
   Assembly a_;
@@ -237,13 +307,13 @@ class RlcSolver final : public FlowSolver {
   std::vector<double> inertance_;  // (num_segments) without occlusion
   size_t n_nodes_ = 0;
   Eigen::Index n_ = 0;
-  Eigen::SparseMatrix<double> e_, f_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
-  std::vector<Eigen::VectorXd> src_;
-  mutable std::vector<double> coef_;
-  Eigen::VectorXd y_, yd_, prev_y_, b_, tmp_, x_;
+  std::unique_ptr<RlcNetwork> network_;
+  std::unique_ptr<RlcBoundary> boundary_;
+  std::unique_ptr<svzerod::System> system_;
+  std::unique_ptr<svzerod::GeneralizedAlpha> integrator_;
+  svzerod::State st_;
+  Eigen::VectorXd prev_y_;
   std::vector<double> out_;
-  double am_ = 1.0, af_ = 1.0, gamma_ = 0.5;
   double cur_t_ = 0.0, prev_t_ = 0.0, t_offset_ = 0.0;
   PeriodicInfo periodic_;
 };
@@ -259,6 +329,11 @@ std::unique_ptr<FlowSolver> make_rlc_solver(const Network& net, FlowSpec spec) {
 PeriodicInfo periodic_info(const FlowSolver& solver) {
   if (const auto* r = dynamic_cast<const detail::RlcSolver*>(&solver)) return r->periodic();
   return {};
+}
+
+long rlc_factorizations(const FlowSolver& solver) {
+  if (const auto* r = dynamic_cast<const detail::RlcSolver*>(&solver)) return r->factorizations();
+  return 0;
 }
 
 }  // namespace flowire::flow

@@ -136,5 +136,42 @@ TEST(FlowRlc, RcrOutletsReachAPeriodicState) {
   EXPECT_NEAR(in / n, mean_qs / n, 1e-3 * std::abs(mean_qs / n));
 }
 
+// The boundary waveforms enter only the right-hand side: the step matrix is factorized once
+// for the steady state and once for the time step, and again only when a wire changes a
+// segment's resistance or inertance (then the flow through it drops).
+TEST(FlowRlc, StepMatrixIsFactorizedOncePerPhaseAndPerOcclusionChange) {
+  const Network net = murray_tree(3);
+  FlowSpec spec = default_spec(net, Waveform::sine(120 * 133.322, 80 * 133.322, 0.8));
+  for (auto& o : spec.outlets) {
+    o.type = OutletBC::Type::Rcr;
+    o.rp = 1e8;
+    o.c = 1e-10;
+    o.rd = 1.5e9;
+  }
+  spec.model = Model::Rlc;
+  spec.dt = 0.8 / 200;
+  auto s = make_solver(net, spec);
+  ASSERT_GT(periodic_info(*s).cycles, 1);
+  EXPECT_EQ(rlc_factorizations(*s), 2);
+  s->advance(1.6);
+  EXPECT_EQ(rlc_factorizations(*s), 2);
+  std::vector<SegmentOcclusion> occ(static_cast<size_t>(net.num_segments()));
+  s->set_occlusion(occ);  // all factors 1: J unchanged
+  s->advance(2.4);
+  EXPECT_EQ(rlc_factorizations(*s), 2);
+  const double q_free = s->segment_flow(1);
+  occ[1].resistance_factor = 20.0;
+  occ[1].inertance_factor = 1.5;
+  s->set_occlusion(occ);
+  EXPECT_EQ(rlc_factorizations(*s), 3);
+  s->advance(4.0);  // two periods later: the same phase of the cycle
+  EXPECT_EQ(rlc_factorizations(*s), 3);
+  std::printf("segment 1 flow at the same phase: free %.6g, occluded %.6g m^3/s\n", q_free, s->segment_flow(1));
+  EXPECT_LT(std::abs(s->segment_flow(1)), std::abs(q_free));
+  spec.model = Model::Poiseuille;
+  flowire::testing::ExpectWarnings w;
+  EXPECT_EQ(rlc_factorizations(*make_solver(net, spec)), 0);
+}
+
 }  // namespace
 }  // namespace flowire::flow

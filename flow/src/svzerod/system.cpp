@@ -127,6 +127,8 @@ void System::update_time(double t) {
   for (Block* b : time_blocks_) b->assemble(asm_, t);
 }
 
+void System::update_block(const Block& b, double t) { b.assemble(asm_, t); }
+
 void System::update_solution(double t, const Eigen::VectorXd& y, const Eigen::VectorXd& yd) {
   for (Block* b : nonlinear_blocks_) b->assemble_nonlinear(asm_, t, y, yd);
 }

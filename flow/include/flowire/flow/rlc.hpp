@@ -15,8 +15,10 @@
 /// - RCR outlet: Q_bc = −(p_i − p_c)/R_p, \f$ C \dot p_c = (p_i - p_c)/R_p - (p_c - P_d)/R_d \f$.
 ///
 /// Time stepping: generalized-α (second order, spectral radius `rho_infinity` at infinite
-/// step) with the matrix \f$ \alpha_m E + \alpha_f\gamma\Delta t F \f$ factored once for the
-/// fixed step `dt`. The initial state is the steady solution at t = 0. With a periodic inlet,
+/// step), the one of svzerod::GeneralizedAlpha: the network is two blocks of an
+/// svzerod::System, E and F (written again only when an occlusion changes a segment) and the
+/// boundary values c(t), so the matrix \f$ \alpha_m E + \alpha_f\gamma\Delta t F \f$ is factored
+/// (KLU) once for the fixed step `dt` and again only after an occlusion change. The initial state is the steady solution at t = 0. With a periodic inlet,
 /// setup runs whole cycles until two consecutive cycle starts differ by less than
 /// `periodic_tolerance` (relative), at most `max_cycles`, and that periodic state becomes
 /// t = 0. `advance(t)` steps the grid k·dt to t and interpolates linearly between steps.
@@ -32,6 +34,9 @@ struct PeriodicInfo {
   double last_change = 0.0;  ///< relative change between the last two cycle starts
 };
 [[nodiscard]] PeriodicInfo periodic_info(const FlowSolver& solver);
+/// @brief Numeric factorizations of the rlc model's system so far: one for the steady
+/// initial state, one for the time step, one more per occlusion change (0 for another model).
+[[nodiscard]] long rlc_factorizations(const FlowSolver& solver);
 
 /// @brief Inertance of a cylindrical segment (kg/m⁴): ρl/(πr²), times 4/3 for `Womersley`.
 [[nodiscard]] double segment_inertance(Inertance kind, double density, double length, double radius);

@@ -72,6 +72,9 @@ class System {
   void set_phase(bool steady, double t);
   /// @brief Blocks whose parameters vary in time write their linear part at `t`.
   void update_time(double t);
+  /// @brief Block `b`, whose parameters changed within the phase (not with time), writes its
+  /// linear part again; the next factorize() refactorizes on the same pattern.
+  void update_block(const Block& b, double t);
   /// @brief Nonlinear blocks write \f$ c_{nl} \f$, \f$ D_y \f$, \f$ D_{\dot y} \f$ at (y, ẏ).
   void update_solution(double t, const Eigen::VectorXd& y, const Eigen::VectorXd& yd);
   /// @brief \f$ f = E\dot y + F y + c + c_{nl} \f$ (no allocation).
@@ -92,7 +95,6 @@ class System {
  private:
   friend class Assembler;
   [[nodiscard]] int slot(int row, int col) const;
-  void assemble_linear(const Block& b, double t);
 
   std::vector<Block*> blocks_, time_blocks_, nonlinear_blocks_;
   int n_;
