@@ -841,7 +841,10 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     for (long step = 0; step < steps; ++step) {
       const double t1 = (static_cast<double>(step) + 1.0) * dt;
       cosim.step();
-      if (sim && wire_out) wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
+      if (sim && wire_out) {
+        wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
+        wire_out->add_base(sim->time(), sim->base_force(), sim->base_torque());
+      }
       if (series && (step + 1) % out_every == 0) record(t1);
       if (options.progress) options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
     }

@@ -22,7 +22,14 @@ WireOutput::WireOutput(std::filesystem::path dir, bool csv, bool vtk) : dir_(std
   if (csv_) {
     wire_csv_ = "time,vertex,s,x,y,z,drag_x,drag_y,drag_z,contact_x,contact_y,contact_z\n";
     tip_csv_ = "time,inserted_length,x,y,z\n";
+    base_csv_ = "time,fx,fy,fz,tx,ty,tz\n";
   }
+}
+
+void WireOutput::add_base(double time, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
+  if (!csv_) return;
+  base_csv_ += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", time, force.x(), force.y(), force.z(),
+                           torque.x(), torque.y(), torque.z());
 }
 
 void WireOutput::add_tip(double time, double inserted_length, const Eigen::Vector3d& tip) {
@@ -99,6 +106,7 @@ void WireOutput::finish() {
   if (csv_) {
     write_text_atomically(dir_ / "wire.csv", wire_csv_);
     write_text_atomically(dir_ / "tip_trace.csv", tip_csv_);
+    write_text_atomically(dir_ / "base_force.csv", base_csv_);
   }
   if (vtk_ && !vtk_files_.empty()) write_pvd(dir_ / "wire.pvd", vtk_files_);
 }

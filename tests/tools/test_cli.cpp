@@ -330,6 +330,47 @@ TEST(Cli, ProgressLineOnATerminalOnly) {
   EXPECT_NE(text.str().find("ok in"), std::string::npos) << text.str();
 }
 
+TEST(Cli, BaseForceEveryStepBalancesTheTipLoadAtRest) {
+  // base_force.csv: the clamp's force on the wire every step. A free wire (no vessels, no
+  // gravity) pulled at its tip by F and damped to rest is held by −F at the clamp
+  // (Newton's third law on the whole wire), and the clamp's torque balances F's moment.
+  const auto dir = flowire::testing::scratch_dir("cli-base-force");
+  write(dir / "scene.yaml", R"(name: pulled
+wire: {length: 0.05, radius: 0.2 mm, youngs_modulus: 60 GPa, segment_length: 5 mm, damping: 5,
+       base: {position: [0, 0, 0], direction: [1, 0, 0]}}
+insertion: {speed: 0, initial_length: 5 cm}
+loads: [{type: tip_force, value: [0, 0.002, 0]}]
+solve: {dt: 10 ms, duration: 3 s}
+output: {vtk: false}
+)");
+  const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "out").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(dir / "out" / "base_force.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "time,fx,fy,fz,tx,ty,tz");
+  int rows = 0;
+  std::vector<double> last;
+  while (std::getline(in, line)) {
+    ++rows;
+    last.clear();
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) last.push_back(std::stod(c));
+  }
+  EXPECT_EQ(rows, 300);
+  ASSERT_EQ(last.size(), 7u);
+  EXPECT_NEAR(last[0], 3.0, 1e-9);
+  EXPECT_NEAR(last[1], 0.0, 2e-5);
+  EXPECT_NEAR(last[2], -0.002, 2e-5);
+  EXPECT_NEAR(last[3], 0.0, 2e-5);
+  // Torque about the clamp: −(tip position × F), the tip near (x_tip, y_tip, 0).
+  std::ifstream sj(dir / "out" / "summary.json");
+  const auto j = nlohmann::json::parse(sj);
+  const double x_tip = j["wire"]["tip"][0].get<double>();
+  EXPECT_NEAR(last[6], -x_tip * 0.002, 0.02 * x_tip * 0.002);
+  EXPECT_NEAR(last[2], j["wire"]["base_force"][1].get<double>(), 1e-9);
+}
+
 TEST(Cli, OcclusionNeedsASolverThatCanRefactor) {
   // The published dense K⁻¹ cannot take the wire's resistance: asked for, that is bad input
   // (exit 2, the key named, no output); by default the run says the flow ignores the wire.

@@ -1,7 +1,8 @@
 #pragma once
 /// @file wire_output.hpp
 /// @brief Wire outputs: wire.csv (time,vertex,s,x,y,z,drag_x,drag_y,drag_z,contact_x,
-/// contact_y,contact_z), tip_trace.csv (time,inserted_length,x,y,z), and a ParaView series
+/// contact_y,contact_z), tip_trace.csv (time,inserted_length,x,y,z), base_force.csv
+/// (time,fx,fy,fz,tx,ty,tz: the clamp's force and torque every step), and a ParaView series
 /// wire.pvd + wire_NNNNN.vtp with point data s, force, drag, contact and flow_velocity. Rows are buffered in memory and every file is written
 /// atomically, so a failed run leaves no half-written file.
 #include <filesystem>
@@ -30,14 +31,17 @@ class WireOutput {
   void add_frame(const WireFrame& frame);
   /// @brief Record a tip-trace sample (every step).
   void add_tip(double time, double inserted_length, const Eigen::Vector3d& tip);
-  /// @brief Write wire.csv, tip_trace.csv and wire.pvd.
+  /// @brief Record the clamp's force and torque on the wire (every step): base_force.csv,
+  /// `time,fx,fy,fz,tx,ty,tz` [s, N, N·m], what a haptic device reads.
+  void add_base(double time, const Eigen::Vector3d& force, const Eigen::Vector3d& torque);
+  /// @brief Write wire.csv, tip_trace.csv, base_force.csv and wire.pvd.
   void finish();
   [[nodiscard]] int frames() const { return frame_count_; }
 
  private:
   std::filesystem::path dir_;
   bool csv_, vtk_;
-  std::string wire_csv_, tip_csv_;
+  std::string wire_csv_, tip_csv_, base_csv_;
   std::vector<std::pair<double, std::string>> vtk_files_;
   int frame_count_ = 0;
 };
