@@ -483,13 +483,7 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
   if (vols.size() != 1) throw_numerical_error(fmt::format("{}: the lumen gave {} volumes, not one", at, vols.size()));
   detail::tag_groups_and_set_options(vols[0].second, "lumen", mesh.groups, surfs, surf_group, opt.algorithm3d);
 
-  if (opt.mesh_size > 0.0) {
-    gmsh::option::setNumber("Mesh.MeshSizeMin", opt.mesh_size);
-    gmsh::option::setNumber("Mesh.MeshSizeMax", opt.mesh_size);
-  } else {
-    if (!(opt.size_factor > 0.0)) throw_usage_error("fem: size_factor must be > 0 when mesh_size is not set");
-    gmsh::option::setNumber("Mesh.MeshSizeMin", 0.0);
-    gmsh::option::setNumber("Mesh.MeshSizeMax", 1e22);
+  if (!detail::set_size_bounds(opt.mesh_size, opt.size_factor)) {
     struct Axis {
       Vec3 a, d;
       double l2, r;

@@ -300,6 +300,18 @@ void tag_groups_and_set_options(int volume, const char* volume_name, const std::
 }
 
 
+
+bool set_size_bounds(double mesh_size, double size_factor) {
+  if (mesh_size > 0.0) {
+    gmsh::option::setNumber("Mesh.MeshSizeMin", mesh_size);
+    gmsh::option::setNumber("Mesh.MeshSizeMax", mesh_size);
+    return true;
+  }
+  if (!(size_factor > 0.0)) throw_usage_error("fem: size_factor must be > 0 when mesh_size is not set");
+  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.0);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", 1e22);
+  return false;
+}
 }  // namespace detail
 
 namespace {
@@ -371,13 +383,7 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
   // Sizes: fixed, or a fraction of the radius of the nearest piece.
   double hmin = std::numeric_limits<double>::infinity();
   for (const Piece& p : g.pieces) hmin = std::min(hmin, opt.size_factor * p.radius);
-  if (opt.mesh_size > 0.0) {
-    gmsh::option::setNumber("Mesh.MeshSizeMin", opt.mesh_size);
-    gmsh::option::setNumber("Mesh.MeshSizeMax", opt.mesh_size);
-  } else {
-    if (!(opt.size_factor > 0.0)) throw_usage_error("fem: size_factor must be > 0 when mesh_size is not set");
-    gmsh::option::setNumber("Mesh.MeshSizeMin", 0.0);
-    gmsh::option::setNumber("Mesh.MeshSizeMax", 1e22);
+  if (!detail::set_size_bounds(opt.mesh_size, opt.size_factor)) {
     const Geometry* geo = &g;
     const Network* nw = &net;
     const double factor = opt.size_factor;

@@ -41,6 +41,11 @@ class GmshModel {
 void tag_groups_and_set_options(int volume, const char* volume_name, const std::vector<BoundaryGroup>& groups,
                                 const gmsh::vectorpair& surfs, const std::vector<int>& surf_group, int algorithm3d);
 
+/// Mesh size bounds: `mesh_size` everywhere when it is > 0 (returns true); otherwise open
+/// bounds for a size callback of `size_factor` × the local radius (returns false).
+/// @throws flowire::Error (usage) when neither is positive.
+bool set_size_bounds(double mesh_size, double size_factor);
+
 /// Second-order tetrahedra of the current model (one thread), written to `opt.save_msh`.
 void generate(const MeshOptions& opt);
 
