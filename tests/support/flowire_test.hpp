@@ -41,9 +41,10 @@ inline std::filesystem::path shared_dir() {
   return FLOWIRE_SHARED_DIR;
 }
 
-/// A scratch directory for a test, emptied first.
+/// A scratch directory for a test, emptied first. It lives in the build tree, so two builds
+/// (two clones, two worktrees) running their tests at once never share one.
 inline std::filesystem::path scratch_dir(std::string_view name) {
-  auto p = std::filesystem::temp_directory_path() / "flowire-tests" / std::string(name);
+  auto p = std::filesystem::path(FLOWIRE_BINARY_DIR) / "test-scratch" / std::string(name);
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   return p;
