@@ -42,11 +42,17 @@ void VesselForces::ensure_size(int n) {
     cur_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
     lag_normal_force_.resize(static_cast<size_t>(n), 0.0);
     lag_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
-    surf_tri_.resize(static_cast<size_t>(n), -1);
+    surf_near_.resize(static_cast<size_t>(n));
     surf_d_.resize(static_cast<size_t>(n), 0.0);
     surf_x_.resize(static_cast<size_t>(n), Vec3::Zero());
-    surf_open_.resize(static_cast<size_t>(n), 1);
+    surf_known_.resize(static_cast<size_t>(n), 0);
   }
+}
+
+bool VesselForces::deep_inside(size_t k, const Vec3& x, double a) const {
+  // The smoothed distance d_τ is 1-Lipschitz and has the sign of d: below −a at the last
+  // query point, it stays below −a + |x − x_last| at x, where d ≤ d_τ (inside).
+  return surf_known_[k] != 0 && surf_d_[k] + (x - surf_x_[k]).norm() + a < 0.0;
 }
 
 bool VesselForces::surface_wall(int i, const Vec3& x, double a, double* d, Vec3* n, Mat3* H) {
@@ -54,12 +60,11 @@ bool VesselForces::surface_wall(int i, const Vec3& x, double a, double* d, Vec3*
   // The signed distance is 1-Lipschitz (beyond an open end too: there it is minus the
   // distance to the rim; it flips sign only outside the wall, past the rim): a vertex that
   // was deeper than its radius plus the distance it moved since cannot touch the wall now.
-  if (surf_tri_[k] >= 0 && surf_d_[k] + (x - surf_x_[k]).norm() + a < 0.0) return false;
-  const auto q = surface_->smooth_distance(x, smoothing_, surf_tri_[k], H);
-  surf_tri_[k] = q.triangle;
+  if (deep_inside(k, x, a)) return false;
+  const auto q = surface_->smooth_distance(x, smoothing_, surf_near_[k], surf_margin_, H);
   surf_d_[k] = q.distance;
   surf_x_[k] = x;
-  surf_open_[k] = q.open ? 1 : 0;
+  surf_known_[k] = 1;
   *d = q.distance;
   *n = q.gradient;
   return true;
@@ -220,6 +225,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
 }
 
 void VesselForces::end_step(const rod::RodView& rod) {
+  const auto t0 = Clock::now();
   const int free = std::min(rod.first_clamped_vertex, rod.vertex_count());
   ensure_size(rod.vertex_count());
   lagged_ = contact_.enabled;
@@ -235,14 +241,17 @@ void VesselForces::end_step(const rod::RodView& rod) {
     if (surface_) {
       // The friction's normal force from the contact's own (smoothed) distance; the exact
       // distance measures how far outside the wire is.
-      const auto q = surface_->smooth_distance(rod.position(i), smoothing_, surf_tri_[k]);
-      surf_tri_[k] = q.triangle, surf_d_[k] = q.distance, surf_x_[k] = rod.position(i), surf_open_[k] = q.open;
+      // A vertex deeper than its radius (bounded from its last query) has no normal force,
+      // and its distance, below −a, cannot raise the maxima recorded below (both ≥ 0).
+      if (deep_inside(k, rod.position(i), wire_radius_)) continue;
+      const auto q = surface_->smooth_distance(rod.position(i), smoothing_, surf_near_[k], surf_margin_);
+      surf_d_[k] = q.distance, surf_x_[k] = rod.position(i), surf_known_[k] = 1;
       nrm = q.gradient;
       if (q.distance + wire_radius_ > 0.0) {
         lag_normal_force_[k] = contact_.stiffness * rod.cell_weight(i) * (q.distance + wire_radius_);
         lag_normal_[k] = nrm;
       }
-      d = surface_->distance(rod.position(i), q.triangle).distance;
+      d = q.exact;
       // The wire passes the open inlet near the entry: measured from entry_margin on.
       if (!rod.arc_length.empty() && rod.arc_length[k] < entry_margin_) continue;
     } else {
@@ -270,12 +279,15 @@ void VesselForces::end_step(const rod::RodView& rod) {
     }
     stats_.max_penetration = std::max(stats_.max_penetration, d + wire_radius_);
   }
+  // The step's wall distances for friction and for the outside check are contact work too.
+  stats_.seconds_contact += since(t0);
 }
 
 void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
   const int n = rod.vertex_count();
   remap_segments_.assign(segment_.begin(), segment_.end());
-  remap_tri_.assign(surf_tri_.begin(), surf_tri_.end());
+  remap_surf_near_.swap(surf_near_);
+  surf_near_.resize(remap_surf_near_.size());
   remap_near_.swap(near_);
   near_.resize(remap_near_.size());
   ensure_size(n);
@@ -283,8 +295,12 @@ void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
     const int k = source[static_cast<size_t>(i)];
     const bool kept = k >= 0 && k < static_cast<int>(remap_segments_.size());
     segment_[static_cast<size_t>(i)] = kept ? remap_segments_[static_cast<size_t>(k)] : -1;
-    surf_tri_[static_cast<size_t>(i)] = kept && k < static_cast<int>(remap_tri_.size()) ? remap_tri_[static_cast<size_t>(k)] : -1;
-    surf_open_[static_cast<size_t>(i)] = 1;  // no bound carried over: queried afresh
+    // A neighbourhood is valid for any point within its margin, whichever vertex made it.
+    auto& sn = surf_near_[static_cast<size_t>(i)];
+    if (kept && k < static_cast<int>(remap_surf_near_.size()))
+      sn = remap_surf_near_[static_cast<size_t>(k)];  // within capacity after the first remaps
+    else
+      sn.clear();
     auto& nb = near_[static_cast<size_t>(i)];
     if (kept && k < static_cast<int>(remap_near_.size()))
       nb = remap_near_[static_cast<size_t>(k)];  // within capacity after the first remaps

@@ -88,3 +88,46 @@ TEST(SurfaceContact, SmoothedDistanceIsBoundedByTheExactOneAndContinuousAcrossFa
   EXPECT_GT(max_jump_exact, 0.15);   // one face normal to the next (the rings are staggered)
   EXPECT_LT(max_jump_smooth, 0.02);  // over a step of 2π/16/2000 rad
 }
+
+TEST(SurfaceContact, KeptNeighbourhoodAnswersAsAFreshQueryAlongAWanderingPath) {
+  // A vertex's kept triangles (SurfaceNeighbourhood) must give the answer of a query that
+  // walks the whole hierarchy, whether the point barely moves (Newton iterates), moves within
+  // the margin, or jumps beyond it (rebuild) — on the faceted tube and at the open ends.
+  const double R = 3e-3, tau = 0.1e-3, margin = 0.3e-3;
+  const auto s = faceted_tube(16, 20, R, 40e-3);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> step(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  vessels::SurfaceNeighbourhood near[2];  // one per smoothing width
+  Vec3 x(R - 0.4e-3, 0.0, 0.0);
+  int rebuilt = 0, reused = 0;
+  Vec3 last_centre = Vec3::Constant(1e9);
+  for (int t = 0; t < 3000; ++t) {
+    // Mostly small moves, sometimes one past the margin; kept inside radius ≈ R and |z| < 22 mm
+    // (beyond the open ends at ±20 mm too).
+    const double scale = unit(rng) < 0.1 ? 1.5e-3 : (unit(rng) < 0.5 ? 1e-6 : 0.1e-3);
+    x += scale * Vec3(step(rng), step(rng), step(rng));
+    const double rho = std::hypot(x.x(), x.y());
+    if (rho > R + 0.3e-3) x.head<2>() *= (R + 0.3e-3) / rho;
+    x.z() = std::clamp(x.z(), -22e-3, 22e-3);
+    for (int k = 0; k < 2; ++k) {
+      const double w = k == 0 ? tau : 0.0;
+      Eigen::Matrix3d H_kept, H_fresh;
+      const auto kept = s.smooth_distance(x, w, near[k], margin, &H_kept);
+      const auto fresh = s.smooth_distance(x, w, -1, &H_fresh);
+      ASSERT_EQ(kept.triangle, fresh.triangle) << "step " << t;
+      EXPECT_NEAR(kept.distance, fresh.distance, 1e-15) << "step " << t;
+      EXPECT_NEAR(kept.exact, fresh.exact, 1e-15);
+      EXPECT_EQ(kept.open, fresh.open);
+      EXPECT_LT((kept.gradient - fresh.gradient).norm(), 1e-12);
+      EXPECT_LT((H_kept - H_fresh).norm(), 1e-9 * (1.0 + H_fresh.norm()));
+      // The exact part agrees with checking every triangle.
+      EXPECT_NEAR(kept.exact, s.distance_brute_force(x).distance, 1e-15);
+    }
+    ((near[0].centre - last_centre).norm() > 0.0 ? rebuilt : reused) += 1;
+    last_centre = near[0].centre;
+  }
+  // Both paths were taken.
+  EXPECT_GT(rebuilt, 100) << reused;
+  EXPECT_GT(reused, 100);
+}

@@ -390,6 +390,7 @@ SurfaceDistance LumenSurface::finish(const Vec3& x, int f, const Vec3& c, Featur
   double s = e.dot(N) > 0.0 ? 1.0 : -1.0;
   if (r.open) s = -1.0;  // beyond an open end: not outside
   r.distance = s * u;
+  r.exact = r.distance;
   r.gradient = u > 0.0 ? Vec3(s * e / u) : face_normal_[static_cast<size_t>(f)];
   if (hessian) {
     hessian->setZero();
@@ -483,32 +484,92 @@ SurfaceDistance LumenSurface::smooth_distance(const Vec3& x, double tau, int hin
     if (hessian) r = distance(x, r.triangle, hessian);
     return r;
   }
-  const double u_min = std::abs(r.distance);
-  const double s = r.distance < 0.0 ? -1.0 : 1.0;
   thread_local std::vector<int> cand;
-  gather(x, u_min + 10.0 * tau, cand);
-  // Soft minimum, shifted by u_min for range: u_τ = u_min − τ log Σ exp(−(u_f − u_min)/τ).
+  gather(x, std::abs(r.distance) + 10.0 * tau, cand);
+  return smooth_over(x, tau, cand, hessian);
+}
+
+SurfaceDistance LumenSurface::smooth_distance(const Vec3& x, double tau, SurfaceNeighbourhood& near, double margin,
+                                              Mat3* hessian) const {
+  const double t = std::max(tau, 0.0);
+  const double delta = (x - near.centre).norm();
+  if (near.margin < 0.0 || near.tau != t || delta > near.margin) {
+    const SurfaceDistance r = distance(x, near.nearest, nullptr);
+    near.centre = x;
+    near.margin = std::max(margin, 0.0);
+    near.tau = t;
+    near.u_centre = std::abs(r.distance);
+    const double radius = near.u_centre + 10.0 * t + 2.0 * near.margin;
+    thread_local std::vector<int> cand;
+    gather(x, radius, cand);
+    near.triangles.clear();
+    near.reach.clear();
+    for (int f : cand) {
+      Vec3 c;
+      Feature feat;
+      int local;
+      const double u = std::sqrt(closest_on(f, x, c, feat, local));
+      if (u <= radius) near.triangles.push_back(f), near.reach.push_back(u);
+    }
+    return smooth_distance(x, tau, near, margin, hessian);  // delta = 0 now
+  }
+  // Those that can matter at x (see SurfaceNeighbourhood); the slack covers rounding.
+  const double bound = (near.u_centre + 10.0 * t + 2.0 * delta) * (1.0 + 1e-12) + 1e-15;
+  thread_local std::vector<int> cand;
+  cand.clear();
+  for (size_t i = 0; i < near.triangles.size(); ++i)
+    if (near.reach[i] <= bound) cand.push_back(near.triangles[i]);
+  SurfaceDistance r = smooth_over(x, t, cand, hessian);
+  near.nearest = r.triangle;
+  return r;
+}
+
+SurfaceDistance LumenSurface::smooth_over(const Vec3& x, double tau, std::span<const int> candidates,
+                                          Mat3* hessian) const {
+  struct Near {
+    double d2;
+    Vec3 c;
+    Feature feat;
+    int local, f;
+  };
+  if (candidates.empty()) return smooth_distance(x, tau, -1, hessian);  // cannot happen: they hold the nearest
+  thread_local std::vector<Near> near;
+  near.clear();
+  size_t best = 0;
+  for (int f : candidates) {
+    Near q;
+    q.f = f;
+    q.d2 = closest_on(f, x, q.c, q.feat, q.local);
+    // Ties (a shared edge or vertex): the lower index, as distance() decides them.
+    if (near.empty() || q.d2 < near[best].d2 || (q.d2 == near[best].d2 && f < near[best].f)) best = near.size();
+    near.push_back(q);
+  }
+  const Near& nb = near[best];
+  SurfaceDistance r = finish(x, nb.f, nb.c, nb.feat, nb.local, tau > 0.0 ? nullptr : hessian);
+  if (!(tau > 0.0)) return r;
+  const double u_min = std::sqrt(nb.d2);
+  const double s = r.distance < 0.0 ? -1.0 : 1.0;
+  // Soft minimum, shifted by u_min for range: u_τ = u_min − τ log Σ exp(−(u_f − u_min)/τ),
+  // over the triangles within 10τ of the nearest (the rest weigh less than e⁻¹⁰).
   double z = 0.0;
   Vec3 g = Vec3::Zero();
   Mat3 Hw = Mat3::Zero(), C = Mat3::Zero();
-  for (int f : cand) {
-    Vec3 c;
-    Feature feat;
-    int local;
-    const double u = std::sqrt(closest_on(f, x, c, feat, local));
+  const double cut = u_min + 10.0 * tau;
+  for (const Near& q : near) {
+    if (q.d2 > cut * cut) continue;
+    const double u = std::sqrt(q.d2);
     const double w = std::exp(-(u - u_min) / tau);
-    if (w < 1e-300) continue;
     z += w;
-    const Vec3 e = u > 0.0 ? Vec3((x - c) / u) : face_normal_[static_cast<size_t>(f)];
+    const Vec3 e = u > 0.0 ? Vec3((x - q.c) / u) : face_normal_[static_cast<size_t>(q.f)];
     g += w * e;
     if (hessian) {
       C += w * e * e.transpose();
-      if (u > 0.0 && feat != Feature::Face) {
+      if (u > 0.0 && q.feat != Feature::Face) {
         Mat3 P = Mat3::Identity() - e * e.transpose();
-        if (feat == Feature::Edge) {
-          const auto& t = tri_[static_cast<size_t>(f)];
-          const Vec3 tan = (v_[static_cast<size_t>(t[static_cast<size_t>((local + 1) % 3)])] -
-                            v_[static_cast<size_t>(t[static_cast<size_t>(local)])])
+        if (q.feat == Feature::Edge) {
+          const auto& t = tri_[static_cast<size_t>(q.f)];
+          const Vec3 tan = (v_[static_cast<size_t>(t[static_cast<size_t>((q.local + 1) % 3)])] -
+                            v_[static_cast<size_t>(t[static_cast<size_t>(q.local)])])
                                .normalized();
           P -= tan * tan.transpose();
         }

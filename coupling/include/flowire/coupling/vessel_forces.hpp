@@ -95,6 +95,10 @@ class VesselForces : public rod::ExternalForce {
     surface_ = surface;
     smoothing_ = smoothing;
     entry_margin_ = entry_margin;
+    // A vertex's triangles are gathered again once it has moved a wire radius (or τ) away:
+    // wider margins list more triangles per rebuild than they save in rebuilds (measured
+    // on examples/real/feelpp_arch, 0.5–4 radii).
+    surf_margin_ = std::max(wire_radius_, smoothing);
   }
   /// @brief The entry as an introducer sheath: a wire vertex within @p reach of the entry
   /// axis may not come back out behind the entry (point @p p, unit direction @p t into the
@@ -109,7 +113,7 @@ class VesselForces : public rod::ExternalForce {
 
  private:
   void ensure_size(int n);
-  std::vector<int> remap_segments_, remap_tri_;
+  std::vector<int> remap_segments_;
   std::vector<vessels::Neighbourhood> remap_near_;
   std::vector<vessels::Location> location_;     ///< (vertices) at the last evaluation
   std::vector<vessels::Neighbourhood> near_;    ///< (vertices) segments near each vertex, kept across steps
@@ -131,10 +135,14 @@ class VesselForces : public rod::ExternalForce {
   const vessels::LumenSurface* surface_ = nullptr;
   double entry_margin_ = 0.0;
   double smoothing_ = 0.0;
-  std::vector<int> surf_tri_;           ///< (vertices) closest triangle at the last query (hint)
+  double surf_margin_ = 0.0;            ///< margin of the vertices' surface neighbourhoods [m]
+  std::vector<vessels::SurfaceNeighbourhood> surf_near_;  ///< (vertices) triangles near each vertex, kept across steps
+  std::vector<vessels::SurfaceNeighbourhood> remap_surf_near_;
   std::vector<double> surf_d_;          ///< (vertices) signed distance at the last query
   std::vector<vessels::Vec3> surf_x_;   ///< (vertices) where it was made
-  std::vector<char> surf_open_;         ///< (vertices) beyond an open end at the last query
+  std::vector<char> surf_known_;        ///< (vertices) surf_d_ and surf_x_ hold a query
+  /// Vertex k at x is deeper than @p a by the bound from its last query.
+  [[nodiscard]] bool deep_inside(size_t k, const vessels::Vec3& x, double a) const;
   vessels::Vec3 intro_point_ = vessels::Vec3::Zero(), intro_dir_ = vessels::Vec3::Zero();
   double intro_reach_ = 0.0;            ///< 0: no introducer
   std::uint64_t intro_contacts_ = 0;

@@ -24,6 +24,7 @@
 /// so that the normals point out of the lumen (see the constructor).
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,25 @@ struct SurfaceDistance {
   int triangle = -1;              ///< triangle holding it
   Feature feature = Feature::Face;
   bool open = false;              ///< beyond an open end (closest feature on a boundary edge)
+  double exact = 0.0;             ///< the unsmoothed signed distance d (smooth_distance's d_τ is `distance`)
+};
+
+/// @brief The triangles near a moving point, kept from one query to the next (one per wire
+/// vertex). Built at a centre c whose nearest triangle lies at u_c, it lists every triangle
+/// within u_c + 10τ + 2m of c, with their distances u_f(c). The distance is
+/// 1-Lipschitz: at a point x with δ = |x − c| ≤ m, u(x) ≤ u_c + δ, and a triangle within
+/// 10τ of x's nearest has u_f(c) ≤ u(x) + 10τ + δ ≤ u_c + 10τ + 2δ. A query at x checks
+/// only the listed triangles within that bound (a vertex that barely moved checks just the
+/// ones it needs) and walks no hierarchy; its answer is the one a fresh query gives.
+struct SurfaceNeighbourhood {
+  Vec3 centre = Vec3::Zero();
+  double margin = -1.0;    ///< m [m]; < 0: empty, rebuilt at the next query
+  double tau = 0.0;        ///< the smoothing width it was built for
+  double u_centre = 0.0;   ///< u_c [m]
+  int nearest = -1;        ///< nearest triangle at the last query (a hint for the rebuild)
+  std::vector<int> triangles;   ///< gathered at the centre
+  std::vector<double> reach;    ///< their distances u_f(c) [m]
+  void clear() { margin = -1.0; }
 };
 
 struct SurfaceCounts {
@@ -108,6 +128,13 @@ class LumenSurface {
   /// τ ≤ 0 gives distance().
   SurfaceDistance smooth_distance(const Vec3& x, double tau, int hint = -1, Eigen::Matrix3d* hessian = nullptr) const;
 
+  /// @brief smooth_distance() over the triangles of @p near, rebuilt (with margin @p margin)
+  /// when x has left it or τ changed: the same answer, without a walk of the hierarchy for
+  /// most queries of a vertex that moves little between them (Newton iterates, line-search
+  /// trials, steps). τ ≤ 0 gives distance().
+  SurfaceDistance smooth_distance(const Vec3& x, double tau, SurfaceNeighbourhood& near, double margin,
+                                  Eigen::Matrix3d* hessian = nullptr) const;
+
   /// @brief Reference answer by checking every triangle (tests and benchmarks).
   SurfaceDistance distance_brute_force(const Vec3& x) const;
 
@@ -133,6 +160,10 @@ class LumenSurface {
   int nearest(const Vec3& x, int hint, Vec3& c, Feature& feat, int& local) const;
   double closest_on(int f, const Vec3& x, Vec3& c, Feature& feat, int& local) const;
   SurfaceDistance finish(const Vec3& x, int f, const Vec3& c, Feature feat, int local, Eigen::Matrix3d* hessian) const;
+  /// The smoothed distance over candidate triangles that hold the nearest one and every one
+  /// within 10τ of it.
+  SurfaceDistance smooth_over(const Vec3& x, double tau, std::span<const int> candidates,
+                              Eigen::Matrix3d* hessian) const;
 
   std::vector<Vec3> v_;
   std::vector<std::array<int, 3>> tri_;
