@@ -30,10 +30,9 @@ void GeneralizedAlpha::step(State& s, double time) {
   sys_.update_time(t);
   if (!sys_.nonlinear()) {
     // ẏ at α_m for the predictor: ẏ_n + α_m((1 − 1/γ)ẏ_n − ẏ_n) = (1 − α_m/γ) ẏ_n; y at α_f is y_n.
-    ydam_ = s.yd * (1.0 - am_ / gamma_);
-    sys_.residual(s.y, ydam_, f_);
-    s.yd *= predict;
-    if (f_.cwiseAbs().maxCoeff() >= atol_) {
+    if (sys_.residual(s.y, s.yd, 1.0 - am_ / gamma_, f_) < atol_) {
+      s.yd *= predict;
+    } else {
       sys_.factorize(am_, a_y);
       sys_.solve(f_);  // the correction is −f_
       const double c = gamma_ * dt_;
@@ -42,7 +41,7 @@ void GeneralizedAlpha::step(State& s, double time) {
       const double* x = f_.data();
       double check = 0.0;
       for (Eigen::Index i = 0; i < f_.size(); ++i) {
-        yd[i] -= x[i];
+        yd[i] = predict * yd[i] - x[i];
         y[i] -= c * x[i];
         check += x[i];
       }

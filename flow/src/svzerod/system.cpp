@@ -4,6 +4,8 @@
 #include <klu.h>
 
 #include <algorithm>
+#include <cassert>
+#include <cmath>
 
 #include "flowire/common/error.hpp"
 #include "flowire/flow/svzerod/block.hpp"
@@ -25,8 +27,14 @@ void Assembler::set_matrix(std::vector<double>& values, int row, int col, double
   }
 }
 
-void Assembler::e(int row, int col, double v) { set_matrix(s_.e_, row, col, v); }
-void Assembler::f(int row, int col, double v) { set_matrix(s_.f_, row, col, v); }
+void Assembler::e(int row, int col, double v) {
+  set_matrix(s_.e_, row, col, v);
+  s_.compact_stale_ = s_.compact_stale_ || s_.changed_;
+}
+void Assembler::f(int row, int col, double v) {
+  set_matrix(s_.f_, row, col, v);
+  s_.compact_stale_ = s_.compact_stale_ || s_.changed_;
+}
 void Assembler::dy(int row, int col, double v) { set_matrix(s_.dy_, row, col, v); }
 void Assembler::dyd(int row, int col, double v) { set_matrix(s_.dyd_, row, col, v); }
 void Assembler::c(int row, double v) {
@@ -121,19 +129,50 @@ void System::set_phase(bool steady, double t) {
   changed_ = true;
   if (klu_->numeric) klu_free_numeric(&klu_->numeric, &klu_->common);  // new phase: pivot afresh
   for (Block* b : blocks_) b->assemble(asm_, t);
+  compact();
 }
 
 void System::update_time(double t) {
   for (Block* b : time_blocks_) b->assemble(asm_, t);
+  compact();
 }
 
-void System::update_block(const Block& b, double t) { b.assemble(asm_, t); }
+void System::update_block(const Block& b, double t) {
+  b.assemble(asm_, t);
+  compact();
+}
+
+void System::compact() {
+  if (!compact_stale_) return;
+  // E and F share the union pattern, but each holds values on part of it only (E: the
+  // capacitors and inductors, about a quarter): the residual runs over each one's nonzeros.
+  auto build = [&](const std::vector<double>& v, Compact& m) {
+    m.rows.clear();
+    m.cols.clear();
+    m.values.clear();
+    for (int j = 0; j < n_; ++j)
+      for (int k = colptr_[static_cast<size_t>(j)]; k < colptr_[static_cast<size_t>(j) + 1]; ++k)
+        if (v[static_cast<size_t>(k)] != 0.0) {
+          m.rows.push_back(rows_[static_cast<size_t>(k)]);
+          m.cols.push_back(j);
+          m.values.push_back(v[static_cast<size_t>(k)]);
+        }
+  };
+  build(e_, e_compact_);
+  build(f_, f_compact_);
+  compact_stale_ = false;
+}
 
 void System::update_solution(double t, const Eigen::VectorXd& y, const Eigen::VectorXd& yd) {
   for (Block* b : nonlinear_blocks_) b->assemble_nonlinear(asm_, t, y, yd);
 }
 
 void System::residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, Eigen::VectorXd& f) const {
+  residual(y, yd, 1.0, f);
+}
+
+double System::residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, double yd_scale, Eigen::VectorXd& f) const {
+  assert(!compact_stale_);
   double* out = f.data();
   const double* c = c_.data();
   if (nonlinear()) {
@@ -141,14 +180,16 @@ void System::residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, Eigen
   } else {
     std::copy(c, c + n_, out);
   }
-  const int* cp = colptr_.data();
-  const int* ri = rows_.data();
-  const double* ev = e_.data();
-  const double* fv = f_.data();
-  for (int j = 0; j < n_; ++j) {
-    const double a = yd[j], b = y[j];
-    for (int k = cp[j]; k < cp[j + 1]; ++k) out[ri[k]] += ev[k] * a + fv[k] * b;
-  }
+  auto add = [&](const Compact& m, const double* x, double scale) {
+    const int* ri = m.rows.data();
+    const int* ci = m.cols.data();
+    const double* v = m.values.data();
+    const size_t nnz = m.values.size();
+    for (size_t k = 0; k < nnz; ++k) out[ri[k]] += scale * (v[k] * x[ci[k]]);
+  };
+  add(e_compact_, yd.data(), yd_scale);
+  add(f_compact_, y.data(), 1.0);
+  return f.cwiseAbs().maxCoeff();
 }
 
 void System::factorize(double a_yd, double a_y) {

@@ -79,6 +79,8 @@ class System {
   void update_solution(double t, const Eigen::VectorXd& y, const Eigen::VectorXd& yd);
   /// @brief \f$ f = E\dot y + F y + c + c_{nl} \f$ (no allocation).
   void residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, Eigen::VectorXd& f) const;
+  /// @brief \f$ f = E(s\,\dot y) + F y + c + c_{nl} \f$; returns \f$ \|f\|_\infty \f$.
+  double residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, double yd_scale, Eigen::VectorXd& f) const;
   /// @brief Factorize \f$ J = a_{\dot y}(E + D_{\dot y}) + a_y(F + D_y) \f$ unless it is unchanged
   /// since the last factorization. @throws flowire::Error (numerical) when J is singular.
   void factorize(double a_yd, double a_y);
@@ -95,6 +97,8 @@ class System {
  private:
   friend class Assembler;
   [[nodiscard]] int slot(int row, int col) const;
+  /// Rebuild E's and F's nonzero lists after their values changed.
+  void compact();
 
   std::vector<Block*> blocks_, time_blocks_, nonlinear_blocks_;
   int n_;
@@ -104,6 +108,12 @@ class System {
   std::vector<int> colptr_, rows_;
   std::vector<double> e_, f_, dy_, dyd_, j_;
   std::vector<double> c_, c_nl_;
+  struct Compact {
+    std::vector<int> rows, cols;
+    std::vector<double> values;
+  };
+  Compact e_compact_, f_compact_;  ///< E's and F's nonzeros (by column), for the residual
+  bool compact_stale_ = true;
   bool recording_ = false;
   std::vector<std::pair<int, int>> recorded_;
   bool changed_ = true;
