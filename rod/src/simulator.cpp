@@ -73,6 +73,11 @@ struct RodSimulator::Work {
   std::vector<double> ext_spin_k;  // (n_edges) −∂τ/∂ω / h
   // step-start copy (for velocities and rollback)
   std::vector<Vec3> x0, v0;
+  // The state an implicit Euler step ended in and its step (for the next step's predictor).
+  std::vector<Vec3> x_end;
+  double h_end = 0.0;
+  std::vector<Vec3> v_guess;         // (vertices) velocity of the initial guess
+  std::vector<double> omega_guess;   // (edges)
   std::vector<double> theta0, omega0, twist0;
   std::vector<EdgeFrame> frame0;
   // accepted iterate during a line search
@@ -117,11 +122,11 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   w.ext_k.reserve(nvmax);
   w.edges.reserve(nvmax);
   w.acc.reserve(nvmax);
-  for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz, &w.tangent}) v->reserve(nvmax);
+  for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz, &w.tangent, &w.x_end, &w.v_guess}) v->reserve(nvmax);
   w.spin.reserve(nvmax);
   w.ext_spin_k.reserve(nvmax);
   for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.thetab, &w.twistb, &w.tz, &w.ru, &w.rtau,
-                  &w.rcell, &w.rtheta, &w.romega, &w.rtwist, &w.psi, &w.unew})
+                  &w.rcell, &w.rtheta, &w.romega, &w.rtwist, &w.psi, &w.unew, &w.omega_guess})
     v->reserve(nvmax);
   for (auto* v : {&w.rx, &w.rv, &w.rT}) v->reserve(nvmax);
   w.rframe.reserve(nvmax);
@@ -930,6 +935,12 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     return rep;
   }
   rep.status = SolveStatus::MaxIterations;
+  // Chord iterations: once a full Newton step has cut the residual a hundredfold (the
+  // quadratic regime, where the iterate is already close), the next iteration solves with
+  // the factorization it used instead of assembling and factorizing a new matrix. Its
+  // contraction is |H⁻¹ΔH| = O(|Δq|), small there; when it does not at least cut the residual
+  // tenfold with a full step, the iteration after it is a Newton one again.
+  bool chord = false;
   for (int it = 0; it < max_it; ++it) {
     rep.residual = residual_norm();
     if (rep.residual <= rep.tolerance) {
@@ -937,7 +948,19 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       break;
     }
     rep.newton_iterations = it + 1;
-    if (!matrix_current) {
+    const bool chord_step = chord;
+    if (chord_step) {
+      t_phase = Clock::now();
+      auto rhs = w.rhs.head(nd);
+      rhs = -w.grad.head(nd);
+      rhs.tail(nd - first_fixed).setZero();
+      rhs.head(first_free).setZero();
+      w.dq.head(nd) = rhs;
+      w.ldlt.solve_in_place(w.dq.head(nd));
+      ++rep.chord_iterations;
+      phase_seconds_.factorize += seconds(t_phase);
+    }
+    if (!chord_step && !matrix_current) {
       // Same configuration as the accepted trial: its loads and external forces are kept.
       t_phase = Clock::now();
       phi = assemble(mode, h, load_scale, Need::Matrix, false, /*reuse_loads=*/true);
@@ -945,6 +968,8 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       phase_seconds_.assembly += seconds(t_phase);
     }
     t_phase = Clock::now();
+    bool ok = chord_step;
+    if (!chord_step) {
     // Linear solve on the free unknowns: the exact Hessian first; if it is indefinite
     // (strongly bent or compressed states), the Gauss–Newton matrix of the same residual,
     // which is positive semi-definite, with a modified factorization as last resort.
@@ -952,7 +977,6 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
     rhs = -w.grad.head(nd);
     rhs.tail(nd - first_fixed).setZero();
     rhs.head(first_free).setZero();
-    bool ok = false;
     for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
       if (attempt == 1) {
         assemble(mode, h, load_scale, Need::Matrix, /*psd=*/true, /*reuse_loads=*/true);
@@ -989,6 +1013,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       }
     }
     phase_seconds_.factorize += seconds(t_phase);  // (with the rare positive semi-definite reassembly)
+    }
     if (!ok || !finite(w.dq.head(nd))) {
       rep.status = SolveStatus::SingularMatrix;
       break;
@@ -1107,6 +1132,9 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       rep.status = SolveStatus::Converged;
       break;
     }
+    // The banded factorization is the one kept (the sparse path refactorizes each time).
+    chord = settings_.chord_iterations && settings_.linear_solver == LinearSolver::Banded && alpha == 1.0 &&
+            rep.residual <= (chord_step ? 0.1 : 0.01) * previous;
     // Round-off plateau: a full Newton step that no longer reduces a residual already
     // within 100× the tolerance.
     if (alpha == 1.0 && rep.residual <= 100.0 * rep.tolerance && rep.residual > 0.5 * previous) {
@@ -1177,6 +1205,7 @@ StepReport RodSimulator::step_subdivided(double dt, int depth) {
       const StepReport r = step_subdivided(0.5 * dt, depth + 1);
       total.status = r.status;
       total.newton_iterations += r.newton_iterations;
+      total.chord_iterations += r.chord_iterations;
       total.line_search_cuts += r.line_search_cuts;
       total.regularizations += r.regularizations;
       total.residual = r.residual;
@@ -1242,10 +1271,26 @@ double clamp_inserted(double L, const RodModel& m, bool& clamped) {
 }
 }  // namespace
 
-void RodSimulator::begin_step(double h) {
+void RodSimulator::begin_step(double h, bool extrapolate) {
   auto& w = *work_;
   auto& s = state_;
   const int nv = s.vertex_count();
+  // Newton's initial guess. Inertial: q + h q̇. With `extrapolate` (implicit Euler), where the
+  // vertex is where the last step of the same h left it (not moved since: not resampled, not
+  // set from outside; feeding keeps the indices from the tip), also + h (q̇ − q̇_prev), the
+  // last step's acceleration held: the guess is then O(h³) from the solution instead of
+  // O(h²), and Newton's first step usually lands within the tolerance (one factorization a
+  // step). w.v0 still holds the last step's starting velocities here.
+  const bool history = extrapolate && h == w.h_end;
+  const int nk = history ? std::min({nv, static_cast<int>(w.x_end.size()), static_cast<int>(w.v0.size())}) : 0;
+  auto held = [&](int k) { return k < nk && s.x[k] == w.x_end[k]; };
+  w.v_guess.resize(nv);
+  w.omega_guess.resize(std::max(nv - 1, 0));
+  for (int k = 0; k < nv; ++k) {
+    w.qhat.segment<3>(4 * k) = s.x[k] + h * s.v[k];  // the inertial prediction (the merit's q̂)
+    w.v_guess[k] = held(k) ? Vec3(2.0 * s.v[k] - w.v0[k]) : s.v[k];
+    if (k < nv - 1) w.omega_guess[k] = held(k) && held(k + 1) ? 2.0 * s.omega[k] - w.omega0[k] : s.omega[k];
+  }
   w.x0 = s.x;
   w.v0 = s.v;
   w.theta0 = s.theta;
@@ -1254,7 +1299,6 @@ void RodSimulator::begin_step(double h) {
   w.twist0 = s.ref_twist;
   for (int k = 0; k < nv; ++k) {
     w.q0.segment<3>(4 * k) = s.x[k];
-    w.qhat.segment<3>(4 * k) = s.x[k] + h * s.v[k];
     w.mass.segment<3>(4 * k).setConstant(disc_.mass[k]);
     w.damp.segment<3>(4 * k).setConstant(model_.damping * disc_.cell_length[k]);
     if (k < nv - 1) {
@@ -1265,8 +1309,8 @@ void RodSimulator::begin_step(double h) {
     }
   }
   for (int k = 0; k < nv; ++k) {
-    s.x[k] += h * s.v[k];
-    if (k < nv - 1) s.theta[k] += h * s.omega[k];
+    s.x[k] += h * w.v_guess[k];
+    if (k < nv - 1) s.theta[k] += h * w.omega_guess[k];
   }
 }
 
@@ -1285,7 +1329,7 @@ StepReport RodSimulator::step_euler(double dt) {
   const double angle_new = target_angle_ + rotation_speed_ * dt;
 
   // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
-  begin_step(dt);
+  begin_step(dt, /*extrapolate=*/true);
   const int nv = s.vertex_count();
   predict_feed(L_new - s.inserted_length, dt);
   set_prescribed(L_new, angle_new, s.x, s.theta);
@@ -1311,6 +1355,9 @@ StepReport RodSimulator::step_euler(double dt) {
   }
   target_angle_ = angle_new;
   s.base_angle = angle_new;
+  // Where this step left the vertices, for the next step's predictor.
+  w.x_end = s.x;
+  w.h_end = dt;
   compute_base_reaction();
   return rep;
 }
@@ -1333,7 +1380,7 @@ StepReport RodSimulator::step_midpoint(double dt) {
   const double angle_half = target_angle_ + rotation_speed_ * hh;
   const double angle_new = target_angle_ + rotation_speed_ * dt;
 
-  begin_step(hh);
+  begin_step(hh, /*extrapolate=*/false);
   const int nv = s.vertex_count();
   predict_feed(L_half - L_start, hh);
   set_prescribed(L_half, angle_half, s.x, s.theta);
@@ -1388,6 +1435,7 @@ StepReport RodSimulator::solve_static() {
     const StepReport again = solve_static_once();
     r.status = again.status;
     r.newton_iterations += again.newton_iterations;
+    r.chord_iterations += again.chord_iterations;
     r.line_search_cuts += again.line_search_cuts;
     r.regularizations += again.regularizations;
     r.residual = again.residual;
@@ -1409,6 +1457,7 @@ StepReport RodSimulator::solve_static_once() {
   for (int i = 1; i <= steps; ++i) {
     const StepReport r = newton(Mode::Static, 1.0, static_cast<double>(i) / steps);
     total.newton_iterations += r.newton_iterations;
+    total.chord_iterations += r.chord_iterations;
     total.line_search_cuts += r.line_search_cuts;
     total.regularizations += r.regularizations;
     total.residual = r.residual;
