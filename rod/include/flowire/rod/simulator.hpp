@@ -137,11 +137,14 @@ struct SolverSettings {
   /// A step whose solve fails is retaken from its start as two half steps, at most this
   /// many levels deep (dt/2^n); 0 keeps a failed step's last iterate at once.
   int max_subdivisions = 3;
-  /// After a full Newton step that cut the residual a hundredfold, the next iteration reuses
+  /// After a full Newton step that cut the residual a thousandfold, the next iteration reuses
   /// that step's factorization (a chord step) instead of a new matrix; it falls back to Newton
   /// when the chord step does not cut the residual tenfold. Same converged states (the same
   /// tolerances), less work per step.
   bool chord_iterations = true;
+  /// Implicit Euler's Newton starts from q + h q̇ + h (q̇ − q̇_prev) (the last step's
+  /// acceleration held) where the vertex has not moved since that step; else q + h q̇.
+  bool second_order_guess = true;
 };
 
 /// @brief One sample of the tip trace.
