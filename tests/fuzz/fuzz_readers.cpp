@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
@@ -38,8 +39,11 @@ const std::filesystem::path& work_dir() {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  for (const char* ext : {".vtp", ".vtk", ".yaml", ".in"}) {
-    const auto path = (work_dir() / (std::string("input") + ext)).string();
+  // Each reader by its first extension, and one extension no reader claims (content sniffing).
+  std::vector<std::string> exts = {".dat"};
+  for (const auto& r : flowire::vessels::network_readers()) exts.emplace_back(r.extensions.front());
+  for (const auto& ext : exts) {
+    const auto path = (work_dir() / ("input" + ext)).string();
     {
       std::ofstream out(path, std::ios::binary | std::ios::trunc);
       out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));

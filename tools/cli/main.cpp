@@ -191,7 +191,7 @@ int main(int argc, char** argv) {
   double max_seg = 0;
   bool json = false;
   auto* info = network->add_subcommand("info", "print branches, nodes, segments, junctions, ends, loops, length, radii");
-  info->add_option("file", file, "network file (.vtp, .vtk, .yaml, .in)")->required();
+  info->add_option("file", file, "network file (" + flowire::vessels::network_extensions() + ")")->required();
   info->add_option("--length-unit", unit, "unit of the file's coordinates: m, cm, mm, um");
   info->add_option("--max-segment-length", max_seg, "split branches into segments no longer than this (m)");
   info->add_flag("--json", json, "print one JSON object");

@@ -24,8 +24,6 @@
 namespace flowire::vessels {
 namespace {
 
-enum class Format { Vtk, Yaml, OneD, Unknown };
-
 std::string lower(std::string s) {
   for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
@@ -39,30 +37,6 @@ std::string read_all(const std::string& path) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
-}
-
-Format sniff(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw_input_error(path, "is a directory, not a network file");
-  const auto ext = lower(std::filesystem::path(path).extension().string());
-  if (ext == ".vtp" || ext == ".vtk") return Format::Vtk;
-  if (ext == ".yaml" || ext == ".yml") return Format::Yaml;
-  if (ext == ".in") return Format::OneD;
-  // Unknown extension: look at the content.
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw_input_error(path, "cannot open the file for reading (does it exist?)");
-  std::string head(4096, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<size_t>(in.gcount()));
-  if (head.find("<VTKFile") != std::string::npos || head.rfind("# vtk DataFile", 0) == 0) return Format::Vtk;
-  if (head.find("branches:") != std::string::npos || head.find("segments:") != std::string::npos) return Format::Yaml;
-  if (head.find("NODE ") != std::string::npos && head.find("SEGMENT ") != std::string::npos) return Format::OneD;
-  return Format::Unknown;
-}
-
-[[noreturn]] void unknown_format(const std::string& path) {
-  throw_input_error(path, "unknown network format: expected .vtp/.vtk (VMTK, SimVascular or flowire centerlines), "
-                          ".yaml/.yml (flowire network) or .in (svOneDSolver)");
 }
 
 /// Factor from file units to metres. `declared`: the unit the file itself states, if any.
@@ -649,63 +623,106 @@ Network finish(Network net, const ReadOptions& opt, double factor, const std::st
   return net;
 }
 
+Centerlines vtk_centerlines(const std::string& path, const ReadOptions& opt) {
+  const auto pd = detail::read_vtk_polydata(path);
+  const bool own = detail::find_array(pd.field_data, "flowire_network") != nullptr;
+  const double f = length_factor(opt, own ? std::optional<std::string>("m") : std::nullopt, path);
+  auto c = detail::polydata_to_centerlines(pd, opt.merge_tolerance);
+  scale(c, f);
+  return c;
+}
+
+Network vtk_network(const std::string& path, const ReadOptions& opt) {
+  const auto pd = detail::read_vtk_polydata(path);
+  if (detail::find_array(pd.field_data, "flowire_network")) {
+    const double f = length_factor(opt, std::string("m"), path);
+    return finish(*detail::polydata_to_network(pd), opt, f, path);
+  }
+  const double f = length_factor(opt, std::nullopt, path);
+  auto c = detail::polydata_to_centerlines(pd, opt.merge_tolerance);
+  scale(c, f);
+  return finish(build_checked(c, opt.build), opt, f, path);
+}
+
+Centerlines yaml_file_centerlines(const std::string& path, const ReadOptions& opt) {
+  const auto file = load_yaml(path);
+  const double f = length_factor(opt, file.unit, path);
+  auto c = yaml_centerlines(path, file);
+  scale(c, f);
+  return c;
+}
+
+Network yaml_file_network(const std::string& path, const ReadOptions& opt) {
+  const auto file = load_yaml(path);
+  const double f = length_factor(opt, file.unit, path);
+  if (auto net = yaml_network(path, file, f)) return finish(std::move(*net), opt, f, path);
+  auto c = yaml_centerlines(path, file);
+  scale(c, f);
+  return finish(build_checked(c, opt.build), opt, f, path);
+}
+
+Centerlines deck_file_centerlines(const std::string& path, const ReadOptions& opt) {
+  const auto deck = parse_deck(path);
+  return deck_centerlines(path, deck, length_factor(opt, std::string("cm"), path));
+}
+
+Network deck_file_network(const std::string& path, const ReadOptions& opt) {
+  const auto deck = parse_deck(path);
+  const double f = length_factor(opt, std::string("cm"), path);
+  return finish(deck_network(path, deck, f, opt.build), opt, f, path);
+}
+
+bool vtk_head(std::string_view head) {
+  return head.find("<VTKFile") != std::string_view::npos || head.starts_with("# vtk DataFile");
+}
+bool yaml_head(std::string_view head) {
+  return head.find("branches:") != std::string_view::npos || head.find("segments:") != std::string_view::npos;
+}
+bool deck_head(std::string_view head) {
+  return head.find("NODE ") != std::string_view::npos && head.find("SEGMENT ") != std::string_view::npos;
+}
+
+/// The reader for `path`: by extension, else by the first 4 KiB of its content.
+const NetworkReader& reader_for(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw_input_error(path, "is a directory, not a network file");
+  const auto ext = lower(std::filesystem::path(path).extension().string());
+  for (const auto& r : network_readers())
+    for (const auto e : r.extensions)
+      if (ext == e) return r;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw_input_error(path, "cannot open the file for reading (does it exist?)");
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  for (const auto& r : network_readers())
+    if (r.recognises(head)) return r;
+  std::string known;
+  for (const auto& r : network_readers()) known += fmt::format("{}{} ({})", known.empty() ? "" : ", ", fmt::join(r.extensions, "/"), r.name);
+  throw_input_error(path, "unknown network format: expected " + known);
+}
+
 }  // namespace
 
-Centerlines read_centerlines(const std::string& path, const ReadOptions& opt) {
-  switch (sniff(path)) {
-    case Format::Vtk: {
-      const auto pd = detail::read_vtk_polydata(path);
-      const bool own = detail::find_array(pd.field_data, "flowire_network") != nullptr;
-      const double f = length_factor(opt, own ? std::optional<std::string>("m") : std::nullopt, path);
-      auto c = detail::polydata_to_centerlines(pd, opt.merge_tolerance);
-      scale(c, f);
-      return c;
-    }
-    case Format::Yaml: {
-      const auto file = load_yaml(path);
-      const double f = length_factor(opt, file.unit, path);
-      auto c = yaml_centerlines(path, file);
-      scale(c, f);
-      return c;
-    }
-    case Format::OneD: {
-      const auto deck = parse_deck(path);
-      return deck_centerlines(path, deck, length_factor(opt, std::string("cm"), path));
-    }
-    case Format::Unknown: break;
-  }
-  unknown_format(path);
+const std::vector<NetworkReader>& network_readers() {
+  static const std::vector<NetworkReader> readers = {
+      {"VMTK, SimVascular or flowire centerlines", {".vtp", ".vtk"}, vtk_head, vtk_centerlines, vtk_network},
+      {"flowire network", {".yaml", ".yml"}, yaml_head, yaml_file_centerlines, yaml_file_network},
+      {"svOneDSolver deck", {".in"}, deck_head, deck_file_centerlines, deck_file_network},
+  };
+  return readers;
 }
 
-Network read_network(const std::string& path, const ReadOptions& opt) {
-  switch (sniff(path)) {
-    case Format::Vtk: {
-      const auto pd = detail::read_vtk_polydata(path);
-      if (detail::find_array(pd.field_data, "flowire_network")) {
-        const double f = length_factor(opt, std::string("m"), path);
-        return finish(*detail::polydata_to_network(pd), opt, f, path);
-      }
-      const double f = length_factor(opt, std::nullopt, path);
-      auto c = detail::polydata_to_centerlines(pd, opt.merge_tolerance);
-      scale(c, f);
-      return finish(build_checked(c, opt.build), opt, f, path);
-    }
-    case Format::Yaml: {
-      const auto file = load_yaml(path);
-      const double f = length_factor(opt, file.unit, path);
-      if (auto net = yaml_network(path, file, f)) return finish(std::move(*net), opt, f, path);
-      auto c = yaml_centerlines(path, file);
-      scale(c, f);
-      return finish(build_checked(c, opt.build), opt, f, path);
-    }
-    case Format::OneD: {
-      const auto deck = parse_deck(path);
-      const double f = length_factor(opt, std::string("cm"), path);
-      return finish(deck_network(path, deck, f, opt.build), opt, f, path);
-    }
-    case Format::Unknown: break;
-  }
-  unknown_format(path);
+std::string network_extensions() {
+  std::vector<std::string_view> all;
+  for (const auto& r : network_readers()) all.insert(all.end(), r.extensions.begin(), r.extensions.end());
+  return fmt::format("{}", fmt::join(all, ", "));
 }
+
+Centerlines read_centerlines(const std::string& path, const ReadOptions& opt) {
+  return reader_for(path).centerlines(path, opt);
+}
+
+Network read_network(const std::string& path, const ReadOptions& opt) { return reader_for(path).network(path, opt); }
 
 }  // namespace flowire::vessels

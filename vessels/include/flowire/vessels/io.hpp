@@ -34,6 +34,7 @@
 /// or coordinate, empty or truncated file, duplicate points, self-loops, a network in several
 /// pieces) as one `flowire::Error` naming the file and the point, line or cell at fault.
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "flowire/vessels/network.hpp"
@@ -73,6 +74,21 @@ Centerlines read_centerlines(const std::string& path, const ReadOptions& options
 /// deck), split further only by `options.build`.
 /// @throws flowire::Error (input) naming the file and the place at fault.
 Network read_network(const std::string& path, const ReadOptions& options = {});
+
+/// @brief One network format: what read_centerlines() and read_network() dispatch on, and
+/// what every list of formats (error messages, the CLI's help, the fuzz target) is made from.
+struct NetworkReader {
+  std::string_view name;                         ///< what writes it, for messages
+  std::vector<std::string_view> extensions;      ///< lower case, with the dot
+  bool (*recognises)(std::string_view head);     ///< by the first 4 KiB, for other extensions
+  Centerlines (*centerlines)(const std::string& path, const ReadOptions& options);
+  Network (*network)(const std::string& path, const ReadOptions& options);
+};
+
+/// @brief The formats read, in the order they are tried.
+const std::vector<NetworkReader>& network_readers();
+/// @brief Their extensions, comma separated (".vtp, .vtk, ...").
+std::string network_extensions();
 
 /// @brief A named array attached to the nodes (point data) or segments (cell data) of a
 /// written network: `values.size() == count * components`, components 1 or 3.
