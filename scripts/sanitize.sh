@@ -37,7 +37,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 start=$SECONDS
 
 cmake --preset debug -B build-sanitize "${LAUNCHER[@]}" >/dev/null
-nice -n 10 cmake --build build-sanitize -j"$JOBS"
+nice -n "${NICE:-10}" cmake --build build-sanitize -j"$JOBS"
 # Under a virtual X server when there is one, so the VTK rendering tests run too.
 XR=()
 if command -v xvfb-run >/dev/null; then XR=(xvfb-run -a -s "-screen 0 1024x768x24"); fi

@@ -651,6 +651,13 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
     insertion_speed_ = c.number("insertion.speed");
     rotation_speed_ = c.number("insertion.rotation_speed");
   }
+  if (c.has("insertion.schedule")) {
+    for (const char* key : {"insertion.speed", "insertion.rotation_speed"})
+      if (c.values().at(key).where != "default")
+        throw_input_error(c.where(key), "give either insertion.schedule or insertion.speed and rotation_speed, not both");
+    if (!sim) throw_input_error(c.where("insertion.schedule"), "a schedule drives the wire: the scene has none");
+    schedule_ = std::make_unique<DriveSchedule>(DriveSchedule::read_csv(c.resolve_path(c.string("insertion.schedule"))));
+  }
 
   // The wire acts on the blood (occlusion.hpp): set before every flow evaluation from the
   // wire of the last accepted step (staggered: the flow of step n+1 sees the wire of step n).
@@ -733,7 +740,13 @@ void CoSimulation::step() {
     t_flow_ += seconds_since(tf);
   }
   if (sim_) {
-    if (sim_->inserted_length() >= max_length_) sim_->set_insertion_speed(insertion_speed_ = 0.0);
+    if (schedule_) {
+      // The step at the schedule's mean speeds: its integrals are met at every step's end.
+      schedule_->mean_over(t1 - dt_, t1, insertion_speed_, rotation_speed_);
+      sim_->set_rotation_speed(rotation_speed_);
+      sim_->set_insertion_speed(insertion_speed_);
+    }
+    if (sim_->inserted_length() >= max_length_ && insertion_speed_ > 0.0) sim_->set_insertion_speed(insertion_speed_ = 0.0);
     const auto tr = Clock::now();
     const auto rep = sim_->step(dt_);
     t_rod_ += seconds_since(tr);
@@ -925,6 +938,14 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       if (!settle.is_null()) s["wire"]["settle"] = settle;
       s["wire"]["initial_layout"] = initial_layout;
       if (c.has("insertion.max_force")) s["wire"]["held_steps"] = sim->held_steps();
+      if (const DriveSchedule* schedule = cosim.schedule()) {
+        double length = 0.0, angle = 0.0;
+        schedule->integral_to(cosim.time(), length, angle);
+        s["wire"]["schedule"] = nlohmann::json{{"file", c.string("insertion.schedule")},
+                                               {"rows", schedule->rows().size()},
+                                               {"driven_length", length},
+                                               {"driven_angle", angle}};
+      }
       if (sim->model().adapt.enabled)
         s["wire"]["adapt"] = {{"splits", sim->adapt_splits()}, {"merges", sim->adapt_merges()}};
       if (tip_forces)

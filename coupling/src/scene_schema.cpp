@@ -152,6 +152,9 @@ config::Schema make_schema() {
   add("insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "base rotation speed");
   add("insertion.rotation_angle", Type::Number, "0", D::Angle, "base rotation at the start (turns a pre-shaped tip)");
   add("insertion.initial_length", Type::Number, "2 cm", D::Length, "length inside at t = 0");
+  add("insertion.schedule", Type::String, "", D::None,
+      "CSV with columns time,speed,rotation_speed (SI): from each row's time on, push (> 0), pull (< 0) or hold, "
+      "and turn; replaces speed and rotation_speed (docs/insertion.md)");
   add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length");
   add("insertion.max_force", Type::Number, "", D::Force,
       "force-limited feeding: hold the feed in steps that start with the wire pushed in harder than this "

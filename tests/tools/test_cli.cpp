@@ -452,3 +452,25 @@ output: {vtk: false, csv: false}
     EXPECT_NE(r.err.find(surface), std::string::npos) << r.err;
   }
 }
+
+TEST(Cli, AnUnsortedScheduleExitsTwoNamingTheLineAndWritesNothing) {
+  const auto dir = flowire::testing::scratch_dir("cli-bad-schedule");
+  write(dir / "drive.csv", "time,speed,rotation_speed\n0,0.01,0\n0.2,0,0\n0.1,0,1\n");
+  write(dir / "scene.yaml", R"(vessels: {generator: {type: straight_tube}}
+wire: {length: 0.2, segment_length: 5 mm}
+insertion: {initial_length: 1 cm, schedule: drive.csv}
+solve: {duration: 0.05 s, dt: 10 ms}
+)");
+  const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("drive.csv:4"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "tip_trace.csv"));
+  // A good schedule runs.
+  write(dir / "drive.csv", "time,speed,rotation_speed\n0,0.01,0\n0.02,-0.01,6.28\n");
+  const auto ok = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "ok").string());
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  std::ifstream in(dir / "ok" / "summary.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["wire"]["schedule"]["rows"], 2);
+  EXPECT_NEAR(j["wire"]["schedule"]["driven_length"].get<double>(), 0.01 * 0.02 - 0.01 * 0.03, 1e-12);
+}

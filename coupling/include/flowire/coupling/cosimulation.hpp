@@ -21,6 +21,7 @@
 #include <string>
 
 #include "flowire/common/config.hpp"
+#include "flowire/coupling/schedule.hpp"
 #include "flowire/coupling/wire_output.hpp"
 #include "flowire/vessels/network.hpp"
 #include "flowire/vessels/spatial.hpp"
@@ -62,13 +63,16 @@ class CoSimulation {
   void step();
 
   // --- controls (take effect at the next step) ---------------------------------------------
-  /// @brief Feeding speed [m/s] (> 0 pushes in); insertion.max_length still stops it.
+  /// @brief Feeding speed [m/s] (> 0 pushes in); insertion.max_length still stops it. With
+  /// insertion.schedule, the schedule sets both speeds again at every step.
   void set_insertion_speed(double speed);
   /// @brief Clamp rotation speed about the insertion direction [rad/s].
   void set_rotation_speed(double omega);
   /// @brief The feeding and rotation speeds of the next step (insertion.speed and
   /// rotation_speed until set; 0 once insertion.max_length is reached).
   [[nodiscard]] double insertion_speed() const { return insertion_speed_; }
+  /// @brief insertion.schedule, or null.
+  [[nodiscard]] const DriveSchedule* schedule() const { return schedule_.get(); }
   [[nodiscard]] double rotation_speed() const { return rotation_speed_; }
 
   // --- the run ----------------------------------------------------------------------------
@@ -121,6 +125,7 @@ class CoSimulation {
   nlohmann::json settle_;
   double dt_ = 0.0, max_length_ = 0.0;
   double insertion_speed_ = 0.0, rotation_speed_ = 0.0;
+  std::unique_ptr<DriveSchedule> schedule_;  ///< insertion.schedule, if given
   long steps_ = 0, step_ = 0;
   int flow_every_ = 1;
   bool is_static_ = false;
