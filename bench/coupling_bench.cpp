@@ -169,8 +169,8 @@ flow:
   }
 };
 
-void run_arch(benchmark::State& state, double network_h, bool two_way = false) {
-  ArchExample s(network_h, 0.78, two_way);
+void run_arch(benchmark::State& state, double network_h, bool two_way = false, double inserted = 0.78) {
+  ArchExample s(network_h, inserted, two_way);
   const auto flow_before = s.flow->timings();
   const auto before = s.forces->stats();
   const auto rod_before = s.rod->phase_seconds();
@@ -207,6 +207,16 @@ void BM_ArchExample78cm_5mmNetwork_TwoWay(benchmark::State& st) { run_arch(st, 5
 void BM_ArchExample78cm_1mmNetwork_TwoWay(benchmark::State& st) { run_arch(st, 1e-3, true); }
 BENCHMARK(BM_ArchExample78cm_5mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_ArchExample78cm_1mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->Iterations(200);
+
+// Scaling of each phase: against the inserted length (args: cm inserted, network 5 mm) and
+// against the network's sampling (args: 78 cm, network in tenths of a mm).
+void BM_ArchScaling(benchmark::State& st) {
+  run_arch(st, 1e-4 * static_cast<double>(st.range(1)), false, 0.01 * static_cast<double>(st.range(0)));
+}
+BENCHMARK(BM_ArchScaling)
+    ->Args({20, 50})->Args({39, 50})->Args({78, 50})
+    ->Args({78, 20})->Args({78, 10})->Args({78, 5})
+    ->ArgNames({"inserted_cm", "network_tenth_mm"})->Unit(benchmark::kMillisecond)->Iterations(200);
 
 void BM_CoSimStep_All(benchmark::State& st) { run(st, true, true, 0.1); }
 void BM_CoSimStep_NoFriction(benchmark::State& st) { run(st, true, true, 0.0); }
