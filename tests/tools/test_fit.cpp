@@ -70,6 +70,8 @@ std::vector<Row> read_trace(const fs::path& p) {
   return rows;
 }
 
+#ifdef FLOWIRE_FIT_SLOW
+// 48 runs of about a second each (process start-up dominates): labelled slow (test_fit_slow).
 TEST(Fit, RecoversAHiddenRotationFromANoisyTrace) {
   const auto dir = flowire::testing::scratch_dir("fit-recover");
   std::ofstream(dir / "scene.yaml") << kScene;
@@ -112,7 +114,7 @@ TEST(Fit, RecoversAHiddenRotationFromANoisyTrace) {
   // plus the search's stopping resolution (tol_x = 1e-3 of the range, twice).
   const double tol = 4.0 * noise / (offset * std::sqrt(samples)) + 2e-3 * (hi - lo);
   EXPECT_NEAR(fitted, hidden, tol) << "tolerance " << tol;
-  EXPECT_LE(j["evaluations"].get<long>(), 48 + 8);
+  EXPECT_LE(j["evaluations"].get<long>(), 48);
   // The reported rms is that of the best run's outputs, and near the noise floor:
   // eq. 11 over `samples` points of 3 coordinates each of variance σ² gives (3·samples·σ²/2)^½.
   const double floor = std::sqrt(1.5 * samples) * noise;
@@ -130,6 +132,7 @@ TEST(Fit, RecoversAHiddenRotationFromANoisyTrace) {
   for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().filename().string().find(".fit-work"), std::string::npos);
 }
 
+#else
 TEST(Fit, BadArgumentsExitTwoNamingThemAndWriteNothing) {
   const auto dir = flowire::testing::scratch_dir("fit-bad");
   std::ofstream(dir / "scene.yaml") << kScene;
@@ -160,5 +163,6 @@ TEST(Fit, BadArgumentsExitTwoNamingThemAndWriteNothing) {
   // with the run's message and writes nothing.
   expect_bad(good + " --param wire.length=-1..-0.5 --jobs 2", "every run of the first generation failed");
 }
+#endif
 
 }  // namespace
