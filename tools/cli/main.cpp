@@ -19,6 +19,7 @@
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
 #include "flowire/vessels/io.hpp"
+#include "fit_command.hpp"
 #include "svzerod_command.hpp"
 
 namespace {
@@ -210,9 +211,28 @@ int main(int argc, char** argv) {
   compare->add_option("--spacing", spacing, "sample spacing of inserted length (default 5 mm)");
   compare->add_option("--rows", rows, "table row spacing (default 50 mm)");
 
+  flowire::cli::FitOptions fit_opts;
+  auto* fit = app.add_subcommand("fit", "fit scene values to a measured tip trace (CMA-ES on the trace RMS; docs/fit.md)");
+  fit->add_option("scene", fit_opts.scene, "scene file (.yaml)")->required();
+  fit->add_option("--trace", fit_opts.trace, "measured tip trace (tip_trace.csv columns: time,inserted_length,x,y,z)")
+      ->required();
+  fit->add_option("--param", fit_opts.params,
+                  "a scene value to fit and its range, units as the scene accepts them: "
+                  "--param insertion.rotation_angle=0deg..180deg (repeatable)")
+      ->required()
+      ->allow_extra_args(false);
+  fit->add_option("--out", fit_opts.out, "output folder: fit.json, fit_history.csv and the best run's outputs")->required();
+  fit->add_option("--set", fit_opts.sets, "fix a scene key for every run: --set solve.dt=5ms (repeatable)")
+      ->allow_extra_args(false);
+  fit->add_option("--jobs", fit_opts.jobs, "runs at a time (default: the number of hardware threads)")
+      ->check(CLI::NonNegativeNumber);
+  fit->add_option("--max-evaluations", fit_opts.max_evaluations, "stop after this many runs (default 100*(params+1))")
+      ->check(CLI::NonNegativeNumber);
+  fit->add_option("--seed", fit_opts.seed, "random seed of the search (equal seeds give equal fits; default 1)");
+
   std::vector<std::string> help_topic;
   auto* help = app.add_subcommand("help", "help for a command; `help scene` lists every scene key");
-  help->add_option("command", help_topic, "command (run, network, compare, scene)");
+  help->add_option("command", help_topic, "command (run, network, compare, fit, scene)");
 
   try {
     app.parse(argc, argv);
@@ -231,16 +251,18 @@ int main(int argc, char** argv) {
     if (*info) return cmd_info(file, unit, max_seg, json);
     if (*convert) return cmd_convert(in, outfile, unit, max_seg);
     if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows, cmp_plot);
+    if (*fit) return flowire::cli::run_fit(fit_opts);
     if (*help) {
       if (help_topic.empty()) {
         std::cout << app.help();
       } else if (help_topic[0] == "scene") {
         std::cout << "Scene keys (SI units; \"<number> <unit>\" strings accepted):\n\n"
                   << flowire::coupling::scene_schema().markdown();
-      } else if (help_topic[0] == "run" || help_topic[0] == "network" || help_topic[0] == "compare") {
+      } else if (help_topic[0] == "run" || help_topic[0] == "network" || help_topic[0] == "compare" ||
+                 help_topic[0] == "fit") {
         std::cout << app.get_subcommand(help_topic[0])->help();
       } else {
-        return error_exit(fmt::format("help: unknown command '{}' (commands: run, network, compare, help scene)",
+        return error_exit(fmt::format("help: unknown command '{}' (commands: run, network, compare, fit, help scene)",
                                       help_topic[0]),
                           2);
       }
