@@ -157,6 +157,38 @@ rod::WireSpec scene_wire_spec(const config::Config& c) {
   return w;
 }
 
+CatheterSpec scene_catheter_spec(const config::Config& c, const rod::WireSpec& wire) {
+  CatheterSpec k;
+  k.length = c.number("catheter.length");
+  k.outer_radius = c.number("catheter.outer_radius");
+  k.inner_radius = c.number("catheter.inner_radius");
+  k.youngs_modulus = c.number("catheter.youngs_modulus");
+  k.density = c.number("catheter.density");
+  k.initial_length = c.number("catheter.initial_length");
+  k.stiffness = c.number("catheter.stiffness");
+  if (c.has_section("catheter.insertion")) {
+    k.speed = c.number("catheter.insertion.speed");
+    k.rotation_speed = c.number("catheter.insertion.rotation_speed");
+  }
+  for (const char* key : {"length", "outer_radius", "inner_radius", "youngs_modulus", "density", "stiffness"}) {
+    const std::string path = std::string("catheter.") + key;
+    if (!(c.number(path) > 0.0)) throw_input_error(c.where(path), fmt::format("catheter.{} must be positive", key));
+  }
+  if (!(k.initial_length >= 0.0) || k.initial_length > k.length)
+    throw_input_error(c.where("catheter.initial_length"), "catheter.initial_length must be in [0, catheter.length]");
+  if (!(k.outer_radius > k.inner_radius))
+    throw_input_error(c.where("catheter.outer_radius"),
+                      fmt::format("catheter.outer_radius ({:.4g} m) must exceed catheter.inner_radius ({:.4g} m)",
+                                  k.outer_radius, k.inner_radius));
+  if (!c.has_section("wire"))
+    throw_input_error(c.where("catheter"), "a catheter runs over a wire: the scene has no wire: section");
+  if (!(k.inner_radius >= wire.radius))
+    throw_input_error(c.where("catheter.inner_radius"),
+                      fmt::format("catheter.inner_radius ({:.4g} m) is narrower than the wire (wire.radius {:.4g} m)",
+                                  k.inner_radius, wire.radius));
+  return k;
+}
+
 namespace {
 
 /// Obstacles (clot resistance) and steering, if the scene has them.
