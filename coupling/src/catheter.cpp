@@ -112,8 +112,10 @@ int LumenContact::nearest_edge(const Eigen::Vector3d& x, double s, const std::ve
 
 void LumenContact::evaluate_wire(const rod::RodView& rod, rod::ForceAccumulator& out) const {
   for (int i = 0; i < rod.first_clamped_vertex; ++i) {
-    const int j = nearest_edge(rod.position(i), rod.arc_length[i], catheter_snapshot, catheter_arc);
-    if (j < 0) continue;
+    const int j = i < static_cast<int>(wire_edge.size())
+                      ? wire_edge[static_cast<size_t>(i)]
+                      : nearest_edge(rod.position(i), rod.arc_length[i], catheter_snapshot, catheter_arc);
+    if (j < 0 || j + 1 >= static_cast<int>(catheter_snapshot.size())) continue;
     const double k = stiffness_ * rod.cell_weight(i);
     const LumenPenalty p =
         lumen_penalty(rod.position(i), catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, k, j == 0);
@@ -128,8 +130,8 @@ void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumula
   const std::vector<Eigen::Vector3d> cath(rod.positions.begin(), rod.positions.end());
   const std::vector<double> arc(rod.arc_length.begin(), rod.arc_length.end());
   for (size_t i = 0; i < wire_snapshot.size(); ++i) {
-    const int j = nearest_edge(wire_snapshot[i], wire_arc[i], cath, arc);
-    if (j < 0) continue;
+    const int j = i < wire_edge.size() ? wire_edge[i] : nearest_edge(wire_snapshot[i], wire_arc[i], cath, arc);
+    if (j < 0 || j + 1 >= static_cast<int>(cath.size())) continue;
     const LumenPenalty p = lumen_penalty(wire_snapshot[i], cath[j], cath[j + 1], clearance_, stiffness_, j == 0);
     if (!(p.energy > 0.0)) continue;
     out.add_conservative_force(j, -p.grad_a);
@@ -143,22 +145,30 @@ void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumula
 double LumenContact::energy() const {
   double e = 0.0;
   for (size_t i = 0; i < wire_snapshot.size(); ++i) {
-    const int j = nearest_edge(wire_snapshot[i], wire_arc[i], catheter_snapshot, catheter_arc);
-    if (j >= 0)
+    const int j = i < wire_edge.size() ? wire_edge[i] : -1;
+    if (j >= 0 && j + 1 < static_cast<int>(catheter_snapshot.size()))
       e += lumen_penalty(wire_snapshot[i], catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, stiffness_, j == 0)
                .energy;
   }
   return e;
 }
 
+void LumenContact::assign_edges() {
+  wire_edge.assign(wire_snapshot.size(), -1);
+  for (size_t i = 0; i < wire_snapshot.size() && i < wire_arc.size(); ++i)
+    wire_edge[i] = nearest_edge(wire_snapshot[i], wire_arc[i], catheter_snapshot, catheter_arc);
+}
+
 void LumenContact::hold_catheter(const rod::RodSimulator& catheter) {
   catheter_snapshot.assign(catheter.positions().begin(), catheter.positions().end());
   catheter_arc.assign(catheter.arc_lengths().begin(), catheter.arc_lengths().end());
+  assign_edges();
 }
 
 void LumenContact::hold_wire(const rod::RodSimulator& wire) {
   wire_snapshot.assign(wire.positions().begin(), wire.positions().end());
   wire_arc.assign(wire.arc_lengths().begin(), wire.arc_lengths().end());
+  assign_edges();
 }
 
 PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact,
@@ -203,6 +213,7 @@ PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& c
     c = next;
     for (size_t i = 0; i < contact.catheter_snapshot.size(); ++i)
       contact.catheter_snapshot[i] = c.segment<3>(3 * static_cast<Eigen::Index>(i));
+    contact.assign_edges();
   }
   if (rep.sweeps > max_sweeps) rep.sweeps = max_sweeps;
   contact.hold_catheter(catheter);

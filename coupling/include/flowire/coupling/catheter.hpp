@@ -85,7 +85,13 @@ class LumenContact {
   void evaluate_catheter(const rod::RodView& rod, rod::ForceAccumulator& out) const;
   /// @brief Total penalty energy of the held configurations [J].
   [[nodiscard]] double energy() const;
-  /// @brief Hold the catheter / the wire at the rod's current state.
+  /// @brief The catheter edge each wire vertex is measured against, chosen (nearest) when a
+  /// rod is held and kept through the other rod's solve, so that the penalty is a smooth
+  /// function of the unknowns within a solve; −1: out of the lumen.
+  std::vector<int> wire_edge;
+  /// @brief Choose wire_edge from the held configurations.
+  void assign_edges();
+  /// @brief Hold the catheter / the wire at the rod's current state (and assign_edges()).
   void hold_catheter(const rod::RodSimulator& catheter);
   void hold_wire(const rod::RodSimulator& wire);
   [[nodiscard]] double clearance() const { return clearance_; }
