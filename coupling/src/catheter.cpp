@@ -42,7 +42,7 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   using M = Eigen::Matrix3d;
   LumenPenalty p;
   p.grad_x.setZero(), p.grad_a.setZero(), p.grad_b.setZero();
-  p.hess_xx.setZero(), p.hess_aa.setZero(), p.hess_bb.setZero();
+  p.hess_xx.setZero(), p.hess_aa.setZero(), p.hess_bb.setZero(), p.hess_ab.setZero();
   const Eigen::Vector3d e = b - a;
   const double l2 = e.squaredNorm();
   const double raw = l2 > 0.0 ? (x - a).dot(e) / l2 : 0.0;
@@ -83,6 +83,9 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   block(rx, M::Zero(), p.grad_x, p.hess_xx);
   block(ra, sa, p.grad_a, p.hess_aa);
   block(rb, sb, p.grad_b, p.hess_bb);
+  // ∂²r/∂a_i∂b_j · n = n_i ∂α/∂b_j − ∂α/∂a_i n_j (n ⊥ e).
+  const M sab = interior ? M(n * db.transpose() - da * n.transpose()) : M::Zero();
+  p.hess_ab = k * ((ra.transpose() * n) * (rb.transpose() * n).transpose() + gap * (ra.transpose() * pn * rb / d + sab));
   return p;
 }
 
@@ -137,8 +140,9 @@ void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumula
     out.add_conservative_force(j, -p.grad_a);
     out.add_conservative_force(j + 1, -p.grad_b);
     out.add_energy(p.energy);
-    out.add_position_jacobian(j, -p.hess_aa);
-    out.add_position_jacobian(j + 1, -p.hess_bb);
+    Eigen::Matrix<double, 6, 6> hess;
+    hess << p.hess_aa, p.hess_ab, p.hess_ab.transpose(), p.hess_bb;
+    out.add_edge_jacobian(j, -hess);
   }
 }
 

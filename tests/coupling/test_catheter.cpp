@@ -38,6 +38,11 @@ void check_block(const V3& x, const V3& a, const V3& b, double c, double k, bool
     const V3 col = (gp - gm) / (2 * h);
     for (int l = 0; l < 3; ++l)
       EXPECT_NEAR(hess(l, m), col[l], 1e-5 * k) << "hessian, block " << which << ", (" << l << "," << m << ")";
+    if (which == 2) {  // the cross block ∂²E/∂a∂b: column m of ∂(∂E/∂a)/∂b
+      const V3 cross = (plus.grad_a - minus.grad_a) / (2 * h);
+      for (int l = 0; l < 3; ++l)
+        EXPECT_NEAR(p.hess_ab(l, m), cross[l], 1e-5 * k) << "hessian a-b, (" << l << "," << m << ")";
+    }
   }
 }
 

@@ -54,6 +54,7 @@ struct LumenPenalty {
   double alpha = 0.0;                                 ///< nearest point a + α (b − a)
   Eigen::Vector3d grad_x, grad_a, grad_b;             ///< ∂E/∂x, ∂E/∂a, ∂E/∂b
   Eigen::Matrix3d hess_xx, hess_aa, hess_bb;          ///< ∂²E/∂x², ∂²E/∂a², ∂²E/∂b²
+  Eigen::Matrix3d hess_ab;                            ///< ∂²E/∂a∂b
 };
 /// @brief The penalty of x against edge [a, b] with clearance @p c and stiffness @p k
 /// (zero when d ≤ c). Exact derivatives of the distance to the segment (interior or end).
