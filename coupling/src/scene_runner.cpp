@@ -157,6 +157,38 @@ rod::WireSpec scene_wire_spec(const config::Config& c) {
   return w;
 }
 
+CatheterSpec scene_catheter_spec(const config::Config& c, const rod::WireSpec& wire) {
+  CatheterSpec k;
+  k.length = c.number("catheter.length");
+  k.outer_radius = c.number("catheter.outer_radius");
+  k.inner_radius = c.number("catheter.inner_radius");
+  k.youngs_modulus = c.number("catheter.youngs_modulus");
+  k.density = c.number("catheter.density");
+  k.initial_length = c.number("catheter.initial_length");
+  k.stiffness = c.number("catheter.stiffness");
+  if (c.has_section("catheter.insertion")) {
+    k.speed = c.number("catheter.insertion.speed");
+    k.rotation_speed = c.number("catheter.insertion.rotation_speed");
+  }
+  for (const char* key : {"length", "outer_radius", "inner_radius", "youngs_modulus", "density", "stiffness"}) {
+    const std::string path = std::string("catheter.") + key;
+    if (!(c.number(path) > 0.0)) throw_input_error(c.where(path), fmt::format("catheter.{} must be positive", key));
+  }
+  if (!(k.initial_length >= 0.0) || k.initial_length > k.length)
+    throw_input_error(c.where("catheter.initial_length"), "catheter.initial_length must be in [0, catheter.length]");
+  if (!(k.outer_radius > k.inner_radius))
+    throw_input_error(c.where("catheter.outer_radius"),
+                      fmt::format("catheter.outer_radius ({:.4g} m) must exceed catheter.inner_radius ({:.4g} m)",
+                                  k.outer_radius, k.inner_radius));
+  if (!c.has_section("wire"))
+    throw_input_error(c.where("catheter"), "a catheter runs over a wire: the scene has no wire: section");
+  if (!(k.inner_radius >= wire.radius))
+    throw_input_error(c.where("catheter.inner_radius"),
+                      fmt::format("catheter.inner_radius ({:.4g} m) is narrower than the wire (wire.radius {:.4g} m)",
+                                  k.inner_radius, wire.radius));
+  return k;
+}
+
 namespace {
 
 /// Obstacles (clot resistance) and steering, if the scene has them.
@@ -588,6 +620,17 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
     sim = std::make_unique<rod::RodSimulator>(spec);
     sim->set_integrator(c.string("solve.integrator") == "implicit_midpoint" ? rod::Integrator::ImplicitMidpoint
                                                                             : rod::Integrator::ImplicitEuler);
+    std::optional<CatheterSpec> cat;
+    if (c.has_section("catheter")) {
+      if (spec.adapt.enabled)
+        throw_input_error(c.where("wire.adapt"), "wire.adapt is not available with a catheter (both rods share one grid)");
+      cat = scene_catheter_spec(c, spec);
+      cath_ = std::make_unique<rod::RodSimulator>(catheter_rod_spec(*cat, spec));
+      cath_->set_integrator(sim->settings().integrator);
+      cath_->set_insertion_speed(cat->speed);
+      cath_->set_rotation_speed(cat->rotation_speed);
+      lumen_ = std::make_shared<LumenContact>(cat->inner_radius - spec.radius, cat->stiffness);
+    }
     apply_loads(c, *sim);
     if (c.has_section("insertion")) {
       sim->set_insertion_speed(c.number("insertion.speed"));
@@ -609,6 +652,9 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
         bool leaves = false;
         for (double a = 0.0; a < shaft && !leaves; a += 0.5 * sim->model().h)
           leaves = index->wall_distance(spec.base_position + a * spec.base_direction) + spec.radius > 0.0;
+        if (cath_)  // the catheter, as wide as its outer radius
+          for (double a = 0.0; a < cath_->inserted_length() && !leaves; a += 0.5 * sim->model().h)
+            leaves = index->wall_distance(spec.base_position + a * spec.base_direction) + cat->outer_radius > 0.0;
         if (leaves) {
           const VesselPath path(*net, wire_entry);
           if (sim->inserted_length() > path.max_wire_length())
@@ -616,15 +662,24 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
                               fmt::format("{:.4g} m is longer than the vessel path from the entry and back ({:.4g} m)",
                                           sim->inserted_length(), path.max_wire_length()));
           sim->lay_along([&path](double a) { return path.wire_point(a); });
+          if (cath_) {
+            if (cath_->inserted_length() > path.max_wire_length())
+              throw_input_error(c.where("catheter.initial_length"),
+                                fmt::format("{:.4g} m is longer than the vessel path from the entry and back ({:.4g} m)",
+                                            cath_->inserted_length(), path.max_wire_length()));
+            cath_->lay_along([&path](double a) { return path.wire_point(a); });
+          }
           initial_layout = "vessel_path";
         }
       }
+      double wall_smoothing = 0.0;
       forces = make_vessel_forces(c, *index, spec, fsolver.get());
       if (forces) {
         nlohmann::json info;
         double smoothing = 0.0;
         surface_ = make_scene_surface(c, *net, info, smoothing);  // vessels.surface: the wall the wire touches
         if (surface_) forces->set_surface(surface_.get(), smoothing), s["surface"] = info;
+        wall_smoothing = smoothing;
         if (wire_entry >= 0 && (!c.has("contact.introducer") || c.boolean("contact.introducer"))) {
           // The introducer sheath's mouth: as wide as the entry vessel, twice over.
           const auto& es = net->segment(*net->node_segments(wire_entry).first);
@@ -632,6 +687,24 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
         }
         sim->add_external(forces);
       }
+      if (cath_) {  // the catheter against the walls, with its outer radius
+        cath_forces_ = make_vessel_forces(c, *index, catheter_rod_spec(*cat, spec), fsolver.get());
+        if (cath_forces_) {
+          if (surface_) cath_forces_->set_surface(surface_.get(), wall_smoothing);
+          if (wire_entry >= 0 && (!c.has("contact.introducer") || c.boolean("contact.introducer"))) {
+            const auto& es = net->segment(*net->node_segments(wire_entry).first);
+            cath_forces_->set_introducer(spec.base_position, spec.base_direction, 2.0 * es.radius);
+          }
+          cath_->add_external(cath_forces_);
+        }
+      }
+    }
+    if (cath_) {
+      lumen_->hold_catheter(*cath_);
+      lumen_->hold_wire(*sim);
+      sim->add_external(std::make_shared<LumenContactSide>(lumen_, LumenContactSide::Side::Wire));
+      cath_->add_external(std::make_shared<LumenContactSide>(lumen_, LumenContactSide::Side::Catheter));
+      s["catheter"] = {{"clearance", lumen_->clearance()}, {"lumen_stiffness", lumen_->stiffness()}};
     }
     tip_forces = make_tip_forces(c, net ? &*net : nullptr);
     if (tip_forces) sim->add_external(tip_forces);
@@ -706,7 +779,7 @@ void CoSimulation::start() {
   }
   if (sim_ && is_static_) {
     const auto tr = Clock::now();
-    const auto rep = sim_->solve_static();
+    const auto rep = solve_static_all();
     t_rod_ += seconds_since(tr);
     if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
       throw_numerical_error(fmt::format("static solve failed: {}", rod::to_string(rep.status)));
@@ -717,7 +790,7 @@ void CoSimulation::start() {
     // The free initial shape may not fit the lumen (a J tip wider than the vessel): start
     // from its equilibrium against the walls, or the first steps take a large impulse.
     const auto tr = Clock::now();
-    const auto rep = sim_->solve_static();
+    const auto rep = solve_static_all();
     t_rod_ += seconds_since(tr);
     settle_ = {{"converged", rep.converged()}, {"newton_iterations", rep.newton_iterations}};
     if (!rep.converged()) warn("the initial wire did not settle against the walls; starting from its last iterate");
@@ -753,20 +826,40 @@ void CoSimulation::step() {
     if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
       throw_numerical_error(fmt::format("rod step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(rep.status)));
     if (!rep.converged()) ++failures_;
+    if (cath_) {
+      // Staggered (catheter.hpp): the wire above stepped against the catheter of the last
+      // step; now the catheter against that wire.
+      lumen_->hold_wire(*sim_);
+      const auto tc = Clock::now();
+      const auto crep = cath_->step(dt_);
+      t_rod_ += seconds_since(tc);
+      if (crep.status == rod::SolveStatus::NonFinite || crep.status == rod::SolveStatus::SingularMatrix)
+        throw_numerical_error(
+            fmt::format("catheter step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(crep.status)));
+      if (!crep.converged()) ++cath_failures_;
+      lumen_->hold_catheter(*cath_);
+    }
   }
   ++step_;
 }
 
-WireFrame CoSimulation::wire_frame() const {
+rod::StepReport CoSimulation::solve_static_all() {
+  if (!cath_) return sim_->solve_static();
+  const PairStaticReport pair = solve_static_pair(*sim_, *cath_, *lumen_, 100, 1e-3 * sim_->model().h);
+  rod::StepReport rep = sim_->last_report();
+  if (rep.converged() && (!pair.converged || !cath_->last_report().converged())) rep.status = rod::SolveStatus::MaxIterations;
+  return rep;
+}
+
+namespace {
+/// The frame of one rod as the outputs write it (free vertices from the base to the tip).
+WireFrame rod_frame(const rod::RodSimulator& rod, const VesselForces* forces, double time) {
   WireFrame f;
-  f.time = time();
-  if (!sim_) return f;
-  const auto& sim = sim_;
-  const auto& forces = forces_;
-  const auto x = sim->positions();
-  const auto arc = sim->arc_lengths();
-  for (int i = sim->first_clamped_vertex(); i >= 0; --i) {  // base → tip
-    if (i >= sim->vertex_count()) continue;
+  f.time = time;
+  const auto x = rod.positions();
+  const auto arc = rod.arc_lengths();
+  for (int i = rod.first_clamped_vertex(); i >= 0; --i) {  // base → tip
+    if (i >= rod.vertex_count()) continue;
     f.x.push_back(x[static_cast<size_t>(i)]);
     f.s.push_back(std::max(0.0, arc[static_cast<size_t>(i)]));
     f.force.push_back(forces && i < static_cast<int>(forces->force().size()) ? forces->force()[static_cast<size_t>(i)]
@@ -780,6 +873,25 @@ WireFrame CoSimulation::wire_frame() const {
                                   : Eigen::Vector3d::Zero());
   }
   return f;
+}
+}  // namespace
+
+WireFrame CoSimulation::wire_frame() const {
+  if (!sim_) {
+    WireFrame f;
+    f.time = time();
+    return f;
+  }
+  return rod_frame(*sim_, forces_.get(), time());
+}
+
+WireFrame CoSimulation::catheter_frame() const {
+  if (!cath_) {
+    WireFrame f;
+    f.time = time();
+    return f;
+  }
+  return rod_frame(*cath_, cath_forces_.get(), time());
 }
 
 
@@ -836,6 +948,8 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     const bool flow_out = fsolver && (write_csv || write_vtk);
     std::optional<WireOutput> wire_out;
     if (sim && (write_csv || write_vtk)) wire_out.emplace(out, write_csv, write_vtk);
+    std::optional<WireOutput> cath_out;
+    if (cosim.catheter() && (write_csv || write_vtk)) cath_out.emplace(out, write_csv, write_vtk, "catheter");
 
     double t_out = 0;
     auto record = [&](double t) {
@@ -845,6 +959,11 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
         WireFrame f = cosim.wire_frame();
         f.time = t;
         wire_out->add_frame(f);
+      }
+      if (cath_out) {
+        WireFrame f = cosim.catheter_frame();
+        f.time = t;
+        cath_out->add_frame(f);
       }
       t_out += seconds_since(to);
     };
@@ -881,6 +1000,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     }
     if (c.boolean("output.png") && net) render_pictures(c, *net, fsolver, sim, out);
     if (wire_out) wire_out->finish();
+    if (cath_out) cath_out->finish();
     if (net && !fsolver && write_csv) {
       std::string csv =
           "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
@@ -945,6 +1065,30 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
                                                {"rows", schedule->rows().size()},
                                                {"driven_length", length},
                                                {"driven_angle", angle}};
+      }
+      if (const rod::RodSimulator* cath = cosim.catheter()) {
+        nlohmann::json& k = s["catheter"];
+        k["vertices"] = cath->vertex_count();
+        k["inserted_length"] = cath->inserted_length();
+        k["tip"] = {cath->tip_position().x(), cath->tip_position().y(), cath->tip_position().z()};
+        k["base_force"] = {cath->base_force().x(), cath->base_force().y(), cath->base_force().z()};
+        k["length_drift"] = cath->length_drift();
+        k["unconverged_steps"] = cosim.catheter_unconverged_steps();
+        k["bending_stiffness"] = cath->model().bend_stiffness.empty() ? 0.0 : cath->model().bend_stiffness.back();
+        if (const VesselForces* cf = cosim.catheter_forces())
+          k["contact"] = {{"max_penetration", cf->stats().max_penetration}, {"max_outside", cf->stats().max_outside}};
+        // The wire's farthest excursion from the catheter's axis inside the lumen.
+        const LumenContact& lc = *cosim.lumen_contact();
+        double worst = 0.0;
+        for (size_t i = 0; i < lc.wire_snapshot.size(); ++i) {
+          const int j = lc.nearest_edge(lc.wire_snapshot[i], lc.wire_arc[i], lc.catheter_snapshot, lc.catheter_arc);
+          if (j >= 0)
+            worst = std::max(worst, lumen_penalty(lc.wire_snapshot[i], lc.catheter_snapshot[j], lc.catheter_snapshot[j + 1],
+                                                  lc.clearance(), lc.stiffness(), j == 0)
+                                        .distance);
+        }
+        k["max_wire_offset"] = worst;
+        k["max_wire_offset_over_clearance"] = lc.clearance() > 0 ? worst / lc.clearance() : 0.0;
       }
       if (sim->model().adapt.enabled)
         s["wire"]["adapt"] = {{"splits", sim->adapt_splits()}, {"merges", sim->adapt_merges()}};

@@ -142,6 +142,21 @@ config::Schema make_schema() {
   add("wire.base.direction", Type::Vector3, "[1, 0, 0]", D::None, "base direction (vessel scenes: into the entry vessel)");
   add("wire.entry", Type::StringOrInteger, "auto", D::None, "network end where the wire enters (node id, or auto)");
 
+  add("catheter", Type::Section, "", D::None,
+      "a hollow catheter over the wire, entering at the same point (docs/catheter.md); the wire runs in its lumen");
+  add("catheter.length", Type::Number, "1.0", D::Length, "total catheter length");
+  add("catheter.outer_radius", Type::Number, "1 mm", D::Length, "outer radius (the wall contact uses it)");
+  add("catheter.inner_radius", Type::Number, "0.55 mm", D::Length,
+      "lumen radius: the wire's axis stays within inner_radius - wire.radius of the catheter's axis");
+  add("catheter.youngs_modulus", Type::Number, "2 GPa", D::Pressure, "Young's modulus of the catheter wall");
+  add("catheter.density", Type::Number, "1200", D::Density, "density of the catheter wall");
+  add("catheter.initial_length", Type::Number, "2 cm", D::Length, "catheter length inside at t = 0");
+  add("catheter.stiffness", Type::Number, "3e4", D::None,
+      "lumen penalty per wire vertex (N/m): a wire vertex pushing on the lumen with force F sinks F/k into it");
+  add("catheter.insertion", Type::Section, "", D::None, "pushing and turning the catheter at the entry");
+  add("catheter.insertion.speed", Type::Number, "0", D::Velocity, "catheter insertion speed (negative: pull back)");
+  add("catheter.insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "catheter rotation speed");
+
   add("loads", Type::List, "", D::None, "external loads on the wire");
   add("loads[].type", Type::Enum, "", D::None, "load kind", {"tip_force", "tip_moment", "gravity", "point_force"});
   add("loads[].value", Type::Vector3, "", D::None, "force (N), moment (N*m) or acceleration (m/s^2), SI");

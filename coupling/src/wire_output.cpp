@@ -18,7 +18,8 @@
 
 namespace flowire::coupling {
 
-WireOutput::WireOutput(std::filesystem::path dir, bool csv, bool vtk) : dir_(std::move(dir)), csv_(csv), vtk_(vtk) {
+WireOutput::WireOutput(std::filesystem::path dir, bool csv, bool vtk, std::string name)
+    : dir_(std::move(dir)), csv_(csv), vtk_(vtk), name_(std::move(name)) {
   if (csv_) {
     wire_csv_ = "time,vertex,s,x,y,z,drag_x,drag_y,drag_z,contact_x,contact_y,contact_z\n";
     tip_csv_ = "time,inserted_length,x,y,z\n";
@@ -83,7 +84,7 @@ void WireOutput::add_frame(const WireFrame& f) {
   add("drag", 3, vec(f.drag));
   add("contact", 3, vec(f.contact));
   add("flow_velocity", 3, vec(f.flow_velocity));
-  const std::string name = fmt::format("wire_{:05d}.vtp", frame_count_ - 1);
+  const std::string name = fmt::format("{}_{:05d}.vtp", name_, frame_count_ - 1);
   write_atomically(dir_ / name, [&](const std::filesystem::path& tmp) {
     vtkNew<vtkXMLPolyDataWriter> w;
     w->SetFileName(tmp.string().c_str());
@@ -104,11 +105,13 @@ void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<do
 
 void WireOutput::finish() {
   if (csv_) {
-    write_text_atomically(dir_ / "wire.csv", wire_csv_);
-    write_text_atomically(dir_ / "tip_trace.csv", tip_csv_);
-    write_text_atomically(dir_ / "base_force.csv", base_csv_);
+    write_text_atomically(dir_ / (name_ + ".csv"), wire_csv_);
+    if (name_ == "wire") {
+      write_text_atomically(dir_ / "tip_trace.csv", tip_csv_);
+      write_text_atomically(dir_ / "base_force.csv", base_csv_);
+    }
   }
-  if (vtk_ && !vtk_files_.empty()) write_pvd(dir_ / "wire.pvd", vtk_files_);
+  if (vtk_ && !vtk_files_.empty()) write_pvd(dir_ / (name_ + ".pvd"), vtk_files_);
 }
 
 }  // namespace flowire::coupling

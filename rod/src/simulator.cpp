@@ -27,6 +27,11 @@ Mat3 positive_part(const Mat3& a) {
   const Eigen::Vector3d lambda = es.eigenvalues().cwiseMax(0.0);
   return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
 }
+Eigen::Matrix<double, 6, 6> positive_part6(const Eigen::Matrix<double, 6, 6>& a) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(a);
+  const Eigen::Matrix<double, 6, 1> lambda = es.eigenvalues().cwiseMax(0.0);
+  return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
+}
 }  // namespace
 
 const char* to_string(SolveStatus s) {
@@ -64,6 +69,8 @@ struct RodSimulator::Work {
   int sparse_pattern_size = -1;
   std::vector<Mat3> ext_k;  // (n_vertices) −∂f/∂x − ∂f/∂v / h, symmetrized
   bool has_ext_k = false;
+  std::vector<Eigen::Matrix<double, 6, 6>> ext_edge_k;  // (n_edges) −∂(f_j, f_j+1)/∂(x_j, x_j+1), symmetrized
+  bool has_ext_edge_k = false;
   std::vector<EdgeGeometry> edges;  // (n_edges) tangent, length, material frame
   Mat3 moment_k = Mat3::Zero();  // −∂f₁/∂e of the tip couple, symmetrized
   ForceAccumulator acc;
@@ -121,6 +128,7 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   w.H.reserve(max_dof, kBandwidth);
   w.ldlt.reserve(max_dof, kBandwidth);
   w.ext_k.reserve(nvmax);
+  w.ext_edge_k.reserve(nvmax);
   w.edges.reserve(nvmax);
   w.acc.reserve(nvmax);
   for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz, &w.tangent, &w.x_end, &w.v_guess}) v->reserve(nvmax);
@@ -722,6 +730,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   w.fcons.head(nd).setZero();
   w.ext_energy = 0.0;
   w.has_ext_k = false;
+  w.has_ext_edge_k = false;
   w.moment_k.setZero();
   if (gravity_.squaredNorm() > 0.0)
     for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += load_scale * disc_.mass[k] * gravity_;
@@ -781,6 +790,14 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
       w.fext(4 * j + 3) += w.acc.twist_torques()[j];
       w.ext_spin_k[j] =
           mode == Mode::Dynamic ? -w.acc.twist_torque_spin_derivatives()[j] / h : 0.0;
+    }
+    w.has_ext_edge_k = w.acc.has_edge_jacobians();
+    if (w.has_ext_edge_k) {
+      w.ext_edge_k.resize(nv - 1);
+      for (int j = 0; j < nv - 1; ++j) {
+        const auto& e = w.acc.edge_jacobians()[static_cast<size_t>(j)];
+        w.ext_edge_k[j] = -0.5 * (e + e.transpose());
+      }
     }
     w.ext_energy = w.acc.energy();
     for (int k = 0; k < nv; ++k) {
@@ -872,6 +889,12 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
       } else {
         w.H.add_block(w.ext_k[k], idx, 3);
       }
+    }
+    for (int j = 0; w.has_ext_k && w.has_ext_edge_k && j < nv - 1; ++j) {
+      const Eigen::Matrix<double, 6, 6>& k6 = w.ext_edge_k[j];
+      if (k6.isZero(0.0)) continue;
+      const int idx[6] = {4 * j, 4 * j + 1, 4 * j + 2, 4 * j + 4, 4 * j + 5, 4 * j + 6};
+      w.H.add_block(psd ? positive_part6(k6) : k6, idx, 6);
     }
     for (int j = 0; w.has_ext_k && j < nv - 1; ++j) w.H.lower(4 * j + 3, 4 * j + 3) += w.ext_spin_k[j];
     if (!psd && !w.moment_k.isZero(0.0)) {

@@ -371,6 +371,48 @@ output: {vtk: false}
   EXPECT_NEAR(last[2], j["wire"]["base_force"][1].get<double>(), 1e-9);
 }
 
+TEST(Cli, CatheterBadInputNamesTheKey) {
+  // A lumen narrower than the wire, a wall with outer <= inner radius, non-positive values and
+  // unknown keys: exit 2, the key named, no output.
+  const auto dir = flowire::testing::scratch_dir("cli-catheter");
+  write(dir / "scene.yaml", R"(name: catheter
+wire: {length: 0.1, radius: 0.3 mm, youngs_modulus: 60 GPa, segment_length: 2 mm}
+insertion: {speed: 1 cm/s, initial_length: 3 cm}
+catheter: {length: 0.1, outer_radius: 0.8 mm, inner_radius: 0.4 mm, initial_length: 2 cm}
+solve: {dt: 10 ms, duration: 0.05 s}
+output: {vtk: false}
+)");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"catheter.inner_radius=0.2mm", "catheter.inner_radius"},
+      {"catheter.outer_radius=0.4mm", "catheter.outer_radius"},
+      {"catheter.youngs_modulus=0", "catheter.youngs_modulus"},
+      {"catheter.density=-5", "catheter.density"},
+      {"catheter.initial_length=0.2", "catheter.initial_length"},
+      {"catheter.stifness=5", "catheter.stifness"}};
+  int k = 0;
+  for (const auto& [set, key] : cases) {
+    const auto out = dir / ("bad" + std::to_string(k++));
+    const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + out.string() + " --set " + set);
+    EXPECT_EQ(r.status, 2) << set << ": " << r.err;
+    EXPECT_NE(r.err.find(key), std::string::npos) << set << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out / "summary.json")) << set;
+  }
+  // The same scene as given runs, and writes the catheter as the wire.
+  const auto ok = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "ok").string());
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  std::ifstream head(dir / "ok" / "catheter.csv");
+  std::string header;
+  std::getline(head, header);
+  std::ifstream wire_head(dir / "ok" / "wire.csv");
+  std::string wire_header;
+  std::getline(wire_head, wire_header);
+  EXPECT_EQ(header, wire_header);
+  std::ifstream sj(dir / "ok" / "summary.json");
+  const auto j = nlohmann::json::parse(sj);
+  EXPECT_EQ(j["catheter"]["unconverged_steps"], 0);
+  EXPECT_NEAR(j["catheter"]["inserted_length"].get<double>(), 0.02, 1e-12);
+}
+
 TEST(Cli, OcclusionNeedsASolverThatCanRefactor) {
   // The published dense K⁻¹ cannot take the wire's resistance: asked for, that is bad input
   // (exit 2, the key named, no output); by default the run says the flow ignores the wire.

@@ -22,6 +22,7 @@
 
 #include "flowire/common/config.hpp"
 #include "flowire/coupling/schedule.hpp"
+#include "flowire/rod/simulator.hpp"
 #include "flowire/coupling/wire_output.hpp"
 #include "flowire/vessels/network.hpp"
 #include "flowire/vessels/spatial.hpp"
@@ -41,6 +42,7 @@ namespace flowire::coupling {
 class VesselForces;
 class TipForces;
 class WireOcclusion;
+class LumenContact;
 
 class CoSimulation {
  public:
@@ -108,6 +110,14 @@ class CoSimulation {
   /// tip, with the interaction, drag, contact forces and blood velocity at each (zero without
   /// contact and drag). Empty without a wire.
   [[nodiscard]] WireFrame wire_frame() const;
+  /// @brief The catheter (`catheter:`), null if none; its wall forces; its frame as wire_frame().
+  [[nodiscard]] rod::RodSimulator* catheter() const { return cath_.get(); }
+  [[nodiscard]] const VesselForces* catheter_forces() const { return cath_forces_.get(); }
+  [[nodiscard]] WireFrame catheter_frame() const;
+  /// @brief The wire–catheter lumen contact, null without a catheter.
+  [[nodiscard]] const LumenContact* lumen_contact() const { return lumen_.get(); }
+  /// @brief Catheter steps that did not converge; coupled static solves that did not.
+  [[nodiscard]] int catheter_unconverged_steps() const { return cath_failures_; }
 
  private:
   /// Sets the flow's segment occlusion from the wire of the last accepted step.
@@ -121,6 +131,13 @@ class CoSimulation {
   std::shared_ptr<VesselForces> forces_;
   std::shared_ptr<TipForces> tip_forces_;
   std::unique_ptr<WireOcclusion> occlusion_;
+  // catheter: (catheter.hpp): its rod, wall forces and the contact with the wire in its lumen
+  std::unique_ptr<rod::RodSimulator> cath_;
+  std::shared_ptr<VesselForces> cath_forces_;
+  std::shared_ptr<LumenContact> lumen_;
+  int cath_failures_ = 0;
+  /// Static equilibrium of what the scene has (the pair with a catheter).
+  rod::StepReport solve_static_all();
   std::string initial_layout_ = "straight";
   nlohmann::json settle_;
   double dt_ = 0.0, max_length_ = 0.0;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "flowire/common/config.hpp"
+#include "flowire/coupling/catheter.hpp"
 #include "flowire/rod/model.hpp"
 #include "flowire/vessels/network.hpp"
 
@@ -34,6 +35,10 @@ vessels::Network build_scene_network(const config::Config& scene);
 /// @brief The wire a scene describes (`wire:` and `insertion.initial_length`), before the
 /// vessel network places its base.
 rod::WireSpec scene_wire_spec(const config::Config& scene);
+
+/// @brief The scene's `catheter:` section, checked against its @p wire (the lumen must hold
+/// it). @throws flowire::Error (input) naming the offending key.
+CatheterSpec scene_catheter_spec(const config::Config& scene, const rod::WireSpec& wire);
 
 class VesselForces;
 /// @brief Wall contact and blood drag on the wire as the scene's `contact:` and `coupling:`

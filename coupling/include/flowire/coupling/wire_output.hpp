@@ -26,7 +26,9 @@ struct WireFrame {
 
 class WireOutput {
  public:
-  WireOutput(std::filesystem::path dir, bool csv, bool vtk);
+  /// @p name: "wire", or "catheter" for the catheter's catheter.csv and catheter.pvd +
+  /// catheter_NNNNN.vtp (same columns; no tip trace or base force).
+  WireOutput(std::filesystem::path dir, bool csv, bool vtk, std::string name = "wire");
   /// @brief Record a frame (the VTK file of the frame is written now).
   void add_frame(const WireFrame& frame);
   /// @brief Record a tip-trace sample (every step).
@@ -41,6 +43,7 @@ class WireOutput {
  private:
   std::filesystem::path dir_;
   bool csv_, vtk_;
+  std::string name_;
   std::string wire_csv_, tip_csv_, base_csv_;
   std::vector<std::pair<double, std::string>> vtk_files_;
   int frame_count_ = 0;

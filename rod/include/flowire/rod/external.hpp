@@ -93,6 +93,12 @@ class ForceAccumulator {
   void add_energy(double e) { energy_ += e; }
   /// @brief Add ∂f_i/∂x_i (e.g. −k n nᵀ for a penalty contact of stiffness k).
   void add_position_jacobian(int vertex, const Eigen::Matrix3d& dfdx) { dfdx_[vertex] += dfdx; }
+  /// @brief Add the full ∂(f_j, f_{j+1})/∂(x_j, x_{j+1}) of edge @p edge's two vertices (a
+  /// force on a point of the edge split between its ends, e.g. a contact on the edge).
+  void add_edge_jacobian(int edge, const Eigen::Matrix<double, 6, 6>& dfdx) {
+    edge_dfdx_[edge] += dfdx;
+    has_edge_dfdx_ = true;
+  }
   /// @brief Add ∂f_i/∂v_i (e.g. −c·I for viscous drag).
   void add_velocity_jacobian(int vertex, const Eigen::Matrix3d& dfdv) { dfdv_[vertex] += dfdv; }
   /// @brief Add a torque about edge @p edge's tangent [N m] (e.g. rotational friction or
@@ -111,6 +117,7 @@ class ForceAccumulator {
     torque_.reserve(n);
     dtorque_.reserve(n);
     conservative_.reserve(n);
+    edge_dfdx_.reserve(n);
   }
   void reset(int n) {
     force_.assign(n, Eigen::Vector3d::Zero());
@@ -119,6 +126,9 @@ class ForceAccumulator {
     torque_.assign(n > 0 ? n - 1 : 0, 0.0);
     dtorque_.assign(n > 0 ? n - 1 : 0, 0.0);
     conservative_.assign(n, Eigen::Vector3d::Zero());
+    if (has_edge_dfdx_ || static_cast<int>(edge_dfdx_.size()) != (n > 0 ? n - 1 : 0))
+      edge_dfdx_.assign(n > 0 ? n - 1 : 0, Eigen::Matrix<double, 6, 6>::Zero());
+    has_edge_dfdx_ = false;
     energy_ = 0.0;
   }
   /// @brief All forces per vertex (conservative ones included).
@@ -129,6 +139,9 @@ class ForceAccumulator {
   [[nodiscard]] double energy() const { return energy_; }
   [[nodiscard]] const std::vector<Eigen::Matrix3d>& position_jacobians() const { return dfdx_; }
   [[nodiscard]] const std::vector<Eigen::Matrix3d>& velocity_jacobians() const { return dfdv_; }
+  /// @brief (n − 1) edge Jacobians (add_edge_jacobian); all zero unless has_edge_jacobians().
+  [[nodiscard]] const std::vector<Eigen::Matrix<double, 6, 6>>& edge_jacobians() const { return edge_dfdx_; }
+  [[nodiscard]] bool has_edge_jacobians() const { return has_edge_dfdx_; }
   [[nodiscard]] const std::vector<double>& twist_torques() const { return torque_; }
   [[nodiscard]] const std::vector<double>& twist_torque_spin_derivatives() const { return dtorque_; }
 
@@ -139,6 +152,8 @@ class ForceAccumulator {
   std::vector<double> torque_;
   std::vector<double> dtorque_;
   std::vector<Eigen::Vector3d> conservative_;
+  std::vector<Eigen::Matrix<double, 6, 6>> edge_dfdx_;
+  bool has_edge_dfdx_ = false;
   double energy_ = 0.0;
 };
 

@@ -1,0 +1,138 @@
+#pragma once
+/// @file catheter.hpp
+/// @brief A hollow catheter over the guidewire: its rod and the contact inside its lumen.
+///
+/// **Model.** The catheter is a second discrete elastic rod (rod::RodSimulator) with the
+/// stiffnesses of a thick-walled tube, EI = E π (r_o⁴ − r_i⁴)/4, GJ = G π (r_o⁴ − r_i⁴)/2,
+/// EA = E π (r_o² − r_i²), ρA = ρ π (r_o² − r_i²). Where the two overlap they bend as one
+/// composite because the wire is held inside the lumen by contact: each wire vertex whose
+/// axis is farther than the clearance c = r_i − r_w from the catheter's axis (its distance to
+/// the nearest catheter edge) is pushed back by the penalty E = ½ k (d − c)². With the wire
+/// kept coaxial, both rods take the same curvature and their bending moments add:
+/// EI_pair = EI_wire + EI_catheter exactly (the composite tube in contact), not the
+/// Halpin–Tsai estimate of a homogenized composite (composite catheter paper, 2006).
+///
+/// **Coupling.** Staggered (block Gauss–Seidel): in each step the wire is solved against the
+/// catheter of the last step, then the catheter against the wire just computed; each rod
+/// keeps its own side of the penalty implicit (force and Jacobian in its Newton), so stiff
+/// lumen contact is stable in each solve (docs/catheter.md). The reaction on the catheter is
+/// the gradient of the same energy with respect to the catheter's vertices (the force at the
+/// nearest point, split between the edge's ends by the projection parameter).
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "flowire/rod/external.hpp"
+#include "flowire/rod/model.hpp"
+#include "flowire/rod/simulator.hpp"
+
+namespace flowire::coupling {
+
+/// @brief The `catheter:` section of a scene.
+struct CatheterSpec {
+  double length = 1.0;            ///< [m]
+  double outer_radius = 1e-3;     ///< [m]
+  double inner_radius = 0.55e-3;  ///< [m]
+  double youngs_modulus = 2e9;    ///< [Pa]
+  double poisson_ratio = 0.4;
+  double density = 1200.0;        ///< [kg/m³]
+  double initial_length = 0.02;   ///< [m] inside at t = 0
+  double stiffness = 3e4;         ///< [N/m] lumen penalty per wire vertex
+  double speed = 0.0;             ///< [m/s] insertion speed
+  double rotation_speed = 0.0;    ///< [rad/s]
+};
+
+/// @brief The rod of a tube with the catheter's section, on the wire's feeding grid and at
+/// its entry (same base position and direction, same segment length).
+[[nodiscard]] rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wire);
+
+/// @brief Energy, gradients and diagonal Hessian blocks of the lumen penalty
+/// E = ½ k (d − c)² for one point x and one edge [a, b] (d: distance from x to the edge).
+struct LumenPenalty {
+  double energy = 0.0;
+  double distance = 0.0;
+  double alpha = 0.0;                                 ///< nearest point a + α (b − a)
+  Eigen::Vector3d grad_x, grad_a, grad_b;             ///< ∂E/∂x, ∂E/∂a, ∂E/∂b
+  Eigen::Matrix3d hess_xx, hess_aa, hess_bb;          ///< ∂²E/∂x², ∂²E/∂a², ∂²E/∂b²
+  Eigen::Matrix3d hess_ab;                            ///< ∂²E/∂a∂b
+};
+/// @brief The penalty of x against edge [a, b] with clearance @p c and stiffness @p k
+/// (zero when d ≤ c). Exact derivatives of the distance to the segment (interior or end).
+/// @p open_before_a: before a the distance is to the edge's line (the lumen's open tip end,
+/// so a wire vertex level with the catheter's tip is held by its lateral distance only).
+[[nodiscard]] LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a,
+                                         const Eigen::Vector3d& b, double c, double k, bool open_before_a = false);
+
+/// @brief The wire–catheter contact, one object shared by two ExternalForce views: the wire
+/// side (catheter held at `catheter_snapshot`) and the catheter side (wire held at
+/// `wire_snapshot`). The coupling loop refreshes the snapshots between the two solves.
+class LumenContact {
+ public:
+  LumenContact(double clearance, double stiffness) : clearance_(clearance), stiffness_(stiffness) {}
+  /// @brief Held catheter: its vertices (tip first) and arc lengths from the entry.
+  std::vector<Eigen::Vector3d> catheter_snapshot;
+  std::vector<double> catheter_arc;
+  /// @brief Held wire: its vertices (tip first) and arc lengths from the entry.
+  std::vector<Eigen::Vector3d> wire_snapshot;
+  std::vector<double> wire_arc;
+
+  /// @brief The nearest catheter edge to wire point @p x with arc length @p s, or −1 when it
+  /// is out of the catheter (beyond its tip, or not inserted).
+  [[nodiscard]] int nearest_edge(const Eigen::Vector3d& x, double s,
+                                 const std::vector<Eigen::Vector3d>& cath, const std::vector<double>& arc) const;
+  /// @brief The penalty on the wire at @p rod (catheter held).
+  void evaluate_wire(const rod::RodView& rod, rod::ForceAccumulator& out) const;
+  /// @brief The reaction on the catheter at @p rod (wire held).
+  void evaluate_catheter(const rod::RodView& rod, rod::ForceAccumulator& out) const;
+  /// @brief Total penalty energy of the held configurations [J].
+  [[nodiscard]] double energy() const;
+  /// @brief The catheter edge each wire vertex is measured against, chosen (nearest) when a
+  /// rod is held and kept through the other rod's solve, so that the penalty is a smooth
+  /// function of the unknowns within a solve; −1: out of the lumen.
+  std::vector<int> wire_edge;
+  /// @brief Choose wire_edge from the held configurations.
+  void assign_edges();
+  /// @brief Hold the catheter / the wire at the rod's current state (and assign_edges()).
+  void hold_catheter(const rod::RodSimulator& catheter);
+  void hold_wire(const rod::RodSimulator& wire);
+  [[nodiscard]] double clearance() const { return clearance_; }
+  [[nodiscard]] double stiffness() const { return stiffness_; }
+
+ private:
+  double clearance_;
+  double stiffness_;
+};
+
+/// @brief Outcome of a coupled static solve.
+struct PairStaticReport {
+  bool converged = false;
+  int sweeps = 0;           ///< wire + catheter solves
+  double correction = 0.0;  ///< last max |catheter change| [m]
+};
+/// @brief Static equilibrium of wire and catheter together: block Gauss–Seidel sweeps (wire
+/// against the held catheter, then catheter against the held wire), accelerated by the
+/// interface quasi-Newton least-squares update on the held catheter (IQN-ILS, Degroote,
+/// Bruggeman, Haelterman & Vierendeels 2009), until the catheter moves less than @p tol [m]
+/// in a sweep. Plain sweeps would contract only by 1 − EI/(k L³) per sweep under a stiff
+/// lumen penalty; the least-squares update removes those slow modes.
+PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact,
+                                   int max_sweeps = 200, double tol = 1e-9);
+
+/// @brief ExternalForce adaptor: one side of a LumenContact.
+class LumenContactSide : public rod::ExternalForce {
+ public:
+  enum class Side { Wire, Catheter };
+  LumenContactSide(std::shared_ptr<LumenContact> contact, Side side) : contact_(std::move(contact)), side_(side) {}
+  void evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) override {
+    if (side_ == Side::Wire)
+      contact_->evaluate_wire(rod, out);
+    else
+      contact_->evaluate_catheter(rod, out);
+  }
+
+ private:
+  std::shared_ptr<LumenContact> contact_;
+  Side side_;
+};
+
+}  // namespace flowire::coupling

@@ -1,0 +1,227 @@
+// The catheter over the wire: its tube rod and the penalty that keeps the wire in its lumen
+// (catheter.hpp; derivation in docs/catheter.md).
+#include "flowire/coupling/catheter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <Eigen/Dense>
+
+namespace flowire::coupling {
+
+rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wire) {
+  rod::WireSpec s;
+  s.length = cat.length;
+  s.radius = cat.outer_radius;
+  s.youngs_modulus = cat.youngs_modulus;
+  s.poisson_ratio = cat.poisson_ratio;
+  s.density = cat.density;
+  s.segments = 0;
+  s.segment_length = wire.segments > 0 ? wire.length / wire.segments : wire.segment_length;
+  s.base_position = wire.base_position;
+  s.base_direction = wire.base_direction;
+  s.base_normal = wire.base_normal;
+  s.inserted_length = cat.initial_length;
+  s.damping = wire.damping;
+  // The tube's section (thick-walled, exact).
+  const double ro = cat.outer_radius, ri = cat.inner_radius, pi = std::numbers::pi;
+  const double i4 = pi * (std::pow(ro, 4) - std::pow(ri, 4)) / 4.0;
+  const double area = pi * (ro * ro - ri * ri);
+  const double g = cat.youngs_modulus / (2.0 * (1.0 + cat.poisson_ratio));
+  s.bending_stiffness = cat.youngs_modulus * i4;
+  s.twist_stiffness = g * 2.0 * i4;
+  s.stretch_stiffness = cat.youngs_modulus * area;
+  s.mass_per_length = cat.density * area;
+  return s;
+}
+
+LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double c,
+                           double k, bool open_before_a) {
+  using M = Eigen::Matrix3d;
+  LumenPenalty p;
+  p.grad_x.setZero(), p.grad_a.setZero(), p.grad_b.setZero();
+  p.hess_xx.setZero(), p.hess_aa.setZero(), p.hess_bb.setZero(), p.hess_ab.setZero();
+  const Eigen::Vector3d e = b - a;
+  const double l2 = e.squaredNorm();
+  const double raw = l2 > 0.0 ? (x - a).dot(e) / l2 : 0.0;
+  const M I = M::Identity();
+  // r = x − nearest point; R_y = ∂r/∂y; S_y = Σ_m n_m ∂²r_m/∂y² (symmetric).
+  Eigen::Vector3d r;
+  M rx = I, ra = M::Zero(), rb = M::Zero();
+  Eigen::Vector3d da = Eigen::Vector3d::Zero(), db = Eigen::Vector3d::Zero();
+  bool interior = false;
+  if (raw <= 0.0 && !open_before_a) {
+    p.alpha = 0.0, r = x - a, ra = -I;
+  } else if (raw >= 1.0) {
+    p.alpha = 1.0, r = x - b, rb = -I;
+  } else {
+    interior = true;
+    p.alpha = raw;
+    r = x - a - raw * e;
+    rx = I - e * e.transpose() / l2;
+    da = (-(e + (x - a)) + 2.0 * raw * e) / l2;  // ∂α/∂a
+    db = ((x - a) - 2.0 * raw * e) / l2;         // ∂α/∂b
+    ra = -(1.0 - raw) * I - e * da.transpose();
+    rb = -raw * I - e * db.transpose();
+  }
+  const double d = r.norm();
+  p.distance = d;
+  const double gap = d - c;
+  if (!(gap > 0.0) || !(d > 0.0)) return p;
+  const Eigen::Vector3d n = r / d;
+  p.energy = 0.5 * k * gap * gap;
+  const M pn = I - n * n.transpose();
+  auto block = [&](const M& R, const M& S, Eigen::Vector3d& grad, M& hess) {
+    const Eigen::Vector3d rn = R.transpose() * n;
+    grad = k * gap * rn;
+    hess = k * (rn * rn.transpose() + gap * (R.transpose() * pn * R / d + S));
+  };
+  const M sa = interior ? M(da * n.transpose() + n * da.transpose()) : M::Zero();
+  const M sb = interior ? M(-(db * n.transpose() + n * db.transpose())) : M::Zero();
+  block(rx, M::Zero(), p.grad_x, p.hess_xx);
+  block(ra, sa, p.grad_a, p.hess_aa);
+  block(rb, sb, p.grad_b, p.hess_bb);
+  // ∂²r/∂a_i∂b_j · n = n_i ∂α/∂b_j − ∂α/∂a_i n_j (n ⊥ e).
+  const M sab = interior ? M(n * db.transpose() - da * n.transpose()) : M::Zero();
+  p.hess_ab = k * ((ra.transpose() * n) * (rb.transpose() * n).transpose() + gap * (ra.transpose() * pn * rb / d + sab));
+  return p;
+}
+
+int LumenContact::nearest_edge(const Eigen::Vector3d& x, double s, const std::vector<Eigen::Vector3d>& cath,
+                               const std::vector<double>& arc) const {
+  const int nv = static_cast<int>(cath.size());
+  if (nv < 2 || !(s > 0.0)) return -1;
+  // Both rods enter at the same point, so inside the lumen a wire vertex lies near the
+  // catheter vertices of about its own arc length: search a window around it.
+  const double window = 4.0 * std::abs(arc.front() - arc[1]) + 2.0 * clearance_ + 1e-9;
+  int best = -1;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (int j = 0; j + 1 < nv; ++j) {
+    if (arc[j] < s - window || arc[j + 1] > s + window) continue;
+    const Eigen::Vector3d e = cath[j + 1] - cath[j];
+    const double l2 = e.squaredNorm();
+    const double t = l2 > 0.0 ? std::clamp((x - cath[j]).dot(e) / l2, 0.0, 1.0) : 0.0;
+    const double d = (x - cath[j] - t * e).squaredNorm();
+    if (d < best_d) best_d = d, best = j;
+  }
+  if (best == 0) {  // more than half an edge beyond the catheter's tip: out of the lumen
+    const Eigen::Vector3d e = cath[1] - cath[0];
+    if ((x - cath[0]).dot(e) < -0.5 * e.squaredNorm()) return -1;
+  }
+  return best;
+}
+
+void LumenContact::evaluate_wire(const rod::RodView& rod, rod::ForceAccumulator& out) const {
+  for (int i = 0; i < rod.first_clamped_vertex; ++i) {
+    const int j = i < static_cast<int>(wire_edge.size())
+                      ? wire_edge[static_cast<size_t>(i)]
+                      : nearest_edge(rod.position(i), rod.arc_length[i], catheter_snapshot, catheter_arc);
+    if (j < 0 || j + 1 >= static_cast<int>(catheter_snapshot.size())) continue;
+    const double k = stiffness_ * rod.cell_weight(i);
+    const LumenPenalty p =
+        lumen_penalty(rod.position(i), catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, k, j == 0);
+    if (!(p.energy > 0.0)) continue;
+    out.add_conservative_force(i, -p.grad_x);
+    out.add_energy(p.energy);
+    out.add_position_jacobian(i, -p.hess_xx);
+  }
+}
+
+void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumulator& out) const {
+  const std::vector<Eigen::Vector3d> cath(rod.positions.begin(), rod.positions.end());
+  const std::vector<double> arc(rod.arc_length.begin(), rod.arc_length.end());
+  for (size_t i = 0; i < wire_snapshot.size(); ++i) {
+    const int j = i < wire_edge.size() ? wire_edge[i] : nearest_edge(wire_snapshot[i], wire_arc[i], cath, arc);
+    if (j < 0 || j + 1 >= static_cast<int>(cath.size())) continue;
+    const LumenPenalty p = lumen_penalty(wire_snapshot[i], cath[j], cath[j + 1], clearance_, stiffness_, j == 0);
+    if (!(p.energy > 0.0)) continue;
+    out.add_conservative_force(j, -p.grad_a);
+    out.add_conservative_force(j + 1, -p.grad_b);
+    out.add_energy(p.energy);
+    Eigen::Matrix<double, 6, 6> hess;
+    hess << p.hess_aa, p.hess_ab, p.hess_ab.transpose(), p.hess_bb;
+    out.add_edge_jacobian(j, -hess);
+  }
+}
+
+double LumenContact::energy() const {
+  double e = 0.0;
+  for (size_t i = 0; i < wire_snapshot.size(); ++i) {
+    const int j = i < wire_edge.size() ? wire_edge[i] : -1;
+    if (j >= 0 && j + 1 < static_cast<int>(catheter_snapshot.size()))
+      e += lumen_penalty(wire_snapshot[i], catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, stiffness_, j == 0)
+               .energy;
+  }
+  return e;
+}
+
+void LumenContact::assign_edges() {
+  wire_edge.assign(wire_snapshot.size(), -1);
+  for (size_t i = 0; i < wire_snapshot.size() && i < wire_arc.size(); ++i)
+    wire_edge[i] = nearest_edge(wire_snapshot[i], wire_arc[i], catheter_snapshot, catheter_arc);
+}
+
+void LumenContact::hold_catheter(const rod::RodSimulator& catheter) {
+  catheter_snapshot.assign(catheter.positions().begin(), catheter.positions().end());
+  catheter_arc.assign(catheter.arc_lengths().begin(), catheter.arc_lengths().end());
+  assign_edges();
+}
+
+void LumenContact::hold_wire(const rod::RodSimulator& wire) {
+  wire_snapshot.assign(wire.positions().begin(), wire.positions().end());
+  wire_arc.assign(wire.arc_lengths().begin(), wire.arc_lengths().end());
+  assign_edges();
+}
+
+PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact,
+                                   int max_sweeps, double tol) {
+  // Fixed point c = H(c): the catheter after solving the wire against c and the catheter
+  // against that wire. IQN-ILS: with the differences V of residuals r = H(c) − c and W of
+  // H(c) over the sweeps so far, c ← H(c) + W γ, γ = argmin |V γ + r|.
+  PairStaticReport rep;
+  auto flat = [](const std::vector<Eigen::Vector3d>& v) {
+    Eigen::VectorXd f(3 * static_cast<Eigen::Index>(v.size()));
+    for (size_t i = 0; i < v.size(); ++i) f.segment<3>(3 * static_cast<Eigen::Index>(i)) = v[i];
+    return f;
+  };
+  contact.hold_catheter(catheter);
+  Eigen::VectorXd c = flat(contact.catheter_snapshot);
+  std::vector<Eigen::VectorXd> rs, hs;
+  for (rep.sweeps = 1; rep.sweeps <= max_sweeps; ++rep.sweeps) {
+    (void)wire.solve_static();
+    contact.hold_wire(wire);
+    (void)catheter.solve_static();
+    const Eigen::VectorXd h = flat(std::vector<Eigen::Vector3d>(catheter.positions().begin(), catheter.positions().end()));
+    if (h.size() != c.size()) {  // the vertex set changed: restart the history
+      rs.clear(), hs.clear();
+      c = h;
+    }
+    const Eigen::VectorXd r = h - c;
+    rep.correction = r.size() ? r.cwiseAbs().maxCoeff() : 0.0;
+    if (rep.correction < tol) {
+      rep.converged = true;
+      break;
+    }
+    Eigen::VectorXd next = h;
+    if (!rs.empty()) {
+      const Eigen::Index m = static_cast<Eigen::Index>(rs.size());
+      Eigen::MatrixXd V(r.size(), m), W(r.size(), m);
+      for (Eigen::Index q = 0; q < m; ++q) V.col(q) = r - rs[q], W.col(q) = h - hs[q];
+      const Eigen::VectorXd gamma = V.colPivHouseholderQr().solve(-r);
+      next = h + W * gamma;
+    }
+    rs.push_back(r), hs.push_back(h);
+    if (rs.size() > 20) rs.erase(rs.begin()), hs.erase(hs.begin());
+    c = next;
+    for (size_t i = 0; i < contact.catheter_snapshot.size(); ++i)
+      contact.catheter_snapshot[i] = c.segment<3>(3 * static_cast<Eigen::Index>(i));
+    contact.assign_edges();
+  }
+  if (rep.sweeps > max_sweeps) rep.sweeps = max_sweeps;
+  contact.hold_catheter(catheter);
+  return rep;
+}
+
+}  // namespace flowire::coupling

@@ -1,0 +1,157 @@
+// The catheter over the wire: the lumen penalty's gradients and Hessian blocks against
+// central differences of its energy; action and reaction between the two rods; and the
+// composite bending of an overlapping pair against the Euler–Bernoulli cantilever with
+// EI_wire + EI_catheter (tip deflection P L³ / (3 EI)), converging in the segment length.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "flowire/coupling/catheter.hpp"
+#include "flowire/rod/simulator.hpp"
+
+using namespace flowire;
+using namespace flowire::coupling;
+
+namespace {
+
+using V3 = Eigen::Vector3d;
+
+// ∂E/∂y and ∂²E/∂y² (diagonal block) of the penalty w.r.t. y ∈ {x, a, b} by central differences.
+void check_block(const V3& x, const V3& a, const V3& b, double c, double k, bool open, int which) {
+  const LumenPenalty p = lumen_penalty(x, a, b, c, k, open);
+  ASSERT_GT(p.energy, 0.0);
+  const V3& grad = which == 0 ? p.grad_x : which == 1 ? p.grad_a : p.grad_b;
+  const Eigen::Matrix3d& hess = which == 0 ? p.hess_xx : which == 1 ? p.hess_aa : p.hess_bb;
+  const double h = 1e-7;
+  auto at = [&](int m, double s) {
+    V3 xs = x, as = a, bs = b;
+    (which == 0 ? xs : which == 1 ? as : bs)[m] += s;
+    return lumen_penalty(xs, as, bs, c, k, open);
+  };
+  for (int m = 0; m < 3; ++m) {
+    const LumenPenalty plus = at(m, h), minus = at(m, -h);
+    const double fd = (plus.energy - minus.energy) / (2 * h);
+    EXPECT_NEAR(grad[m], fd, 1e-6 * (std::abs(fd) + k * 1e-4)) << "grad, block " << which << ", m " << m;
+    const V3& gp = which == 0 ? plus.grad_x : which == 1 ? plus.grad_a : plus.grad_b;
+    const V3& gm = which == 0 ? minus.grad_x : which == 1 ? minus.grad_a : minus.grad_b;
+    const V3 col = (gp - gm) / (2 * h);
+    for (int l = 0; l < 3; ++l)
+      EXPECT_NEAR(hess(l, m), col[l], 1e-5 * k) << "hessian, block " << which << ", (" << l << "," << m << ")";
+    if (which == 2) {  // the cross block ∂²E/∂a∂b: column m of ∂(∂E/∂a)/∂b
+      const V3 cross = (plus.grad_a - minus.grad_a) / (2 * h);
+      for (int l = 0; l < 3; ++l)
+        EXPECT_NEAR(p.hess_ab(l, m), cross[l], 1e-5 * k) << "hessian a-b, (" << l << "," << m << ")";
+    }
+  }
+}
+
+}  // namespace
+
+TEST(LumenPenalty, DerivativesMatchCentralDifferences) {
+  const V3 a(0.0, 0.0, 0.0), b(1e-3, 0.2e-3, -0.1e-3);
+  const double c = 5e-5, k = 3e4;
+  // interior projection, near each end, and the open tip end (before a, on the line)
+  for (const V3& x : {V3(0.4e-3, 0.3e-3, 0.15e-3), V3(0.9e-3, -0.25e-3, 0.2e-3), V3(0.1e-3, 0.1e-3, -0.3e-3)})
+    for (int which = 0; which < 3; ++which) check_block(x, a, b, c, k, false, which);
+  const V3 before(-0.2e-3, 0.2e-3, 0.1e-3), behind(1.3e-3, 0.3e-3, 0.1e-3);
+  for (int which = 0; which < 3; ++which) check_block(before, a, b, c, k, true, which);
+  check_block(before, a, b, c, k, false, 0);  // the closed end: distance to the point a
+  check_block(before, a, b, c, k, false, 1);
+  check_block(behind, a, b, c, k, false, 0);  // beyond b: distance to b
+  check_block(behind, a, b, c, k, false, 2);
+  // inside the clearance: no force
+  const V3 side = (b - a).cross(V3::UnitZ()).normalized();
+  EXPECT_EQ(lumen_penalty(0.5 * (a + b) + 0.6 * c * side, a, b, c, k).energy, 0.0);
+  EXPECT_GT(lumen_penalty(0.5 * (a + b) + 1.4 * c * side, a, b, c, k).energy, 0.0);
+}
+
+namespace {
+struct Pair {
+  rod::WireSpec wire;
+  CatheterSpec cat;
+  double ei_wire = 0.0, ei_cath = 0.0;
+};
+Pair cantilever_pair(double length, int segments) {
+  Pair p;
+  p.wire.length = length;
+  p.wire.radius = 0.2e-3;
+  p.wire.youngs_modulus = 60e9;
+  p.wire.segments = segments;
+  p.wire.inserted_length = length;
+  p.cat.length = length;
+  p.cat.outer_radius = 0.6e-3;
+  p.cat.inner_radius = 0.2e-3;  // clearance 0: the wire's axis held on the catheter's
+  p.cat.youngs_modulus = 2e9;
+  p.cat.initial_length = length;
+  p.cat.stiffness = 1e5;
+  const double pi = std::numbers::pi;
+  p.ei_wire = p.wire.youngs_modulus * pi * std::pow(p.wire.radius, 4) / 4;
+  p.ei_cath = p.cat.youngs_modulus * pi * (std::pow(p.cat.outer_radius, 4) - std::pow(p.cat.inner_radius, 4)) / 4;
+  return p;
+}
+}  // namespace
+
+TEST(LumenContact, ReactionOnTheCatheterIsMinusTheForceOnTheWire) {
+  Pair p = cantilever_pair(0.03, 15);
+  rod::RodSimulator wire(p.wire);
+  rod::RodSimulator cath(catheter_rod_spec(p.cat, p.wire));
+  // bend the wire off the catheter's axis by a tip load, catheter held straight
+  LumenContact contact(p.cat.inner_radius - p.wire.radius, p.cat.stiffness);
+  contact.hold_catheter(cath);
+  wire.set_tip_force({0.0, 5e-3, 0.0});
+  (void)wire.solve_static();
+  contact.hold_wire(wire);
+  rod::ForceAccumulator on_wire, on_cath;
+  on_wire.reset(wire.vertex_count());
+  on_cath.reset(cath.vertex_count());
+  const auto view = [](const rod::RodSimulator& s) {
+    rod::RodView v;
+    v.positions = s.positions();
+    v.velocities = s.velocities();
+    v.arc_length = s.arc_lengths();
+    v.first_clamped_vertex = s.first_clamped_vertex();
+    return v;
+  };
+  contact.evaluate_wire(view(wire), on_wire);
+  contact.evaluate_catheter(view(cath), on_cath);
+  V3 fw = V3::Zero(), fc = V3::Zero();
+  for (const V3& f : on_wire.forces()) fw += f;
+  for (const V3& f : on_cath.forces()) fc += f;
+  ASSERT_GT(fw.norm(), 1e-3);  // the catheter carries a real part of the load
+  EXPECT_LT((fw + fc).norm(), 1e-9 * fw.norm() + 1e-12);
+  EXPECT_NEAR(on_wire.energy(), on_cath.energy(), 1e-12 * on_wire.energy());
+}
+
+// Cantilevered overlapping pair, tip load P on the wire: δ → P L³ / (3 (EI_w + EI_c)). The
+// discrete rod's error shrinks with the segment length h; the slope of log error vs log h
+// is asserted (the shear-free rod converges at first order or better in h).
+TEST(CatheterPair, CantileverBendsWithTheSumOfBothStiffnesses) {
+  const double length = 0.04, load = 1e-4;
+  std::vector<double> hs, errs;
+  for (int n : {10, 20, 40}) {
+    Pair p = cantilever_pair(length, n);
+    rod::RodSimulator wire(p.wire);
+    rod::RodSimulator cath(catheter_rod_spec(p.cat, p.wire));
+    auto contact = std::make_shared<LumenContact>(p.cat.inner_radius - p.wire.radius, p.cat.stiffness);
+    contact->hold_catheter(cath);
+    contact->hold_wire(wire);
+    wire.add_external(std::make_shared<LumenContactSide>(contact, LumenContactSide::Side::Wire));
+    cath.add_external(std::make_shared<LumenContactSide>(contact, LumenContactSide::Side::Catheter));
+    wire.set_tip_force({0.0, load, 0.0});
+    const PairStaticReport rep = solve_static_pair(wire, cath, *contact, 300, 1e-12);
+    ASSERT_TRUE(rep.converged) << "n " << n << " sweeps " << rep.sweeps << " correction " << rep.correction;
+    const double exact = load * std::pow(length, 3) / (3 * (p.ei_wire + p.ei_cath));
+    const double wire_alone = load * std::pow(length, 3) / (3 * p.ei_wire);
+    const double deflection = wire.tip_position().y();
+    const double err = std::abs(deflection / exact - 1.0);
+    std::printf("n %d sweeps %d: tip %.6e m, composite EB %.6e m (wire alone %.6e), rel. error %.3e\n", n, rep.sweeps,
+                deflection, exact, wire_alone, err);
+    EXPECT_LT(err, 0.05);
+    EXPECT_NEAR(cath.tip_position().y(), deflection, 0.02 * exact);  // the pair bends as one
+    hs.push_back(length / n), errs.push_back(err);
+  }
+  const double slope = std::log(errs.front() / errs.back()) / std::log(hs.front() / hs.back());
+  std::printf("convergence slope %.2f\n", slope);
+  EXPECT_GT(slope, 0.8);
+}
