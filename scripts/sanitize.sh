@@ -5,7 +5,7 @@
 #    tools/sanitizers/lsan.supp; a leak from flowire's own code or any UBSan error fails);
 # 2. build the libFuzzer targets (preset `fuzz`, clang) in build-sanitize-fuzz and run each
 #    for a fixed time (30 s by default).
-# Usage: scripts/sanitize.sh [--fuzz-seconds N] [--no-fuzz] [--jobs N]
+# Usage: scripts/sanitize.sh [--fuzz-seconds N] [--no-fuzz] [--jobs N]   (NICE=n: build niceness, 10)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -47,7 +47,7 @@ echo "sanitize.sh: the default tests pass under AddressSanitizer + UBSan ($((SEC
 if [ "$FUZZ" = 1 ]; then
   cmake --preset fuzz -B build-sanitize-fuzz "${LAUNCHER[@]}" -DFLOWIRE_WITH_TESTS=ON \
     -DFLOWIRE_WITH_BENCHMARKS=OFF -DFLOWIRE_FUZZ_SECONDS="$FUZZ_SECONDS" >/dev/null
-  nice -n 10 cmake --build build-sanitize-fuzz -j"$JOBS" --target fuzzers
+  nice -n "${NICE:-10}" cmake --build build-sanitize-fuzz -j"$JOBS" --target fuzzers
   ctest --test-dir build-sanitize-fuzz -L fuzz --output-on-failure
   echo "sanitize.sh: the fuzz targets ran $FUZZ_SECONDS s each without a finding"
 fi
