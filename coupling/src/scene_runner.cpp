@@ -602,7 +602,7 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
         const double f = c.number("insertion.force");
         if (!(f > 0.0)) throw_input_error(c.where("insertion.force"), "insertion.force must be > 0 N");
         for (const char* key : {"insertion.speed", "insertion.schedule", "insertion.max_force"})
-          if (c.has(key))
+          if (c.has(key) && c.values().at(key).where != "default")
             throw_input_error(c.where(key), fmt::format("give either insertion.force (the feed follows from the force) or {}, not both", key));
         sim->set_push_force(f);
       }
