@@ -641,6 +641,14 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
         if (!(f > 0.0)) throw_input_error(c.where("insertion.max_force"), "max_force must be > 0 N");
         sim->set_max_insertion_force(f);
       }
+      if (c.has("insertion.force")) {
+        const double f = c.number("insertion.force");
+        if (!(f > 0.0)) throw_input_error(c.where("insertion.force"), "insertion.force must be > 0 N");
+        for (const char* key : {"insertion.speed", "insertion.schedule", "insertion.max_force"})
+          if (c.has(key) && c.values().at(key).where != "default")
+            throw_input_error(c.where(key), fmt::format("give either insertion.force (the feed follows from the force) or {}, not both", key));
+        sim->set_push_force(f);
+      }
     }
     if (net) {
       index.emplace(*net, 4);
@@ -820,6 +828,7 @@ void CoSimulation::step() {
       sim_->set_insertion_speed(insertion_speed_);
     }
     if (sim_->inserted_length() >= max_length_ && insertion_speed_ > 0.0) sim_->set_insertion_speed(insertion_speed_ = 0.0);
+    if (sim_->inserted_length() >= max_length_ && sim_->push_force() > 0.0) sim_->set_push_force(0.0);  // held there
     const auto tr = Clock::now();
     const auto rep = sim_->step(dt_);
     t_rod_ += seconds_since(tr);
@@ -1058,6 +1067,11 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       if (!settle.is_null()) s["wire"]["settle"] = settle;
       s["wire"]["initial_layout"] = initial_layout;
       if (c.has("insertion.max_force")) s["wire"]["held_steps"] = sim->held_steps();
+      if (c.has("insertion.force"))
+        s["wire"]["force_feed"] = nlohmann::json{{"force", c.number("insertion.force")},
+                                                 {"last_speed", sim->force_feed_speed()},
+                                                 {"extra_solves", sim->force_feed_iterations()},
+                                                 {"unbalanced_steps", sim->force_feed_unbalanced()}};
       if (const DriveSchedule* schedule = cosim.schedule()) {
         double length = 0.0, angle = 0.0;
         schedule->integral_to(cosim.time(), length, angle);

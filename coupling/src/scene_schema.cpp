@@ -175,6 +175,10 @@ config::Schema make_schema() {
       "force-limited feeding: hold the feed in steps that start with the wire pushed in harder than this "
       "(a drive's or a hand's limit); default unlimited (the feed is kinematic)");
 
+  add("insertion.force", Type::Number, "", D::Force,
+      "force-driven feeding: push the base with this constant force; each step's feed is the one for which the "
+      "clamp's axial force equals it (replaces speed; docs/insertion.md)");
+
   add("contact", Type::Section, "", D::None, "wall contact (present by default when a wire moves in vessels)");
   add("contact.enabled", Type::Bool, "true", D::None,
       "false: no wall contact at all (no lookup or wall distance unless the blood drag needs them)");

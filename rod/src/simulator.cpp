@@ -1282,15 +1282,60 @@ void RodSimulator::restore_state(int depth) {
 }
 
 StepReport RodSimulator::step_once(double dt) {
-  feed_speed_ = insertion_speed_;
-  if (feed_speed_ > 0.0 && max_insertion_force_ > 0.0 &&
+  if (push_force_ > 0.0) return step_force_fed(dt);
+  double speed = insertion_speed_;
+  if (speed > 0.0 && max_insertion_force_ > 0.0 &&
       base_force_.dot(model_.base_direction) > max_insertion_force_) {
-    feed_speed_ = 0.0;
+    speed = 0.0;
     ++held_steps_;
   }
+  return step_at_feed(dt, speed);
+}
+
+StepReport RodSimulator::step_at_feed(double dt, double speed) {
+  feed_speed_ = speed;
   adapt_for(std::max(0.0, -feed_speed_ * dt));
   return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt)
                                                               : step_euler(dt);
+}
+
+StepReport RodSimulator::step_force_fed(double dt) {
+  // The feed length of the step is the unknown: the step is taken again from its start until
+  // the clamp's axial force at its end, g(v) = base_force()·d, equals the applied force F.
+  // g grows with v (the step's inertia m/dt, damping, drag and friction, and the axial
+  // stiffness times dt against an obstacle); a secant iteration, started from the last
+  // step's speed and slope, solves it. The feed of one step is kept within half a segment.
+  const Vec3& d = model_.base_direction;
+  const int slot = std::max(settings_.max_subdivisions, 0) + 2;
+  const double tol = force_feed_tolerance_ * push_force_;
+  const double vmax = 0.5 * model_.h / dt;
+  if (!(force_feed_slope_ > 0.0)) {
+    double m = 0.0;
+    for (double mk : disc_.mass) m += mk;
+    force_feed_slope_ = std::max(m / dt + model_.damping * state_.inserted_length, 1e-12);
+  }
+  save_state(slot);
+  double v = std::clamp(force_feed_speed_, -vmax, vmax);
+  StepReport rep = step_at_feed(dt, v);
+  if (!rep.converged()) return rep;
+  double g = base_force_.dot(d) - push_force_;
+  int it = 0;
+  for (; std::abs(g) > tol && it < kMaxForceFeedIterations; ++it) {
+    const double v_new = std::clamp(v - g / force_feed_slope_, -vmax, vmax);
+    if (v_new == v) break;  // at the per-step limit
+    restore_state(slot);
+    rep = step_at_feed(dt, v_new);
+    if (!rep.converged()) return rep;
+    const double g_new = base_force_.dot(d) - push_force_;
+    const double slope = (g_new - g) / (v_new - v);
+    if (slope > 0.0 && std::isfinite(slope)) force_feed_slope_ = slope;
+    v = v_new;
+    g = g_new;
+  }
+  force_feed_iterations_ += it;
+  if (std::abs(g) > tol) ++force_feed_unbalanced_;
+  force_feed_speed_ = v;
+  return rep;
 }
 
 namespace {

@@ -179,6 +179,17 @@ TEST(Cli, BadInputGivesOneLineAndStatusTwo) {
   EXPECT_FALSE(fs::exists(dir / "w" / "summary.json"));
   expect_bad("run " + (dir / "wire.yaml").string() + " --set wire.adapt.split_angle=0.1 --out " + (dir / "w").string(),
              "wire.yaml:5");
+  // Force-driven feeding: with a speed too, or not positive, names the file and line.
+  write(dir / "force.yaml",
+        "wire:\n  length: 0.1\n  segment_length: 2 mm\ninsertion: {force: 0.05 N, speed: 1 cm/s}\n"
+        "solve: {dt: 1 ms, duration: 2 ms}\n");
+  expect_bad("run " + (dir / "force.yaml").string() + " --out " + (dir / "f").string(), "force.yaml:4");
+  expect_bad("run " + (dir / "force.yaml").string() + " --out " + (dir / "f").string(), "insertion.force");
+  EXPECT_FALSE(fs::exists(dir / "f" / "summary.json"));
+  write(dir / "force2.yaml",
+        "wire:\n  length: 0.1\n  segment_length: 2 mm\ninsertion: {force: -1 N}\nsolve: {dt: 1 ms, duration: 2 ms}\n");
+  expect_bad("run " + (dir / "force2.yaml").string() + " --out " + (dir / "f").string(), "force2.yaml:4");
+  EXPECT_FALSE(fs::exists(dir / "f" / "summary.json"));
 }
 
 TEST(Cli, VesselsOnlySceneWritesSummaryAndSegments) {

@@ -201,6 +201,25 @@ class RodSimulator {
   /// harder than @p force [N] (base_force() along the insertion direction) feeds nothing,
   /// as a force-limited drive or an operator's hand would; 0 (default): no limit.
   void set_max_insertion_force(double force) { max_insertion_force_ = force; }
+  /// @brief Force-driven feeding: the base is pushed along the insertion direction with a
+  /// constant force @p force [N] (> 0; 0 returns to the kinematic feed) and the feed of each
+  /// step is the one for which the clamp's axial force at the step's end, base_force()·d,
+  /// equals it (a quasi-static drive: its own mass and compliance are left out). The wire
+  /// then advances at the speed the resisting forces (inertia, damping, drag, friction)
+  /// allow, and stops where the wire's axial reaction against an obstacle reaches the force.
+  /// Replaces set_insertion_speed while set; rotation_speed still turns the base.
+  void set_push_force(double force) {
+    push_force_ = force;
+    force_feed_slope_ = 0.0;
+  }
+  [[nodiscard]] double push_force() const { return push_force_; }
+  /// @brief Feed speed of the last force-driven step [m/s].
+  [[nodiscard]] double force_feed_speed() const { return force_feed_speed_; }
+  /// @brief Secant iterations (extra step solves) spent by force-driven feeding so far.
+  [[nodiscard]] long force_feed_iterations() const { return force_feed_iterations_; }
+  /// @brief Force-driven steps whose axial force stayed off F by more than the tolerance
+  /// (the per-step feed limit of half a segment reached, or the iteration limit).
+  [[nodiscard]] long force_feed_unbalanced() const { return force_feed_unbalanced_; }
   /// @brief Steps in which feeding was held by the force limit.
   [[nodiscard]] long held_steps() const { return held_steps_; }
   /// @brief Clamp rotation speed, right-handed about the insertion direction [rad/s].
@@ -297,6 +316,8 @@ class RodSimulator {
   /// refinement/coarsening of the current one), carrying the state over.
   void resample(const std::vector<double>& u_new);
   void predict_feed(double fed, double h);
+  StepReport step_at_feed(double dt, double speed);
+  StepReport step_force_fed(double dt);
   void vertex_params(int k, VertexParams& p) const;
   StepReport newton(Mode mode, double h, double load_scale);
   StepReport solve_static_once();
@@ -354,6 +375,12 @@ class RodSimulator {
   double insertion_speed_ = 0.0;
   double feed_speed_ = 0.0;  // this step's feeding speed (insertion_speed_ unless held)
   double max_insertion_force_ = 0.0;
+  static constexpr int kMaxForceFeedIterations = 12;
+  double push_force_ = 0.0;              // force-driven feeding [N] (0: kinematic)
+  double force_feed_speed_ = 0.0;        // the last force-driven step's feed speed
+  double force_feed_slope_ = 0.0;        // d(axial clamp force)/d(feed speed), last secant
+  double force_feed_tolerance_ = 1e-4;   // relative to push_force_
+  long force_feed_iterations_ = 0, force_feed_unbalanced_ = 0;
   long held_steps_ = 0;
   double rotation_speed_ = 0.0;
   double target_angle_ = 0.0;
