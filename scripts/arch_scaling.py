@@ -22,7 +22,7 @@ for b in json.loads(out)["benchmarks"]:
 
 print("| inserted | network | vertices | segments | ms/step | " + " | ".join(p[:-3] + " µs" for p in phases) +
       " | Newton its | unconverged |")
-print("|" + "---|" * (7 + len(phases) + 1))
+print("|" + "---|" * (5 + len(phases) + 2))
 for r in rows:
     print(f"| {r['cm']} cm | {r['mm']:g} mm | {r['vertices']:.0f} | {r['segments']:.0f} | {r['ms']:.3f} | " +
           " | ".join(f"{r[p]:.0f}" for p in phases) + f" | {r['newton_per_step']:.2f} | {r['unconverged']:.0f} |")
