@@ -862,9 +862,12 @@ rod::StepReport CoSimulation::solve_static_all() {
 
 namespace {
 /// The frame of one rod as the outputs write it (free vertices from the base to the tip).
-WireFrame rod_frame(const rod::RodSimulator& rod, const VesselForces* forces, double time) {
+/// The frame of @p rod (empty, at @p time, when there is none).
+WireFrame rod_frame(const rod::RodSimulator* rod_or_null, const VesselForces* forces, double time) {
   WireFrame f;
   f.time = time;
+  if (!rod_or_null) return f;
+  const rod::RodSimulator& rod = *rod_or_null;
   const auto x = rod.positions();
   const auto arc = rod.arc_lengths();
   for (int i = rod.first_clamped_vertex(); i >= 0; --i) {  // base → tip
@@ -885,23 +888,9 @@ WireFrame rod_frame(const rod::RodSimulator& rod, const VesselForces* forces, do
 }
 }  // namespace
 
-WireFrame CoSimulation::wire_frame() const {
-  if (!sim_) {
-    WireFrame f;
-    f.time = time();
-    return f;
-  }
-  return rod_frame(*sim_, forces_.get(), time());
-}
+WireFrame CoSimulation::wire_frame() const { return rod_frame(sim_.get(), forces_.get(), time()); }
 
-WireFrame CoSimulation::catheter_frame() const {
-  if (!cath_) {
-    WireFrame f;
-    f.time = time();
-    return f;
-  }
-  return rod_frame(*cath_, cath_forces_.get(), time());
-}
+WireFrame CoSimulation::catheter_frame() const { return rod_frame(cath_.get(), cath_forces_.get(), time()); }
 
 
 RunResult run_scene(const config::Config& c, const RunOptions& options) {

@@ -84,7 +84,6 @@ struct RodSimulator::Work {
   std::vector<Vec3> x_end;
   double h_end = 0.0;
   std::vector<Vec3> v_guess;         // (vertices) velocity of the initial guess
-  std::vector<char> held;            // (vertices) where the last step left it (second-order guess)
   std::vector<double> omega_guess;   // (edges)
   std::vector<double> theta0, omega0, twist0;
   std::vector<EdgeFrame> frame0;
@@ -132,7 +131,6 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   w.edges.reserve(nvmax);
   w.acc.reserve(nvmax);
   for (auto* v : {&w.vel, &w.x0, &w.v0, &w.xb, &w.xz, &w.tangent, &w.x_end, &w.v_guess}) v->reserve(nvmax);
-  w.held.reserve(nvmax);
   w.spin.reserve(nvmax);
   w.ext_spin_k.reserve(nvmax);
   for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.thetab, &w.twistb, &w.tz, &w.ru, &w.rtau,
@@ -1358,11 +1356,9 @@ void RodSimulator::begin_step(double h, bool extrapolate) {
   const int nk = history ? std::min({nv, static_cast<int>(w.x_end.size()), static_cast<int>(w.v0.size())}) : 0;
   auto held = [&](int k) { return k < nk && s.x[k] == w.x_end[k]; };
   w.v_guess.resize(nv);
-  w.held.resize(nv);
   w.omega_guess.resize(std::max(nv - 1, 0));
   for (int k = 0; k < nv; ++k) {
     w.qhat.segment<3>(4 * k) = s.x[k] + h * s.v[k];  // the inertial prediction (the merit's q̂)
-    w.held[k] = held(k);
     w.v_guess[k] = held(k) ? Vec3(2.0 * s.v[k] - w.v0[k]) : s.v[k];
     if (k < nv - 1) w.omega_guess[k] = held(k) && held(k + 1) ? 2.0 * s.omega[k] - w.omega0[k] : s.omega[k];
   }
