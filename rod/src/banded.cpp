@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "flowire/common/error.hpp"
+#include "kernel_clones.hpp"
 
 namespace flowire::rod {
 
@@ -73,6 +74,7 @@ void BandedLDLT::reserve(int max_n, int bandwidth) {
 
 namespace {
 
+/// (Both kernels are inlined into their callers, which are compiled per instruction set.)
 /// Right-looking LDLᵀ of a band stored by rows (stride b + 1). With B > 0 the half-width is
 /// a compile-time constant (the rod's b = 10): the short update loops are then unrolled and
 /// vectorized, which is most of the factorization's cost at this bandwidth. The multipliers
@@ -82,7 +84,7 @@ namespace {
 typedef double V2 __attribute__((vector_size(16)));
 
 template <int B>
-bool factorize_band(double* __restrict L, int n, int b_runtime, double tiny, double min_pivot,
+__attribute__((always_inline)) inline bool factorize_band(double* __restrict L, int n, int b_runtime, double tiny, double min_pivot,
                     double* __restrict w, int& negative, int& modified, double& min_pivot_seen) {
   const int b = B > 0 ? B : b_runtime;
   const size_t stride = static_cast<size_t>(b) + 1;
@@ -149,7 +151,7 @@ bool factorize_band(double* __restrict L, int n, int b_runtime, double tiny, dou
 /// Forward (L y = r), diagonal and backward (Lᵀ x = z) substitution in place; with B > 0
 /// the interior rows run with a compile-time bandwidth.
 template <int B>
-void solve_band(const double* __restrict L, int n, int b_runtime, double* __restrict x) {
+__attribute__((always_inline)) inline void solve_band(const double* __restrict L, int n, int b_runtime, double* __restrict x) {
   const int b = B > 0 ? B : b_runtime;
   const size_t stride = static_cast<size_t>(b) + 1;
   for (int i = 0; i < n; ++i) {  // L y = rhs
@@ -192,6 +194,7 @@ void solve_band(const double* __restrict L, int n, int b_runtime, double* __rest
 
 }  // namespace
 
+FLOWIRE_ROD_KERNEL_CLONES
 bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
   const int n = a.size();
   const int b = a.bandwidth();
@@ -212,6 +215,7 @@ bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
   return factorize_band<0>(L, n, b, tiny, min_pivot, w, negative_, modified_, min_pivot_);
 }
 
+FLOWIRE_ROD_KERNEL_CLONES
 void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const {
   const int n = l_.size();
   const int b = l_.bandwidth();

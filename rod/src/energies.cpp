@@ -1,5 +1,7 @@
 #include "flowire/rod/energies.hpp"
 
+#include "kernel_clones.hpp"
+
 #include <cassert>
 #include <cmath>
 #include <numbers>
@@ -16,12 +18,6 @@ Mat3 skew(const Vec3& v) {
   Mat3 m;
   m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
   return m;
-}
-
-/// Any unit vector perpendicular to unit vector a.
-Vec3 any_perpendicular(const Vec3& a) {
-  const Vec3 trial = std::abs(a.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  return (trial - a * a.dot(trial)).normalized();
 }
 
 /// Geometry of a stencil at the base point. Variables "y" are (t_e, t_f, θ_e, θ_f).
@@ -245,18 +241,6 @@ double twist_y(const Local& L, double theta_e, double theta_f, const VertexParam
   return 0.5 * c * dm * dm;
 }
 
-
-// The stencil kernel is ~1,000 scalar multiply-adds. On x86-64 with GCC it is also compiled
-// for x86-64-v3 (AVX2, FMA: three-operand forms and fused multiply-adds, ~25% faster) and
-// the variant is picked once at load time, so the default build still runs on any x86-64.
-// Results differ between the two variants by round-off only (FLOWIRE_ROD_NO_KERNEL_CLONES
-// builds the default variant alone).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
-    !defined(FLOWIRE_ROD_NO_KERNEL_CLONES)
-#define FLOWIRE_ROD_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define FLOWIRE_ROD_KERNEL_CLONES
-#endif
 
 // Small value types for the stencil kernel below: plain structs of doubles that the compiler
 // keeps in registers and inlines completely (fixed-size Eigen 3-vectors in an expression of
@@ -507,30 +491,8 @@ double bend_twist_kernel(const Vec3& te_, const Vec3& tf_, double le, double lf,
 
 }  // namespace
 
-Vec3 parallel_transport(const Vec3& u, const Vec3& from, const Vec3& to) {
-  const Vec3 b = from.cross(to);
-  const double c = from.dot(to);
-  if (1.0 + c < 1e-14) {
-    const Vec3 axis = any_perpendicular(from);
-    return 2.0 * axis * axis.dot(u) - u;  // rotation by π about axis
-  }
-  return c * u + b.cross(u) + b * (b.dot(u) / (1.0 + c));
-}
-
-double signed_angle(const Vec3& a, const Vec3& b, const Vec3& axis) {
-  return std::atan2(a.cross(b).dot(axis), a.dot(b));
-}
-
 Vec3 curvature_binormal(const Vec3& te, const Vec3& tf) {
   return 2.0 * te.cross(tf) / (1.0 + te.dot(tf));
-}
-
-double reference_twist(const Vec3& d1e, const Vec3& te, const Vec3& d1f, const Vec3& tf,
-                       double previous) {
-  const Vec3 u = parallel_transport(d1e, te, tf);
-  const double a = signed_angle(u, d1f, tf);
-  constexpr double two_pi = 2.0 * std::numbers::pi;
-  return a + two_pi * std::round((previous - a) / two_pi);
 }
 
 double stretch_energy(const Vec3& x0, const Vec3& x1, double ks, double rest_length) {

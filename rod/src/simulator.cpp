@@ -10,6 +10,7 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "kernel_clones.hpp"
 
 namespace flowire::rod {
 
@@ -652,24 +653,27 @@ void RodSimulator::predict_feed(double fed, double h) {
 // Frames
 // -----------------------------------------------------------------------------------------
 
+FLOWIRE_ROD_KERNEL_CLONES
 void RodSimulator::transport_frames_to(const std::vector<Vec3>& x_new,
                                        const std::vector<EdgeFrame>& frame_from,
                                        const std::vector<double>& twist_from,
                                        std::vector<EdgeFrame>& frame_to,
                                        std::vector<double>& twist_to) const {
+  // One pass: edge j's frame, then the reference twist at the vertex before it from the
+  // two new frames (their tangents kept, not re-derived as d1 × d2). In place is allowed.
   const int nv = static_cast<int>(x_new.size());
+  Vec3 t_prev = Vec3::Zero(), d1_prev = Vec3::Zero();
   for (int j = 0; j < nv - 1; ++j) {
-    const Vec3 t0 = frame_from[j].d1.cross(frame_from[j].d2);
+    const EdgeFrame& from = frame_from[j];
+    const Vec3 t0 = from.d1.cross(from.d2);
     const Vec3 t1 = (x_new[j + 1] - x_new[j]).normalized();
-    Vec3 d1 = parallel_transport(frame_from[j].d1, t0, t1);
+    Vec3 d1 = parallel_transport(from.d1, t0, t1);
     d1 = (d1 - t1 * t1.dot(d1)).normalized();
     frame_to[j].d1 = d1;
     frame_to[j].d2 = t1.cross(d1);
-  }
-  for (int k = 1; k < nv - 1; ++k) {
-    const Vec3 te = frame_to[k - 1].d1.cross(frame_to[k - 1].d2);
-    const Vec3 tf = frame_to[k].d1.cross(frame_to[k].d2);
-    twist_to[k] = reference_twist(frame_to[k - 1].d1, te, frame_to[k].d1, tf, twist_from[k]);
+    if (j > 0) twist_to[j] = reference_twist(d1_prev, t_prev, d1, t1, twist_from[j]);
+    t_prev = t1;
+    d1_prev = d1;
   }
 }
 
@@ -940,11 +944,17 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
   rep.tolerance = force_scale(load_scale);
   const int max_it = mode == Mode::Static ? settings_.max_static_iterations : settings_.max_iterations;
 
+  // Max over the free unknowns of |force| and |torque| / rest length (a force too).
   auto residual_norm = [&]() {
     double r = 0.0;
-    for (int d = first_free; d < first_fixed; ++d) {
+    for (int d = first_free; d < first_fixed && d % 4 != 0; ++d) {  // a partly held vertex
       const double v = (d % 4 == 3) ? w.grad(d) / disc_.rest_length[d / 4] : w.grad(d);
       r = std::max(r, std::abs(v));
+    }
+    for (int k = (first_free + 3) / 4; 4 * k < first_fixed; ++k) {
+      const double* g = w.grad.data() + 4 * k;
+      r = std::max({r, std::abs(g[0]), std::abs(g[1]), std::abs(g[2])});
+      if (4 * k + 3 < first_fixed) r = std::max(r, std::abs(g[3]) / disc_.rest_length[k]);
     }
     return r;
   };
@@ -1010,10 +1020,11 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       }
       for (int d = first_fixed; d < nd; ++d) w.H.set_identity_row(d);
       for (int d = 0; d < first_free; ++d) w.H.set_identity_row(d);
-      const double scale = std::max(w.H.max_diagonal(), 1e-300);
+      // (The scale of the diagonal is needed by the fallbacks only.)
+      auto scale = [&] { return std::max(w.H.max_diagonal(), 1e-300); };
       if (settings_.linear_solver == LinearSolver::Banded) {
         ok = attempt == 0 ? (w.ldlt.factorize(w.H) && w.ldlt.negative_pivots() == 0)
-                          : w.ldlt.factorize(w.H, 1e-12 * scale);
+                          : w.ldlt.factorize(w.H, 1e-12 * scale());
         if (ok) {
           w.dq.head(nd) = rhs;
           w.ldlt.solve_in_place(w.dq.head(nd));
@@ -1022,7 +1033,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
         double shift = 0.0;
         for (int tries = 0; tries < (attempt == 0 ? 1 : 12) && !ok; ++tries) {
           if (tries > 0) {
-            const double next = tries == 1 ? 1e-12 * scale : 10.0 * shift;
+            const double next = tries == 1 ? 1e-12 * scale() : 10.0 * shift;
             w.H.add_to_diagonal(next - shift);
             shift = next;
           }

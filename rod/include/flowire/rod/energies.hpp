@@ -21,6 +21,9 @@
 /// - bending and twisting: one interior vertex with its two edges e (before) and f
 ///   (after), variables (x_0, θ_e, x_1, θ_f, x_2) — 11 unknowns, contiguous in the global
 ///   vector.
+#include <cmath>
+#include <numbers>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -36,10 +39,23 @@ using Mat11 = Eigen::Matrix<double, 11, 11>;
 /// @brief Minimal rotation taking unit vector @p from to unit vector @p to, applied to @p u.
 /// \f[ P u = (a\cdot b)\,u + (a\times b)\times u + \frac{(a\times b)\,((a\times b)\cdot u)}{1+a\cdot b} \f]
 /// For antiparallel inputs (1 + a·b < 1e-14) it rotates by π about an axis ⊥ @p from.
-[[nodiscard]] Vec3 parallel_transport(const Vec3& u, const Vec3& from, const Vec3& to);
+/// Inline: the simulator transports every edge's frame at each Newton trial.
+[[nodiscard]] inline Vec3 parallel_transport(const Vec3& u, const Vec3& from, const Vec3& to) {
+  const Vec3 b = from.cross(to);
+  const double c = from.dot(to);
+  if (1.0 + c < 1e-14) [[unlikely]] {
+    // Rotation by π about an axis ⊥ from.
+    const Vec3 trial = std::abs(from.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+    const Vec3 axis = (trial - from * from.dot(trial)).normalized();
+    return 2.0 * axis * axis.dot(u) - u;
+  }
+  return c * u + b.cross(u) + b * (b.dot(u) / (1.0 + c));
+}
 
 /// @brief Signed angle from @p a to @p b about axis @p axis (a, b ⊥ axis), in (−π, π].
-[[nodiscard]] double signed_angle(const Vec3& a, const Vec3& b, const Vec3& axis);
+[[nodiscard]] inline double signed_angle(const Vec3& a, const Vec3& b, const Vec3& axis) {
+  return std::atan2(a.cross(b).dot(axis), a.dot(b));
+}
 
 /// @brief Curvature binormal of two consecutive edge tangents:
 /// \f[ (\kappa b) = \frac{2\, t_e \times t_f}{1 + t_e\cdot t_f}, \quad |\kappa b| = 2\tan(\varphi/2) \f]
@@ -49,8 +65,12 @@ using Mat11 = Eigen::Matrix<double, 11, 11>;
 /// @brief Reference twist at the vertex between edges e and f: the signed angle about
 /// t_f from the space-parallel transport of d1_e to d1_f. The result is taken on the
 /// branch closest to @p previous (2π jumps removed).
-[[nodiscard]] double reference_twist(const Vec3& d1e, const Vec3& te, const Vec3& d1f,
-                                     const Vec3& tf, double previous);
+[[nodiscard]] inline double reference_twist(const Vec3& d1e, const Vec3& te, const Vec3& d1f,
+                                            const Vec3& tf, double previous) {
+  const double a = signed_angle(parallel_transport(d1e, te, tf), d1f, tf);
+  constexpr double two_pi = 2.0 * std::numbers::pi;
+  return a + two_pi * std::round((previous - a) / two_pi);
+}
 
 // ---------------------------------------------------------------------------------------
 // Stretching
