@@ -319,7 +319,20 @@ class RodSimulator {
   StepReport step_at_feed(double dt, double speed);
   StepReport step_force_fed(double dt);
   void vertex_params(int k, VertexParams& p) const;
+  /// Newton's method on the incremental potential (newton.cpp): from the current state to
+  /// a residual within force_scale(), or the status that stopped it.
   StepReport newton(Mode mode, double h, double load_scale);
+  /// Max over the free unknowns [first_free, first_fixed) of |force| and |torque| / rest length.
+  [[nodiscard]] double residual_norm(int first_free, int first_fixed) const;
+  /// Newton's direction into work dq: with the kept factorization (a chord step), or by
+  /// factorizing the Hessian with its fallbacks. False if no factorization succeeded.
+  bool solve_direction(Mode mode, double h, double load_scale, bool chord_step, int first_free, int first_fixed,
+                       StepReport& rep);
+  /// Backtracking line search along dq from the current state, which it moves to the
+  /// accepted point (φ and the largest step updated); returns the step length, or 0 with
+  /// nothing accepted (the state then is the trial last rejected).
+  double line_search(Mode mode, double h, double load_scale, int first_free, int first_fixed, double& phi,
+                     double& max_step, StepReport& rep);
   StepReport solve_static_once();
   /// adapt() with the grid kept over the length a pull-back of @p pull_back moves into the clamp.
   bool adapt_for(double pull_back);

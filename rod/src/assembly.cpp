@@ -1,0 +1,263 @@
+#include "flowire/rod/simulator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "flowire/common/error.hpp"
+#include "kernel_clones.hpp"
+#include "simulator_internal.hpp"
+
+namespace flowire::rod {
+
+using detail::positive_part;
+using detail::positive_part6;
+using detail::sym;
+
+// -----------------------------------------------------------------------------------------
+// Assembly
+// -----------------------------------------------------------------------------------------
+
+void RodSimulator::vertex_params(int k, VertexParams& p) const {
+  // A clamp vertex owns only the half cell on its free side: the wire behind it is
+  // held rigid, so its bending and twisting act over h/2 (this keeps the clamp exactly at
+  // the entry and the scheme second-order; a full cell would move the clamp back by h/2).
+  double cell = 1.0;
+  if (k == first_clamped_) cell = 0.5 * disc_.rest_length[k - 1] / disc_.cell_length[k];
+  if (tip_clamped_ && k == 1) cell = 0.5;
+  p.bend_stiffness1 = p.bend_stiffness2 = disc_.bend_stiffness[k];
+  p.rest_kappa1 = cell * disc_.rest_kappa1[k];
+  p.rest_kappa2 = cell * disc_.rest_kappa2[k];
+  p.twist_stiffness = disc_.twist_stiffness[k];
+  p.rest_twist = 0.0;
+  p.voronoi_length = cell * disc_.cell_length[k];
+}
+
+void RodSimulator::gather(Eigen::Ref<Eigen::VectorXd> q) const {
+  const int nv = state_.vertex_count();
+  for (int k = 0; k < nv; ++k) {
+    q.segment<3>(4 * k) = state_.x[k];
+    if (k < nv - 1) q(4 * k + 3) = state_.theta[k];
+  }
+}
+
+int RodSimulator::add_point_force(double s, const Vec3& f) {
+  point_forces_.push_back({s, f});
+  return static_cast<int>(point_forces_.size()) - 1;
+}
+
+void RodSimulator::add_external(std::shared_ptr<ExternalForce> force) {
+  if (!force) throw_usage_error("RodSimulator::add_external: null force");
+  externals_.push_back(std::move(force));
+  externals_.back()->start(current_view(0.0));
+}
+
+void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
+  Work& w = *work_;
+  const RodState& s = state_;
+  const int nv = s.vertex_count();
+  const int nd = dof_count();
+  w.fext.head(nd).setZero();
+  w.fcons.head(nd).setZero();
+  w.ext_energy = 0.0;
+  w.has_ext_k = false;
+  w.has_ext_edge_k = false;
+  w.moment_k.setZero();
+  if (gravity_.squaredNorm() > 0.0)
+    for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += load_scale * disc_.mass[k] * gravity_;
+  w.fext.segment<3>(0) += load_scale * tip_force_;
+  const double L = s.inserted_length;
+  for (const PointForce& pf : point_forces_) {
+    const double u = L - pf.s;
+    if (u < 0.0 || u > L) continue;
+    const auto it = std::upper_bound(s.u.begin(), s.u.end(), u);
+    const int k = std::clamp(static_cast<int>(it - s.u.begin()) - 1, 0, nv - 2);
+    const double a = std::clamp((u - s.u[k]) / (s.u[k + 1] - s.u[k]), 0.0, 1.0);
+    w.fext.segment<3>(4 * k) += load_scale * (1.0 - a) * pf.f;
+    w.fext.segment<3>(4 * (k + 1)) += load_scale * a * pf.f;
+  }
+  if (tip_moment_.squaredNorm() > 0.0) {
+    const Vec3 M = load_scale * tip_moment_;
+    const Vec3 e = s.x[1] - s.x[0];
+    const double l2 = e.squaredNorm();
+    const Vec3 t = e / std::sqrt(l2);
+    w.fext(3) += M.dot(t);
+    const Vec3 Mp = M - t * t.dot(M);
+    const Vec3 f1 = Mp.cross(e) / l2;  // couple: e × f1 = M⊥
+    w.fext.segment<3>(4) += f1;
+    w.fext.segment<3>(0) -= f1;
+    Mat3 skewM;
+    skewM << 0, -Mp.z(), Mp.y(), Mp.z(), 0, -Mp.x(), -Mp.y(), Mp.x(), 0;
+    w.moment_k = -sym(skewM / l2 - 2.0 * f1 * e.transpose() / l2);
+  }
+  if (!externals_.empty()) {
+    w.vel.resize(nv);
+    w.spin.resize(nv - 1);
+    w.tangent.resize(nv - 1);
+    for (int k = 0; k < nv; ++k)
+      w.vel[k] = mode == Mode::Dynamic ? Vec3((s.x[k] - w.x0[k]) / h) : Vec3::Zero();
+    for (int j = 0; j < nv - 1; ++j) {
+      w.spin[j] = mode == Mode::Dynamic ? (s.theta[j] - w.theta0[j]) / h : 0.0;
+      w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
+    }
+    w.acc.reset(nv);
+    RodView view;
+    view.positions = s.x;
+    view.velocities = w.vel;
+    view.arc_length = std::span<const double>(arc_length_.data(), nv);
+    view.radius = std::span<const double>(disc_.edge_radius.data(), nv - 1);
+    view.rest_lengths = std::span<const double>(disc_.rest_length.data(), nv - 1);
+    view.segment_length = model_.h;
+    view.spin_rates = w.spin;
+    view.tangents = w.tangent;
+    view.first_clamped_vertex = first_clamped_;
+    view.time = s.time;
+    view.dt = mode == Mode::Dynamic ? h : 0.0;
+    for (auto& ext : externals_) ext->evaluate(view, w.acc);
+    w.ext_k.resize(nv);
+    w.ext_spin_k.resize(nv - 1);
+    w.has_ext_k = true;
+    for (int j = 0; j < nv - 1; ++j) {
+      w.fext(4 * j + 3) += w.acc.twist_torques()[j];
+      w.ext_spin_k[j] =
+          mode == Mode::Dynamic ? -w.acc.twist_torque_spin_derivatives()[j] / h : 0.0;
+    }
+    w.has_ext_edge_k = w.acc.has_edge_jacobians();
+    if (w.has_ext_edge_k) {
+      w.ext_edge_k.resize(nv - 1);
+      for (int j = 0; j < nv - 1; ++j) {
+        const auto& e = w.acc.edge_jacobians()[static_cast<size_t>(j)];
+        w.ext_edge_k[j] = -0.5 * (e + e.transpose());
+      }
+    }
+    w.ext_energy = w.acc.energy();
+    for (int k = 0; k < nv; ++k) {
+      w.fcons.segment<3>(4 * k) = w.acc.conservative_forces()[k];
+      w.fext.segment<3>(4 * k) += w.acc.forces()[k];
+      w.ext_k[k] = -sym(w.acc.position_jacobians()[k]);
+      if (mode == Mode::Dynamic) w.ext_k[k] -= sym(w.acc.velocity_jacobians()[k]) / h;
+    }
+  }
+}
+
+double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need, bool psd,
+                              bool reuse_loads) {
+  Work& w = *work_;
+  const RodState& s = state_;
+  const int nv = s.vertex_count();
+  const int nd = dof_count();
+  const bool need_grad = need != Need::Value;
+  const bool need_matrix = need == Need::Matrix;
+  auto g = w.grad.head(nd);
+  if (need_grad) g.setZero();
+  if (need_matrix) w.H.resize(nd);
+  double energy = 0.0;
+  // Stretching: E = ½ ks ℓ̄ (ℓ/ℓ̄ − 1)², one length and tangent per edge.
+  for (int j = 0; j < nv - 1; ++j) {
+    const double lbar = disc_.rest_length[j];
+    const double ks = disc_.stretch_stiffness[j];
+    const Vec3 e = s.x[j + 1] - s.x[j];
+    const double l = e.norm();
+    const double strain = l / lbar - 1.0;
+    energy += 0.5 * ks * lbar * strain * strain;
+    if (!need_grad) continue;
+    const Vec3 t = e / l;
+    const Vec3 ge = ks * strain * t;
+    g.segment<3>(4 * j) -= ge;
+    g.segment<3>(4 * j + 4) += ge;
+    if (need_matrix) {
+      // Same matrix as stretch_hessian(): (ks/ℓ̄) t tᵀ + ks (1/ℓ̄ − 1/ℓ)(I − t tᵀ).
+      double transverse = ks * (1.0 / lbar - 1.0 / l);
+      if (psd) transverse = std::max(transverse, 0.0);
+      const Mat3 tt = t * t.transpose();
+      const Mat3 he = (ks / lbar - transverse) * tt + transverse * Mat3::Identity();
+      // Blocks (x_j, x_j) = (x_{j+1}, x_{j+1}) = he, (x_{j+1}, x_j) = −he; lower band only.
+      const int r0 = 4 * j, r1 = 4 * j + 4;
+      for (int a = 0; a < 3; ++a) {
+        for (int c = 0; c <= a; ++c) {
+          w.H.lower(r0 + a, r0 + c) += he(a, c);
+          w.H.lower(r1 + a, r1 + c) += he(a, c);
+        }
+        for (int c = 0; c < 3; ++c) w.H.lower(r1 + a, r0 + c) -= he(a, c);
+      }
+    }
+  }
+  // Bending and twisting: per-edge geometry once, then one stencil per interior vertex.
+  w.edges.resize(nv - 1);
+  for (int j = 0; j < nv - 1; ++j)
+    w.edges[j] = edge_geometry(s.x[j], s.x[j + 1], s.frame[j], s.theta[j]);
+  VertexParams p;
+  Vec11 gs;
+  Mat11 hs;
+  for (int k = 1; k < nv - 1; ++k) {
+    vertex_params(k, p);
+    energy += bend_twist(w.edges[k - 1], w.edges[k], s.theta[k - 1], s.theta[k], s.ref_twist[k], p,
+                         need_grad ? &gs : nullptr, need_matrix ? &hs : nullptr, psd);
+    if (need_grad) g.segment<11>(4 * (k - 1)) += gs;
+    if (need_matrix) w.H.add_block(hs, 4 * (k - 1));
+  }
+  if (!reuse_loads) evaluate_loads(mode, h, load_scale);
+  if (need_grad) g -= w.fext.head(nd);
+  if (mode == Mode::Dynamic) {
+    // Inertia and damping: ½|q − q̂|²_M / h² + ½|q − q₀|²_C / h.
+    const double ih2 = 1.0 / (h * h), ih = 1.0 / h;
+    for (int d = 0; d < nd; ++d) {
+      const double a = w.q(d) - w.qhat(d);
+      const double b = w.q(d) - w.q0(d);
+      energy += 0.5 * (w.mass(d) * a * a * ih2 + w.damp(d) * b * b * ih);
+      if (need_grad) g(d) += w.mass(d) * a * ih2 + w.damp(d) * b * ih;
+      if (need_matrix) w.H.lower(d, d) += w.mass(d) * ih2 + w.damp(d) * ih;
+    }
+  }
+  if (need_matrix) {
+    for (int k = 0; w.has_ext_k && k < nv; ++k) {
+      if (w.ext_k[k].isZero(0.0)) continue;
+      const int idx[3] = {4 * k, 4 * k + 1, 4 * k + 2};
+      if (psd) {
+        // An external stiffness need not be definite (a contact's wall curvature where two
+        // vessels are blended): its positive part, so the Gauss–Newton matrix is.
+        w.H.add_block(positive_part(w.ext_k[k]), idx, 3);
+      } else {
+        w.H.add_block(w.ext_k[k], idx, 3);
+      }
+    }
+    for (int j = 0; w.has_ext_k && w.has_ext_edge_k && j < nv - 1; ++j) {
+      const Eigen::Matrix<double, 6, 6>& k6 = w.ext_edge_k[j];
+      if (k6.isZero(0.0)) continue;
+      const int idx[6] = {4 * j, 4 * j + 1, 4 * j + 2, 4 * j + 4, 4 * j + 5, 4 * j + 6};
+      w.H.add_block(psd ? positive_part6(k6) : k6, idx, 6);
+    }
+    for (int j = 0; w.has_ext_k && j < nv - 1; ++j) w.H.lower(4 * j + 3, 4 * j + 3) += w.ext_spin_k[j];
+    if (!psd && !w.moment_k.isZero(0.0)) {
+      Mat6 b;
+      b << w.moment_k, -w.moment_k, -w.moment_k, w.moment_k;
+      const int idx[6] = {0, 1, 2, 4, 5, 6};
+      w.H.add_block(b, idx, 6);
+    }
+  }
+  // External forces that derive from a potential enter the merit through that potential.
+  return energy + w.ext_energy;
+}
+
+double RodSimulator::force_scale(double load_scale) const {
+  const RodState& s = state_;
+  double total_mass = 0.0, ei = 0.0, ea = 0.0;
+  for (int k = 0; k < s.vertex_count(); ++k) {
+    total_mass += disc_.mass[k];
+    ei = std::max(ei, disc_.bend_stiffness[k]);
+  }
+  double lmin = model_.h;
+  for (int j = 0; j < s.edge_count(); ++j) {
+    ea = std::max(ea, disc_.stretch_stiffness[j]);
+    lmin = std::min(lmin, disc_.rest_length[j]);
+  }
+  const double L = std::max(s.inserted_length, model_.h);
+  double f = std::max({ei / (L * L), load_scale * total_mass * gravity_.norm(),
+                       load_scale * tip_force_.norm(), load_scale * tip_moment_.norm() / L});
+  for (const auto& pf : point_forces_) f = std::max(f, load_scale * pf.f.norm());
+  const double xscale = model_.base_position.norm() + L;
+  const double floor = 4.0 * std::numeric_limits<double>::epsilon() * ea * (1.0 + xscale / lmin);
+  return settings_.force_tolerance * f + floor;
+}
+
+}  // namespace flowire::rod

@@ -1,0 +1,124 @@
+#pragma once
+// The simulator's private parts shared by its source files: the work buffers and a few small
+// helpers. The simulator is split by phase:
+//   simulator.cpp   construction, state layout, frames, reactions, diagnostics
+//   feeding.cpp     the inserted length: vertex set, prescribed unknowns, feed predictor,
+//                   speed- and force-driven steps
+//   adapt.cpp       adaptive refinement and resampling
+//   assembly.cpp    loads, energy, gradient and banded Hessian
+//   newton.cpp      Newton's method: linear solve with its fallbacks, line search
+//   stepping.cpp    integrators (implicit Euler, implicit midpoint, statics), substeps
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <vector>
+
+#include "flowire/rod/banded.hpp"
+#include "flowire/rod/simulator.hpp"
+
+namespace flowire::rod::detail {
+
+inline constexpr int kBandwidth = 10;  // stencil (x_{k-1}, θ_{k-1}, x_k, θ_k, x_{k+1}) spans 11 unknowns
+
+inline Mat3 sym(const Mat3& a) { return 0.5 * (a + a.transpose()); }
+
+inline bool finite(const Eigen::Ref<const Eigen::VectorXd>& v) { return v.allFinite(); }
+
+/// The symmetric matrix's negative eigenvalues set to zero.
+inline Mat3 positive_part(const Mat3& a) {
+  Eigen::SelfAdjointEigenSolver<Mat3> es;
+  es.computeDirect(a);
+  const Eigen::Vector3d lambda = es.eigenvalues().cwiseMax(0.0);
+  return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
+}
+inline Eigen::Matrix<double, 6, 6> positive_part6(const Eigen::Matrix<double, 6, 6>& a) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(a);
+  const Eigen::Matrix<double, 6, 1> lambda = es.eigenvalues().cwiseMax(0.0);
+  return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
+}
+
+/// The inserted length held between two segments and the wire's length.
+inline double clamp_inserted(double L, const RodModel& m, bool& clamped) {
+  const double lo = 2.0 * m.h, hi = m.length;
+  clamped = L < lo || L > hi;
+  return std::clamp(L, lo, hi);
+}
+
+}  // namespace flowire::rod::detail
+
+namespace flowire::rod {
+
+/// Buffers sized once for the whole wire, so that a step allocates nothing. Sizes: nd =
+/// 4 nv − 1 unknowns (x_k and θ_k interleaved: q = (x_0, θ_0, x_1, θ_1, …, x_{nv−1})),
+/// nv vertices, ne = nv − 1 edges.
+struct RodSimulator::Work {
+  int max_dof = 0;
+
+  // Step start (stepping.cpp): for velocities, the inertial target and rollback.
+  std::vector<Vec3> x0, v0;                      ///< (nv)
+  std::vector<double> theta0, omega0, twist0;    ///< (ne)
+  std::vector<EdgeFrame> frame0;                 ///< (ne)
+  Eigen::VectorXd q0;                            ///< (nd) unknowns at the step start
+  Eigen::VectorXd qhat;                          ///< (nd) inertial target q₀ + h q̇₀
+  std::vector<Vec3> x_end;        ///< (nv) where the last implicit Euler step ended …
+  double h_end = 0.0;             ///< … and its step, for the next step's predictor
+  std::vector<Vec3> v_guess;      ///< (nv) velocity of Newton's initial guess
+  std::vector<double> omega_guess;  ///< (ne)
+  std::vector<Vec3> x_mid;        ///< (nv) implicit midpoint: positions at the midpoint
+  std::vector<double> feed_twist; ///< (nv) feeding: each vertex's total twist, kept across a re-layout
+  struct Saved {                  ///< a step start kept for a retry in substeps
+    RodState state;
+    double target_angle = 0.0, insertion_speed = 0.0;
+    int first_clamped = 0;
+    Vec3 base_force = Vec3::Zero(), base_torque = Vec3::Zero();
+    size_t trace_size = 0;
+  };
+  std::vector<Saved> saved;  ///< one per subdivision level
+
+  // Assembly (assembly.cpp).
+  Eigen::VectorXd mass, damp;  ///< (nd) lumped mass and damping diagonals
+  Eigen::VectorXd fext;        ///< (nd) loads: gravity, point forces, external forces
+  Eigen::VectorXd fcons;       ///< (nd) the conservative part of fext (it has a potential)
+  double ext_energy = 0.0;     ///< potential of the conservative external forces
+  std::vector<EdgeGeometry> edges;  ///< (ne) tangent, length, material frame
+  Mat3 moment_k = Mat3::Zero();     ///< −∂f₁/∂e of the tip couple, symmetrized
+  ForceAccumulator acc;             ///< what the external forces return
+  std::vector<Vec3> vel;            ///< (nv) vertex velocities at the iterate, for the externals
+  std::vector<double> spin;         ///< (ne) edge spin rates at the iterate, for the externals
+  std::vector<Vec3> tangent;        ///< (ne) edge tangents at the iterate, for the externals
+  std::vector<Mat3> ext_k;          ///< (nv) −∂f/∂x − ∂f/∂v / h, symmetrized
+  bool has_ext_k = false;
+  std::vector<Eigen::Matrix<double, 6, 6>> ext_edge_k;  ///< (ne) −∂(f_j, f_j+1)/∂(x_j, x_j+1), symmetrized
+  bool has_ext_edge_k = false;
+  std::vector<double> ext_spin_k;   ///< (ne) −∂τ/∂ω / h
+
+  // Newton (newton.cpp).
+  Eigen::VectorXd q;     ///< (nd) unknowns at the iterate
+  Eigen::VectorXd grad;  ///< (nd) gradient of the incremental potential minus the loads
+  Eigen::VectorXd rhs;   ///< (nd) −grad on the free unknowns; in the line search, the trial q
+  Eigen::VectorXd dq;    ///< (nd) Newton direction
+  BandedMatrix H;        ///< (nd, half-band 10) Hessian, lower band
+  BandedLDLT ldlt;       ///< its factorization, kept for chord iterations
+  Eigen::SparseMatrix<double> sparse;  ///< the general sparse back end (LinearSolver::SparseLDLT)
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> sparse_ldlt;
+  int sparse_pattern_size = -1;
+  // The accepted iterate while the line search tries points along the direction.
+  std::vector<Vec3> x_accepted;              ///< (nv)
+  std::vector<double> theta_accepted, twist_accepted;  ///< (ne), (nv)
+  std::vector<EdgeFrame> frame_accepted;     ///< (ne)
+  Eigen::VectorXd fext_accepted, fcons_accepted;  ///< (nd) its loads
+
+  // Adaptivity (adapt.cpp): the plan, and the old state while resampling.
+  std::vector<double> turn_angle;           ///< (nv) turning angle, or the rest shape's if larger
+  std::vector<char> split_edge;             ///< (ne) edges to halve
+  std::vector<char> remove_vertex;          ///< (nv) vertices to merge away
+  std::vector<double> new_u;                ///< (new nv) arc positions from the tip
+  std::vector<int> new_source;              ///< (new nv) the old vertex a new one copies, or −1
+  std::vector<double> new_twist_density;    ///< (new nv)
+  std::vector<double> old_u, old_cell, old_theta, old_omega, old_ref_twist, old_twist_density;
+  std::vector<Vec3> old_x, old_v, old_tangent;
+  std::vector<EdgeFrame> old_frame;
+};
+
+}  // namespace flowire::rod

@@ -1,0 +1,316 @@
+#include "flowire/rod/simulator.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "simulator_internal.hpp"
+
+namespace flowire::rod {
+
+using detail::clamp_inserted;
+using detail::finite;
+
+// -----------------------------------------------------------------------------------------
+// Stepping
+// -----------------------------------------------------------------------------------------
+
+StepReport RodSimulator::step(double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
+  const StepReport rep = step_subdivided(dt, 0);
+  report(rep, settings_.integrator == Integrator::ImplicitMidpoint ? "implicit midpoint step"
+                                                                   : "implicit Euler step");
+  return rep;
+}
+
+StepReport RodSimulator::step_subdivided(double dt, int depth) {
+  // A step whose Newton solve fails (no descent left, the iteration limit far from
+  // convergence, non-finite values) is taken again from its start as two half steps, down
+  // to dt/2^max_subdivisions; only the last level's result is kept as it is.
+  const bool can_retry = depth < settings_.max_subdivisions;
+  if (can_retry) save_state(depth);
+  StepReport rep = step_once(dt);
+  if (!rep.converged() && can_retry) {
+    restore_state(depth);
+    StepReport total;
+    for (int half = 0; half < 2; ++half) {
+      const StepReport r = step_subdivided(0.5 * dt, depth + 1);
+      total.status = r.status;
+      total.newton_iterations += r.newton_iterations;
+      total.chord_iterations += r.chord_iterations;
+      total.line_search_cuts += r.line_search_cuts;
+      total.regularizations += r.regularizations;
+      total.residual = r.residual;
+      total.tolerance = r.tolerance;
+      total.subdivisions = std::max(total.subdivisions, r.subdivisions);
+      if (!r.converged()) break;
+    }
+    total.subdivisions = std::max(total.subdivisions, depth + 1);
+    return total;
+  }
+  last_report_ = rep;
+  record_trace();
+  if (!externals_.empty()) {
+    const RodView view = current_view(dt);
+    for (auto& e : externals_) e->end_step(view);
+  }
+  return rep;
+}
+
+void RodSimulator::save_state(int depth) {
+  Work& w = *work_;
+  if (static_cast<int>(w.saved.size()) <= depth) w.saved.resize(static_cast<size_t>(depth) + 1);
+  Work::Saved& v = w.saved[static_cast<size_t>(depth)];
+  v.state = state_;
+  v.target_angle = target_angle_;
+  v.insertion_speed = insertion_speed_;
+  v.first_clamped = first_clamped_;
+  v.base_force = base_force_;
+  v.base_torque = base_torque_;
+  v.trace_size = trace_.size();
+}
+
+void RodSimulator::restore_state(int depth) {
+  const Work::Saved& v = work_->saved[static_cast<size_t>(depth)];
+  state_ = v.state;
+  target_angle_ = v.target_angle;
+  insertion_speed_ = v.insertion_speed;
+  first_clamped_ = v.first_clamped;
+  base_force_ = v.base_force;
+  base_torque_ = v.base_torque;
+  trace_.resize(v.trace_size);
+  model_.discretize(state_.u, disc_);
+  refresh_arc_lengths();
+}
+
+StepReport RodSimulator::step_once(double dt) {
+  if (push_force_ > 0.0) return step_force_fed(dt);
+  double speed = insertion_speed_;
+  if (speed > 0.0 && max_insertion_force_ > 0.0 &&
+      base_force_.dot(model_.base_direction) > max_insertion_force_) {
+    speed = 0.0;
+    ++held_steps_;
+  }
+  return step_at_feed(dt, speed);
+}
+
+void RodSimulator::begin_step(double h, bool extrapolate) {
+  auto& w = *work_;
+  auto& s = state_;
+  const int nv = s.vertex_count();
+  // Newton's initial guess. Inertial: q + h q̇. With `extrapolate` (implicit Euler), where the
+  // vertex is where the last step of the same h left it (not moved since: not resampled, not
+  // set from outside; feeding keeps the indices from the tip), also + h (q̇ − q̇_prev), the
+  // last step's acceleration held: the guess is then O(h³) from the solution instead of
+  // O(h²), and Newton's first step usually lands within the tolerance (one factorization a
+  // step). w.v0 still holds the last step's starting velocities here.
+  const bool history = extrapolate && h == w.h_end;
+  const int nk = history ? std::min({nv, static_cast<int>(w.x_end.size()), static_cast<int>(w.v0.size())}) : 0;
+  auto held = [&](int k) { return k < nk && s.x[k] == w.x_end[k]; };
+  w.v_guess.resize(nv);
+  w.omega_guess.resize(std::max(nv - 1, 0));
+  for (int k = 0; k < nv; ++k) {
+    w.qhat.segment<3>(4 * k) = s.x[k] + h * s.v[k];  // the inertial prediction (the merit's q̂)
+    w.v_guess[k] = held(k) ? Vec3(2.0 * s.v[k] - w.v0[k]) : s.v[k];
+    if (k < nv - 1) w.omega_guess[k] = held(k) && held(k + 1) ? 2.0 * s.omega[k] - w.omega0[k] : s.omega[k];
+  }
+  w.x0 = s.x;
+  w.v0 = s.v;
+  w.theta0 = s.theta;
+  w.omega0 = s.omega;
+  w.frame0 = s.frame;
+  w.twist0 = s.ref_twist;
+  for (int k = 0; k < nv; ++k) {
+    w.q0.segment<3>(4 * k) = s.x[k];
+    w.mass.segment<3>(4 * k).setConstant(disc_.mass[k]);
+    w.damp.segment<3>(4 * k).setConstant(model_.damping * disc_.cell_length[k]);
+    if (k < nv - 1) {
+      w.q0(4 * k + 3) = s.theta[k];
+      w.qhat(4 * k + 3) = s.theta[k] + h * s.omega[k];
+      w.mass(4 * k + 3) = disc_.twist_inertia[k];
+      w.damp(4 * k + 3) = 0.0;
+    }
+  }
+  for (int k = 0; k < nv; ++k) {
+    s.x[k] += h * w.v_guess[k];
+    if (k < nv - 1) s.theta[k] += h * w.omega_guess[k];
+  }
+}
+
+StepReport RodSimulator::step_euler(double dt) {
+  Work& w = *work_;
+  RodState& s = state_;
+  bool clamped = false;
+  const double L_new = clamp_inserted(s.inserted_length + feed_speed_ * dt, model_, clamped);
+  if (clamped && feed_speed_ != 0.0) {
+    warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
+    insertion_speed_ = 0.0;
+    feed_speed_ = 0.0;
+  }
+  s.base_angle = target_angle_;
+  update_vertex_set(L_new);
+  const double angle_new = target_angle_ + rotation_speed_ * dt;
+
+  // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
+  begin_step(dt, settings_.second_order_guess);
+  const int nv = s.vertex_count();
+  predict_feed(L_new - s.inserted_length, dt);
+  set_prescribed(L_new, angle_new, s.x, s.theta);
+  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  s.time += dt;
+  s.inserted_length = L_new;
+  refresh_arc_lengths();
+
+  StepReport rep = newton(Mode::Dynamic, dt, 1.0);
+  if (rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix) {
+    s.x = w.x0;
+    s.v = w.v0;
+    s.theta = w.theta0;
+    s.omega = w.omega0;
+    s.frame = w.frame0;
+    s.ref_twist = w.twist0;
+    set_prescribed(L_new, angle_new, s.x, s.theta);
+    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  }
+  for (int k = 0; k < nv; ++k) {
+    s.v[k] = (s.x[k] - w.x0[k]) / dt;
+    if (k < nv - 1) s.omega[k] = (s.theta[k] - w.theta0[k]) / dt;
+  }
+  target_angle_ = angle_new;
+  s.base_angle = angle_new;
+  // Where this step left the vertices, for the next step's predictor.
+  w.x_end = s.x;
+  w.h_end = dt;
+  compute_base_reaction();
+  return rep;
+}
+
+StepReport RodSimulator::step_midpoint(double dt) {
+  Work& w = *work_;
+  RodState& s = state_;
+  bool clamped = false;
+  const double L_start = s.inserted_length;
+  const double L_new = clamp_inserted(L_start + feed_speed_ * dt, model_, clamped);
+  if (clamped && feed_speed_ != 0.0) {
+    warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
+    insertion_speed_ = 0.0;
+    feed_speed_ = 0.0;
+  }
+  s.base_angle = target_angle_;
+  update_vertex_set(L_new);
+  const double hh = 0.5 * dt;
+  const double L_half = 0.5 * (L_start + L_new);
+  const double angle_half = target_angle_ + rotation_speed_ * hh;
+  const double angle_new = target_angle_ + rotation_speed_ * dt;
+
+  begin_step(hh, /*extrapolate=*/false);
+  const int nv = s.vertex_count();
+  predict_feed(L_half - L_start, hh);
+  set_prescribed(L_half, angle_half, s.x, s.theta);
+  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  s.time += hh;
+  s.inserted_length = L_half;
+  refresh_arc_lengths();
+
+  StepReport rep = newton(Mode::Dynamic, hh, 1.0);
+  const bool failed =
+      rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix;
+  compute_base_reaction();
+  if (failed) {
+    s.x = w.x0;
+    s.theta = w.theta0;
+    s.frame = w.frame0;
+    s.ref_twist = w.twist0;
+    for (auto& v : s.v) v.setZero();
+    for (auto& o : s.omega) o = 0.0;
+    set_prescribed(L_new, angle_new, s.x, s.theta);
+    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  } else {
+    // Extrapolate from the midpoint z: q₁ = 2z − q₀, v₁ = 2 (z − q₀)/(h/2) − v₀.
+    w.x_mid = s.x;
+    w.frame_accepted = s.frame;
+    w.twist_accepted = s.ref_twist;
+    for (int k = 0; k < nv; ++k) {
+      s.v[k] = 2.0 * (w.x_mid[k] - w.x0[k]) / hh - w.v0[k];
+      s.x[k] = 2.0 * w.x_mid[k] - w.x0[k];
+      if (k < nv - 1) {
+        const double tz = s.theta[k];
+        s.omega[k] = 2.0 * (tz - w.theta0[k]) / hh - w.omega0[k];
+        s.theta[k] = 2.0 * tz - w.theta0[k];
+      }
+    }
+    set_prescribed(L_new, angle_new, s.x, s.theta);
+    transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
+  }
+  s.time += hh;
+  s.inserted_length = L_new;
+  refresh_arc_lengths();
+  target_angle_ = angle_new;
+  s.base_angle = angle_new;
+  return rep;
+}
+
+StepReport RodSimulator::solve_static() {
+  StepReport r = solve_static_once();
+  // Adaptive: resample at the equilibrium and solve again until the vertex set settles.
+  for (int round = 0; round < 12 && r.converged() && adapt(); ++round) {
+    trace_.pop_back();
+    const StepReport again = solve_static_once();
+    r.status = again.status;
+    r.newton_iterations += again.newton_iterations;
+    r.chord_iterations += again.chord_iterations;
+    r.line_search_cuts += again.line_search_cuts;
+    r.regularizations += again.regularizations;
+    r.residual = again.residual;
+    r.tolerance = again.tolerance;
+  }
+  return r;
+}
+
+StepReport RodSimulator::solve_static_once() {
+  RodState& s = state_;
+  s.base_angle = target_angle_;
+  set_prescribed(s.inserted_length, target_angle_, s.x, s.theta);
+  transport_frames_to(s.x, s.frame, s.ref_twist, s.frame, s.ref_twist);
+  for (auto& v : s.v) v.setZero();
+  for (auto& o : s.omega) o = 0.0;
+  refresh_arc_lengths();
+  const int steps = std::max(1, settings_.static_load_steps);
+  StepReport total;
+  for (int i = 1; i <= steps; ++i) {
+    const StepReport r = newton(Mode::Static, 1.0, static_cast<double>(i) / steps);
+    total.newton_iterations += r.newton_iterations;
+    total.chord_iterations += r.chord_iterations;
+    total.line_search_cuts += r.line_search_cuts;
+    total.regularizations += r.regularizations;
+    total.residual = r.residual;
+    total.tolerance = r.tolerance;
+    total.status = r.status;
+    if (!r.converged()) break;
+  }
+  compute_base_reaction();
+  report(total, "static solve");
+  record_trace();
+  if (!externals_.empty()) {
+    const RodView view = current_view(0.0);
+    for (auto& e : externals_) e->start(view);
+  }
+  return total;
+}
+
+int RodSimulator::static_hessian_negative_eigenvalues() {
+  Work& w = *work_;
+  const int nd = dof_count();
+  gather(w.q);
+  assemble(Mode::Static, 1.0, 1.0, Need::Matrix);
+  for (int d = 4 * first_clamped_; d < nd; ++d) w.H.set_identity_row(d);
+  if (tip_clamped_)
+    for (int d = 0; d < 7; ++d) w.H.set_identity_row(d);
+  if (!w.ldlt.factorize(w.H)) return -1;
+  return w.ldlt.negative_pivots();
+}
+
+}  // namespace flowire::rod
