@@ -7,40 +7,18 @@
 #include <cstdlib>
 
 #include "flowire/common/error.hpp"
+#include "flowire/flow/petsc_runtime.hpp"
 #include "solvers.hpp"
 
 namespace flowire::flow::detail {
 namespace {
 
-/// Every PETSc call goes through this: a nonzero code becomes a flowire::Error.
-void check(PetscErrorCode code, const char* what) {
-  if (code != 0) {
-    const char* text = nullptr;
-    PetscErrorMessage(code, &text, nullptr);
-    throw_numerical_error(fmt::format("flow (petsc): {} failed: {}", what, text ? text : "unknown error"));
-  }
-}
-#define FLOWIRE_PETSC(call) check((call), #call)
-
-bool g_we_initialized = false;
-
-void ensure_petsc() {
-  PetscBool up = PETSC_FALSE;
-  PetscInitialized(&up);
-  if (up) return;
-  int mpi_up = 0, mpi_done = 0;
-  MPI_Initialized(&mpi_up);
-  MPI_Finalized(&mpi_done);
-  if (mpi_done) throw_usage_error("flow.solver: petsc used after MPI_Finalize");
-  FLOWIRE_PETSC(PetscInitializeNoArguments());
-  if (!g_we_initialized) std::atexit([] { finalize_petsc(); });
-  g_we_initialized = true;
-}
+#define FLOWIRE_PETSC(call) ::flowire::flow::check_petsc((call), #call, "flow")
 
 class PetscSolver final : public ResponseSolver {
  public:
   PetscSolver(const Network& net, FlowSpec spec) : ResponseSolver(net, std::move(spec)) {
-    ensure_petsc();
+    ensure_petsc("flow.solver");
     Stopwatch sw;
     const Eigen::SparseMatrix<double, Eigen::RowMajor> g = nodal_matrix(net_, a_);
     const Eigen::MatrixXd b = source_rhs();
@@ -160,17 +138,3 @@ std::unique_ptr<FlowSolver> make_petsc_solver(const Network& net, FlowSpec spec)
 }
 
 }  // namespace flowire::flow::detail
-
-namespace flowire::flow {
-
-void finalize_petsc() {
-  if (!detail::g_we_initialized) return;
-  PetscBool up = PETSC_FALSE, done = PETSC_FALSE;
-  PetscInitialized(&up);
-  PetscFinalized(&done);
-  int mpi_done = 0;
-  MPI_Finalized(&mpi_done);
-  if (up && !done && !mpi_done) PetscFinalize();
-}
-
-}  // namespace flowire::flow

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
+#include "flowire/flow/solver.hpp"
 #include "flowire/fem/compare.hpp"
 
 int main(int argc, char** argv) {
@@ -85,7 +86,7 @@ int main(int argc, char** argv) {
   }
   int total = 0;
   MPI_Allreduce(&failures, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-  flowire::fem::finalize_petsc();
+  flowire::flow::finalize_petsc();
   MPI_Finalize();
   return total == 0 ? 0 : 1;
 }

@@ -26,6 +26,8 @@
 #include <string>
 
 #include "fem_test_cases.hpp"
+#include "flowire/flow/solver.hpp"
+#include "flowire/flow/solver.hpp"
 #include "flowire/fem/element.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/stokes.hpp"
@@ -265,7 +267,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "fem_petsc_plex_check: %s\n", e.what());
     status = 1;
   }
-  flowire::fem::finalize_petsc();
+  flowire::flow::finalize_petsc();
   PetscFinalize();
   return status;
 }

@@ -97,7 +97,9 @@ void expect_documented(const CrossWire& r) {
   const double ratio = r.force_per_length / r.law;
   EXPECT_GT(ratio, 0.9) << "Re_d " << r.re_d;
   EXPECT_LT(ratio, 1.6) << "Re_d " << r.re_d;
-  if (r.re_d <= 10.0) EXPECT_GT(r.force_per_length, r.curve) << "Re_d " << r.re_d;
+  if (r.re_d <= 10.0) {
+    EXPECT_GT(r.force_per_length, r.curve) << "Re_d " << r.re_d;
+  }
 }
 
 #ifndef FLOWIRE_FEM_SLOW

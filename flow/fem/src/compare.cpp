@@ -3,7 +3,6 @@
 #include "flowire/fem/compare.hpp"
 
 #include <fmt/format.h>
-#include <mpi.h>
 
 #include <algorithm>
 #include <chrono>
@@ -24,18 +23,13 @@
 #include "flowire/fem/lumen.hpp"
 #include "flowire/fem/obstacle.hpp"
 #include "flowire/fem/sample.hpp"
+#include "flowire/flow/petsc_runtime.hpp"
 #include "flowire/flow/solver.hpp"
 
 namespace flowire::fem {
 namespace {
 
-int mpi_rank() {
-  int up = 0, done = 0, rank = 0;
-  MPI_Initialized(&up);
-  MPI_Finalized(&done);
-  if (up && !done) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  return rank;
-}
+using flow::mpi_rank;
 
 OutletValue outlet_value_of(const BoundaryValues& bv, int node) {
   for (const auto& o : bv.outlets)

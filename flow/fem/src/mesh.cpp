@@ -18,6 +18,7 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/fem/element.hpp"
+#include "flowire/flow/petsc_runtime.hpp"
 #include "mesh_detail.hpp"
 
 namespace flowire::fem {
@@ -699,16 +700,7 @@ void bcast_vector(std::vector<T>& v, int rank) {
 /// Mesh on rank 0 with `build`; under MPI with more than one rank every rank receives
 /// the mesh (or rank 0's error).
 TetMesh build_shared(const std::function<TetMesh()>& build) {
-  int mpi_up = 0, size = 1, rank = 0;
-  MPI_Initialized(&mpi_up);
-  if (mpi_up) {
-    int done = 0;
-    MPI_Finalized(&done);
-    if (!done) {
-      MPI_Comm_size(MPI_COMM_WORLD, &size);
-      MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    }
-  }
+  const int size = flow::mpi_size(), rank = flow::mpi_rank();
   if (size == 1) return build();
 
   // Rank 0 meshes; the outcome (or the error) goes to every rank.

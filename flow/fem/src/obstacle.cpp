@@ -3,7 +3,6 @@
 #include "flowire/fem/obstacle.hpp"
 
 #include <fmt/format.h>
-#include <mpi.h>
 
 #include <filesystem>
 #include <sstream>
@@ -12,17 +11,12 @@
 #include "flowire/common/output.hpp"
 #include "flowire/fem/compare.hpp"
 #include "flowire/fem/sample.hpp"
+#include "flowire/flow/petsc_runtime.hpp"
 
 namespace flowire::fem {
 namespace {
 
-int rank0() {
-  int up = 0, done = 0, rank = 0;
-  MPI_Initialized(&up);
-  MPI_Finalized(&done);
-  if (up && !done) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  return rank == 0;
-}
+bool rank0() { return flow::mpi_rank() == 0; }
 
 // DFG 3D-1Z data (SI).
 constexpr double kLength = 2.5, kHeight = 0.41, kDiameter = 0.1, kAxisX = 0.5, kAxisY = 0.2;

@@ -21,32 +21,14 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/fem/element.hpp"
+#include "flowire/flow/petsc_runtime.hpp"
 
 namespace flowire::fem {
 namespace {
 
-void check(PetscErrorCode code, const char* what) {
-  if (code != 0) {
-    const char* text = nullptr;
-    PetscErrorMessage(code, &text, nullptr);
-    throw_numerical_error(fmt::format("fem (petsc): {} failed: {}", what, text ? text : "unknown error"));
-  }
-}
-#define FLOWIRE_PETSC(call) check((call), #call)
+#define FLOWIRE_PETSC(call) ::flowire::flow::check_petsc((call), #call, "fem")
 
-bool g_we_initialized = false;
-
-void ensure_petsc() {
-  PetscBool up = PETSC_FALSE;
-  PetscInitialized(&up);
-  if (up) return;
-  int mpi_done = 0;
-  MPI_Finalized(&mpi_done);
-  if (mpi_done) throw_usage_error("fem: PETSc used after MPI_Finalize");
-  FLOWIRE_PETSC(PetscInitializeNoArguments());
-  if (!g_we_initialized) std::atexit([] { finalize_petsc(); });
-  g_we_initialized = true;
-}
+void ensure_petsc() { flow::ensure_petsc("fem"); }
 
 /// Owns one PETSc object and destroys it at scope exit.
 template <class T, PetscErrorCode (*Destroy)(T*)>
@@ -1710,15 +1692,5 @@ void navier_stokes_face(const TetMesh& mesh, int face, const StokesOptions& opt,
 }  // namespace detail
 
 void initialize() { ensure_petsc(); }
-
-void finalize_petsc() {
-  if (!g_we_initialized) return;
-  PetscBool up = PETSC_FALSE, done = PETSC_FALSE;
-  PetscInitialized(&up);
-  PetscFinalized(&done);
-  int mpi_done = 0;
-  MPI_Finalized(&mpi_done);
-  if (up && !done && !mpi_done) PetscFinalize();
-}
 
 }  // namespace flowire::fem

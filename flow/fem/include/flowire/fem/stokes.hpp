@@ -257,9 +257,7 @@ void navier_stokes_face(const TetMesh& mesh, int face, const StokesOptions& opt,
 }  // namespace detail
 
 /// @brief Initialize PETSc (and MPI) unless already done; build_mesh then sees every rank.
+/// PETSc is owned by flow (flow/petsc_runtime.hpp): flow::finalize_petsc() ends it.
 void initialize();
-
-/// @brief Finalize PETSc if the fem solver initialized it (also done at exit).
-void finalize_petsc();
 
 }  // namespace flowire::fem
