@@ -24,6 +24,7 @@ rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wi
   s.base_direction = wire.base_direction;
   s.base_normal = wire.base_normal;
   s.inserted_length = cat.initial_length;
+  s.tip.length = 0.0;  // one section over the whole tube (and contact.friction all along it)
   s.damping = wire.damping;
   // The tube's section (thick-walled, exact).
   const double ro = cat.outer_radius, ri = cat.inner_radius, pi = std::numbers::pi;

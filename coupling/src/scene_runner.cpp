@@ -78,7 +78,7 @@ std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& c, const 
   cp.stiffness = c.number_or("contact.stiffness", 3e4);
   cp.friction = c.number_or("contact.friction", 0.1);
   cp.tip_friction = c.number_or("contact.tip_friction", cp.friction);
-  cp.tip_length = c.has_section("wire.tip") ? c.number("wire.tip.length") : 0.0;
+  cp.tip_length = spec.tip.length;  // the wire's tip (wire.tip.length); a catheter has none
   cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
   DragModel dp;
   const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "cylinder";
@@ -632,6 +632,10 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
       lumen_ = std::make_shared<LumenContact>(cat->inner_radius - spec.radius, cat->stiffness);
     }
     apply_loads(c, *sim);
+    if (cath_)  // gravity acts on the catheter too (the other loads are the wire's)
+      for (int i = 0; i < c.count("loads"); ++i)
+        if (const std::string p = fmt::format("loads[{}].", i); c.string(p + "type") == "gravity")
+          cath_->set_gravity(c.vector3(p + "value"));
     if (c.has_section("insertion")) {
       sim->set_insertion_speed(c.number("insertion.speed"));
       sim->set_rotation_speed(c.number("insertion.rotation_speed"));

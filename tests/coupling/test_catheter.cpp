@@ -8,8 +8,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "flowire/common/config.hpp"
 #include "flowire/coupling/catheter.hpp"
+#include "flowire/coupling/scene.hpp"
 #include "flowire/rod/simulator.hpp"
+#include "flowire_test.hpp"
 
 using namespace flowire;
 using namespace flowire::coupling;
@@ -313,4 +316,42 @@ TEST(CatheterPair, CantileverBendsWithTheSumOfBothStiffnesses) {
   const double slope = std::log(errs.front() / errs.back()) / std::log(hs.front() / hs.back());
   std::printf("convergence slope %.2f\n", slope);
   EXPECT_GT(slope, 0.8);
+}
+
+TEST(CatheterPair, ACatheterSlidesOnTheWallWhenPushedWithMuTimesItsWeight) {
+  // Coulomb's law for the catheter on the vessel wall, through a scene: a catheter lies along
+  // the bottom of a horizontal tube under gravity and is fed at 1 cm/s. Sliding takes an axial
+  // push of μ m g, m the mass inserted: the clamp's axial force over m g is μ (0.1 and 0.3),
+  // and 0 without friction. The catheter's wall friction is the wire's (VesselForces, the same
+  // contact: keys). The 1 cm of wire inside hangs from its own clamp (its sag, 1e-9 m, is far
+  // within the lumen's clearance), and the clamp carries the catheter's weight over a boundary
+  // layer of about (EI / k)^¼ ≈ 2 cm on the soft penalty foundation: 25 cm are inserted.
+  const double g = 9.81, pi = std::numbers::pi, rho = 1200, ro = 1e-3, ri = 0.55e-3;
+  for (const double mu : {0.0, 0.1, 0.3}) {
+    const auto dir = flowire::testing::scratch_dir("catheter-coulomb");
+    const std::string yaml = R"(
+vessels: {generator: {type: straight_tube, length: 0.4, radius: 3 mm}, max_segment_length: 5 mm}
+wire: {length: 0.3, radius: 0.3 mm, youngs_modulus: 60 GPa, density: 6450, segment_length: 2 mm,
+       base: {position: [0.01, 0, -0.002], direction: [1, 0, 0]}}
+insertion: {speed: 0, initial_length: 1 cm}
+catheter: {length: 0.4, outer_radius: 1 mm, inner_radius: 0.55 mm, youngs_modulus: 2 GPa, density: 1200,
+           initial_length: 24 cm, insertion: {speed: 1 cm/s}}
+loads: [{type: gravity, value: [0, 0, -9.81]}]
+contact: {friction: )" + std::to_string(mu) + R"(}
+solve: {dt: 5 ms, duration: 1 s}
+output: {csv: false, vtk: false}
+)";
+    const auto cfg = config::load_config_text(yaml, "scene.yaml", scene_schema(), {"output.dir=" + dir.string()});
+    const auto s = run_scene(cfg).summary;
+    ASSERT_EQ(s["status"], "ok");
+    const auto& c = s["catheter"];
+    EXPECT_EQ(c["unconverged_steps"].get<int>(), 0);
+    const double inserted = c["inserted_length"].get<double>();
+    ASSERT_NEAR(inserted, 0.25, 1e-9);
+    const double weight = g * rho * pi * (ro * ro - ri * ri) * inserted;
+    const double push = std::abs(c["base_force"][0].get<double>());
+    std::printf("mu %.1f: push %.4e N, mu m g %.4e N, push / m g %.4f\n", mu, push, mu * weight, push / weight);
+    EXPECT_NEAR(push / weight, mu, 0.03 * mu + 1e-6) << "mu " << mu;
+    EXPECT_LT(c["contact"]["max_penetration"].get<double>(), 1e-6);
+  }
 }
