@@ -250,7 +250,7 @@ void apply_loads(const config::Config& c, rod::RodSimulator& sim) {
 /// periodic inlet the pressure is that of the instant of peak inlet pressure (or flow) in the
 /// cycle after the run's end (systole: the range of pressures that drives the flow; the
 /// quasi-steady model), else of the end. A catheter (@p cath, may be null) is drawn as a wider
-/// orange tube under the wire: the wire shows where it has left it.
+/// orange tube around the wire, which shows where it has left the catheter's tip.
 void render_pictures(const config::Config& c, const vessels::Network& net, flow::FlowSolver* fs,
                      const rod::RodSimulator* sim, const rod::RodSimulator* cath, const std::filesystem::path& out) {
   std::vector<double> p(static_cast<size_t>(net.num_nodes()), 0.0);
