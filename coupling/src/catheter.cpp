@@ -24,6 +24,7 @@ rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wi
   s.base_direction = wire.base_direction;
   s.base_normal = wire.base_normal;
   s.inserted_length = cat.initial_length;
+  s.tip.length = 0.0;  // one section over the whole tube (and contact.friction all along it)
   s.damping = wire.damping;
   // The tube's section (thick-walled, exact).
   const double ro = cat.outer_radius, ri = cat.inner_radius, pi = std::numbers::pi;
@@ -35,6 +36,16 @@ rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wi
   s.stretch_stiffness = cat.youngs_modulus * area;
   s.mass_per_length = cat.density * area;
   return s;
+}
+
+double tip_weight(double alpha, double* dw, double* d2w) {
+  // The share of the vertex's cell (one edge, centred on it) inside the lumen, α + ½ for
+  // α ∈ [−½, ½], smoothed by the quintic smoothstep so that w, w′ and w″ are continuous.
+  const double t = std::clamp(alpha + 0.5, 0.0, 1.0);
+  const bool ramp = t > 0.0 && t < 1.0;
+  if (dw) *dw = ramp ? 30.0 * t * t * (1.0 - t) * (1.0 - t) : 0.0;
+  if (d2w) *d2w = ramp ? 60.0 * t * (1.0 - t) * (1.0 - 2.0 * t) : 0.0;
+  return t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
 }
 
 LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double c,
@@ -69,9 +80,14 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   const double d = r.norm();
   p.distance = d;
   const double gap = d - c;
-  if (!(gap > 0.0) || !(d > 0.0)) return p;
+  // The open tip end: the penalty weighted by the vertex's share inside the lumen, w(α),
+  // which falls smoothly from 1 at half an edge inside the tip to 0 at half an edge beyond.
+  double dw = 0.0, d2w = 0.0;
+  const double w = open_before_a && interior ? tip_weight(p.alpha, &dw, &d2w) : 1.0;
+  p.weight = w;
+  if (!(gap > 0.0) || !(d > 0.0) || !(w > 0.0)) return p;
   const Eigen::Vector3d n = r / d;
-  p.energy = 0.5 * k * gap * gap;
+  const double energy = 0.5 * k * gap * gap;
   const M pn = I - n * n.transpose();
   auto block = [&](const M& R, const M& S, Eigen::Vector3d& grad, M& hess) {
     const Eigen::Vector3d rn = R.transpose() * n;
@@ -86,6 +102,32 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   // ∂²r/∂a_i∂b_j · n = n_i ∂α/∂b_j − ∂α/∂a_i n_j (n ⊥ e).
   const M sab = interior ? M(n * db.transpose() - da * n.transpose()) : M::Zero();
   p.hess_ab = k * ((ra.transpose() * n) * (rb.transpose() * n).transpose() + gap * (ra.transpose() * pn * rb / d + sab));
+  p.energy = energy;
+  if (w < 1.0) {
+    // E_w = w(α) E: ∂_y E_w = w ∂_y E + E w′ α_y,
+    // ∂²_yz E_w = w ∂²_yz E + w′ (∂_y E α_zᵀ + α_y ∂_z Eᵀ) + E (w″ α_y α_zᵀ + w′ α_yz),
+    // α_x = e/|e|², α_a = da, α_b = db, and the second derivatives of α = (x − a)·e/|e|²:
+    // α_xx = 0, α_aa = 2 ((1 − α) I + e daᵀ + da eᵀ)/|e|², α_bb = −2 (α I + e dbᵀ + db eᵀ)/|e|²,
+    // α_ab = ((2α − 1) I + 2 e dbᵀ − 2 da eᵀ)/|e|² (rows a, columns b).
+    const Eigen::Vector3d ax = e / l2;
+    const double al = p.alpha;
+    const M aaa = 2.0 * ((1.0 - al) * I + e * da.transpose() + da * e.transpose()) / l2;
+    const M abb = -2.0 * (al * I + e * db.transpose() + db * e.transpose()) / l2;
+    const M aab = ((2.0 * al - 1.0) * I + 2.0 * e * db.transpose() - 2.0 * da * e.transpose()) / l2;
+    auto hess = [&](const M& h, const Eigen::Vector3d& gy, const Eigen::Vector3d& gz, const Eigen::Vector3d& ay,
+                    const Eigen::Vector3d& az, const M& ayz) {
+      return M(w * h + dw * (gy * az.transpose() + ay * gz.transpose()) +
+               energy * (d2w * ay * az.transpose() + dw * ayz));
+    };
+    p.hess_xx = hess(p.hess_xx, p.grad_x, p.grad_x, ax, ax, M::Zero());
+    p.hess_aa = hess(p.hess_aa, p.grad_a, p.grad_a, da, da, aaa);
+    p.hess_bb = hess(p.hess_bb, p.grad_b, p.grad_b, db, db, abb);
+    p.hess_ab = hess(p.hess_ab, p.grad_a, p.grad_b, da, db, aab);
+    p.grad_x = w * p.grad_x + energy * dw * ax;
+    p.grad_a = w * p.grad_a + energy * dw * da;
+    p.grad_b = w * p.grad_b + energy * dw * db;
+    p.energy = w * energy;
+  }
   return p;
 }
 

@@ -78,7 +78,7 @@ std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& c, const 
   cp.stiffness = c.number_or("contact.stiffness", 3e4);
   cp.friction = c.number_or("contact.friction", 0.1);
   cp.tip_friction = c.number_or("contact.tip_friction", cp.friction);
-  cp.tip_length = c.has_section("wire.tip") ? c.number("wire.tip.length") : 0.0;
+  cp.tip_length = spec.tip.length;  // the wire's tip (wire.tip.length); a catheter has none
   cp.viscous_friction = c.number_or("contact.viscous_friction", 0.0);
   DragModel dp;
   const std::string law = c.has_section("coupling") ? c.string("coupling.drag") : "cylinder";
@@ -249,9 +249,10 @@ void apply_loads(const config::Config& c, rod::RodSimulator& sim) {
 /// spreads in: the arch of an aorta, the fork of a Y), network_side.png across it. With a
 /// periodic inlet the pressure is that of the instant of peak inlet pressure (or flow) in the
 /// cycle after the run's end (systole: the range of pressures that drives the flow; the
-/// quasi-steady model), else of the end.
+/// quasi-steady model), else of the end. A catheter (@p cath, may be null) is drawn as a wider
+/// orange tube around the wire, which shows where it has left the catheter's tip.
 void render_pictures(const config::Config& c, const vessels::Network& net, flow::FlowSolver* fs,
-                     const rod::RodSimulator* sim, const std::filesystem::path& out) {
+                     const rod::RodSimulator* sim, const rod::RodSimulator* cath, const std::filesystem::path& out) {
   std::vector<double> p(static_cast<size_t>(net.num_nodes()), 0.0);
   flow::RenderOptions ro;
   ro.title = c.string_or("name", "flowire");
@@ -276,13 +277,20 @@ void render_pictures(const config::Config& c, const vessels::Network& net, flow:
   } else {
     ro.scalar_name = "no flow";
   }
-  if (sim) {
-    flow::RenderOverlay wire;
-    const auto x = sim->positions();
-    for (int i = 0; i <= std::min(sim->first_clamped_vertex(), sim->vertex_count() - 1); ++i)
-      wire.points.push_back(x[static_cast<size_t>(i)]);
-    wire.radius = std::max(3.0 * sim->model().edge_radius.front(), 1.2e-3);  // drawn thicker to be seen
-    ro.overlays.push_back(std::move(wire));
+  auto overlay = [](const rod::RodSimulator& rod) {
+    flow::RenderOverlay o;
+    const auto x = rod.positions();
+    for (int i = 0; i <= std::min(rod.first_clamped_vertex(), rod.vertex_count() - 1); ++i)
+      o.points.push_back(x[static_cast<size_t>(i)]);
+    o.radius = std::max(3.0 * rod.model().edge_radius.front(), 1.2e-3);  // drawn thicker to be seen
+    return o;
+  };
+  if (sim) ro.overlays.push_back(overlay(*sim));
+  if (sim && cath) {
+    flow::RenderOverlay tube = overlay(*cath);
+    tube.radius = std::max(tube.radius, 1.6 * ro.overlays.back().radius);  // around the wire
+    tube.color = {0.95, 0.55, 0.1};
+    ro.overlays.push_back(std::move(tube));
   }
   // Principal directions of the network's nodes: look along the smallest.
   vessels::Vec3 mean = vessels::Vec3::Zero();
@@ -632,6 +640,10 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
       lumen_ = std::make_shared<LumenContact>(cat->inner_radius - spec.radius, cat->stiffness);
     }
     apply_loads(c, *sim);
+    if (cath_)  // gravity acts on the catheter too (the other loads are the wire's)
+      for (int i = 0; i < c.count("loads"); ++i)
+        if (const std::string p = fmt::format("loads[{}].", i); c.string(p + "type") == "gravity")
+          cath_->set_gravity(c.vector3(p + "value"));
     if (c.has_section("insertion")) {
       sim->set_insertion_speed(c.number("insertion.speed"));
       sim->set_rotation_speed(c.number("insertion.rotation_speed"));
@@ -996,7 +1008,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
         else flow::write_network_vtp(*fsolver, flow_frames.back(), out / "network.vtp");
       }
     }
-    if (c.boolean("output.png") && net) render_pictures(c, *net, fsolver, sim, out);
+    if (c.boolean("output.png") && net) render_pictures(c, *net, fsolver, sim, cosim.catheter(), out);
     if (wire_out) wire_out->finish();
     if (cath_out) cath_out->finish();
     if (net && !fsolver && write_csv) {

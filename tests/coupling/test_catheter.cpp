@@ -4,11 +4,15 @@
 // EI_wire + EI_catheter (tip deflection P L³ / (3 EI)), converging in the segment length.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
+#include "flowire/common/config.hpp"
 #include "flowire/coupling/catheter.hpp"
+#include "flowire/coupling/scene.hpp"
 #include "flowire/rod/simulator.hpp"
+#include "flowire_test.hpp"
 
 using namespace flowire;
 using namespace flowire::coupling;
@@ -60,10 +64,168 @@ TEST(LumenPenalty, DerivativesMatchCentralDifferences) {
   check_block(before, a, b, c, k, false, 1);
   check_block(behind, a, b, c, k, false, 0);  // beyond b: distance to b
   check_block(behind, a, b, c, k, false, 2);
+  // the open tip end, where the penalty is tapered (tip_weight): half an edge inside the tip
+  // to half an edge beyond it, the weight's ramp, its ends and the plain part past it
+  const V3 e = b - a, lateral = e.cross(V3::UnitZ()).normalized() * 2.5 * c + V3(0, 0, 1.5 * c);
+  for (const double alpha : {-0.45, -0.3, -0.12, 0.0, 0.2, 0.45, 0.7})
+    for (int which = 0; which < 3; ++which) check_block(a + alpha * e + lateral, a, b, c, k, true, which);
   // inside the clearance: no force
   const V3 side = (b - a).cross(V3::UnitZ()).normalized();
   EXPECT_EQ(lumen_penalty(0.5 * (a + b) + 0.6 * c * side, a, b, c, k).energy, 0.0);
   EXPECT_GT(lumen_penalty(0.5 * (a + b) + 1.4 * c * side, a, b, c, k).energy, 0.0);
+}
+
+TEST(LumenPenalty, TipWeightIsTheSmoothedShareOfTheCellInsideTheLumen) {
+  // w(α) = s(α + ½), s the quintic smoothstep: 0 half an edge beyond the tip, ½ at the tip
+  // end (half the vertex's cell inside), 1 half an edge inside; w′ and w″ continuous (0 at
+  // both ends of the ramp) and the derivatives those of w (central differences).
+  EXPECT_EQ(tip_weight(-0.5), 0.0);
+  EXPECT_EQ(tip_weight(-0.9), 0.0);
+  EXPECT_DOUBLE_EQ(tip_weight(0.0), 0.5);
+  EXPECT_EQ(tip_weight(0.5), 1.0);
+  EXPECT_EQ(tip_weight(3.0), 1.0);
+  const double h = 1e-5;
+  for (double alpha = -0.6; alpha <= 0.6; alpha += 0.01) {
+    double dw = 0.0, d2w = 0.0;
+    (void)tip_weight(alpha, &dw, &d2w);
+    double dp = 0.0, dm = 0.0;
+    const double wp = tip_weight(alpha + h, &dp), wm = tip_weight(alpha - h, &dm);
+    EXPECT_NEAR(dw, (wp - wm) / (2 * h), 1e-8) << "alpha " << alpha;
+    EXPECT_NEAR(d2w, (dp - dm) / (2 * h), 5e-4) << "alpha " << alpha;  // (w‴ jumps at the ramp's ends: O(h) there)
+  }
+  for (const double end : {-0.5, 0.5}) {  // the ramp's ends: w′ and w″ go to 0 (C²)
+    double dw = 1.0, d2w = 1.0;
+    (void)tip_weight(end + 1e-6, &dw, &d2w);
+    EXPECT_LT(std::abs(dw), 1e-9);
+    EXPECT_LT(std::abs(d2w), 1e-3);
+    (void)tip_weight(end - 1e-6, &dw, &d2w);
+    EXPECT_LT(std::abs(dw), 1e-9);
+    EXPECT_LT(std::abs(d2w), 1e-3);
+  }
+}
+
+namespace {
+/// A straight catheter of `n` edges of length h, its tip at the origin and its entry at
+/// x = n h (vertices tip first), and one wire vertex held at α edges from the tip end along
+/// the tip edge (α < 0: beyond the tip), y off the axis; its edge assigned.
+LumenContact straight_lumen(double alpha, double y, double c, double k, int n = 6, double h = 2e-3) {
+  LumenContact lc(c, k);
+  for (int j = 0; j <= n; ++j) {
+    lc.catheter_snapshot.emplace_back(j * h, 0.0, 0.0);
+    lc.catheter_arc.push_back((n - j) * h);
+  }
+  lc.wire_snapshot = {V3(alpha * h, y, 0.0)};
+  lc.wire_arc = {(n - alpha) * h};
+  lc.assign_edges();
+  return lc;
+}
+/// The lumen force on that wire vertex (LumenContact::evaluate_wire) and its energy.
+std::pair<V3, double> wire_force(const LumenContact& lc) {
+  rod::RodView v;
+  const std::vector<double> arc = lc.wire_arc;
+  v.positions = lc.wire_snapshot;
+  v.arc_length = arc;
+  v.first_clamped_vertex = 1;
+  rod::ForceAccumulator out;
+  out.reset(1);
+  lc.evaluate_wire(v, out);
+  return {out.forces()[0], out.energy()};
+}
+}  // namespace
+
+TEST(LumenContact, WireLeavesTheTipWithAContinuousForce) {
+  // A wire vertex held 2.5 clearances off the axis walks out of the catheter's tip, from two
+  // edges inside to one beyond. The contact's energy and force are continuous all the way (no
+  // jump where the vertex leaves the lumen, half an edge beyond the tip) and the force is
+  // −∂E/∂x by central differences of the whole contact (edge choice included), near the tip
+  // end and across the taper.
+  const double c = 1e-4, k = 3e4, y = 2.5 * c, full = 0.5 * k * (y - c) * (y - c);
+  double last_e = full;
+  V3 last_f = wire_force(straight_lumen(2.0, y, c, k)).first;
+  double max_de = 0.0, max_df = 0.0;
+  const double step = 1e-3;  // in edges
+  for (double alpha = 2.0 - step; alpha >= -1.0; alpha -= step) {
+    const auto [f, e] = wire_force(straight_lumen(alpha, y, c, k));
+    EXPECT_NEAR(e, straight_lumen(alpha, y, c, k).energy(), 1e-15);
+    if (alpha > 0.5 + step) {
+      EXPECT_NEAR(e, full, 1e-12 * full) << "alpha " << alpha;
+    }
+    if (alpha < -0.5 - step) {
+      EXPECT_EQ(e, 0.0) << "alpha " << alpha;
+    }
+    max_de = std::max(max_de, std::abs(e - last_e));
+    max_df = std::max(max_df, (f - last_f).norm());
+    last_e = e, last_f = f;
+  }
+  // Steps of 1e-3 edge: the energy changes by at most |E′| Δα ≈ 1.9 E Δα per step, the force
+  // by |F′| Δα; a vertex switched off at once would jump by E (and k (y − c)).
+  EXPECT_LT(max_de, 5e-3 * full);
+  EXPECT_LT(max_df, 5e-3 * k * (y - c));
+  for (const double alpha : {-0.45, -0.3, -0.05, 0.0, 0.05, 0.3, 0.45}) {
+    const auto [f, e] = wire_force(straight_lumen(alpha, y, c, k));
+    ASSERT_GT(e, 0.0);
+    const double h = 1e-9;
+    for (int m = 0; m < 3; ++m) {
+      auto at = [&](double s) {
+        LumenContact lc = straight_lumen(alpha, y, c, k);
+        lc.wire_snapshot[0][m] += s;
+        lc.assign_edges();
+        return lc.energy();
+      };
+      const double fd = -(at(h) - at(-h)) / (2 * h);
+      EXPECT_NEAR(f[m], fd, 1e-6 * k * (y - c)) << "alpha " << alpha << ", component " << m;
+    }
+  }
+}
+
+TEST(CatheterPair, AnAngledWirePushedOutOfTheCatheterConvergesEveryStep) {
+  // A 45°-angled wire tip, 1 cm inside a straight cantilevered catheter, fed 2 cm out of it
+  // at 1 cm/s in 5 ms steps (staggered as in the scene runner). Every step of both rods
+  // converges, and the contact energy changes smoothly while the pre-shaped tip leaves the
+  // lumen: no step changes it by more than a fifth of its largest value.
+  rod::WireSpec wire;
+  wire.length = 0.1;
+  wire.radius = 0.445e-3;
+  wire.youngs_modulus = 60e9;
+  wire.density = 6450;
+  wire.segments = 50;
+  wire.inserted_length = 0.04;
+  wire.tip.length = 0.03;
+  wire.tip.youngs_modulus = 10e9;
+  wire.tip.shape = rod::TipShape::Angled;
+  wire.tip.angle = std::numbers::pi / 4;
+  wire.tip.bend_radius = 5e-3;
+  CatheterSpec cat;
+  cat.length = 0.1;
+  cat.outer_radius = 1e-3;
+  cat.inner_radius = 0.55e-3;
+  cat.initial_length = 0.05;
+  rod::RodSimulator w(wire);
+  rod::RodSimulator k(catheter_rod_spec(cat, wire));
+  auto contact = std::make_shared<LumenContact>(cat.inner_radius - wire.radius, cat.stiffness);
+  w.add_external(std::make_shared<LumenContactSide>(contact, LumenContactSide::Side::Wire));
+  k.add_external(std::make_shared<LumenContactSide>(contact, LumenContactSide::Side::Catheter));
+  contact->hold_catheter(k);
+  contact->hold_wire(w);
+  w.set_insertion_speed(0.01);
+  const double dt = 5e-3;
+  std::vector<double> energy;
+  int unconverged = 0;
+  for (int n = 0; n < 600; ++n) {
+    if (!w.step(dt).converged()) ++unconverged;
+    contact->hold_wire(w);
+    if (!k.step(dt).converged()) ++unconverged;
+    contact->hold_catheter(k);
+    energy.push_back(contact->energy());
+  }
+  EXPECT_EQ(unconverged, 0);
+  EXPECT_GT(w.tip_position().x(), k.tip_position().x() + 0.015);  // 2 cm out: the angled part is free
+  const double e_max = *std::max_element(energy.begin(), energy.end());
+  double jump = 0.0;
+  for (size_t n = 1; n < energy.size(); ++n) jump = std::max(jump, std::abs(energy[n] - energy[n - 1]));
+  std::printf("contact energy: largest %.3e J, largest change in a step %.3e J\n", e_max, jump);
+  ASSERT_GT(e_max, 0.0);
+  EXPECT_LT(jump, 0.2 * e_max);
 }
 
 namespace {
@@ -154,4 +316,42 @@ TEST(CatheterPair, CantileverBendsWithTheSumOfBothStiffnesses) {
   const double slope = std::log(errs.front() / errs.back()) / std::log(hs.front() / hs.back());
   std::printf("convergence slope %.2f\n", slope);
   EXPECT_GT(slope, 0.8);
+}
+
+TEST(CatheterPair, ACatheterSlidesOnTheWallWhenPushedWithMuTimesItsWeight) {
+  // Coulomb's law for the catheter on the vessel wall, through a scene: a catheter lies along
+  // the bottom of a horizontal tube under gravity and is fed at 1 cm/s. Sliding takes an axial
+  // push of μ m g, m the mass inserted: the clamp's axial force over m g is μ (0.1 and 0.3),
+  // and 0 without friction. The catheter's wall friction is the wire's (VesselForces, the same
+  // contact: keys). The 1 cm of wire inside hangs from its own clamp (its sag, 1e-9 m, is far
+  // within the lumen's clearance), and the clamp carries the catheter's weight over a boundary
+  // layer of about (EI / k)^¼ ≈ 2 cm on the soft penalty foundation: 25 cm are inserted.
+  const double g = 9.81, pi = std::numbers::pi, rho = 1200, ro = 1e-3, ri = 0.55e-3;
+  for (const double mu : {0.0, 0.1, 0.3}) {
+    const auto dir = flowire::testing::scratch_dir("catheter-coulomb");
+    const std::string yaml = R"(
+vessels: {generator: {type: straight_tube, length: 0.4, radius: 3 mm}, max_segment_length: 5 mm}
+wire: {length: 0.3, radius: 0.3 mm, youngs_modulus: 60 GPa, density: 6450, segment_length: 2 mm,
+       base: {position: [0.01, 0, -0.002], direction: [1, 0, 0]}}
+insertion: {speed: 0, initial_length: 1 cm}
+catheter: {length: 0.4, outer_radius: 1 mm, inner_radius: 0.55 mm, youngs_modulus: 2 GPa, density: 1200,
+           initial_length: 24 cm, insertion: {speed: 1 cm/s}}
+loads: [{type: gravity, value: [0, 0, -9.81]}]
+contact: {friction: )" + std::to_string(mu) + R"(}
+solve: {dt: 5 ms, duration: 1 s}
+output: {csv: false, vtk: false}
+)";
+    const auto cfg = config::load_config_text(yaml, "scene.yaml", scene_schema(), {"output.dir=" + dir.string()});
+    const auto s = run_scene(cfg).summary;
+    ASSERT_EQ(s["status"], "ok");
+    const auto& c = s["catheter"];
+    EXPECT_EQ(c["unconverged_steps"].get<int>(), 0);
+    const double inserted = c["inserted_length"].get<double>();
+    ASSERT_NEAR(inserted, 0.25, 1e-9);
+    const double weight = g * rho * pi * (ro * ro - ri * ri) * inserted;
+    const double push = std::abs(c["base_force"][0].get<double>());
+    std::printf("mu %.1f: push %.4e N, mu m g %.4e N, push / m g %.4f\n", mu, push, mu * weight, push / weight);
+    EXPECT_NEAR(push / weight, mu, 0.03 * mu + 1e-6) << "mu " << mu;
+    EXPECT_LT(c["contact"]["max_penetration"].get<double>(), 1e-6);
+  }
 }

@@ -52,16 +52,26 @@ struct LumenPenalty {
   double energy = 0.0;
   double distance = 0.0;
   double alpha = 0.0;                                 ///< nearest point a + α (b − a)
+  double weight = 1.0;                                ///< w(α) at the open tip end, else 1
   Eigen::Vector3d grad_x, grad_a, grad_b;             ///< ∂E/∂x, ∂E/∂a, ∂E/∂b
   Eigen::Matrix3d hess_xx, hess_aa, hess_bb;          ///< ∂²E/∂x², ∂²E/∂a², ∂²E/∂b²
   Eigen::Matrix3d hess_ab;                            ///< ∂²E/∂a∂b
 };
 /// @brief The penalty of x against edge [a, b] with clearance @p c and stiffness @p k
 /// (zero when d ≤ c). Exact derivatives of the distance to the segment (interior or end).
-/// @p open_before_a: before a the distance is to the edge's line (the lumen's open tip end,
-/// so a wire vertex level with the catheter's tip is held by its lateral distance only).
+/// @p open_before_a: [a, b] is the catheter's tip edge, a its open end. Before a the distance
+/// is to the edge's line (a wire vertex level with the tip is held by its lateral distance
+/// only), and the penalty is weighted by tip_weight(α), the vertex's share of its cell inside
+/// the lumen: full half an edge inside the tip, none half an edge beyond it, where the vertex
+/// leaves the lumen (LumenContact::nearest_edge). The wire's exit is then C² in the weight and
+/// the energy C¹ as a whole (the penalty's own ½ k (d − c)₊²), with no force switched off.
 [[nodiscard]] LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a,
                                          const Eigen::Vector3d& b, double c, double k, bool open_before_a = false);
+
+/// @brief The weight of the lumen penalty at the catheter's open tip end for a wire vertex at
+/// α along the tip edge (α = 0 at the tip end, < 0 beyond it): the quintic smoothstep of
+/// α + ½ over [0, 1] (1 for α ≥ ½, 0 for α ≤ −½). @p dw, @p d2w: its first two derivatives.
+[[nodiscard]] double tip_weight(double alpha, double* dw = nullptr, double* d2w = nullptr);
 
 /// @brief The wire–catheter contact, one object shared by two ExternalForce views: the wire
 /// side (catheter held at `catheter_snapshot`) and the catheter side (wire held at

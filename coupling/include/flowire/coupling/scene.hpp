@@ -43,7 +43,9 @@ CatheterSpec scene_catheter_spec(const config::Config& scene, const rod::WireSpe
 class VesselForces;
 /// @brief Wall contact and blood drag on the wire as the scene's `contact:` and `coupling:`
 /// sections configure them (drag only with a @p flow solver); null when the scene needs
-/// neither (`contact.enabled: false` and no drag), so nothing is looked up.
+/// neither (`contact.enabled: false` and no drag), so nothing is looked up. The rod's
+/// distal `tip.length` takes `contact.tip_friction` (a catheter's rod has none: the same
+/// Coulomb friction, `contact.friction`, all along it).
 std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& scene, const vessels::SpatialIndex& index,
                                                  const rod::WireSpec& wire, flow::FlowSolver* flow);
 
