@@ -70,8 +70,14 @@ TEST(FlowProfile, WomersleyFlowRatioEqualsAnArbitraryPrecisionEvaluation) {
                            {25, 0.00070345293614265699, -0.012075769290257558},
                            {40, 0.00017363789914099611, -0.0048232089923062417}};
   for (const auto& r : ref) EXPECT_LT(rel(womersley_flow_ratio(r[0]), {r[1], r[2]}), 1e-11) << "alpha " << r[0];
-  // The quasi-steady limit.
+  // The quasi-steady limit, and the next term: the impedance Z/R = 1/ratio = 1 + iα²/6 + O(α⁴),
+  // the inertance 4ρl/(3πr²) of Inertance::Womersley (ωL/R = α²/6).
   EXPECT_EQ(womersley_flow_ratio(0.0), std::complex<double>(1.0, 0.0));
+  for (const double alpha : {0.05, 0.1, 0.2}) {
+    const std::complex<double> z = 1.0 / womersley_flow_ratio(alpha);
+    EXPECT_NEAR(z.imag() / (alpha * alpha / 6.0), 1.0, 0.1 * alpha * alpha) << alpha;
+    EXPECT_NEAR(z.real(), 1.0, 0.01 * std::pow(alpha, 4)) << alpha;
+  }
   // The profile shape S(ρ), same reference: u(Q̂ = 1, r = 1, ωt = 0) = Re S/π, at ωt = −π/2 Im S/π.
   const double shape[][4] = {{17, 0.5, 1.0788754291686747, -0.094787462842053579},
                              {17, 0.95, 0.61029852157822058, 0.29415528533915835},
