@@ -13,13 +13,21 @@ void write_atomically(const std::filesystem::path& target,
                       const std::function<void(const std::filesystem::path& tmp)>& writer) {
   namespace fs = std::filesystem;
   const fs::path tmp = target.parent_path() / (target.filename().string() + ".partial");
+  // A folder that cannot be made or a file that cannot be moved into place is bad input
+  // (an output path under a regular file, a read-only folder): one error naming the file.
+  std::error_code ec;
+  if (!target.parent_path().empty()) {
+    fs::create_directories(target.parent_path(), ec);
+    if (ec)
+      throw_input_error(target.string(),
+                        fmt::format("cannot create the folder {}: {}", target.parent_path().string(), ec.message()));
+  }
   try {
-    if (!target.parent_path().empty()) fs::create_directories(target.parent_path());
     writer(tmp);
     if (!fs::exists(tmp)) throw_input_error(target.string(), "the file could not be written");
-    fs::rename(tmp, target);
+    fs::rename(tmp, target, ec);
+    if (ec) throw_input_error(target.string(), fmt::format("the file could not be put in place: {}", ec.message()));
   } catch (...) {
-    std::error_code ec;
     fs::remove(tmp, ec);
     throw;
   }

@@ -126,7 +126,9 @@ void write_network_vtp(const FlowSolver& solver, const FlowFrame& frame, const s
 void write_network_series(const FlowSolver& solver, std::span<const FlowFrame> frames, const std::filesystem::path& dir,
                           const std::string& stem) {
   if (frames.empty()) throw_usage_error("write_network_series: no frames");
-  std::filesystem::create_directories(dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw_input_error(dir.string(), fmt::format("cannot create the output folder: {}", ec.message()));
   std::string pvd =
       "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
   for (size_t i = 0; i < frames.size(); ++i) {

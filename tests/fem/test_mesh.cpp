@@ -1,5 +1,5 @@
-// Reference element and quadrature exactness, and the lumen meshes built with gmsh:
-// volumes and areas of curved P2 meshes, boundary groups, reproducibility, clear errors.
+// The lumen meshes built with gmsh: volumes and areas of curved P2 meshes, boundary groups,
+// reproducibility, clear errors.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,57 +8,11 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/element.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire_test.hpp"
 
 namespace flowire::fem {
 namespace {
-
-double factorial(int n) { return n <= 1 ? 1.0 : n * factorial(n - 1); }
-
-TEST(FemElement, TetQuadratureIsExactToDegreeFive) {
-  for (int a = 0; a <= 5; ++a)
-    for (int b = 0; a + b <= 5; ++b)
-      for (int c = 0; a + b + c <= 5; ++c) {
-        double sum = 0.0;
-        for (const auto& q : tet_quadrature())
-          sum += q.weight * std::pow(q.xi[0], a) * std::pow(q.xi[1], b) * std::pow(q.xi[2], c);
-        const double exact = factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
-        EXPECT_NEAR(sum, exact, 1e-15) << a << b << c;
-      }
-}
-
-TEST(FemElement, TriQuadratureIsExactToDegreeFour) {
-  for (int a = 0; a <= 4; ++a)
-    for (int b = 0; a + b <= 4; ++b) {
-      double sum = 0.0;
-      for (const auto& q : tri_quadrature()) sum += q.weight * std::pow(q.xi[0], a) * std::pow(q.xi[1], b);
-      const double exact = factorial(a) * factorial(b) / factorial(a + b + 2);
-      EXPECT_NEAR(sum, exact, 1e-14) << a << b;
-    }
-}
-
-TEST(FemElement, P2BasisIsNodalAndGradientsMatchDifferences) {
-  const std::array<std::array<double, 3>, 10> nodes{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, 0, 0},
-                                                     {.5, .5, 0}, {0, .5, 0}, {0, 0, .5}, {.5, 0, .5}, {0, .5, .5}}};
-  double v[10];
-  for (int i = 0; i < 10; ++i) {
-    tet_p2(nodes[static_cast<size_t>(i)], v);
-    for (int j = 0; j < 10; ++j) EXPECT_NEAR(v[j], i == j ? 1.0 : 0.0, 1e-15);
-  }
-  const std::array<double, 3> x{0.21, 0.17, 0.33};
-  double g[10][3], vp[10], vm[10];
-  tet_p2_grad(x, g);
-  for (int d = 0; d < 3; ++d) {
-    auto xp = x, xm = x;
-    xp[static_cast<size_t>(d)] += 1e-6;
-    xm[static_cast<size_t>(d)] -= 1e-6;
-    tet_p2(xp, vp);
-    tet_p2(xm, vm);
-    for (int i = 0; i < 10; ++i) EXPECT_NEAR(g[i][d], (vp[i] - vm[i]) / 2e-6, 1e-8);
-  }
-}
 
 TEST(FemMesh, StraightTubeVolumeAreaAndGroups) {
   const auto net = test::tube(2e-3, 20e-3);

@@ -1,7 +1,6 @@
-// Output files of the contract: nodes.csv, segments.csv, network.vtp / .pvd, PNG.
+// Output files of the contract: nodes.csv, segments.csv, network.vtp / .pvd (the PNG: test_render.cpp).
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -79,26 +78,6 @@ TEST(FlowOutput, VtpSeriesOverACycle) {
   const Network back = vessels::read_network((dir / "network.vtp").string());
   EXPECT_EQ(back.num_segments(), net.num_segments());
 #endif
-}
-
-TEST(FlowRender, PressureColouredPng) {
-#ifndef FLOWIRE_TEST_HAVE_VTK
-  GTEST_SKIP() << "built without VTK";
-#endif
-  if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no X display: run under xvfb-run -a -s \"-screen 0 1024x768x24\"";
-  const auto dir = flowire::testing::scratch_dir("flow_render");
-  const Network net = murray_tree(4);
-  auto s = make_solver(net, default_spec(net, Waveform::constant(13000.0)));
-  std::vector<double> p(static_cast<size_t>(net.num_nodes()));
-  s->node_pressures(p);
-  RenderOptions opt;
-  opt.title = "Murray tree, 13 kPa inlet";
-  opt.view_direction = Vec3(0, 0, -1);
-  opt.view_up = Vec3(0, 1, 0);
-  opt.overlays.push_back({{net.node(0), net.node(1), net.node(2)}, 0.3e-3, {0.0, 0.0, 0.0}});
-  render_network_png(net, p, dir / "pressure.png", opt);
-  ASSERT_TRUE(std::filesystem::exists(dir / "pressure.png"));
-  EXPECT_GT(std::filesystem::file_size(dir / "pressure.png"), 5000u);
 }
 
 }  // namespace

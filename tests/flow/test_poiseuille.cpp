@@ -7,7 +7,6 @@
 
 #include "flow_test_networks.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/flow/profile.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire_test.hpp"
 
@@ -314,104 +313,6 @@ TEST(FlowPoiseuille, RcrOutletUsesTotalResistanceWithAWarning) {
   EXPECT_TRUE(w.contains("Rp + Rd"));
   const double r = poiseuille_resistance(3.5e-3, 0.1, 2e-3);
   EXPECT_LT(rel(s->segment_flow(0), 900.0 / (r + 1e8)), 1e-12);
-}
-
-TEST(FlowProfile, BesselAndWomersleyTableOfReference5) {
-  // Reference 5: |Q/Q_Poiseuille| and phase for a sinusoidal pressure gradient.
-  const double table[][3] = {{1, 0.986, -9.5}, {2, 0.825, -33}, {3, 0.548, -54}, {5, 0.242, -71}, {10, 0.069, -81}};
-  for (const auto& row : table) {
-    const auto ratio = womersley_flow_ratio(row[0]);
-    EXPECT_NEAR(std::abs(ratio), row[1], 0.006) << "alpha " << row[0];
-    EXPECT_NEAR(std::arg(ratio) * 180.0 / M_PI, row[2], 1.0) << "alpha " << row[0];
-  }
-  EXPECT_NEAR(bessel_j0(2.0).real(), 0.22389077914123567, 1e-14);
-  EXPECT_NEAR(bessel_j1(2.0).real(), 0.57672480775687339, 1e-14);
-  // The Womersley profile carries the flow it is given: integrate over the disk.
-  for (double alpha : {0.5, 3.0, 12.0}) {
-    const std::complex<double> qhat(2e-6, -1e-6);
-    const double r = 1e-3;
-    for (double wt : {0.0, 1.0, 2.5}) {
-      double q = 0.0;
-      const int n = 4000;
-      for (int i = 0; i < n; ++i) {
-        const double rho = (i + 0.5) / n;
-        q += womersley_velocity(qhat, r, alpha, rho, wt) * 2.0 * M_PI * rho * r * r / n;
-      }
-      EXPECT_NEAR(q, (qhat * std::polar(1.0, wt)).real(), 2e-6 * std::abs(qhat)) << alpha;
-    }
-  }
-}
-
-TEST(FlowProfile, TabulatedWomersleyShapeEqualsTheBesselSeries) {
-  // Between its nodes the table interpolates; it must agree with the series everywhere,
-  // including inside the Stokes layer at the wall at aortic α.
-  for (double alpha : {0.0, 0.5, 3.0, 10.0, 17.0, 25.0}) {
-    const WomersleyShape shape(alpha);
-    double worst = 0.0;
-    for (int i = 0; i <= 5000; ++i) {
-      const double rho = i / 5000.0 * (1.0 - 1e-12);
-      const double direct = womersley_velocity({1.0, 0.0}, 1.0, alpha, rho, 0.0);
-      const double direct_im = womersley_velocity({1.0, 0.0}, 1.0, alpha, rho, -0.5 * M_PI);
-      const std::complex<double> table = shape(rho) / M_PI;
-      worst = std::max({worst, std::abs(table.real() - direct), std::abs(table.imag() - direct_im)});
-    }
-    EXPECT_LT(worst, 1e-7 * 2.0 / M_PI) << alpha;  // of the laminar centre value 2/π
-  }
-}
-
-TEST(FlowProfile, WomersleyProfileOfAMeasuredWaveformIsTheSumOfItsHarmonics) {
-  // A table inlet (as a measured waveform arrives) with a first and a third harmonic:
-  // p(t) = p0 + p1 sin ωt + p3 cos 3ωt. In a tube the quasi-steady flow is p(t)/R, so the
-  // exact velocity is the parabola of the mean plus the Womersley solutions of α and α√3,
-  // summed here with the Bessel series (womersley_velocity), not the solver's tables.
-  const double r = 4e-3, len = 0.1, period = 0.8, p0 = 1000, p1 = 600, p3 = 250;
-  const Network net = tube(len, r, 2);
-  const double omega = 2 * M_PI / period;
-  std::vector<double> times, values;
-  for (int i = 0; i <= 2000; ++i) {
-    const double t = period * i / 2000;
-    times.push_back(t);
-    values.push_back(p0 + p1 * std::sin(omega * t) + p3 * std::cos(3 * omega * t));
-  }
-  FlowSpec spec = pressure_spec(net, 0, Waveform::table(times, values), {{net.num_nodes() - 1, 0.0}});
-  spec.profile = Profile::Womersley;
-  auto s = make_solver(net, spec);
-  const double R = 8 * spec.viscosity * len / (M_PI * std::pow(r, 4));
-  const double alpha = womersley_number(r, omega, spec.density, spec.viscosity);
-  const Vec3 a = net.node(0);
-  double worst = 0.0, scale = 0.0;
-  for (double t : {0.0, 0.13, 0.37, 0.61}) {
-    s->advance(t);
-    for (double rho : {0.0, 0.3, 0.7, 0.9, 0.97}) {
-      // sin ωt = Re[−i e^{iωt}], cos 3ωt = Re[e^{3iωt}]
-      const double exact = 2 * p0 / R / (M_PI * r * r) * (1 - rho * rho) +
-                           womersley_velocity({0.0, -p1 / R}, r, alpha, rho, omega * t) +
-                           womersley_velocity({p3 / R, 0.0}, r, alpha * std::sqrt(3.0), rho, 3 * omega * t);
-      const double u = s->axial_velocity_at(0, a + Vec3(0, rho * r, 0));
-      worst = std::max(worst, std::abs(u - exact));
-      scale = std::max(scale, std::abs(exact));
-    }
-  }
-  EXPECT_LT(worst, 1e-4 * scale) << "alpha " << alpha;
-}
-
-TEST(FlowProfile, WomersleyProfileOptionCarriesTheSegmentFlow) {
-  const Network net = tube(0.1, 2e-3, 2);
-  FlowSpec spec = pressure_spec(net, 0, Waveform::sine(1200.0, 800.0, 0.5), {{net.num_nodes() - 1, 0.0}});
-  spec.profile = Profile::Womersley;
-  auto s = make_solver(net, spec);
-  const Vec3 a = net.node(0);
-  for (double t : {0.0, 0.1, 0.33}) {
-    s->advance(t);
-    double q = 0.0;
-    const int n = 2000;
-    for (int i = 0; i < n; ++i) {
-      const double d = (i + 0.5) / n * 2e-3;
-      q += s->axial_velocity_at(0, a + Vec3(0, d, 0)) * 2.0 * M_PI * d * 2e-3 / n;
-    }
-    EXPECT_NEAR(q, s->segment_flow(0), 1e-5 * std::abs(s->segment_flow(0)));
-  }
-  EXPECT_GT(s->segment_state(0).womersley, 0.0);
 }
 
 }  // namespace

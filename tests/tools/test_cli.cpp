@@ -192,6 +192,25 @@ TEST(Cli, BadInputGivesOneLineAndStatusTwo) {
   EXPECT_FALSE(fs::exists(dir / "f" / "summary.json"));
 }
 
+TEST(Cli, AnOutputFolderThatCannotBeMadeExitsTwoNamingIt) {
+  // --out below a regular file: no folder can be made there. Bad input (exit 2, one line
+  // naming the place), not an unexpected failure (exit 3).
+  const auto dir = flowire::testing::scratch_dir("cli-unwritable");
+  write(dir / "plain", "a file, not a folder\n");
+  write(dir / "scene.yaml", "vessels:\n  generator: {type: y_bifurcation}\n");
+  write(dir / "aorta.vtp", vmtk_three_outlet_aorta());
+  for (const std::string& args :
+       {"run " + (dir / "scene.yaml").string() + " --out " + (dir / "plain" / "out").string(),
+        "network convert " + (dir / "aorta.vtp").string() + " " + (dir / "plain" / "net.vtp").string() +
+            " --length-unit mm"}) {
+    const auto r = run(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("flowire: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find((dir / "plain").string()), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("unexpected failure"), std::string::npos) << r.err;
+  }
+}
+
 TEST(Cli, VesselsOnlySceneWritesSummaryAndSegments) {
   const auto dir = flowire::testing::scratch_dir("cli-run");
   write(dir / "scene.yaml", "vessels:\n  generator: {type: y_bifurcation}\n  max_segment_length: 10 mm\n");

@@ -1,4 +1,4 @@
-// Network construction: splitting, joining, counting, generators, bad input.
+// Network construction: splitting, joining, counting, bad input.
 #include "flowire/vessels/network.hpp"
 
 #include <gtest/gtest.h>
@@ -122,60 +122,6 @@ TEST(Network, BadInputNamesBranchAndPoint) {
   loop.branches[0].points[1] = Vec3(2e-7, 0, 0);
   EXPECT_NE(build_error(loop).find("self-loop"), std::string::npos) << build_error(loop);
   EXPECT_NE(build_error(Centerlines{{}, "empty.vtp"}).find("empty.vtp: no centerline branches"), std::string::npos);
-}
-
-TEST(Generators, YBifurcationObeysMurray) {
-  const auto net = Network::build(y_bifurcation({}), {.max_segment_length = 5e-3});
-  const auto n = net.counts();
-  EXPECT_EQ(n.branches, 3);
-  EXPECT_EQ(n.junctions, 1);
-  EXPECT_EQ(n.ends, 3);
-  EXPECT_EQ(n.loops, 0);
-  const double rp = net.segment(net.branch(0).segments[0]).radius;
-  const double r1 = net.segment(net.branch(1).segments[0]).radius;
-  const double r2 = net.segment(net.branch(2).segments[0]).radius;
-  EXPECT_NEAR(std::pow(r1, 3) + std::pow(r2, 3), std::pow(rp, 3), 1e-20);
-  EXPECT_NEAR(n.total_length, 0.12, 1e-12);
-}
-
-TEST(Generators, AorticArchIsAnAdultAortaWithThreeSupraAorticBranches) {
-  const auto c = aortic_arch();
-  const auto net = Network::build(c, {.max_segment_length = 5e-3});
-  const auto n = net.counts();
-  EXPECT_EQ(n.branches, 9);
-  EXPECT_EQ(n.junctions, 4);   // brachiocephalic, carotid, subclavian, iliac bifurcation
-  EXPECT_EQ(n.ends, 6);        // root, three supra-aortic, two femoral
-  EXPECT_EQ(n.loops, 0);
-  EXPECT_NEAR(n.radius_max, 0.014, 0.001);
-  EXPECT_GT(n.radius_min, 3e-3);
-  // The root is the widest end (flow inlet) and sits at the origin.
-  EXPECT_LT(net.node(net.widest_end()).norm(), 1e-12);
-  // The femoral entry is well below the root: a realistic insertion path of 60–80 cm.
-  double path = 0;
-  for (const auto& b : c.branches)
-    if (b.name == "ascending_aorta" || b.name == "arch_1" || b.name == "arch_2" || b.name == "descending_aorta" ||
-        b.name == "right_iliac_femoral")
-      for (size_t i = 1; i < b.points.size(); ++i) path += (b.points[i] - b.points[i - 1]).norm();
-  EXPECT_GT(path, 0.60);
-  EXPECT_LT(path, 0.80);
-  EXPECT_LT(aortic_arch_entry().z(), -0.4);
-}
-
-TEST(Generators, BinaryTreeCountsAndMurrayScaling) {
-  const auto net = binary_tree({.depth = 5});
-  const auto n = net.counts();
-  EXPECT_EQ(n.segments, 63);
-  EXPECT_EQ(n.ends, 33);
-  EXPECT_EQ(n.junctions, 31);
-  EXPECT_EQ(n.loops, 0);
-  EXPECT_NEAR(net.segment(62).radius, 2e-3 * std::pow(2.0, -5.0 / 3.0), 1e-15);
-  EXPECT_NEAR(net.segment(62).length, 20e-3 * std::pow(2.0, -5.0 / 3.0), 1e-15);
-}
-
-TEST(Generators, RejectBadParameters) {
-  EXPECT_THROW(straight_tube({.length = 0.0}), flowire::Error);
-  EXPECT_THROW(y_bifurcation({.parent_radius = -1.0}), flowire::Error);
-  EXPECT_THROW(binary_tree({.depth = 40}), flowire::Error);
 }
 
 TEST(Network, FarthestEndFollowsTheVessels) {

@@ -268,3 +268,37 @@ TEST(Spatial, NeighbourhoodsAreReusedByADriftingPoint) {
   }
   EXPECT_EQ(index.stats().gathers, 1u);
 }
+
+TEST(Spatial, BothLocateOverloadsGiveTheSameAnswerAndCountsOnARandomCloud) {
+  // Independent points (not a walk) over a generated network, each with a random hint (none
+  // for some): locate(p, hint) and locate(p, hint, nb) must return the same Location, field
+  // by field, and count the same window hits and fallbacks. Two indices keep the counts apart.
+  const auto net = Network::build(aortic_arch(), {.max_segment_length = 2e-3});
+  const SpatialIndex plain(net, 4), with_nb(net, 4);
+  const auto pts = random_points(net, 3000, 2.0, 21);
+  std::mt19937 rng(22);
+  std::uniform_int_distribution<int> pick(-1, net.num_segments() - 1);
+  Neighbourhood nb;
+  long from_window = 0, outside = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    // Half the hints are the brute-force answer (a hit when the point is inside), half random.
+    const int hint = i % 2 ? pick(rng) : plain.locate_brute_force(pts[i]).segment;
+    const auto a = plain.locate(pts[i], hint);
+    const auto b = with_nb.locate(pts[i], hint, nb);
+    ASSERT_EQ(a.segment, b.segment) << "point " << i;
+    ASSERT_EQ(a.inside, b.inside) << "point " << i;
+    ASSERT_EQ(a.t, b.t) << "point " << i;
+    ASSERT_EQ(a.axis_distance, b.axis_distance) << "point " << i;
+    ASSERT_EQ(a.from_window, b.from_window) << "point " << i;
+    from_window += a.from_window;
+    outside += !a.inside;
+  }
+  EXPECT_EQ(plain.stats().window_hits, with_nb.stats().window_hits);
+  EXPECT_EQ(plain.stats().fallbacks, with_nb.stats().fallbacks);
+  EXPECT_EQ(plain.stats().window_hits, static_cast<std::uint64_t>(from_window));
+  EXPECT_EQ(plain.stats().window_hits + plain.stats().fallbacks, pts.size());
+  // The cloud exercises both stages and points outside the lumen.
+  EXPECT_GT(from_window, static_cast<long>(pts.size()) / 5);
+  EXPECT_GT(static_cast<long>(pts.size()) - from_window, static_cast<long>(pts.size()) / 5);
+  EXPECT_GT(outside, static_cast<long>(pts.size()) / 10);
+}

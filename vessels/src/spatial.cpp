@@ -72,7 +72,7 @@ bool SpatialIndex::test_segment(const Vec3& p, int s, Location& best) const {
   return true;
 }
 
-bool SpatialIndex::locate_in_window(const Vec3& p, int hint, Location& best) const {
+bool SpatialIndex::holds_in_window(const Vec3& p, int hint, Location& best) const {
   const int ns = net_.num_segments();
   if (hint < 0 || hint >= ns) return false;
   if (test_segment(p, hint, best)) return true;  // the wire moves little between queries: the hint alone first
@@ -86,25 +86,25 @@ bool SpatialIndex::locate_in_window(const Vec3& p, int hint, Location& best) con
   return best.inside;
 }
 
-Location SpatialIndex::locate(const Vec3& p, int hint) const {
-  Location best;
-  if (locate_in_window(p, hint, best)) {
+bool SpatialIndex::locate_in_window(const Vec3& p, int hint, Location& best) const {
+  if (holds_in_window(p, hint, best)) {
     best.from_window = true;
     ++stats_.window_hits;
-    return best;
+    return true;
   }
   ++stats_.fallbacks;
+  return false;
+}
+
+Location SpatialIndex::locate(const Vec3& p, int hint) const {
+  Location best;
+  if (locate_in_window(p, hint, best)) return best;
   return fallback(p);
 }
 
 Location SpatialIndex::locate(const Vec3& p, int hint, Neighbourhood& nb) const {
   Location best;
-  if (locate_in_window(p, hint, best)) {
-    best.from_window = true;
-    ++stats_.window_hits;
-    return best;
-  }
-  ++stats_.fallbacks;
+  if (locate_in_window(p, hint, best)) return best;
   const double delta = nb.reach >= 0.0 ? (p - nb.centre).norm() : std::numeric_limits<double>::infinity();
   if (delta <= nb.reach) {
     // The fallback's two passes over the neighbourhood. A segment left out has its box

@@ -51,8 +51,8 @@ using Mat3 = Eigen::Matrix3d;
 enum class DragLaw {
   None,
   Cylinder,        ///< Reynolds-aware cross-flow drag + annular Poiseuille shear (this file)
-  SlenderBody,     ///< resistive-force (Stokes) drag, valid for Re ≪ 1
-  VelocityOffset,  ///< the published form: the blood velocity added to the velocity update
+  SlenderBody,     ///< resistive-force (Stokes) drag, valid for Re ≪ 1 (slender_body_drag: Gazzola et al. 2018, eq. 4.13)
+  VelocityOffset,  ///< the published form: the blood velocity added to the velocity update (eq. 10 of the published method)
 };
 
 /// @brief Largest Reynolds number of the drag curve's published range (Sucker & Brauer 1975).

@@ -1,8 +1,11 @@
 #pragma once
 /// @file tip_forces.hpp
 /// @brief Forces on the wire's distal tip: resistance inside marked obstacle regions (a
-/// clot, a tight lesion) and an optional steering force towards a chosen branch, as in
-/// the elastic-rod guidewire simulators (Luo et al.'s clot resistance and steering).
+/// clot, a tight lesion) and an optional steering force towards a chosen branch, after the
+/// elastic-rod guidewire simulator of Tang, Lagadec, Gould, Wan, Zhai & How 2010 (Vis.
+/// Comput. 26, 1157–1165, §3.3–3.4: a clot's resistance f = βT/|T| along the tip's tangent,
+/// a steering force of constant magnitude at the tip). Their steering pulls along the
+/// target branch's centerline; here it pulls the tip sideways towards a target point.
 ///
 /// - Obstacle: while the tip vertex is inside a sphere (centre, radius), a force of
 ///   magnitude F opposes its motion along the tip tangent t (t points distally):

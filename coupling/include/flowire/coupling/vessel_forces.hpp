@@ -24,7 +24,7 @@ namespace flowire::coupling {
 struct ContactParams {
   bool enabled = true;
   double stiffness = 0.0;        ///< penalty stiffness per vertex [N/m]
-  double friction = 0.1;         ///< Coulomb coefficient, shaft
+  double friction = 0.1;         ///< Coulomb coefficient, shaft (wire on vessel wall: 0.1–1.0, Tang et al. 2010, §3.3)
   double tip_friction = 0.1;     ///< Coulomb coefficient, tip region
   double tip_length = 0.03;      ///< [m] distal length using tip_friction
   double slip_speed = 1e-4;      ///< [m/s] smooth stick/slip transition width ε

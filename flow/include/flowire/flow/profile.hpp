@@ -1,6 +1,12 @@
 #pragma once
 /// @file profile.hpp
 /// @brief Velocity profiles in a rigid circular tube: laminar (Poiseuille) and Womersley.
+///
+/// Sources: the laminar profile is eq. 8 of the published method (the Hagen–Poiseuille
+/// parabola); the oscillatory one is Womersley's solution for a sinusoidal pressure gradient
+/// in a rigid tube (J. R. Womersley 1955, J. Physiol. 127, 553–563); the Bessel functions
+/// are summed from their ascending series (Abramowitz & Stegun, Handbook of Mathematical
+/// Functions, eq. 9.1.10).
 #include <complex>
 #include <vector>
 
@@ -10,8 +16,10 @@ namespace flowire::flow {
 /// carrying flow Q: \f$ u(d) = \frac{2Q}{\pi r^2}\left(1 - \frac{d^2}{r^2}\right) \f$, 0 for d ≥ r.
 [[nodiscard]] double laminar_velocity(double flow, double radius, double d);
 
-/// @brief Bessel functions of the first kind J0, J1 of a complex argument (power series;
-/// accurate to ~1e-12 relative for |z| ≤ 60, which covers α ≤ 60).
+/// @brief Bessel functions of the first kind J0, J1 of a complex argument (the power series
+/// of Abramowitz & Stegun eq. 9.1.10; accurate to ~1e-12 relative for |z| ≤ 60, which covers
+/// α ≤ 60). On the ray arg z = 3π/4 they are the Kelvin functions, J0(x i^{3/2}) = ber x + i bei x
+/// (A&S 9.9.1).
 [[nodiscard]] std::complex<double> bessel_j0(std::complex<double> z);
 [[nodiscard]] std::complex<double> bessel_j1(std::complex<double> z);
 

@@ -8,10 +8,11 @@
 /// that time. The network must outlive the solver.
 ///
 /// Quasi-steady Poiseuille model (the published method): every segment obeys
-/// \f$ Q_s = (p_{from} - p_{to}) / R_s \f$ with \f$ R_s = 8\eta l_s / (\pi r_s^4) \f$ and mass is
-/// conserved at every node; the state at t depends only on the boundary values at t.
-/// - `dense_inverse`: the published system \f$ K [Q; P] = [b; p_{source}(t)] \f$,
-///   K = [A 0; C −Aᵀ] of size N+E, inverted densely once and multiplied every frame.
+/// \f$ Q_s = (p_{from} - p_{to}) / R_s \f$ with \f$ R_s = 8\eta l_s / (\pi r_s^4) \f$ (its eq. 1,
+/// the Hagen–Poiseuille law) and mass is conserved at every node (its eq. 3, AQ = 0); the
+/// state at t depends only on the boundary values at t.
+/// - `dense_inverse`: the published system \f$ K [Q; P] = [b; p_{source}(t)] \f$ (its eq. 6),
+///   K = [A 0; C −Aᵀ] of size N+E, inverted densely once and multiplied every frame (eq. 7).
 /// - `superposition`: the nodal conductance system G p = b factored once with CHOLMOD,
 ///   solved once per independent boundary source k; a frame is
 ///   \f$ p(t) = \sum_k f_k(t)\, p_k \f$ and only the nodes/segments asked for are evaluated.
@@ -173,14 +174,17 @@ std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec);
 /// program that calls MPI_Init itself calls this before MPI_Finalize. No-op without PETSc.
 void finalize_petsc();
 
-/// @brief Poiseuille resistance \f$ R = 8\eta l/(\pi r^4) \f$.
+/// @brief Poiseuille resistance \f$ R = 8\eta l/(\pi r^4) \f$: the Hagen–Poiseuille law of
+/// steady laminar flow of a Newtonian fluid in a rigid circular tube (Bird, Stewart &
+/// Lightfoot, Transport Phenomena, §2.3; eq. 1 of the published method).
 [[nodiscard]] inline double poiseuille_resistance(double viscosity, double length, double radius) {
   constexpr double pi = 3.14159265358979323846;
   return 8.0 * viscosity * length / (pi * radius * radius * radius * radius);
 }
 
 /// @brief Poiseuille resistance of a conical frustum whose radius runs linearly from r1 to
-/// r2 over the length l, the integral of 8η/(π r(x)⁴) along it:
+/// r2 over the length l, the integral of 8η/(π r(x)⁴) along it (the Hagen–Poiseuille law
+/// in every cross-section: the lubrication approximation of a slowly tapering tube):
 /// \f[ R = \frac{8\eta l\,(r_1^2 + r_1 r_2 + r_2^2)}{3\pi r_1^3 r_2^3} \f]
 /// (equal to `poiseuille_resistance` when r1 = r2; the mean radius would underestimate it).
 [[nodiscard]] inline double frustum_resistance(double viscosity, double length, double r1, double r2) {

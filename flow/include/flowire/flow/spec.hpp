@@ -5,7 +5,9 @@
 ///
 /// Boundary conditions are attached to network nodes. Inlets prescribe a pressure or a
 /// flow into the network; outlets prescribe a pressure, a resistance to a distal pressure,
-/// or a three-element (RCR) windkessel. An RCR outlet has state, so it is only dynamic
+/// or a three-element (RCR) windkessel (proximal resistance, compliance, distal resistance:
+/// Westerhof, Lankhaar & Westerhof 2009, "The arterial Windkessel", Med. Biol. Eng. Comput.
+/// 47, 131–141). An RCR outlet has state, so it is only dynamic
 /// in `Model::Rlc`; the quasi-steady Poiseuille model replaces it by its total
 /// resistance Rp + Rd to Pd and reports that with a warning.
 #include <string>
@@ -77,11 +79,13 @@ enum class Model { Poiseuille, Rlc };
 enum class SolverKind { Superposition, DenseInverse, Sparse, Petsc };
 /// @brief Inertance per segment in the rlc model.
 /// Poiseuille: \f$ L = \rho l / (\pi r^2) \f$ (flat profile, the usual 0D choice);
-/// Womersley: \f$ L = 4\rho l / (3\pi r^2) \f$, which with R in series reproduces the
-/// Womersley flow amplitude and phase within about 1–4 % up to α ≈ 4.
+/// Womersley: \f$ L = 4\rho l / (3\pi r^2) \f$, the low-α limit of the impedance of
+/// Womersley's solution (J. Physiol. 127, 553–563, 1955), Z = R(1 + iα²/6 + O(α⁴)); with R in
+/// series it reproduces the Womersley flow amplitude and phase within about 1–4 % up to α ≈ 4.
 enum class Inertance { Poiseuille, Womersley };
 /// @brief Velocity profile reported by velocity queries.
-/// Laminar: \f$ u(d) = \frac{2Q}{\pi r^2}(1 - d^2/r^2) \f$; Womersley (quasi-steady model,
+/// Laminar: \f$ u(d) = \frac{2Q}{\pi r^2}(1 - d^2/r^2) \f$ (eq. 8 of the published method);
+/// Womersley (Womersley 1955, profile.hpp; quasi-steady model,
 /// periodic inlets of one period T, sine or table): each segment's flow over one period is
 /// split into its mean and its first harmonics Q̂_n (n = 1..10, 128 samples a period); the
 /// mean carries the parabola, harmonic n the Womersley profile of α√n, and what the ten

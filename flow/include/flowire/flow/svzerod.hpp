@@ -20,7 +20,8 @@
 ///   whose Ra2 varies over the cycle between Ra2_min and Ra2_max (ramps T_vc, T_vr).
 /// A parameter is a number or a periodic table over `t` (linear interpolation).
 ///
-/// Time integration as svZeroDSolver: generalized-α (`rho_infty`, default 0.5) on
+/// Time integration as svZeroDSolver: generalized-α (`rho_infty`, default 0.5; Jansen,
+/// Whiting & Hulbert 2000, Comput. Methods Appl. Mech. Engrg. 190, 305–319) on
 /// \f$ E\dot y + F y + c(y, \dot y, t) = 0 \f$ (svzerod/integrator.hpp): one factorization per
 /// phase for a linear model, Newton iterations to `absolute_tolerance` where a block is
 /// nonlinear. Blocks by name: svzerod/blocks.hpp;

@@ -24,7 +24,8 @@ struct YBifurcationParams {
   double asymmetry = 0.0;        ///< 0: equal daughters (Murray: r_d = r_p / 2^(1/3)); in (-1, 1) skews the flow split
 };
 /// @brief Parent along +x from the origin, two daughters in the xy-plane; Murray's law
-/// r_p³ = r_1³ + r_2³ with r_1³ = (1 + a)/2·r_p³, r_2³ = (1 − a)/2·r_p³.
+/// r_p³ = r_1³ + r_2³ (C. D. Murray 1926, "The physiological principle of minimum work",
+/// Proc. Natl. Acad. Sci. USA 12, 207–214) with r_1³ = (1 + a)/2·r_p³, r_2³ = (1 − a)/2·r_p³.
 Centerlines y_bifurcation(const YBifurcationParams& p);
 
 struct AorticArchParams {
@@ -47,7 +48,7 @@ struct BinaryTreeParams {
   int depth = 5;                 ///< generations 0..depth, 2^(depth+1) − 1 vessels
   double root_radius = 2e-3;     ///< m
   double root_length = 20e-3;    ///< m
-  double radius_ratio = 0.7937005259840998;  ///< r_{k+1}/r_k (Murray: 2^(−1/3))
+  double radius_ratio = 0.7937005259840998;  ///< r_{k+1}/r_k (Murray 1926 for equal daughters: 2^(−1/3))
   double length_ratio = 0.7937005259840998;  ///< L_{k+1}/L_k
   double angle = 0.5;            ///< branching half-angle (rad)
 };

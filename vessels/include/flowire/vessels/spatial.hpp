@@ -98,7 +98,11 @@ class SpatialIndex {
   Location fallback(const Vec3& p) const;
   /// Keeps in @p best the segment whose wall is nearest (ties: the lower index).
   void nearest_wall_candidate(const Vec3& p, int s, double& best_d, Location& best) const;
-  /// locate() up to the fallback: the hint, then its window. False if neither holds p.
+  /// The hint, then its window: true if a segment of them holds p (the best one in @p best).
+  bool holds_in_window(const Vec3& p, int hint, Location& best) const;
+  /// The first stage of both locate() overloads: holds_in_window, counted in stats() as a
+  /// window hit (and @p best marked `from_window`) or as a fallback to come. False: the
+  /// caller falls back.
   bool locate_in_window(const Vec3& p, int hint, Location& best) const;
   void nearby_segments(const Vec3& p, double radius, std::vector<int>& out) const;
   /// Radius around p that wall_distance searches when p is located in @p loc.

@@ -26,7 +26,8 @@ struct QuadPoint {
 /// @brief 14-point rule on the reference tetrahedron, exact for polynomials of degree 5
 /// (weights sum to 1/6).
 std::span<const QuadPoint> tet_quadrature();
-/// @brief 6-point rule on the reference triangle, exact for degree 4 (weights sum to 1/2).
+/// @brief 6-point rule on the reference triangle, exact for degree 4 (weights sum to 1/2):
+/// Dunavant's degree-4 rule (Dunavant 1985, Int. J. Numer. Methods Eng. 21, 1129–1148).
 std::span<const QuadPoint> tri_quadrature();
 
 /// @brief P2 basis values (10) at reference point xi.

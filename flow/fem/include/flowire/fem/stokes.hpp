@@ -1,7 +1,8 @@
 #pragma once
 /// @file stokes.hpp
 /// @brief Steady incompressible Stokes / Navier–Stokes on a TetMesh with Taylor–Hood
-/// P2/P1 elements (isoparametric: the quadratic geometry of the mesh is used).
+/// P2/P1 elements (Taylor & Hood 1973, Computers & Fluids 1, 73–100; isoparametric: the
+/// quadratic geometry of the mesh is used).
 ///
 /// Governing equations (η viscosity, ρ density, f a body force):
 /// \f[ -\eta\Delta u + \rho (u\cdot\nabla)u + \nabla p = f, \qquad \nabla\cdot u = 0 \f]
@@ -15,7 +16,8 @@
 /// Navier–Stokes at arterial Reynolds numbers (see solve_stokes): Newton's method with
 /// the exact Jacobian of the convection, continuation in the density from the Stokes
 /// solution (Re ∝ ρ) with an adaptive step, and three consistent stabilization terms:
-/// - SUPG: \f$ \sum_e (\tau_M\,\rho\,u\cdot\nabla v,\ \rho(u\cdot\nabla)u - \eta\Delta u + \nabla p - f)_e \f$
+/// - SUPG (streamline-upwind Petrov–Galerkin, Brooks & Hughes 1982, Comput. Methods Appl.
+///   Mech. Engrg. 32, 199–259): \f$ \sum_e (\tau_M\,\rho\,u\cdot\nabla v,\ \rho(u\cdot\nabla)u - \eta\Delta u + \nabla p - f)_e \f$
 ///   with \f$ \tau_M = [(2\rho|u|/h)^2 + (12\eta/h^2)^2]^{-1/2} \f$, h half the element
 ///   size (P2); the second derivatives of the curved (isoparametric) element are exact;
 /// - LSIC (grad-div): \f$ \sum_e (\tau_C \nabla\cdot u, \nabla\cdot v)_e \f$ with
