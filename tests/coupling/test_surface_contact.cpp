@@ -72,7 +72,7 @@ TEST(SurfaceContact, SmoothedDistanceIsBoundedByTheExactOneAndContinuousAcrossFa
   // angle 2π/16; the smoothed one turns continuously.
   double max_jump_exact = 0.0, max_jump_smooth = 0.0;
   const double r = R - 0.5e-3;
-  Vec3 g0e, g0s;
+  Vec3 g0e = Vec3::Zero(), g0s = Vec3::Zero();
   for (int i = 0; i <= 2000; ++i) {
     const double th = 2.0 * M_PI / 16 * (i / 2000.0);
     const Vec3 x(r * std::cos(th), r * std::sin(th), 0.3e-3);

@@ -175,7 +175,9 @@ TEST(FlowOcclusion, RlcTubeRelaxesWithTheOccludedResistanceAndInertance) {
     std::printf("rlc tube, dt %.0e s (tau %.3f s): max |Q - exact|/Q0 = %.2e\n", dt, tau, err);
     log_dt.push_back(std::log(dt));
     log_err.push_back(std::log(err));
-    if (dt == 1e-4) EXPECT_LT(err, 2e-4);
+    if (dt == 1e-4) {
+      EXPECT_LT(err, 2e-4);
+    }
   }
   const double slope = (log_err.back() - log_err.front()) / (log_dt.back() - log_dt.front());
   std::printf("rlc tube: error slope %.2f\n", slope);
