@@ -31,6 +31,7 @@
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/vessel_path.hpp"
 #include "flowire/coupling/wire_output.hpp"
+#include "run_output.hpp"
 #include "flowire/flow/output.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/rod/simulator.hpp"
@@ -244,69 +245,6 @@ void apply_loads(const config::Config& c, rod::RodSimulator& sim) {
   }
 }
 
-/// output.png: the network coloured by pressure (or plain, without flow) with the wire over
-/// it. network.png looks along the network's thinnest direction (its shape in the plane it
-/// spreads in: the arch of an aorta, the fork of a Y), network_side.png across it. With a
-/// periodic inlet the pressure is that of the instant of peak inlet pressure (or flow) in the
-/// cycle after the run's end (systole: the range of pressures that drives the flow; the
-/// quasi-steady model), else of the end. A catheter (@p cath, may be null) is drawn as a wider
-/// orange tube around the wire, which shows where it has left the catheter's tip.
-void render_pictures(const config::Config& c, const vessels::Network& net, flow::FlowSolver* fs,
-                     const rod::RodSimulator* sim, const rod::RodSimulator* cath, const std::filesystem::path& out) {
-  std::vector<double> p(static_cast<size_t>(net.num_nodes()), 0.0);
-  flow::RenderOptions ro;
-  ro.title = c.string_or("name", "flowire");
-  if (fs) {
-    const double period = fs->spec().cycle();
-    double t_show = fs->time();
-    // The quasi-steady model goes to any instant and back; the rlc model only forwards.
-    const bool quasi_steady = fs->spec().model == flow::Model::Poiseuille;
-    if (quasi_steady && period > 0.0 && !fs->spec().inlets.empty()) {
-      const auto& inlet = fs->spec().inlets.front().waveform;
-      double best = -std::numeric_limits<double>::infinity();
-      for (int k = 0; k < 256; ++k) {
-        const double t = fs->time() + period * k / 256.0;
-        if (inlet(t) > best) best = inlet(t), t_show = t;
-      }
-      ro.title += fmt::format("  (peak inlet, t = {:.3f} s)", t_show);
-    }
-    const double t_end = fs->time();
-    std::vector<double> q(static_cast<size_t>(net.num_segments()));
-    fs->solve_at(t_show, p, q);
-    if (t_show != t_end) fs->advance(t_end);
-  } else {
-    ro.scalar_name = "no flow";
-  }
-  auto overlay = [](const rod::RodSimulator& rod) {
-    flow::RenderOverlay o;
-    const auto x = rod.positions();
-    for (int i = 0; i <= std::min(rod.first_clamped_vertex(), rod.vertex_count() - 1); ++i)
-      o.points.push_back(x[static_cast<size_t>(i)]);
-    o.radius = std::max(3.0 * rod.model().edge_radius.front(), 1.2e-3);  // drawn thicker to be seen
-    return o;
-  };
-  if (sim) ro.overlays.push_back(overlay(*sim));
-  if (sim && cath) {
-    flow::RenderOverlay tube = overlay(*cath);
-    tube.radius = std::max(tube.radius, 1.6 * ro.overlays.back().radius);  // around the wire
-    tube.color = {0.95, 0.55, 0.1};
-    ro.overlays.push_back(std::move(tube));
-  }
-  // Principal directions of the network's nodes: look along the smallest.
-  vessels::Vec3 mean = vessels::Vec3::Zero();
-  for (int i = 0; i < net.num_nodes(); ++i) mean += net.node(i);
-  mean /= std::max(1, net.num_nodes());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (int i = 0; i < net.num_nodes(); ++i) cov += (net.node(i) - mean) * (net.node(i) - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);  // ascending eigenvalues
-  const vessels::Vec3 thin = eig.eigenvectors().col(0), middle = eig.eigenvectors().col(1), along = eig.eigenvectors().col(2);
-  // Up: the longest direction, pointing to +z where it has a z part (a body stands upright).
-  ro.view_up = along.z() < 0.0 ? vessels::Vec3(-along) : along;
-  ro.view_direction = thin;
-  flow::render_network_png(net, p, out / "network.png", ro);
-  ro.view_direction = middle;
-  flow::render_network_png(net, p, out / "network_side.png", ro);
-}
 
 #ifdef FLOWIRE_HAVE_FEM
 nlohmann::json fem_result_json(const fem::CompareResult& r) {
@@ -329,16 +267,6 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
 }
 #endif
 
-/// What view.py shows: the files of this run's VTK output that were written.
-ParaViewScene paraview_scene(const config::Config& c, const std::filesystem::path& out, bool network_series,
-                             bool wire) {
-  ParaViewScene pv;
-  const std::string network = network_series ? "network.pvd" : "network.vtp";
-  if (c.has_section("vessels") && std::filesystem::exists(out / network)) pv.network = network;
-  if (wire && std::filesystem::exists(out / "wire.pvd")) pv.wire = "wire.pvd", pv.wire_radius = c.number("wire.radius");
-  pv.title = c.string_or("name", "");
-  return pv;
-}
 
 bool fem_on_network(const config::Config& c) {
   return !c.has_section("fem") || c.string("fem.geometry") == "network" || c.string("fem.geometry") == "lumen";
@@ -910,8 +838,6 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
   (void)take_warnings();
   RunResult result;
   result.out_dir = c.string("output.dir");
-  const bool write_csv = c.boolean("output.csv");
-  const bool write_vtk = c.boolean("output.vtk");
   nlohmann::json& s = result.summary;
   s["status"] = "ok";
   s["steps"] = 0;
@@ -940,11 +866,6 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     CoSimulation cosim(c, &s);
     const vessels::Network* net = cosim.network();
     flow::FlowSolver* fsolver = cosim.flow();
-    rod::RodSimulator* sim = cosim.rod();
-    const VesselForces* forces = cosim.forces();
-    const TipForces* tip_forces = cosim.tip_forces();
-    const vessels::SpatialIndex* index = cosim.index();
-    const WireOcclusion* occlusion = cosim.occlusion();
     timings["setup"] = seconds_since(t0);
 
     // ---------------- stepping
@@ -954,76 +875,20 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     const long out_every = every > 0 ? std::max(1L, static_cast<long>(std::llround(every / dt))) : 0;
     const bool series = out_every > 0;
 
-    std::vector<flow::FlowFrame> flow_frames;  // captured at output times, written at the end
-    const bool flow_out = fsolver && (write_csv || write_vtk);
-    std::optional<WireOutput> wire_out;
-    if (sim && (write_csv || write_vtk)) wire_out.emplace(out, write_csv, write_vtk);
-    std::optional<WireOutput> cath_out;
-    if (cosim.catheter() && (write_csv || write_vtk)) cath_out.emplace(out, write_csv, write_vtk, "catheter");
-
-    double t_out = 0;
-    auto record = [&](double t) {
-      const auto to = Clock::now();
-      if (flow_out) flow_frames.push_back(flow::capture_frame(*fsolver));
-      if (wire_out) {
-        WireFrame f = cosim.wire_frame();
-        f.time = t;
-        wire_out->add_frame(f);
-      }
-      if (cath_out) {
-        WireFrame f = cosim.catheter_frame();
-        f.time = t;
-        cath_out->add_frame(f);
-      }
-      t_out += seconds_since(to);
-    };
-
+    RunRecorder recorder(c, cosim, out);
     cosim.start();
-    if (series || steps == 0) record(0.0);
+    if (series || steps == 0) recorder.record(0.0);
     for (long step = 0; step < steps; ++step) {
       const double t1 = (static_cast<double>(step) + 1.0) * dt;
       cosim.step();
-      if (sim && wire_out) {
-        wire_out->add_tip(sim->time(), sim->inserted_length(), sim->tip_position());
-        wire_out->add_base(sim->time(), sim->base_force(), sim->base_torque());
-      }
-      if (series && (step + 1) % out_every == 0) record(t1);
+      recorder.after_step();
+      if (series && (step + 1) % out_every == 0) recorder.record(t1);
       if (options.progress) options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
     }
-    if (!series && steps > 0) record(static_cast<double>(steps) * dt);
+    if (!series && steps > 0) recorder.record(static_cast<double>(steps) * dt);
     s["steps"] = steps;
-    const double t_flow = cosim.flow_seconds(), t_rod = cosim.rod_seconds();
-    const int failures = cosim.unconverged_steps();
-    const nlohmann::json& settle = cosim.settle();
-    const std::string& initial_layout = cosim.initial_layout();
-
-    const auto to = Clock::now();
-    if (flow_out) {
-      if (write_csv) {
-        flow::write_nodes_csv(*net, flow_frames, out / "nodes.csv");
-        flow::write_segments_csv(*fsolver, flow_frames, out / "segments.csv");
-      }
-      if (write_vtk) {
-        if (series) flow::write_network_series(*fsolver, flow_frames, out, "network");
-        else flow::write_network_vtp(*fsolver, flow_frames.back(), out / "network.vtp");
-      }
-    }
-    if (c.boolean("output.png") && net) render_pictures(c, *net, fsolver, sim, cosim.catheter(), out);
-    if (wire_out) wire_out->finish();
-    if (cath_out) cath_out->finish();
-    if (net && !fsolver && write_csv) {
-      std::string csv =
-          "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
-          "occupied_fraction,resistance_factor\n";
-      for (int i = 0; i < net->num_segments(); ++i) {
-        const auto& seg = net->segment(i);
-        csv += fmt::format("0,{},{},{},{:.17g},{:.17g},,,,,,,\n", i, seg.node_from, seg.node_to, seg.length, seg.radius);
-      }
-      write_text_atomically(out / "segments.csv", csv);
-    }
-    if (net && !fsolver && write_vtk) vessels::write_network_vtp(*net, (out / "network.vtp").string());
-    if (write_vtk) write_paraview_script(out, paraview_scene(c, out, net && fsolver && series, sim != nullptr));
-    t_out += seconds_since(to);
+    recorder.finish(series);
+    const double t_out = recorder.seconds();
 
     // ---------------- finite-element comparison of the flow (fem:)
     if (c.has_section("fem") && !fem_on_network(c)) {
@@ -1038,115 +903,11 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     }
 
     // ---------------- summary
-    if (fsolver) {
-      const auto& ft = fsolver->timings();
-      s["flow"]["assemble_seconds"] = ft.assemble;
-      s["flow"]["factor_seconds"] = ft.factor;
-      s["flow"]["frames"] = ft.frame_count;
-      s["flow"]["seconds_per_frame"] = ft.frame_count ? ft.frames / static_cast<double>(ft.frame_count) : 0.0;
-      if (occlusion) {
-        const auto& os = occlusion->stats();
-        s["occlusion"] = {{"model", "annulus"},
-                          {"occupied_segments", os.occupied_segments},
-                          {"max_resistance_factor", os.max_resistance_factor},
-                          {"updates", ft.occlusion_updates},
-                          {"seconds", ft.occlusion},
-                          {"radius_ratio_clamped", os.radius_ratio_clamped}};
-      } else if (sim && forces) {
-        s["occlusion"] = {{"model", "none"}};
-      }
-    }
-    double t_contact = 0, t_coupling = 0;
-    if (sim) {
-      s["wire"] = {{"vertices", sim->vertex_count()},
-                   {"inserted_length", sim->inserted_length()},
-                   {"tip", {sim->tip_position().x(), sim->tip_position().y(), sim->tip_position().z()}},
-                   {"base_force", {sim->base_force().x(), sim->base_force().y(), sim->base_force().z()}},
-                   {"base_torque", {sim->base_torque().x(), sim->base_torque().y(), sim->base_torque().z()}},
-                   {"length_drift", sim->length_drift()},
-                   {"unconverged_steps", failures}};
-      if (!settle.is_null()) s["wire"]["settle"] = settle;
-      s["wire"]["initial_layout"] = initial_layout;
-      if (c.has("insertion.max_force")) s["wire"]["held_steps"] = sim->held_steps();
-      if (c.has("insertion.force"))
-        s["wire"]["force_feed"] = nlohmann::json{{"force", c.number("insertion.force")},
-                                                 {"last_speed", sim->force_feed_speed()},
-                                                 {"extra_solves", sim->force_feed_iterations()},
-                                                 {"unbalanced_steps", sim->force_feed_unbalanced()}};
-      if (const DriveSchedule* schedule = cosim.schedule()) {
-        double length = 0.0, angle = 0.0;
-        schedule->integral_to(cosim.time(), length, angle);
-        s["wire"]["schedule"] = nlohmann::json{{"file", c.string("insertion.schedule")},
-                                               {"rows", schedule->rows().size()},
-                                               {"driven_length", length},
-                                               {"driven_angle", angle}};
-      }
-      if (const rod::RodSimulator* cath = cosim.catheter()) {
-        nlohmann::json& k = s["catheter"];
-        k["vertices"] = cath->vertex_count();
-        k["inserted_length"] = cath->inserted_length();
-        k["tip"] = {cath->tip_position().x(), cath->tip_position().y(), cath->tip_position().z()};
-        k["base_force"] = {cath->base_force().x(), cath->base_force().y(), cath->base_force().z()};
-        k["length_drift"] = cath->length_drift();
-        k["unconverged_steps"] = cosim.catheter_unconverged_steps();
-        k["bending_stiffness"] = cath->model().bend_stiffness.empty() ? 0.0 : cath->model().bend_stiffness.back();
-        if (const VesselForces* cf = cosim.catheter_forces())
-          k["contact"] = {{"max_penetration", cf->stats().max_penetration}, {"max_outside", cf->stats().max_outside}};
-        // The wire's farthest excursion from the catheter's axis inside the lumen.
-        const LumenContact& lc = *cosim.lumen_contact();
-        double worst = 0.0;
-        for (size_t i = 0; i < lc.wire_snapshot.size(); ++i) {
-          const int j = lc.nearest_edge(lc.wire_snapshot[i], lc.wire_arc[i], lc.catheter_snapshot, lc.catheter_arc);
-          if (j >= 0)
-            worst = std::max(worst, lumen_penalty(lc.wire_snapshot[i], lc.catheter_snapshot[j], lc.catheter_snapshot[j + 1],
-                                                  lc.clearance(), lc.stiffness(), j == 0)
-                                        .distance);
-        }
-        k["max_wire_offset"] = worst;
-        k["max_wire_offset_over_clearance"] = lc.clearance() > 0 ? worst / lc.clearance() : 0.0;
-      }
-      if (sim->model().adapt.enabled)
-        s["wire"]["adapt"] = {{"splits", sim->adapt_splits()}, {"merges", sim->adapt_merges()}};
-      if (tip_forces)
-        s["tip_forces"] = {{"obstacle_steps", tip_forces->obstacle_steps()},
-                           {"steering_steps", tip_forces->steering_steps()}};
-      if (forces) {
-        const auto& st = forces->stats();
-        s["lookup"] = {{"window_hits", index->stats().window_hits}, {"fallbacks", index->stats().fallbacks}};
-        s["contact"] = {{"max_penetration", st.max_penetration},
-                        {"max_outside", st.max_outside},
-                        {"max_outside_over_wire_radius", st.max_outside / sim->discretization().edge_radius.front()},
-                        {"contact_evaluations", st.contacts},
-                        {"introducer_contacts", forces->introducer_contacts()}};
-        if (st.outside_time >= 0.0) {
-          const double a = sim->discretization().edge_radius.front();
-          s["contact"]["outside"] = {
-              {"time", st.outside_time},
-              {"arc_length", st.outside_arc_length},
-              {"position", {st.outside_position.x(), st.outside_position.y(), st.outside_position.z()}},
-              {"wire_radii", st.outside_distance / a},
-              {"message", fmt::format("the wire left the lumen: at t = {:.4g} s the vertex {:.4g} m from the entry, at "
-                                      "({:.4g}, {:.4g}, {:.4g}) m, was {:.3g} wire radii outside the wall",
-                                      st.outside_time, st.outside_arc_length, st.outside_position.x(),
-                                      st.outside_position.y(), st.outside_position.z(), st.outside_distance / a)}};
-        }
-        if (forces->drag().law != DragLaw::None) {
-          const auto total = forces->total_drag();
-          s["drag"] = {{"law", c.string_or("coupling.drag", "cylinder")},
-                       {"total", {total.x(), total.y(), total.z()}},
-                       {"max_normal_reynolds", st.max_reynolds}};
-          if (forces->drag().law == DragLaw::Cylinder && st.max_reynolds > kCylinderDragMaxReynolds)
-            warn(fmt::format("drag: the normal Reynolds number reached {:.3g}, beyond the cylinder drag curve's range "
-                             "(up to {:.0e})", st.max_reynolds, kCylinderDragMaxReynolds));
-        }
-        t_contact = st.seconds_lookup + st.seconds_contact;
-        t_coupling = st.seconds_drag;
-      }
-    }
-    timings["flow"] = t_flow;
-    timings["rod"] = std::max(0.0, t_rod - t_contact - t_coupling);
-    timings["contact"] = t_contact;
-    timings["coupling"] = t_coupling;
+    const RunSeconds split = add_run_summary(c, cosim, s);
+    timings["flow"] = cosim.flow_seconds();
+    timings["rod"] = std::max(0.0, cosim.rod_seconds() - split.contact - split.coupling);
+    timings["contact"] = split.contact;
+    timings["coupling"] = split.coupling;
     timings["output"] = t_out;
   } catch (const Error& e) {
     if (e.kind() == ErrorKind::Numerical) {
