@@ -114,10 +114,8 @@ TEST(FlowSvZeroDIntegrator, RlCircuitMatchesTheClosedForm) {
   EXPECT_LT(worst, 1e-5 * p0 / r);
 }
 
-// Every nonlinear block: ∂f/∂y and ∂f/∂ẏ as the system assembles them against central
-// differences of the residual f(y, ẏ) at a random state with flows of both signs.
-TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
-  const Model m = read_model(write_model("stenosis.json", R"({"simulation_parameters": {"number_of_cardiac_cycles": 1,
+/// A nonlinear model: stenoses in both vessel types and in a BloodVesselJunction.
+const char* kStenosisModel = R"({"simulation_parameters": {"number_of_cardiac_cycles": 1,
     "number_of_time_pts_per_cardiac_cycle": 11},
     "boundary_conditions": [{"bc_name": "IN", "bc_type": "FLOW", "bc_values": {"Q": 1.0}},
                             {"bc_name": "OUT1", "bc_type": "RESISTANCE", "bc_values": {"R": 100.0, "Pd": 0.0}},
@@ -134,8 +132,44 @@ TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
     "junctions": [{"junction_name": "J", "junction_type": "BloodVesselJunction", "inlet_vessels": [0],
                    "outlet_vessels": [1, 2],
                    "junction_values": {"R_poiseuille": [1.0, 2.0], "L": [0.1, 0.2],
-                                       "stenosis_coefficient": [3.0, 4.0]}}]})")
-                                 .string());
+                                       "stenosis_coefficient": [3.0, 4.0]}}]})";
+
+/// A tree of NORMAL_JUNCTIONs, one fed directly by another, with a flow table at the inlet
+/// and resistance, RCR and pressure outlets.
+const char* kJunctionModel = R"({"simulation_parameters": {"number_of_cardiac_cycles": 2,
+    "number_of_time_pts_per_cardiac_cycle": 51, "output_variable_based": true, "output_all_cycles": true,
+    "output_derivative": true},
+    "boundary_conditions": [
+      {"bc_name": "IN", "bc_type": "FLOW", "bc_values": {"Q": [2.0, 5.0, 3.0, 2.0], "t": [0.0, 0.3, 0.6, 1.0]}},
+      {"bc_name": "R3", "bc_type": "RESISTANCE", "bc_values": {"R": 300.0, "Pd": 10.0}},
+      {"bc_name": "R4", "bc_type": "RCR", "bc_values": {"Rp": 50.0, "C": 2e-3, "Rd": 400.0, "Pd": 5.0}},
+      {"bc_name": "R5", "bc_type": "RESISTANCE", "bc_values": {"R": 500.0}},
+      {"bc_name": "R6", "bc_type": "RCR", "bc_values": {"Rp": 80.0, "C": 1e-3, "Rd": 600.0}},
+      {"bc_name": "R2", "bc_type": "PRESSURE", "bc_values": {"P": 200.0}}],
+    "vessels": [
+      {"vessel_id": 0, "vessel_name": "v0", "zero_d_element_values": {"R_poiseuille": 10.0, "C": 1e-3, "L": 2.0},
+       "boundary_conditions": {"inlet": "IN"}},
+      {"vessel_id": 1, "vessel_name": "v1", "zero_d_element_values": {"R_poiseuille": 20.0, "C": 5e-4, "L": 3.0}},
+      {"vessel_id": 2, "vessel_name": "v2", "zero_d_element_values": {"R_poiseuille": 30.0, "C": 4e-4},
+       "boundary_conditions": {"outlet": "R2"}},
+      {"vessel_id": 3, "vessel_name": "v3", "zero_d_element_type": "BloodVesselCRL",
+       "zero_d_element_values": {"R_poiseuille": 40.0, "C": 3e-4, "L": 1.0}, "boundary_conditions": {"outlet": "R3"}},
+      {"vessel_id": 4, "vessel_name": "v4", "zero_d_element_values": {"R_poiseuille": 50.0, "L": 4.0},
+       "boundary_conditions": {"outlet": "R4"}},
+      {"vessel_id": 5, "vessel_name": "v5", "zero_d_element_values": {"R_poiseuille": 60.0, "C": 2e-4},
+       "boundary_conditions": {"outlet": "R5"}},
+      {"vessel_id": 6, "vessel_name": "v6", "zero_d_element_values": {"R_poiseuille": 70.0, "C": 1e-4, "L": 5.0},
+       "boundary_conditions": {"outlet": "R6"}}],
+    "junctions": [
+      {"junction_name": "J0", "junction_type": "NORMAL_JUNCTION", "inlet_vessels": [0], "outlet_vessels": [1, 2]},
+      {"junction_name": "J1", "junction_type": "NORMAL_JUNCTION", "inlet_blocks": ["v1"],
+       "outlet_blocks": ["v3", "v4", "J2"]},
+      {"junction_name": "J2", "junction_type": "NORMAL_JUNCTION", "inlet_blocks": [], "outlet_blocks": ["v5", "v6"]}]})";
+
+// Every nonlinear block: ∂f/∂y and ∂f/∂ẏ as the system assembles them against central
+// differences of the residual f(y, ẏ) at a random state with flows of both signs.
+TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
+  const Model m = read_model(write_model("stenosis.json", kStenosisModel).string());
   System sys(m.block_pointers(), m.unknowns, m.period, m.file);
   ASSERT_TRUE(sys.nonlinear());
   sys.set_phase(false, 0.0);
@@ -179,35 +213,7 @@ TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
 // their time derivatives, at every step of every cycle) as the full system with the equations
 // P_0 − P_i = 0 does, to rounding.
 TEST(FlowSvZeroDIntegrator, SharedJunctionPressuresGiveTheFullSystemsSolution) {
-  const auto path = write_model("junctions.json", R"({"simulation_parameters": {"number_of_cardiac_cycles": 2,
-    "number_of_time_pts_per_cardiac_cycle": 51, "output_variable_based": true, "output_all_cycles": true,
-    "output_derivative": true},
-    "boundary_conditions": [
-      {"bc_name": "IN", "bc_type": "FLOW", "bc_values": {"Q": [2.0, 5.0, 3.0, 2.0], "t": [0.0, 0.3, 0.6, 1.0]}},
-      {"bc_name": "R3", "bc_type": "RESISTANCE", "bc_values": {"R": 300.0, "Pd": 10.0}},
-      {"bc_name": "R4", "bc_type": "RCR", "bc_values": {"Rp": 50.0, "C": 2e-3, "Rd": 400.0, "Pd": 5.0}},
-      {"bc_name": "R5", "bc_type": "RESISTANCE", "bc_values": {"R": 500.0}},
-      {"bc_name": "R6", "bc_type": "RCR", "bc_values": {"Rp": 80.0, "C": 1e-3, "Rd": 600.0}},
-      {"bc_name": "R2", "bc_type": "PRESSURE", "bc_values": {"P": 200.0}}],
-    "vessels": [
-      {"vessel_id": 0, "vessel_name": "v0", "zero_d_element_values": {"R_poiseuille": 10.0, "C": 1e-3, "L": 2.0},
-       "boundary_conditions": {"inlet": "IN"}},
-      {"vessel_id": 1, "vessel_name": "v1", "zero_d_element_values": {"R_poiseuille": 20.0, "C": 5e-4, "L": 3.0}},
-      {"vessel_id": 2, "vessel_name": "v2", "zero_d_element_values": {"R_poiseuille": 30.0, "C": 4e-4},
-       "boundary_conditions": {"outlet": "R2"}},
-      {"vessel_id": 3, "vessel_name": "v3", "zero_d_element_type": "BloodVesselCRL",
-       "zero_d_element_values": {"R_poiseuille": 40.0, "C": 3e-4, "L": 1.0}, "boundary_conditions": {"outlet": "R3"}},
-      {"vessel_id": 4, "vessel_name": "v4", "zero_d_element_values": {"R_poiseuille": 50.0, "L": 4.0},
-       "boundary_conditions": {"outlet": "R4"}},
-      {"vessel_id": 5, "vessel_name": "v5", "zero_d_element_values": {"R_poiseuille": 60.0, "C": 2e-4},
-       "boundary_conditions": {"outlet": "R5"}},
-      {"vessel_id": 6, "vessel_name": "v6", "zero_d_element_values": {"R_poiseuille": 70.0, "C": 1e-4, "L": 5.0},
-       "boundary_conditions": {"outlet": "R6"}}],
-    "junctions": [
-      {"junction_name": "J0", "junction_type": "NORMAL_JUNCTION", "inlet_vessels": [0], "outlet_vessels": [1, 2]},
-      {"junction_name": "J1", "junction_type": "NORMAL_JUNCTION", "inlet_blocks": ["v1"],
-       "outlet_blocks": ["v3", "v4", "J2"]},
-      {"junction_name": "J2", "junction_type": "NORMAL_JUNCTION", "inlet_blocks": [], "outlet_blocks": ["v5", "v6"]}]})");
+  const auto path = write_model("junctions.json", kJunctionModel);
   Summary full_s, shared_s;
   const Result full = simulate(path.string(), &full_s, Options{.share_junction_pressures = false});
   const Result shared = simulate(path.string(), &shared_s);
@@ -238,6 +244,35 @@ TEST(FlowSvZeroDIntegrator, SharedJunctionPressuresGiveTheFullSystemsSolution) {
   EXPECT_GT(*std::max_element(p_in.begin(), p_in.end()) - *std::min_element(p_in.begin(), p_in.end()), 10.0);
   std::printf("shared junction pressures: %d unknowns for %d, largest difference %.2e of the largest value\n",
               shared_s.unknowns, full_s.unknowns, worst);
+}
+
+// The solve (KLU's factors copied by rows, block by block) against the matrix it inverts:
+// J x = b for random b, J = a_ẏ ∂f/∂ẏ + a_y ∂f/∂y assembled on its own, in both phases, for
+// a linear model and a nonlinear one at a random state (refactorized on the same pivots).
+TEST(FlowSvZeroDIntegrator, SolveInvertsTheIterationMatrix) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const char* text : {kJunctionModel, kStenosisModel}) {
+    const Model m = read_model(write_model("solve.json", text).string());
+    System sys(m.block_pointers(), m.unknowns, m.period, m.file);
+    const int n = m.unknowns;
+    for (const bool steady : {true, false}) {
+      sys.set_phase(steady, 0.0);
+      for (int trial = 0; trial < 3; ++trial) {
+        Eigen::VectorXd y(n), yd(n), b(n);
+        for (int i = 0; i < n; ++i) y[i] = u(rng), yd[i] = u(rng), b[i] = 1e3 * u(rng);
+        sys.update_solution(0.0, y, yd);
+        const double a_yd = 0.75, a_y = 1e-3 * (1 + trial);
+        sys.factorize(a_yd, a_y);
+        const Eigen::SparseMatrix<double> j = a_yd * sys.dfdyd() + a_y * sys.dfdy();
+        Eigen::VectorXd x = b;
+        sys.solve(x);
+        const Eigen::VectorXd r = j * x - b;
+        const double scale = (Eigen::MatrixXd(j).cwiseAbs() * x.cwiseAbs()).maxCoeff() + b.cwiseAbs().maxCoeff();
+        EXPECT_LT(r.cwiseAbs().maxCoeff() / scale, 1e-14) << (steady ? "steady" : "pulsatile") << " trial " << trial;
+      }
+    }
+  }
 }
 
 // A linear model whose only time table is a boundary value: J is factorized once in the
