@@ -217,7 +217,11 @@ void System::factorize(double a_yd, double a_y) {
           "{}: the system is singular; check the model's connections, boundary conditions and parameters", file_));
     rcond_pivoted_ = klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common) == 1 ? klu_->common.rcond : 0.0;
   }
-  extract_factors();
+  // A new pivot order sizes the copy (so that later copies on the same pivots allocate
+  // nothing); new values on the same pivots are copied only if they serve a second solve.
+  factors_current_ = !done;
+  if (factors_current_) extract_factors();
+  solves_since_factorization_ = 0;
   changed_ = false;
   a_yd_ = a_yd;
   a_y_ = a_y;
@@ -323,7 +327,15 @@ void System::extract_factors() {
   x_.resize(n);
 }
 
-void System::solve(Eigen::VectorXd& b) const {
+void System::solve(Eigen::VectorXd& b) {
+  if (!factors_current_) {
+    if (solves_since_factorization_++ == 0) {
+      klu_solve(klu_->symbolic, klu_->numeric, n_, 1, b.data(), &klu_->common);
+      return;
+    }
+    extract_factors();
+    factors_current_ = true;
+  }
   const Factors& fa = factors_;
   double* x = x_.data();
   double* out = b.data();

@@ -12,7 +12,9 @@
 /// with KLU: the symbolic analysis (block triangular form, AMD ordering) once for the
 /// pattern, the numeric factorization with pivoting once per phase, and again only when a
 /// value of J changed: then on the same pivots (no allocation) unless they got much worse.
-/// The solves run on a copy of KLU's factors taken after each factorization,
+/// The solves run on a copy of KLU's factors, taken after a factorization with pivoting and
+/// after a refactorization once it serves a second solve (a Newton iteration that
+/// refactorizes at every solve keeps KLU's own solve),
 /// \f$ L U + F_{off} = R^{-1} P J Q \f$, stored by rows with the reciprocals of the row
 /// scales and of U's diagonal: one gather, row-wise (dot-product) triangular sweeps block by
 /// block and one scatter, with no division (a step of a linear model is mostly this solve and
@@ -92,7 +94,7 @@ class System {
   /// since the last factorization. @throws flowire::Error (numerical) when J is singular.
   void factorize(double a_yd, double a_y);
   /// @brief Solve \f$ J x = b \f$ in place.
-  void solve(Eigen::VectorXd& b) const;
+  void solve(Eigen::VectorXd& b);
   /// @brief Numeric factorizations done so far.
   [[nodiscard]] long factorizations() const { return factorizations_; }
 
@@ -135,7 +137,9 @@ class System {
     std::vector<double> cx;
   };
   Factors factors_;
-  mutable std::vector<double> x_;  ///< the solve's permuted vector
+  bool factors_current_ = false;  ///< factors_ holds the last factorization
+  int solves_since_factorization_ = 0;
+  std::vector<double> x_;  ///< the solve's permuted vector
   std::vector<int> next_, level_;  ///< scratch of the conversions to rows
   Rows scratch_rows_;
   bool recording_ = false;
