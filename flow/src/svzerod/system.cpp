@@ -283,47 +283,6 @@ void System::extract_factors() {
   extract(nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, x.cp.data(), x.ci.data(), x.cx.data(), nullptr, nullptr,
           nullptr, nullptr);
   by_rows(x.off, nullptr);
-  // Within each block, a triangular factor's rows by level (a row's level: one more than the
-  // highest level of the rows it reads; the rows of a level are independent), by row within.
-  auto schedule = [&](Rows& m, std::vector<int>& order, bool upper) {
-    level_.assign(n, 0);
-    order.resize(n);
-    for (size_t b = 0; b + 1 < x.blocks.size(); ++b) {
-      const int k1 = x.blocks[b], k2 = x.blocks[b + 1];
-      int top = 0;
-      for (int s = 0; s < k2 - k1; ++s) {
-        const int i = upper ? k2 - 1 - s : k1 + s;
-        int lev = 0;
-        for (int k = m.ptr[static_cast<size_t>(i)]; k < m.ptr[static_cast<size_t>(i) + 1]; ++k)
-          lev = std::max(lev, level_[static_cast<size_t>(m.cols[static_cast<size_t>(k)])] + 1);
-        level_[static_cast<size_t>(i)] = lev;
-        top = std::max(top, lev);
-      }
-      next_.assign(static_cast<size_t>(top) + 2, 0);  // rows per level, then first position of each
-      for (int i = k1; i < k2; ++i) ++next_[static_cast<size_t>(level_[static_cast<size_t>(i)]) + 1];
-      next_[0] = k1;
-      for (size_t l = 1; l < next_.size(); ++l) next_[l] += next_[l - 1];
-      for (int s = 0; s < k2 - k1; ++s) {
-        const int i = upper ? k2 - 1 - s : k1 + s;
-        order[static_cast<size_t>(next_[static_cast<size_t>(level_[static_cast<size_t>(i)])]++)] = i;
-      }
-    }
-    Rows& r = scratch_rows_;
-    r.ptr.resize(n + 1);
-    r.cols.resize(m.cols.size());
-    r.values.resize(m.values.size());
-    r.ptr[0] = 0;
-    for (size_t pos = 0; pos < n; ++pos) {
-      const auto i = static_cast<size_t>(order[pos]);
-      const int b = m.ptr[i], e = m.ptr[i + 1];
-      std::copy(m.cols.begin() + b, m.cols.begin() + e, r.cols.begin() + r.ptr[pos]);
-      std::copy(m.values.begin() + b, m.values.begin() + e, r.values.begin() + r.ptr[pos]);
-      r.ptr[pos + 1] = r.ptr[pos] + (e - b);
-    }
-    std::swap(m, r);
-  };
-  schedule(x.l, x.l_row, false);
-  schedule(x.u, x.u_row, true);
   x_.resize(n);
 }
 
@@ -345,7 +304,6 @@ void System::solve(Eigen::VectorXd& b) {
   const int *lp = fa.l.ptr.data(), *lc = fa.l.cols.data(), *up = fa.u.ptr.data(), *uc = fa.u.cols.data();
   const int *op = fa.off.ptr.data(), *oc = fa.off.cols.data();
   const double *lv = fa.l.values.data(), *uv = fa.u.values.data(), *ov = fa.off.values.data(), *u_inv = fa.u_inv.data();
-  const int *l_row = fa.l_row.data(), *u_row = fa.u_row.data();
   // Block upper triangular: the last block first; a block's rows take the off-diagonal
   // terms of the blocks already solved, then its L and U sweeps.
   for (auto blk = static_cast<int>(fa.blocks.size()) - 2; blk >= 0; --blk) {
@@ -356,17 +314,15 @@ void System::solve(Eigen::VectorXd& b) {
       x[k1] = v * u_inv[k1];
       continue;
     }
-    for (int pos = k1; pos < k2; ++pos) {
-      const int i = l_row[pos];
+    for (int i = k1; i < k2; ++i) {
       double v = x[i];
       for (int k = op[i]; k < op[i + 1]; ++k) v -= ov[k] * x[oc[k]];
-      for (int k = lp[pos]; k < lp[pos + 1]; ++k) v -= lv[k] * x[lc[k]];
+      for (int k = lp[i]; k < lp[i + 1]; ++k) v -= lv[k] * x[lc[k]];
       x[i] = v;
     }
-    for (int pos = k1; pos < k2; ++pos) {
-      const int i = u_row[pos];
+    for (int i = k2 - 1; i >= k1; --i) {
       double v = x[i];
-      for (int k = up[pos]; k < up[pos + 1]; ++k) v -= uv[k] * x[uc[k]];
+      for (int k = up[i]; k < up[i + 1]; ++k) v -= uv[k] * x[uc[k]];
       x[i] = v * u_inv[i];
     }
   }

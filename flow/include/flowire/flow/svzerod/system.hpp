@@ -18,9 +18,7 @@
 /// \f$ L U + F_{off} = R^{-1} P J Q \f$, stored by rows with the reciprocals of the row
 /// scales and of U's diagonal: one gather, row-wise (dot-product) triangular sweeps block by
 /// block and one scatter, with no division (a step of a linear model is mostly this solve and
-/// the residual). Each sweep takes a block's rows level by level of its dependency graph (a
-/// row after the rows it reads), so that the processor overlaps the independent rows of a
-/// level instead of waiting along the chain of the factor's order.
+/// the residual).
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <memory>
@@ -127,9 +125,7 @@ class System {
   /// Copy KLU's factors into `factors_` after a factorization.
   void extract_factors();
   struct Factors {
-    Rows l, u;                  ///< strict lower L, strict upper U by sweep position (l_row, u_row)
-    std::vector<int> l_row, u_row;  ///< the row at each position of the L and U sweeps
-    Rows off;                   ///< the off-diagonal blocks by row; all indices permuted
+    Rows l, u, off;          ///< strict lower L, strict upper U, off-diagonal blocks; permuted indices
     std::vector<double> u_inv;  ///< 1/U_kk
     std::vector<double> r_inv;  ///< 1/(row scale) of permuted row k
     std::vector<int> p, q, blocks;  ///< row and column permutations, block boundaries
@@ -140,8 +136,7 @@ class System {
   bool factors_current_ = false;  ///< factors_ holds the last factorization
   int solves_since_factorization_ = 0;
   std::vector<double> x_;  ///< the solve's permuted vector
-  std::vector<int> next_, level_;  ///< scratch of the conversions to rows
-  Rows scratch_rows_;
+  std::vector<int> next_;  ///< scratch of the conversions to rows
   bool recording_ = false;
   std::vector<std::pair<int, int>> recorded_;
   bool changed_ = true;
