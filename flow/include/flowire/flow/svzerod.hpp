@@ -61,7 +61,9 @@ struct Summary {
 struct Options {
   /// The connections of a `NORMAL_JUNCTION` share one pressure unknown instead of each
   /// carrying its own and the junction the equations \f$ P_0 - P_i = 0 \f$: a smaller system
-  /// (on a binary tree 25% fewer unknowns) with the same solution up to rounding.
+  /// (on a binary tree 25% fewer unknowns) with the same solution up to rounding. Output and
+  /// `initial_condition` still name each connection's pressure; an initial condition that
+  /// gives a junction's connections different pressures sets the shared one to the last.
   bool share_junction_pressures = true;
 };
 
