@@ -4,6 +4,7 @@
 // linear model, and the block registry's errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -30,7 +31,7 @@ fs::path write_model(const std::string& name, const std::string& text) {
 /// Index of the unknown called `name`.
 int dof(const Model& m, const std::string& name) {
   for (size_t i = 0; i < m.dofs.size(); ++i)
-    if (m.dofs[i] == name) return static_cast<int>(i);
+    if (m.dofs[i] == name) return m.dof_unknown[i];
   ADD_FAILURE() << "no unknown " << name;
   return 0;
 }
@@ -113,10 +114,8 @@ TEST(FlowSvZeroDIntegrator, RlCircuitMatchesTheClosedForm) {
   EXPECT_LT(worst, 1e-5 * p0 / r);
 }
 
-// Every nonlinear block: ∂f/∂y and ∂f/∂ẏ as the system assembles them against central
-// differences of the residual f(y, ẏ) at a random state with flows of both signs.
-TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
-  const Model m = read_model(write_model("stenosis.json", R"({"simulation_parameters": {"number_of_cardiac_cycles": 1,
+/// A nonlinear model: stenoses in both vessel types and in a BloodVesselJunction.
+const char* kStenosisModel = R"({"simulation_parameters": {"number_of_cardiac_cycles": 1,
     "number_of_time_pts_per_cardiac_cycle": 11},
     "boundary_conditions": [{"bc_name": "IN", "bc_type": "FLOW", "bc_values": {"Q": 1.0}},
                             {"bc_name": "OUT1", "bc_type": "RESISTANCE", "bc_values": {"R": 100.0, "Pd": 0.0}},
@@ -133,8 +132,44 @@ TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
     "junctions": [{"junction_name": "J", "junction_type": "BloodVesselJunction", "inlet_vessels": [0],
                    "outlet_vessels": [1, 2],
                    "junction_values": {"R_poiseuille": [1.0, 2.0], "L": [0.1, 0.2],
-                                       "stenosis_coefficient": [3.0, 4.0]}}]})")
-                                 .string());
+                                       "stenosis_coefficient": [3.0, 4.0]}}]})";
+
+/// A tree of NORMAL_JUNCTIONs, one fed directly by another, with a flow table at the inlet
+/// and resistance, RCR and pressure outlets.
+const char* kJunctionModel = R"({"simulation_parameters": {"number_of_cardiac_cycles": 2,
+    "number_of_time_pts_per_cardiac_cycle": 51, "output_variable_based": true, "output_all_cycles": true,
+    "output_derivative": true},
+    "boundary_conditions": [
+      {"bc_name": "IN", "bc_type": "FLOW", "bc_values": {"Q": [2.0, 5.0, 3.0, 2.0], "t": [0.0, 0.3, 0.6, 1.0]}},
+      {"bc_name": "R3", "bc_type": "RESISTANCE", "bc_values": {"R": 300.0, "Pd": 10.0}},
+      {"bc_name": "R4", "bc_type": "RCR", "bc_values": {"Rp": 50.0, "C": 2e-3, "Rd": 400.0, "Pd": 5.0}},
+      {"bc_name": "R5", "bc_type": "RESISTANCE", "bc_values": {"R": 500.0}},
+      {"bc_name": "R6", "bc_type": "RCR", "bc_values": {"Rp": 80.0, "C": 1e-3, "Rd": 600.0}},
+      {"bc_name": "R2", "bc_type": "PRESSURE", "bc_values": {"P": 200.0}}],
+    "vessels": [
+      {"vessel_id": 0, "vessel_name": "v0", "zero_d_element_values": {"R_poiseuille": 10.0, "C": 1e-3, "L": 2.0},
+       "boundary_conditions": {"inlet": "IN"}},
+      {"vessel_id": 1, "vessel_name": "v1", "zero_d_element_values": {"R_poiseuille": 20.0, "C": 5e-4, "L": 3.0}},
+      {"vessel_id": 2, "vessel_name": "v2", "zero_d_element_values": {"R_poiseuille": 30.0, "C": 4e-4},
+       "boundary_conditions": {"outlet": "R2"}},
+      {"vessel_id": 3, "vessel_name": "v3", "zero_d_element_type": "BloodVesselCRL",
+       "zero_d_element_values": {"R_poiseuille": 40.0, "C": 3e-4, "L": 1.0}, "boundary_conditions": {"outlet": "R3"}},
+      {"vessel_id": 4, "vessel_name": "v4", "zero_d_element_values": {"R_poiseuille": 50.0, "L": 4.0},
+       "boundary_conditions": {"outlet": "R4"}},
+      {"vessel_id": 5, "vessel_name": "v5", "zero_d_element_values": {"R_poiseuille": 60.0, "C": 2e-4},
+       "boundary_conditions": {"outlet": "R5"}},
+      {"vessel_id": 6, "vessel_name": "v6", "zero_d_element_values": {"R_poiseuille": 70.0, "C": 1e-4, "L": 5.0},
+       "boundary_conditions": {"outlet": "R6"}}],
+    "junctions": [
+      {"junction_name": "J0", "junction_type": "NORMAL_JUNCTION", "inlet_vessels": [0], "outlet_vessels": [1, 2]},
+      {"junction_name": "J1", "junction_type": "NORMAL_JUNCTION", "inlet_blocks": ["v1"],
+       "outlet_blocks": ["v3", "v4", "J2"]},
+      {"junction_name": "J2", "junction_type": "NORMAL_JUNCTION", "inlet_blocks": [], "outlet_blocks": ["v5", "v6"]}]})";
+
+// Every nonlinear block: ∂f/∂y and ∂f/∂ẏ as the system assembles them against central
+// differences of the residual f(y, ẏ) at a random state with flows of both signs.
+TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
+  const Model m = read_model(write_model("stenosis.json", kStenosisModel).string());
   System sys(m.block_pointers(), m.unknowns, m.period, m.file);
   ASSERT_TRUE(sys.nonlinear());
   sys.set_phase(false, 0.0);
@@ -163,13 +198,86 @@ TEST(FlowSvZeroDIntegrator, StenosisJacobiansMatchFiniteDifferences) {
       const Eigen::VectorXd col = which == 0 ? jy.col(j) : jyd.col(j);
       const double err = (fd - col).cwiseAbs().maxCoeff() / (1.0 + col.cwiseAbs().maxCoeff());
       worst = std::max(worst, err);
-      EXPECT_LT(err, 1e-7) << (which == 0 ? "d/dy" : "d/dydot") << " of unknown " << m.dofs[static_cast<size_t>(j)];
+      EXPECT_LT(err, 1e-7) << (which == 0 ? "d/dy" : "d/dydot") << " of unknown " << j;
     }
   }
   // The stenosis terms are there: the Jacobian moves with the state.
   sys.update_solution(0.0, 2.0 * y, yd);
   EXPECT_GT((jy - Eigen::MatrixXd(sys.dfdy())).norm(), 1.0);
   std::printf("stenosis Jacobians: worst relative difference to central differences %.2e\n", worst);
+}
+
+// NORMAL_JUNCTION connections share one pressure unknown (the junction keeps only its flow
+// balance): on a tree with junctions side by side, one of them fed directly by another, the
+// smaller system gives every variable (flows, pressures of every connection, RCR pressures,
+// their time derivatives, at every step of every cycle) as the full system with the equations
+// P_0 − P_i = 0 does, to rounding.
+TEST(FlowSvZeroDIntegrator, SharedJunctionPressuresGiveTheFullSystemsSolution) {
+  const auto path = write_model("junctions.json", kJunctionModel);
+  Summary full_s, shared_s;
+  const Result full = simulate(path.string(), &full_s, Options{.share_junction_pressures = false});
+  const Result shared = simulate(path.string(), &shared_s);
+  // 15 connections, 2 RCR pressures; J0 joins 3 connections, J1 and J2 (through J1:J2) 6.
+  EXPECT_EQ(full_s.unknowns, 2 * 15 + 2);
+  EXPECT_EQ(shared_s.unknowns, full_s.unknowns - 2 - 5);
+  ASSERT_EQ(full.names, shared.names);
+  ASSERT_EQ(full.columns, shared.columns);
+  double worst = 0.0, scale = 0.0;
+  for (size_t i = 0; i < full.data.size(); ++i)
+    for (size_t c = 0; c < full.data[i].size(); ++c) scale = std::max(scale, std::abs(full.data[i][c]));
+  for (size_t i = 0; i < full.data.size(); ++i) {
+    EXPECT_EQ(full.times[i], shared.times[i]);
+    for (size_t c = 0; c < full.data[i].size(); ++c)
+      worst = std::max(worst, std::abs(full.data[i][c] - shared.data[i][c]) / scale);
+  }
+  EXPECT_LT(worst, 1e-12);
+  // The pressures of a junction's connections are one value, and it moves over the cycle.
+  auto series = [&](const std::string& name) {
+    std::vector<double> v;
+    for (size_t i = 0; i < shared.names.size(); ++i)
+      if (shared.names[i] == name) v.push_back(shared.data[i][0]);
+    return v;
+  };
+  const auto p_in = series("pressure:v1:J1"), p_j2 = series("pressure:J2:v6");
+  ASSERT_EQ(p_in.size(), 101u);
+  EXPECT_EQ(p_in, p_j2);
+  EXPECT_GT(*std::max_element(p_in.begin(), p_in.end()) - *std::min_element(p_in.begin(), p_in.end()), 10.0);
+  std::printf("shared junction pressures: %d unknowns for %d, largest difference %.2e of the largest value\n",
+              shared_s.unknowns, full_s.unknowns, worst);
+}
+
+// The solve against the matrix it inverts: J x = b for random b, J = a_ẏ ∂f/∂ẏ + a_y ∂f/∂y
+// assembled on its own, in both phases, for a linear model and a nonlinear one at a random
+// state; after a factorization with pivoting (KLU's factors copied by rows) and after
+// refactorizations on the same pivots (KLU's solve first, then the copy).
+TEST(FlowSvZeroDIntegrator, SolveInvertsTheIterationMatrix) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const char* text : {kJunctionModel, kStenosisModel}) {
+    const Model m = read_model(write_model("solve.json", text).string());
+    System sys(m.block_pointers(), m.unknowns, m.period, m.file);
+    const int n = m.unknowns;
+    for (const bool steady : {true, false}) {
+      sys.set_phase(steady, 0.0);
+      for (int trial = 0; trial < 3; ++trial) {
+        Eigen::VectorXd y(n), yd(n), b(n);
+        for (int i = 0; i < n; ++i) y[i] = u(rng), yd[i] = u(rng), b[i] = 1e3 * u(rng);
+        sys.update_solution(0.0, y, yd);
+        const double a_yd = 0.75, a_y = 1e-3 * (1 + trial);
+        sys.factorize(a_yd, a_y);
+        const Eigen::SparseMatrix<double> j = a_yd * sys.dfdyd() + a_y * sys.dfdy();
+        for (int again = 0; again < 3; ++again) {
+          Eigen::VectorXd x = b;
+          sys.solve(x);
+          const Eigen::VectorXd r = j * x - b;
+          const double scale = (Eigen::MatrixXd(j).cwiseAbs() * x.cwiseAbs()).maxCoeff() + b.cwiseAbs().maxCoeff();
+          EXPECT_LT(r.cwiseAbs().maxCoeff() / scale, 1e-14)
+              << (steady ? "steady" : "pulsatile") << " trial " << trial << " solve " << again;
+          b = b.reverse().eval();
+        }
+      }
+    }
+  }
 }
 
 // A linear model whose only time table is a boundary value: J is factorized once in the

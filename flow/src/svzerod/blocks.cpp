@@ -254,6 +254,16 @@ std::string Junction::check_connections() const {
   return {};
 }
 
+bool Junction::shared_pressure() const {
+  const int p = inlets_.empty() ? -1 : inlets_[0].p;
+  auto same = [&](const Node& n) { return n.p == p; };
+  return std::all_of(inlets_.begin(), inlets_.end(), same) && std::all_of(outlets_.begin(), outlets_.end(), same);
+}
+
+int Junction::num_equations() const {
+  return shared_pressure() ? 1 : static_cast<int>(inlets_.size() + outlets_.size());
+}
+
 void Junction::assemble(Assembler& a, double /*t*/) const {
   const int n = num_equations();
   auto node = [&](int k) -> const Node& {

@@ -40,7 +40,7 @@ SimulationParameters read_sim(const std::string& file, const json& cfg) {
   return p;
 }
 
-void read_blocks(Model& m, const json& cfg) {
+void read_blocks(Model& m, const json& cfg, const Options& options) {
   const auto& registry = Registry::instance();
   std::vector<std::pair<std::string, std::string>> connections;
   std::map<int, std::string> vessel_ids;
@@ -129,20 +129,47 @@ void read_blocks(Model& m, const json& cfg) {
     m.period = sp;
   }
 
-  // One node (P, Q) per connection, in connection order.
+  // One node (P, Q) per connection, in connection order. The connections of a block that
+  // makes their pressures equal (a NORMAL_JUNCTION) share one pressure unknown, found by
+  // union-find over the connections (junctions may be connected to each other).
+  std::vector<std::pair<size_t, size_t>> ends;  // (upstream, downstream) block of each connection
   for (const auto& [a, b] : connections) {
     const auto ia = by_name.find(a), ib = by_name.find(b);
     if (ia == by_name.end()) throw_input_error(m.file, fmt::format("connection to an unknown block '{}'", a));
     if (ib == by_name.end()) throw_input_error(m.file, fmt::format("connection to an unknown block '{}'", b));
+    ends.emplace_back(ia->second, ib->second);
+  }
+  std::vector<size_t> parent(connections.size());
+  for (size_t k = 0; k < parent.size(); ++k) parent[k] = k;
+  auto root = [&](size_t k) {
+    while (parent[k] != k) k = parent[k] = parent[parent[k]];
+    return k;
+  };
+  if (options.share_junction_pressures) {
+    std::vector<size_t> first(m.blocks.size(), connections.size());  // first connection of each equal-pressure block
+    for (size_t k = 0; k < connections.size(); ++k)
+      for (const size_t blk : {ends[k].first, ends[k].second}) {
+        if (!m.blocks[blk]->equal_pressures()) continue;
+        if (first[blk] == connections.size()) first[blk] = k;
+        else parent[root(k)] = root(first[blk]);
+      }
+  }
+  std::vector<int> pressure_of(connections.size(), -1);  // by root connection
+  for (size_t k = 0; k < connections.size(); ++k) {
+    const auto& [a, b] = connections[k];
     Node nd;
     nd.name = a + ":" + b;
     nd.q = m.unknowns++;
-    nd.p = m.unknowns++;
+    int& p = pressure_of[root(k)];
+    if (p < 0) p = m.unknowns++;
+    nd.p = p;
     m.dofs.push_back("flow:" + nd.name);
+    m.dof_unknown.push_back(nd.q);
     m.dofs.push_back("pressure:" + nd.name);
+    m.dof_unknown.push_back(nd.p);
     m.nodes.push_back(nd);
-    m.blocks[ia->second]->add_outlet(nd);
-    m.blocks[ib->second]->add_inlet(nd);
+    m.blocks[ends[k].first]->add_outlet(nd);
+    m.blocks[ends[k].second]->add_inlet(nd);
   }
   for (const auto& b : m.blocks) {
     const std::string why = b->check_connections();
@@ -154,7 +181,7 @@ void read_blocks(Model& m, const json& cfg) {
     row += b->num_equations();
     for (const auto& prefix : b->internal_unknowns()) {
       m.dofs.push_back(prefix + ":" + b->name());
-      ++m.unknowns;
+      m.dof_unknown.push_back(m.unknowns++);
     }
   }
   if (row != m.unknowns)
@@ -166,8 +193,10 @@ State read_initial(const Model& m, const json& cfg) {
   State s{Eigen::VectorXd::Zero(m.unknowns), Eigen::VectorXd::Zero(m.unknowns)};
   if (!cfg.contains("initial_condition")) return s;
   const json& ic = cfg.at("initial_condition");
-  for (int i = 0; i < m.unknowns; ++i) {
-    const auto& name = m.dofs[static_cast<size_t>(i)];
+  // A shared junction pressure takes the value of the last of its names that has one.
+  for (size_t k = 0; k < m.dofs.size(); ++k) {
+    const auto& name = m.dofs[k];
+    const int i = m.dof_unknown[k];
     if (ic.contains(name)) {
       s.y[i] = ic.at(name).get<double>();
     } else if (ic.contains("pressure_all") && (name.rfind("pressure", 0) == 0)) {
@@ -188,7 +217,7 @@ std::vector<Block*> Model::block_pointers() const {
   return out;
 }
 
-Model read_model(const std::string& json_path) {
+Model read_model(const std::string& json_path, const Options& options) {
   json cfg;
   {
     std::ifstream in(json_path, std::ios::binary);
@@ -204,7 +233,7 @@ Model read_model(const std::string& json_path) {
   m.file = json_path;
   try {
     m.sim = read_sim(json_path, cfg);
-    read_blocks(m, cfg);
+    read_blocks(m, cfg, options);
     m.initial = read_initial(m, cfg);
   } catch (const json::exception& e) {
     throw_input_error(json_path, fmt::format("unexpected content: {}", e.what()));

@@ -62,8 +62,9 @@ Result make_result(const Model& m, Recorder& rec) {
   if (sp.variable_based) {
     r.columns = {"name", "time", "y"};
     if (sp.derivative) r.columns.emplace_back("ydot");
-    for (int i = 0; i < m.unknowns; ++i) {
-      const auto& name = m.dofs[static_cast<size_t>(i)];
+    for (size_t d = 0; d < m.dofs.size(); ++d) {
+      const auto& name = m.dofs[d];
+      const int i = m.dof_unknown[d];
       if (sp.mean_only) {
         r.names.push_back(name);
         r.times.push_back(nan);
@@ -110,9 +111,9 @@ Result make_result(const Model& m, Recorder& rec) {
 
 }  // namespace
 
-Result simulate(const std::string& json_path, Summary* summary) {
+Result simulate(const std::string& json_path, Summary* summary, const Options& options) {
   Stopwatch sw;
-  Model m = read_model(json_path);
+  Model m = read_model(json_path, options);
   auto& sp = m.sim;
   if (sp.cycle_error && m.has_rcr)
     sp.cycles = static_cast<int>(std::ceil(-m.max_tau / m.period * std::log(sp.cycle_error_value)));

@@ -73,6 +73,9 @@ class Block {
   /// @brief Empty when the connections suit the block, else what is wrong with them.
   [[nodiscard]] virtual std::string check_connections() const = 0;
 
+  /// @brief True when the block makes the pressures of all its connections equal: the model
+  /// may then give them one pressure unknown, and the block writes no equation for it.
+  [[nodiscard]] virtual bool equal_pressures() const { return false; }
   /// @brief Number of equation rows (once connected).
   [[nodiscard]] virtual int num_equations() const = 0;
   /// @brief Names (prefixes) of the block's own unknowns, e.g. "pressure_c".

@@ -48,16 +48,20 @@ class BloodVesselCRL : public Block {
 /// @brief `NORMAL_JUNCTION` (junctions): equal pressures and conserved flow at connections 0..n−1
 /// (inlets first):
 /// \f[ P_0 - P_i = 0,\ i = 1..n-1, \qquad \sum_{in} Q - \sum_{out} Q = 0 \f]
-/// No parameters.
+/// When the model gave all its connections one pressure unknown (equal_pressures()), only the
+/// last row. No parameters.
 class Junction : public Block {
  public:
   explicit Junction(BlockInput& in);
   [[nodiscard]] const char* type() const override { return "NORMAL_JUNCTION"; }
   [[nodiscard]] std::string check_connections() const override;
-  [[nodiscard]] int num_equations() const override {
-    return static_cast<int>(inlets_.size() + outlets_.size());
-  }
+  [[nodiscard]] bool equal_pressures() const override { return true; }
+  [[nodiscard]] int num_equations() const override;
   void assemble(Assembler& a, double t) const override;
+
+ private:
+  /// True when every connection has the pressure unknown of the first.
+  [[nodiscard]] bool shared_pressure() const;
 };
 
 /// @brief `BloodVesselJunction` (junctions, `junction_values`): one inlet, per outlet i an R, L, S branch:

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "flowire/flow/svzerod.hpp"
 #include "flowire/flow/svzerod/block.hpp"
 #include "flowire/flow/svzerod/integrator.hpp"
 
@@ -39,7 +40,10 @@ struct Model {
   std::string file;
   std::vector<std::unique_ptr<Block>> blocks;  ///< vessels, boundary conditions, junctions, in input order
   std::vector<Node> nodes;                     ///< one per connection, in connection order
-  std::vector<std::string> dofs;               ///< (unknowns) names: flow:A:B, pressure:A:B, pressure_c:X, ...
+  /// The peer's variables in its order: flow:A:B, pressure:A:B per connection, then the blocks'
+  /// own (pressure_c:X, ...); with shared junction pressures several name one unknown.
+  std::vector<std::string> dofs;
+  std::vector<int> dof_unknown;                ///< (dofs) the unknown each variable is
   std::vector<Vessel> vessels;                 ///< in input order
   int unknowns = 0, junctions = 0, boundary_conditions = 0;
   double period = 1.0;   ///< cardiac period
@@ -52,6 +56,6 @@ struct Model {
 };
 
 /// @brief Read a model file. @throws flowire::Error (input) naming the file and the block.
-Model read_model(const std::string& json_path);
+Model read_model(const std::string& json_path, const Options& options = {});
 
 }  // namespace flowire::flow::svzerod

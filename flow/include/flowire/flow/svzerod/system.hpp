@@ -12,6 +12,13 @@
 /// with KLU: the symbolic analysis (block triangular form, AMD ordering) once for the
 /// pattern, the numeric factorization with pivoting once per phase, and again only when a
 /// value of J changed: then on the same pivots (no allocation) unless they got much worse.
+/// The solves run on a copy of KLU's factors, taken after a factorization with pivoting and
+/// after a refactorization once it serves a second solve (a Newton iteration that
+/// refactorizes at every solve keeps KLU's own solve),
+/// \f$ L U + F_{off} = R^{-1} P J Q \f$, stored by rows with the reciprocals of the row
+/// scales and of U's diagonal: one gather, row-wise (dot-product) triangular sweeps block by
+/// block and one scatter, with no division (a step of a linear model is mostly this solve and
+/// the residual).
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <memory>
@@ -85,7 +92,7 @@ class System {
   /// since the last factorization. @throws flowire::Error (numerical) when J is singular.
   void factorize(double a_yd, double a_y);
   /// @brief Solve \f$ J x = b \f$ in place.
-  void solve(Eigen::VectorXd& b) const;
+  void solve(Eigen::VectorXd& b);
   /// @brief Numeric factorizations done so far.
   [[nodiscard]] long factorizations() const { return factorizations_; }
 
@@ -108,12 +115,28 @@ class System {
   std::vector<int> colptr_, rows_;
   std::vector<double> e_, f_, dy_, dyd_, j_;
   std::vector<double> c_, c_nl_;
-  struct Compact {
-    std::vector<int> rows, cols;
+  /// A sparse matrix by rows.
+  struct Rows {
+    std::vector<int> ptr, cols;
     std::vector<double> values;
   };
-  Compact e_compact_, f_compact_;  ///< E's and F's nonzeros (by column), for the residual
+  Rows e_rows_, f_rows_;  ///< E's and F's nonzeros by row, for the residual
   bool compact_stale_ = true;
+  /// Copy KLU's factors into `factors_` after a factorization.
+  void extract_factors();
+  struct Factors {
+    Rows l, u, off;          ///< strict lower L, strict upper U, off-diagonal blocks; permuted indices
+    std::vector<double> u_inv;  ///< 1/U_kk
+    std::vector<double> r_inv;  ///< 1/(row scale) of permuted row k
+    std::vector<int> p, q, blocks;  ///< row and column permutations, block boundaries
+    std::vector<int> cp, ci;        ///< extraction scratch
+    std::vector<double> cx;
+  };
+  Factors factors_;
+  bool factors_current_ = false;  ///< factors_ holds the last factorization
+  int solves_since_factorization_ = 0;
+  std::vector<double> x_;  ///< the solve's permuted vector
+  std::vector<int> next_;  ///< scratch of the conversions to rows
   bool recording_ = false;
   std::vector<std::pair<int, int>> recorded_;
   bool changed_ = true;
