@@ -38,14 +38,7 @@ StepReport RodSimulator::step_subdivided(double dt, int depth) {
     StepReport total;
     for (int half = 0; half < 2; ++half) {
       const StepReport r = step_subdivided(0.5 * dt, depth + 1);
-      total.status = r.status;
-      total.newton_iterations += r.newton_iterations;
-      total.chord_iterations += r.chord_iterations;
-      total.line_search_cuts += r.line_search_cuts;
-      total.regularizations += r.regularizations;
-      total.residual = r.residual;
-      total.tolerance = r.tolerance;
-      total.subdivisions = std::max(total.subdivisions, r.subdivisions);
+      total.then(r);
       if (!r.converged()) break;
     }
     total.subdivisions = std::max(total.subdivisions, depth + 1);
@@ -258,14 +251,7 @@ StepReport RodSimulator::solve_static() {
   // Adaptive: resample at the equilibrium and solve again until the vertex set settles.
   for (int round = 0; round < 12 && r.converged() && adapt(); ++round) {
     trace_.pop_back();
-    const StepReport again = solve_static_once();
-    r.status = again.status;
-    r.newton_iterations += again.newton_iterations;
-    r.chord_iterations += again.chord_iterations;
-    r.line_search_cuts += again.line_search_cuts;
-    r.regularizations += again.regularizations;
-    r.residual = again.residual;
-    r.tolerance = again.tolerance;
+    r.then(solve_static_once());
   }
   return r;
 }
@@ -282,13 +268,7 @@ StepReport RodSimulator::solve_static_once() {
   StepReport total;
   for (int i = 1; i <= steps; ++i) {
     const StepReport r = newton(Mode::Static, 1.0, static_cast<double>(i) / steps);
-    total.newton_iterations += r.newton_iterations;
-    total.chord_iterations += r.chord_iterations;
-    total.line_search_cuts += r.line_search_cuts;
-    total.regularizations += r.regularizations;
-    total.residual = r.residual;
-    total.tolerance = r.tolerance;
-    total.status = r.status;
+    total.then(r);
     if (!r.converged()) break;
   }
   compute_base_reaction();

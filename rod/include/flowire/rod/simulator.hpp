@@ -110,6 +110,18 @@ struct StepReport {
   double residual = 0.0;        ///< final scaled residual [N]
   double tolerance = 0.0;       ///< the force tolerance it was compared with [N]
   [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
+  /// @brief Continue this report with a later solve's: its counts added, its status,
+  /// residual and tolerance taken (the last solve decides), the deeper subdivision kept.
+  void then(const StepReport& later) {
+    status = later.status;
+    newton_iterations += later.newton_iterations;
+    chord_iterations += later.chord_iterations;
+    line_search_cuts += later.line_search_cuts;
+    regularizations += later.regularizations;
+    subdivisions = subdivisions > later.subdivisions ? subdivisions : later.subdivisions;
+    residual = later.residual;
+    tolerance = later.tolerance;
+  }
 };
 
 /// @brief Wall-clock seconds spent by the Newton solves, by phase, summed since construction
