@@ -133,18 +133,23 @@ void RodSimulator::begin_step(double h, bool extrapolate) {
   }
 }
 
-StepReport RodSimulator::step_euler(double dt) {
-  Work& w = *work_;
-  RodState& s = state_;
+double RodSimulator::feed_vertex_set(double dt) {
   bool clamped = false;
-  const double L_new = clamp_inserted(s.inserted_length + feed_speed_ * dt, model_, clamped);
+  const double L_new = clamp_inserted(state_.inserted_length + feed_speed_ * dt, model_, clamped);
   if (clamped && feed_speed_ != 0.0) {
     warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
     insertion_speed_ = 0.0;
     feed_speed_ = 0.0;
   }
-  s.base_angle = target_angle_;
+  state_.base_angle = target_angle_;
   update_vertex_set(L_new);
+  return L_new;
+}
+
+StepReport RodSimulator::step_euler(double dt) {
+  Work& w = *work_;
+  RodState& s = state_;
+  const double L_new = feed_vertex_set(dt);
   const double angle_new = target_angle_ + rotation_speed_ * dt;
 
   // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
@@ -184,16 +189,8 @@ StepReport RodSimulator::step_euler(double dt) {
 StepReport RodSimulator::step_midpoint(double dt) {
   Work& w = *work_;
   RodState& s = state_;
-  bool clamped = false;
   const double L_start = s.inserted_length;
-  const double L_new = clamp_inserted(L_start + feed_speed_ * dt, model_, clamped);
-  if (clamped && feed_speed_ != 0.0) {
-    warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
-    insertion_speed_ = 0.0;
-    feed_speed_ = 0.0;
-  }
-  s.base_angle = target_angle_;
-  update_vertex_set(L_new);
+  const double L_new = feed_vertex_set(dt);
   const double hh = 0.5 * dt;
   const double L_half = 0.5 * (L_start + L_new);
   const double angle_half = target_angle_ + rotation_speed_ * hh;

@@ -321,6 +321,9 @@ class RodSimulator {
   /// View of the current state for external forces (dt = 0: between steps).
   RodView current_view(double dt);
   void update_vertex_set(double new_inserted);
+  /// The inserted length at the end of a step of @p dt at the feed speed (held at the wire's
+  /// ends, with a warning), with the vertex set updated to it.
+  double feed_vertex_set(double dt);
   void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x,
                       std::vector<double>& theta) const;
   void refresh_arc_lengths();
