@@ -146,6 +146,17 @@ double RodSimulator::feed_vertex_set(double dt) {
   return L_new;
 }
 
+void RodSimulator::start_stage(double L, double angle, double fed, double h) {
+  Work& w = *work_;
+  RodState& s = state_;
+  predict_feed(fed, h);
+  set_prescribed(L, angle, s.x, s.theta);
+  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  s.time += h;
+  s.inserted_length = L;
+  refresh_arc_lengths();
+}
+
 StepReport RodSimulator::step_euler(double dt) {
   Work& w = *work_;
   RodState& s = state_;
@@ -155,12 +166,7 @@ StepReport RodSimulator::step_euler(double dt) {
   // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
   begin_step(dt, settings_.second_order_guess);
   const int nv = s.vertex_count();
-  predict_feed(L_new - s.inserted_length, dt);
-  set_prescribed(L_new, angle_new, s.x, s.theta);
-  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
-  s.time += dt;
-  s.inserted_length = L_new;
-  refresh_arc_lengths();
+  start_stage(L_new, angle_new, L_new - s.inserted_length, dt);
 
   StepReport rep = newton(Mode::Dynamic, dt, 1.0);
   if (rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix) {
@@ -198,12 +204,7 @@ StepReport RodSimulator::step_midpoint(double dt) {
 
   begin_step(hh, /*extrapolate=*/false);
   const int nv = s.vertex_count();
-  predict_feed(L_half - L_start, hh);
-  set_prescribed(L_half, angle_half, s.x, s.theta);
-  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
-  s.time += hh;
-  s.inserted_length = L_half;
-  refresh_arc_lengths();
+  start_stage(L_half, angle_half, L_half - L_start, hh);
 
   StepReport rep = newton(Mode::Dynamic, hh, 1.0);
   const bool failed =

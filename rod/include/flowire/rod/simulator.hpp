@@ -324,6 +324,10 @@ class RodSimulator {
   /// The inserted length at the end of a step of @p dt at the feed speed (held at the wire's
   /// ends, with a warning), with the vertex set updated to it.
   double feed_vertex_set(double dt);
+  /// Newton's start for an implicit stage of length @p h ending at inserted length @p L and
+  /// base angle @p angle, @p fed fed since the step start: the feed predictor, the
+  /// prescribed unknowns, the frames carried from the step start, time and arc lengths.
+  void start_stage(double L, double angle, double fed, double h);
   void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x,
                       std::vector<double>& theta) const;
   void refresh_arc_lengths();
