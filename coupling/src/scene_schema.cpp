@@ -29,8 +29,8 @@ config::Schema make_schema() {
       "cylinders (signed distance to the triangles, open ends open, caps at the network's ends removed); the "
       "network still carries the flow; fem.geometry: lumen meshes it for the FEM comparison");
   add("vessels.surface_smoothing", Type::Number, "", D::Length,
-      "width of the soft minimum over nearby triangles that makes the surface's distance smooth for Newton "
-      "(default a fifth of the mean edge length; 0: the exact distance)");
+      "width of the Gaussian weights of the smooth implicit surface (a weighted mean of the nearby triangles' "
+      "planes) whose distance the contact uses (default 0.4 of the mean edge length; 0: the exact distance)");
   add("vessels.max_segment_length", Type::Number, "5 mm", D::Length, "branches are split into cylinders no longer than this");
   add("vessels.radius_change", Type::Number, "0.1", D::None, "also split where the radius changes by more than this fraction");
   add("vessels.keep_inlet_piece", Type::Bool, "false", D::None,

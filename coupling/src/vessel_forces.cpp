@@ -43,28 +43,13 @@ void VesselForces::ensure_size(int n) {
     lag_normal_force_.resize(static_cast<size_t>(n), 0.0);
     lag_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
     surf_near_.resize(static_cast<size_t>(n));
-    surf_d_.resize(static_cast<size_t>(n), 0.0);
-    surf_x_.resize(static_cast<size_t>(n), Vec3::Zero());
-    surf_known_.resize(static_cast<size_t>(n), 0);
   }
 }
 
-bool VesselForces::deep_inside(size_t k, const Vec3& x, double a) const {
-  // The smoothed distance d_τ is 1-Lipschitz and has the sign of d: below −a at the last
-  // query point, it stays below −a + |x − x_last| at x, where d ≤ d_τ (inside).
-  return surf_known_[k] != 0 && surf_d_[k] + (x - surf_x_[k]).norm() + a < 0.0;
-}
-
-bool VesselForces::surface_wall(int i, const Vec3& x, double a, double* d, Vec3* n, Mat3* H) {
-  const auto k = static_cast<size_t>(i);
-  // The signed distance is 1-Lipschitz (beyond an open end too: there it is minus the
-  // distance to the rim; it flips sign only outside the wall, past the rim): a vertex that
-  // was deeper than its radius plus the distance it moved since cannot touch the wall now.
-  if (deep_inside(k, x, a)) return false;
-  const auto q = surface_->smooth_distance(x, smoothing_, surf_near_[k], surf_margin_, H);
-  surf_d_[k] = q.distance;
-  surf_x_[k] = x;
-  surf_known_[k] = 1;
+bool VesselForces::surface_wall(int i, const Vec3& x, double* d, Vec3* n, Mat3* H) {
+  auto& near = surf_near_[static_cast<size_t>(i)];
+  const auto q = surface_->smooth_distance(x, smoothing_, near, surf_margin_, H, surf_skip_);
+  if (q.skipped) return false;
   *d = q.distance;
   *n = q.gradient;
   return true;
@@ -128,7 +113,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     Vec3 n_wall;
     Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
     if (surface_) {
-      if (!surface_wall(i, x, a, &d, &n_wall, &H_wall)) continue;
+      if (!surface_wall(i, x, &d, &n_wall, &H_wall)) continue;
     } else {
       const int s = segment_[static_cast<size_t>(i)];
       const auto& seg = net.segment(s);
@@ -239,19 +224,18 @@ void VesselForces::end_step(const rod::RodView& rod) {
     Vec3 nrm;
     double d = 0.0;
     if (surface_) {
-      // The friction's normal force from the contact's own (smoothed) distance; the exact
-      // distance measures how far outside the wire is.
-      // A vertex deeper than its radius (bounded from its last query) has no normal force,
-      // and its distance, below −a, cannot raise the maxima recorded below (both ≥ 0).
-      if (deep_inside(k, rod.position(i), wire_radius_)) continue;
-      const auto q = surface_->smooth_distance(rod.position(i), smoothing_, surf_near_[k], surf_margin_);
-      surf_d_[k] = q.distance, surf_x_[k] = rod.position(i), surf_known_[k] = 1;
+      // The friction's normal force from the contact's own (smooth) distance; the exact
+      // distance measures how far outside the wire is. A vertex deeper than surf_skip_ has
+      // no normal force, and its distance, below −a, cannot raise the maxima recorded below
+      // (both ≥ 0).
+      const auto q = surface_->smooth_distance(rod.position(i), smoothing_, surf_near_[k], surf_margin_, nullptr, surf_skip_);
+      if (q.skipped) continue;
       nrm = q.gradient;
       if (q.distance + wire_radius_ > 0.0) {
         lag_normal_force_[k] = contact_.stiffness * rod.cell_weight(i) * (q.distance + wire_radius_);
         lag_normal_[k] = nrm;
       }
-      d = q.exact;
+      d = surface_->distance(rod.position(i), surf_near_[k]).distance;
       // The wire passes the open inlet near the entry: measured from entry_margin on.
       if (!rod.arc_length.empty() && rod.arc_length[k] < entry_margin_) continue;
     } else {

@@ -95,14 +95,14 @@ TEST(SceneLumen, CapsAtTheNetworksEndsAreRemovedAndTheUnitApplies) {
   }
   // Past either end on the axis: outside, nearest to the open end's rim (no cap there).
   for (const double x : {-0.003, 0.053}) EXPECT_TRUE(s->distance(vessels::Vec3(x, 0, 0)).open) << x;
-  // The default smoothing: a fifth of the mean edge, which lies between the shortest edge
+  // The default smoothing: 0.4 of the mean edge, which lies between the shortest edge
   // (the rim chord 2R sin(π/16)) and the longest (the wall's diagonal).
   const double chord = 2.0 * kRadiusMm * 1e-3 * std::sin(M_PI / kSides);
   const double step = kLengthMm * 1e-3 / (kRings - 1);
   const double mean_edge = info["mean_edge"].get<double>();
   EXPECT_GE(mean_edge, chord * (1 - 1e-6));
   EXPECT_LE(mean_edge, std::hypot(chord, step) * (1 + 1e-6));
-  EXPECT_DOUBLE_EQ(smoothing, 0.2 * mean_edge);
+  EXPECT_DOUBLE_EQ(smoothing, 0.4 * mean_edge);
   EXPECT_DOUBLE_EQ(info["smoothing"].get<double>(), smoothing);
 }
 

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "flowire/rod/model.hpp"
+#include "flowire_test.hpp"
 
 namespace flowire::rod {
 
@@ -27,18 +28,6 @@ inline WireSpec unit_rod_spec(int segments) {
   return spec;
 }
 
-/// Least-squares slope of log(y) against log(x).
-inline double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
-  const size_t n = x.size();
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const double lx = std::log(x[i]), ly = std::log(y[i]);
-    sx += lx;
-    sy += ly;
-    sxx += lx * lx;
-    sxy += lx * ly;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
+using flowire::testing::loglog_slope;
 
 }  // namespace flowire::rod

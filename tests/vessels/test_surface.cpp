@@ -57,16 +57,6 @@ std::string write_tube(const std::filesystem::path& dir, int resolution, double 
 }
 
 
-/// Slope of log(err) against log(h) by least squares.
-double slope(const std::vector<double>& h, const std::vector<double>& err) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = static_cast<double>(h.size());
-  for (size_t i = 0; i < h.size(); ++i) {
-    const double x = std::log(h[i]), y = std::log(err[i]);
-    sx += x, sy += y, sxx += x * x, sxy += x * y;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
 
 }  // namespace
 
@@ -97,7 +87,7 @@ TEST(Surface, SphereDistanceConvergesAtSecondOrder) {
     hs.push_back(1.0 / n);
     errs.push_back(err);
   }
-  const double p = slope(hs, errs);
+  const double p = flowire::testing::loglog_slope(hs, errs);
   EXPECT_NEAR(p, 2.0, 0.25) << "errors " << errs[0] << " " << errs[1] << " " << errs[2] << " " << errs[3];
 }
 
@@ -134,7 +124,7 @@ TEST(Surface, OpenTubeDistanceConvergesAtSecondOrderAndItsEndsAreOpen) {
       EXPECT_LT(q.distance, 0.0) << "a point beyond an open end is not outside (y = " << y << ")";
     }
   }
-  EXPECT_NEAR(slope(hs, errs), 2.0, 0.25);
+  EXPECT_NEAR(flowire::testing::loglog_slope(hs, errs), 2.0, 0.25);
 }
 
 TEST(Surface, HierarchyEqualsBruteForceWithAndWithoutHints) {

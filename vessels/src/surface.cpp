@@ -249,6 +249,7 @@ void LumenSurface::orient(const std::vector<Vec3>& inside) {
 void LumenSurface::pseudonormals() {
   const size_t nf = tri_.size();
   face_normal_.resize(nf);
+  plane_.resize(nf);
   edge_normal_.assign(nf, {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
   edge_open_.assign(nf, {false, false, false});
   vertex_normal_.assign(v_.size(), Vec3::Zero());
@@ -258,10 +259,13 @@ void LumenSurface::pseudonormals() {
   double emin = std::numeric_limits<double>::infinity(), emax = 0.0, esum = 0.0;
   for (size_t f = 0; f < nf; ++f) {
     const auto& t = tri_[f];
-    const Vec3 n = (v_[static_cast<size_t>(t[1])] - v_[static_cast<size_t>(t[0])])
-                       .cross(v_[static_cast<size_t>(t[2])] - v_[static_cast<size_t>(t[0])])
-                       .normalized();
+    const Vec3 area_vector = 0.5 * (v_[static_cast<size_t>(t[1])] - v_[static_cast<size_t>(t[0])])
+                                       .cross(v_[static_cast<size_t>(t[2])] - v_[static_cast<size_t>(t[0])]);
+    const Vec3 n = area_vector.normalized();
+    const Vec3 centroid = (v_[static_cast<size_t>(t[0])] + v_[static_cast<size_t>(t[1])] + v_[static_cast<size_t>(t[2])]) / 3.0;
     face_normal_[f] = n;
+    for (int k : t) max_vertex_reach_ = std::max(max_vertex_reach_, (v_[static_cast<size_t>(k)] - centroid).norm());
+    plane_[f] = {centroid, n, area_vector.norm()};
     for (int k = 0; k < 3; ++k) {
       const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)], c = t[static_cast<size_t>((k + 2) % 3)];
       const auto key = edge_key(a, b);
@@ -390,7 +394,6 @@ SurfaceDistance LumenSurface::finish(const Vec3& x, int f, const Vec3& c, Featur
   double s = e.dot(N) > 0.0 ? 1.0 : -1.0;
   if (r.open) s = -1.0;  // beyond an open end: not outside
   r.distance = s * u;
-  r.exact = r.distance;
   r.gradient = u > 0.0 ? Vec3(s * e / u) : face_normal_[static_cast<size_t>(f)];
   if (hessian) {
     hessian->setZero();
@@ -460,6 +463,28 @@ SurfaceDistance LumenSurface::distance(const Vec3& x, int hint, Mat3* hessian) c
   return finish(x, f, c, feat, local, hessian);
 }
 
+SurfaceDistance LumenSurface::distance(const Vec3& x, const SurfaceNeighbourhood& near) const {
+  // The listed triangles hold x's nearest ones if every triangle within u(x) of x has its
+  // centroid within R of c: u(x) ≤ u_c + δ, and such a triangle's centroid lies within
+  // u(x) + (its farthest vertex from its centroid) of x.
+  const double delta = (x - near.centre).norm();
+  if (!near.gathered || near.margin < 0.0 || near.u_centre + 2.0 * delta + max_vertex_reach_ > near.radius)
+    return distance(x, near.nearest);
+  double best = std::numeric_limits<double>::infinity();
+  int bf = -1, bl = 0;
+  Vec3 bc = Vec3::Zero();
+  Feature bfeat = Feature::Face;
+  for (int f : near.triangles) {
+    Vec3 c;
+    Feature feat;
+    int local;
+    const double d2 = closest_on(f, x, c, feat, local);
+    // Ties (a shared edge or vertex): the lower index, as nearest() decides them.
+    if (d2 < best || (d2 == best && f < bf)) best = d2, bf = f, bc = c, bfeat = feat, bl = local;
+  }
+  return finish(x, bf, bc, bfeat, bl, nullptr);
+}
+
 void LumenSurface::gather(const Vec3& x, double radius, std::vector<int>& out) const {
   out.clear();
   const double r2 = radius * radius;
@@ -478,111 +503,115 @@ void LumenSurface::gather(const Vec3& x, double radius, std::vector<int>& out) c
   }
 }
 
-SurfaceDistance LumenSurface::smooth_distance(const Vec3& x, double tau, int hint, Mat3* hessian) const {
-  SurfaceDistance r = distance(x, hint, nullptr);
-  if (!(tau > 0.0)) {
-    if (hessian) r = distance(x, r.triangle, hessian);
-    return r;
-  }
-  thread_local std::vector<int> cand;
-  gather(x, std::abs(r.distance) + 10.0 * tau, cand);
-  return smooth_over(x, tau, cand, hessian);
+namespace {
+/// Weights below e^−K of the largest are dropped (w_f ∝ e^{−|x − g_f|²/σ²}): near a wall
+/// the dropped triangles' planes lie within a few σ²κ of the kept ones', so d_σ jumps by less
+/// than e^−10 of that (about 1e-9 m on the real anatomies).
+constexpr double kWeightCut = 10.0;
+}  // namespace
+
+SmoothDistance LumenSurface::smooth_distance(const Vec3& x, double sigma, Mat3* hessian) const {
+  SurfaceNeighbourhood near;
+  return smooth_distance(x, sigma, near, 0.0, hessian);
 }
 
-SurfaceDistance LumenSurface::smooth_distance(const Vec3& x, double tau, SurfaceNeighbourhood& near, double margin,
-                                              Mat3* hessian) const {
-  const double t = std::max(tau, 0.0);
-  const double delta = (x - near.centre).norm();
-  if (near.margin < 0.0 || near.tau != t || delta > near.margin) {
+SmoothDistance LumenSurface::smooth_distance(const Vec3& x, double sigma, SurfaceNeighbourhood& near, double margin,
+                                             Mat3* hessian, double skip_deeper_than) const {
+  const double s = std::max(sigma, 0.0);
+  double delta = (x - near.centre).norm();
+  // A point provably deeper than skip_deeper_than keeps its centre however far it moves. One
+  // whose centre was that deep but which has moved too far to tell is centred again (an exact
+  // query costs less than d_σ).
+  const bool deep = near.margin >= 0.0 && near.inside && near.u_centre - delta > skip_deeper_than;
+  const bool unsure = near.inside && near.u_centre > skip_deeper_than && delta > 0.0;
+  if (!deep && (near.margin < 0.0 || near.sigma != s || delta > near.margin || unsure)) {
     const SurfaceDistance r = distance(x, near.nearest, nullptr);
     near.centre = x;
     near.margin = std::max(margin, 0.0);
-    near.tau = t;
+    near.sigma = s;
     near.u_centre = std::abs(r.distance);
-    const double radius = near.u_centre + 10.0 * t + 2.0 * near.margin;
-    thread_local std::vector<int> cand;
-    gather(x, radius, cand);
-    near.triangles.clear();
-    near.reach.clear();
-    for (int f : cand) {
-      Vec3 c;
-      Feature feat;
-      int local;
-      const double u = std::sqrt(closest_on(f, x, c, feat, local));
-      if (u <= radius) near.triangles.push_back(f), near.reach.push_back(u);
-    }
-    return smooth_distance(x, tau, near, margin, hessian);  // delta = 0 now
+    near.inside = r.distance < 0.0;
+    near.nearest = r.triangle;
+    near.gathered = false;
+    delta = 0.0;
   }
-  // Those that can matter at x (see SurfaceNeighbourhood); the slack covers rounding.
-  const double bound = (near.u_centre + 10.0 * t + 2.0 * delta) * (1.0 + 1e-12) + 1e-15;
-  thread_local std::vector<int> cand;
-  cand.clear();
-  for (size_t i = 0; i < near.triangles.size(); ++i)
-    if (near.reach[i] <= bound) cand.push_back(near.triangles[i]);
-  SurfaceDistance r = smooth_over(x, t, cand, hessian);
-  near.nearest = r.triangle;
-  return r;
+  SmoothDistance out;
+  // The exact distance is 1-Lipschitz, and x cannot have crossed the wall since c while it
+  // stays farther from it than it moved.
+  if (near.inside && near.u_centre - delta > skip_deeper_than) {
+    out.skipped = true;
+    out.distance = -(near.u_centre - delta);
+    return out;
+  }
+  if (!(s > 0.0)) {
+    const SurfaceDistance r = distance(x, near.nearest, hessian);
+    out.distance = r.distance;
+    out.gradient = r.gradient;
+    return out;
+  }
+  if (!near.gathered) {
+    const double rho = (near.centre - plane_[static_cast<size_t>(near.nearest)].centroid).norm();
+    const double m = near.margin;
+    const double radius = std::sqrt((rho + m) * (rho + m) + kWeightCut * s * s) + m;
+    near.radius = radius;
+    thread_local std::vector<int> boxes;
+    gather(near.centre, radius, boxes);  // a triangle's box holds its centroid
+    near.triangles.clear();
+    for (int f : boxes)
+      if ((plane_[static_cast<size_t>(f)].centroid - near.centre).norm() <= radius) near.triangles.push_back(f);
+    near.gathered = true;
+  }
+  return implicit_over(x, s, near.triangles, hessian);
 }
 
-SurfaceDistance LumenSurface::smooth_over(const Vec3& x, double tau, std::span<const int> candidates,
-                                          Mat3* hessian) const {
-  struct Near {
-    double d2;
-    Vec3 c;
-    Feature feat;
-    int local, f;
-  };
-  if (candidates.empty()) return smooth_distance(x, tau, -1, hessian);  // cannot happen: they hold the nearest
-  thread_local std::vector<Near> near;
-  near.clear();
-  size_t best = 0;
-  for (int f : candidates) {
-    Near q;
-    q.f = f;
-    q.d2 = closest_on(f, x, q.c, q.feat, q.local);
-    // Ties (a shared edge or vertex): the lower index, as distance() decides them.
-    if (near.empty() || q.d2 < near[best].d2 || (q.d2 == near[best].d2 && f < near[best].f)) best = near.size();
-    near.push_back(q);
+SmoothDistance LumenSurface::implicit_over(const Vec3& x, double sigma, const std::vector<int>& listed,
+                                           Mat3* hessian) const {
+  // Pass 1: squared distances to the listed centroids, and the least (the weights' scale).
+  thread_local std::vector<double> r2;
+  r2.resize(listed.size());
+  double r2_min = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < listed.size(); ++i) {
+    r2[i] = (x - plane_[static_cast<size_t>(listed[i])].centroid).squaredNorm();
+    r2_min = std::min(r2_min, r2[i]);
   }
-  const Near& nb = near[best];
-  SurfaceDistance r = finish(x, nb.f, nb.c, nb.feat, nb.local, tau > 0.0 ? nullptr : hessian);
-  if (!(tau > 0.0)) return r;
-  const double u_min = std::sqrt(nb.d2);
-  const double s = r.distance < 0.0 ? -1.0 : 1.0;
-  // Soft minimum, shifted by u_min for range: u_τ = u_min − τ log Σ exp(−(u_f − u_min)/τ),
-  // over the triangles within 10τ of the nearest (the rest weigh less than e⁻¹⁰).
-  double z = 0.0;
-  Vec3 g = Vec3::Zero();
-  Mat3 Hw = Mat3::Zero(), C = Mat3::Zero();
-  const double cut = u_min + 10.0 * tau;
-  for (const Near& q : near) {
-    if (q.d2 > cut * cut) continue;
-    const double u = std::sqrt(q.d2);
-    const double w = std::exp(-(u - u_min) / tau);
-    z += w;
-    const Vec3 e = u > 0.0 ? Vec3((x - q.c) / u) : face_normal_[static_cast<size_t>(q.f)];
-    g += w * e;
+  // Pass 2: the weights relative to the nearest centroid's Gaussian (the common factor
+  // cancels) and the moments of d_f, n_f and a_f = −2(x − g_f)/σ² they weigh.
+  const double inv_s2 = 1.0 / (sigma * sigma);
+  const double r2_cut = r2_min + kWeightCut * sigma * sigma;
+  double W = 0.0, D = 0.0;
+  Vec3 Sn = Vec3::Zero(), Sa = Vec3::Zero(), Sda = Vec3::Zero();
+  Mat3 Sna = Mat3::Zero(), Saa = Mat3::Zero(), Sdaa = Mat3::Zero();
+  for (size_t i = 0; i < listed.size(); ++i) {
+    if (r2[i] > r2_cut) continue;
+    const Plane& p = plane_[static_cast<size_t>(listed[i])];
+    const Vec3 rel = x - p.centroid;
+    const double w = p.area * std::exp(-(r2[i] - r2_min) * inv_s2);
+    const double d = rel.dot(p.normal);
+    const Vec3 a = (-2.0 * inv_s2) * rel;
+    W += w;
+    D += w * d;
+    Sn += w * p.normal;
+    Sa += w * a;
+    Sda += (w * d) * a;
     if (hessian) {
-      C += w * e * e.transpose();
-      if (u > 0.0 && q.feat != Feature::Face) {
-        Mat3 P = Mat3::Identity() - e * e.transpose();
-        if (q.feat == Feature::Edge) {
-          const auto& t = tri_[static_cast<size_t>(q.f)];
-          const Vec3 tan = (v_[static_cast<size_t>(t[static_cast<size_t>((q.local + 1) % 3)])] -
-                            v_[static_cast<size_t>(t[static_cast<size_t>(q.local)])])
-                               .normalized();
-          P -= tan * tan.transpose();
-        }
-        Hw += (w / u) * P;
-      }
+      const Vec3 wa = w * a;
+      Sna.noalias() += p.normal * wa.transpose();
+      Saa.noalias() += a * wa.transpose();
+      Sdaa.noalias() += d * a * wa.transpose();
     }
   }
-  // z ≥ 1: the nearest triangle is among the candidates with weight 1.
-  g /= z;
-  r.distance = s * (u_min - tau * std::log(z));
-  r.gradient = s * g;
-  if (hessian) *hessian = s * (Hw / z - (C / z - g * g.transpose()) / tau);
-  return r;
+  // Centred: Σ w (d_f − d_σ) a_f = Sda − d_σ Sa (the d_f of a query's planes differ by far
+  // less than they are, so the difference keeps all but a few digits).
+  SmoothDistance out;
+  out.distance = D / W;
+  out.gradient = (Sn + Sda - out.distance * Sa) / W;
+  if (hessian) {
+    const Vec3 abar = Sa / W;
+    const Mat3 na = Sna / W;
+    *hessian = na + na.transpose() + (Sdaa - out.distance * Saa) / W - abar * out.gradient.transpose() -
+               out.gradient * abar.transpose();
+  }
+  return out;
 }
 
 SurfaceDistance LumenSurface::distance_brute_force(const Vec3& x) const {

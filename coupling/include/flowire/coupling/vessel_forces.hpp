@@ -10,6 +10,7 @@
 ///
 /// Vertices are indexed from the distal tip (rod convention), so a vertex keeps its index,
 /// and its lookup hint, while the wire is fed in at the base.
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <vector>
@@ -50,6 +51,12 @@ struct InteractionStats {
   double max_reynolds = 0.0;           ///< largest normal Reynolds number of the drag law over accepted steps [-]
 };
 
+/// @brief How deep inside (exact distance) a wire vertex of radius @p a may be before the
+/// contact on a lumen surface of smoothing width @p sigma skips it: a + max(2σ, a/2). Exact as
+/// long as d_σ < −a wherever d < −(that depth); measured on every real anatomy
+/// (tests/coupling/test_surface_contact.cpp, SkippedDeepVerticesHaveNoContactOnTheRealLumens).
+inline double surface_skip_depth(double a, double sigma) { return a + std::max(0.5 * sigma, 0.5 * a); }
+
 class VesselForces : public rod::ExternalForce {
  public:
   /// @param index  spatial index of the network (outlives this object)
@@ -89,16 +96,17 @@ class VesselForces : public rod::ExternalForce {
   /// the same friction; the network still locates the vertices for the blood velocity.
   /// Vertices closer than @p entry_margin (arc length) to the entry are not measured for
   /// `outside` (the wire passes the open inlet there).
-  /// The wall is the surface's smoothed signed distance of width @p smoothing
-  /// (LumenSurface::smooth_distance), whose gradient is continuous.
+  /// The wall is the surface's smooth signed distance d_σ of width @p smoothing
+  /// (LumenSurface::smooth_distance), whose gradient is continuous. A vertex deeper inside
+  /// than its radius plus max(2σ, 0.5 a) by the exact distance is not evaluated: d_σ lies within
+  /// that band of the exact distance on the real anatomies (surface_skip_depth).
   void set_surface(const vessels::LumenSurface* surface, double smoothing, double entry_margin = 3e-3) {
     surface_ = surface;
     smoothing_ = smoothing;
     entry_margin_ = entry_margin;
-    // A vertex's triangles are gathered again once it has moved a wire radius (or τ) away:
-    // wider margins list more triangles per rebuild than they save in rebuilds (measured
-    // on examples/real/feelpp_arch, 0.5–4 radii).
+    // A vertex's triangles are gathered again once it has moved a wire radius (or σ) away.
     surf_margin_ = std::max(wire_radius_, smoothing);
+    surf_skip_ = surface_skip_depth(wire_radius_, smoothing);
   }
   /// @brief The entry as an introducer sheath: a wire vertex within @p reach of the entry
   /// axis may not come back out behind the entry (point @p p, unit direction @p t into the
@@ -130,19 +138,15 @@ class VesselForces : public rod::ExternalForce {
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;
   bool lagged_ = false;
   InteractionStats stats_;
-  /// Wall distance of vertex i from the surface: d(x) or (no contact, skipped) a bound.
-  bool surface_wall(int i, const vessels::Vec3& x, double a, double* d, vessels::Vec3* n, Mat3* H);
+  /// Smooth wall distance of vertex i from the surface; false if it is deeper than surf_skip_.
+  bool surface_wall(int i, const vessels::Vec3& x, double* d, vessels::Vec3* n, Mat3* H);
   const vessels::LumenSurface* surface_ = nullptr;
   double entry_margin_ = 0.0;
   double smoothing_ = 0.0;
   double surf_margin_ = 0.0;            ///< margin of the vertices' surface neighbourhoods [m]
+  double surf_skip_ = 0.0;              ///< vertices deeper inside than this have no wall contact [m]
   std::vector<vessels::SurfaceNeighbourhood> surf_near_;  ///< (vertices) triangles near each vertex, kept across steps
   std::vector<vessels::SurfaceNeighbourhood> remap_surf_near_;
-  std::vector<double> surf_d_;          ///< (vertices) signed distance at the last query
-  std::vector<vessels::Vec3> surf_x_;   ///< (vertices) where it was made
-  std::vector<char> surf_known_;        ///< (vertices) surf_d_ and surf_x_ hold a query
-  /// Vertex k at x is deeper than @p a by the bound from its last query.
-  [[nodiscard]] bool deep_inside(size_t k, const vessels::Vec3& x, double a) const;
   vessels::Vec3 intro_point_ = vessels::Vec3::Zero(), intro_dir_ = vessels::Vec3::Zero();
   double intro_reach_ = 0.0;            ///< 0: no introducer
   std::uint64_t intro_contacts_ = 0;
