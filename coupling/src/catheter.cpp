@@ -48,8 +48,27 @@ double tip_weight(double alpha, double* dw, double* d2w) {
   return t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
 }
 
+double onset_quadratic(double g, double delta, double* d1, double* d2) {
+  // ½ g₊² with its kink at g = 0 replaced by the cubic u³/(6δ), u = g + δ/2, over
+  // |g| < δ/2: the second derivative ramps linearly from 0 to 1 there, so φ ∈ C².
+  if (!(g > -0.5 * delta)) {
+    if (d1) *d1 = 0.0;
+    if (d2) *d2 = 0.0;
+    return 0.0;
+  }
+  if (g < 0.5 * delta) {
+    const double u = g + 0.5 * delta;
+    if (d1) *d1 = 0.5 * u * u / delta;
+    if (d2) *d2 = u / delta;
+    return u * u * u / (6.0 * delta);
+  }
+  if (d1) *d1 = g;
+  if (d2) *d2 = 1.0;
+  return 0.5 * g * g + delta * delta / 24.0;
+}
+
 LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double c,
-                           double k, bool open_before_a) {
+                           double k, bool open_before_a, double onset) {
   using M = Eigen::Matrix3d;
   LumenPenalty p;
   p.grad_x.setZero(), p.grad_a.setZero(), p.grad_b.setZero();
@@ -79,20 +98,21 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   }
   const double d = r.norm();
   p.distance = d;
-  const double gap = d - c;
+  double dphi = 0.0, d2phi = 0.0;
+  const double phi = onset_quadratic(d - c, onset, &dphi, &d2phi);
   // The open tip end: the penalty weighted by the vertex's share inside the lumen, w(α),
   // which falls smoothly from 1 at half an edge inside the tip to 0 at half an edge beyond.
   double dw = 0.0, d2w = 0.0;
   const double w = open_before_a && interior ? tip_weight(p.alpha, &dw, &d2w) : 1.0;
   p.weight = w;
-  if (!(gap > 0.0) || !(d > 0.0) || !(w > 0.0)) return p;
+  if (!(phi > 0.0) || !(d > 0.0) || !(w > 0.0)) return p;
   const Eigen::Vector3d n = r / d;
-  const double energy = 0.5 * k * gap * gap;
+  const double energy = k * phi;
   const M pn = I - n * n.transpose();
   auto block = [&](const M& R, const M& S, Eigen::Vector3d& grad, M& hess) {
     const Eigen::Vector3d rn = R.transpose() * n;
-    grad = k * gap * rn;
-    hess = k * (rn * rn.transpose() + gap * (R.transpose() * pn * R / d + S));
+    grad = k * dphi * rn;
+    hess = k * (d2phi * rn * rn.transpose() + dphi * (R.transpose() * pn * R / d + S));
   };
   const M sa = interior ? M(da * n.transpose() + n * da.transpose()) : M::Zero();
   const M sb = interior ? M(-(db * n.transpose() + n * db.transpose())) : M::Zero();
@@ -101,7 +121,8 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   block(rb, sb, p.grad_b, p.hess_bb);
   // ∂²r/∂a_i∂b_j · n = n_i ∂α/∂b_j − ∂α/∂a_i n_j (n ⊥ e).
   const M sab = interior ? M(n * db.transpose() - da * n.transpose()) : M::Zero();
-  p.hess_ab = k * ((ra.transpose() * n) * (rb.transpose() * n).transpose() + gap * (ra.transpose() * pn * rb / d + sab));
+  p.hess_ab = k * (d2phi * (ra.transpose() * n) * (rb.transpose() * n).transpose() +
+                   dphi * (ra.transpose() * pn * rb / d + sab));
   p.energy = energy;
   if (w < 1.0) {
     // E_w = w(α) E: ∂_y E_w = w ∂_y E + E w′ α_y,
@@ -163,7 +184,7 @@ void LumenContact::evaluate_wire(const rod::RodView& rod, rod::ForceAccumulator&
     if (j < 0 || j + 1 >= static_cast<int>(catheter_snapshot.size())) continue;
     const double k = stiffness_ * rod.cell_weight(i);
     const LumenPenalty p =
-        lumen_penalty(rod.position(i), catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, k, j == 0);
+        lumen_penalty(rod.position(i), catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, k, j == 0, onset_);
     if (!(p.energy > 0.0)) continue;
     out.add_conservative_force(i, -p.grad_x);
     out.add_energy(p.energy);
@@ -177,7 +198,8 @@ void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumula
   for (size_t i = 0; i < wire_snapshot.size(); ++i) {
     const int j = i < wire_edge.size() ? wire_edge[i] : nearest_edge(wire_snapshot[i], wire_arc[i], cath, arc);
     if (j < 0 || j + 1 >= static_cast<int>(cath.size())) continue;
-    const LumenPenalty p = lumen_penalty(wire_snapshot[i], cath[j], cath[j + 1], clearance_, stiffness_, j == 0);
+    const LumenPenalty p =
+        lumen_penalty(wire_snapshot[i], cath[j], cath[j + 1], clearance_, stiffness_, j == 0, onset_);
     if (!(p.energy > 0.0)) continue;
     out.add_conservative_force(j, -p.grad_a);
     out.add_conservative_force(j + 1, -p.grad_b);
@@ -193,7 +215,8 @@ double LumenContact::energy() const {
   for (size_t i = 0; i < wire_snapshot.size(); ++i) {
     const int j = i < wire_edge.size() ? wire_edge[i] : -1;
     if (j >= 0 && j + 1 < static_cast<int>(catheter_snapshot.size()))
-      e += lumen_penalty(wire_snapshot[i], catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, stiffness_, j == 0)
+      e += lumen_penalty(wire_snapshot[i], catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, stiffness_,
+                         j == 0, onset_)
                .energy;
   }
   return e;

@@ -22,8 +22,8 @@ namespace {
 using V3 = Eigen::Vector3d;
 
 // ∂E/∂y and ∂²E/∂y² (diagonal block) of the penalty w.r.t. y ∈ {x, a, b} by central differences.
-void check_block(const V3& x, const V3& a, const V3& b, double c, double k, bool open, int which) {
-  const LumenPenalty p = lumen_penalty(x, a, b, c, k, open);
+void check_block(const V3& x, const V3& a, const V3& b, double c, double k, bool open, int which, double onset = 0.0) {
+  const LumenPenalty p = lumen_penalty(x, a, b, c, k, open, onset);
   ASSERT_GT(p.energy, 0.0);
   const V3& grad = which == 0 ? p.grad_x : which == 1 ? p.grad_a : p.grad_b;
   const Eigen::Matrix3d& hess = which == 0 ? p.hess_xx : which == 1 ? p.hess_aa : p.hess_bb;
@@ -31,7 +31,7 @@ void check_block(const V3& x, const V3& a, const V3& b, double c, double k, bool
   auto at = [&](int m, double s) {
     V3 xs = x, as = a, bs = b;
     (which == 0 ? xs : which == 1 ? as : bs)[m] += s;
-    return lumen_penalty(xs, as, bs, c, k, open);
+    return lumen_penalty(xs, as, bs, c, k, open, onset);
   };
   for (int m = 0; m < 3; ++m) {
     const LumenPenalty plus = at(m, h), minus = at(m, -h);
@@ -73,6 +73,70 @@ TEST(LumenPenalty, DerivativesMatchCentralDifferences) {
   const V3 side = (b - a).cross(V3::UnitZ()).normalized();
   EXPECT_EQ(lumen_penalty(0.5 * (a + b) + 0.6 * c * side, a, b, c, k).energy, 0.0);
   EXPECT_GT(lumen_penalty(0.5 * (a + b) + 1.4 * c * side, a, b, c, k).energy, 0.0);
+}
+
+TEST(LumenPenalty, SmoothedOnsetDerivativesMatchCentralDifferences) {
+  // The penalty k φ(d − c) with its onset smoothed over |d − c| < δ/2 (onset_quadratic), a wide
+  // band (δ = 0.4 c) so that each point below sits well inside it or past it: every gradient
+  // and Hessian block against central differences of E, at an interior projection, at a closed
+  // end, at the open tip end (distance to the line) and across the tip's taper.
+  const V3 a(0.0, 0.0, 0.0), b(1e-3, 0.2e-3, -0.1e-3);
+  const double c = 5e-5, k = 3e4, onset = 0.4 * c;
+  const V3 e = b - a, side = e.cross(V3::UnitZ()).normalized();
+  const V3 up = side.cross(e).normalized();
+  // d − c = s δ/2: below the band's middle, above it, near its top, and past it
+  for (const double s : {-0.7, -0.2, 0.3, 0.9, 1.6}) {
+    const double d = c + 0.5 * s * onset;
+    const V3 off = d * (0.6 * side + 0.8 * up);  // |off| = d, perpendicular to e
+    for (int which = 0; which < 3; ++which) {
+      check_block(a + 0.4 * e + off, a, b, c, k, false, which, onset);  // interior
+      check_block(a + 0.7 * e + off, a, b, c, k, true, which, onset);   // tip edge, full weight
+      for (const double alpha : {-0.3, 0.1})  // the taper
+        check_block(a + alpha * e + off, a, b, c, k, true, which, onset);
+    }
+    check_block(b + d * e.normalized(), a, b, c, k, false, 0, onset);  // beyond b: distance to the end point
+    check_block(b + d * e.normalized(), a, b, c, k, false, 2, onset);
+  }
+  // Below the band: no force; past it the force is that of ½ k (d − c)² exactly.
+  EXPECT_EQ(lumen_penalty(a + 0.5 * e + (c - 0.51 * onset) * side, a, b, c, k, false, onset).energy, 0.0);
+  EXPECT_GT(lumen_penalty(a + 0.5 * e + (c - 0.49 * onset) * side, a, b, c, k, false, onset).energy, 0.0);
+  const V3 x = a + 0.5 * e + (c + 2.0 * onset) * side;
+  EXPECT_NEAR(lumen_penalty(x, a, b, c, k, false, onset).grad_x.norm(), lumen_penalty(x, a, b, c, k).grad_x.norm(),
+              1e-12 * k * onset);
+}
+
+TEST(LumenPenalty, OnsetQuadraticIsTwiceContinuouslyDifferentiable) {
+  // φ(g): 0 below −δ/2, the cubic (g + δ/2)³/(6δ) over the band, ½ g² + δ²/24 past it. Its φ′ and
+  // φ″ are those of φ (central differences), φ, φ′ and φ″ are continuous at both ends of the band
+  // (φ″ = 0 and 1 there: the stiffness k φ″ of the penalty has no jump, which ½ g₊² has at
+  // g = 0), and δ = 0 is the plain ½ g₊².
+  const double delta = 2e-6, h = 1e-11;
+  for (double g = -1.2 * delta; g <= 1.2 * delta; g += 0.01 * delta) {
+    double d1 = 0.0, d2 = 0.0, d1p = 0.0, d1m = 0.0;
+    (void)onset_quadratic(g, delta, &d1, &d2);
+    const double fp = onset_quadratic(g + h, delta, &d1p), fm = onset_quadratic(g - h, delta, &d1m);
+    EXPECT_NEAR(d1, (fp - fm) / (2 * h), 1e-6 * delta) << "g / delta " << g / delta;
+    EXPECT_NEAR(d2, (d1p - d1m) / (2 * h), 1e-4) << "g / delta " << g / delta;
+  }
+  for (const double end : {-0.5 * delta, 0.5 * delta}) {
+    double f[2], d1[2], d2[2];
+    for (int side = 0; side < 2; ++side)
+      f[side] = onset_quadratic(end + (side ? 1e-13 : -1e-13), delta, &d1[side], &d2[side]);
+    // (a jump would be δ²/24, δ/2 and 1; 2e-13 apart they differ by the slope times 2e-13)
+    EXPECT_NEAR(f[0], f[1], 1e-6 * delta * delta);
+    EXPECT_NEAR(d1[0], d1[1], 1e-6 * delta);
+    EXPECT_NEAR(d2[0], d2[1], 1e-6);
+  }
+  double d2 = 0.0;
+  (void)onset_quadratic(0.5 * delta + 1e-13, delta, nullptr, &d2);
+  EXPECT_NEAR(d2, 1.0, 1e-6);
+  (void)onset_quadratic(-0.5 * delta + 1e-13, delta, nullptr, &d2);
+  EXPECT_NEAR(d2, 0.0, 1e-6);
+  double d1 = 0.0;
+  EXPECT_EQ(onset_quadratic(3e-6, 0.0, &d1, &d2), 0.5 * 3e-6 * 3e-6);
+  EXPECT_EQ(d1, 3e-6);
+  EXPECT_EQ(onset_quadratic(-1e-9, 0.0, &d1, &d2), 0.0);
+  EXPECT_EQ(d2, 0.0);
 }
 
 TEST(LumenPenalty, TipWeightIsTheSmoothedShareOfTheCellInsideTheLumen) {
@@ -139,7 +203,7 @@ TEST(LumenContact, WireLeavesTheTipWithAContinuousForce) {
   // jump where the vertex leaves the lumen, half an edge beyond the tip) and the force is
   // −∂E/∂x by central differences of the whole contact (edge choice included), near the tip
   // end and across the taper.
-  const double c = 1e-4, k = 3e4, y = 2.5 * c, full = 0.5 * k * (y - c) * (y - c);
+  const double c = 1e-4, k = 3e4, y = 2.5 * c, full = k * onset_quadratic(y - c, lumen_onset_fraction * c);
   double last_e = full;
   V3 last_f = wire_force(straight_lumen(2.0, y, c, k)).first;
   double max_de = 0.0, max_df = 0.0;

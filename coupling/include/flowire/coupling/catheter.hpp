@@ -7,8 +7,9 @@
 /// EA = E π (r_o² − r_i²), ρA = ρ π (r_o² − r_i²). Where the two overlap they bend as one
 /// composite because the wire is held inside the lumen by contact: each wire vertex whose
 /// axis is farther than the clearance c = r_i − r_w from the catheter's axis (its distance to
-/// the nearest catheter edge) is pushed back by the penalty E = ½ k (d − c)². With the wire
-/// kept coaxial, both rods take the same curvature and their bending moments add:
+/// the nearest catheter edge) is pushed back by the penalty E = k φ(d − c), φ(g) = ½ g² with
+/// its onset smoothed to C² over |g| < δ/2 (onset_quadratic; δ = lumen_onset_fraction c).
+/// With the wire kept coaxial, both rods take the same curvature and their bending moments add:
 /// EI_pair = EI_wire + EI_catheter exactly (the composite tube in contact), not the
 /// Halpin–Tsai estimate of a homogenized composite (composite catheter paper, 2006).
 ///
@@ -46,8 +47,25 @@ struct CatheterSpec {
 /// its entry (same base position and direction, same segment length).
 [[nodiscard]] rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wire);
 
+/// @brief Width of the lumen penalty's smoothed onset as a fraction of the clearance: δ = 0.3 c
+/// (a wire vertex starts to feel the lumen 0.15 c inside the clearance and feels ½ k (d − c)₊²'s
+/// force from 0.15 c beyond it). With the plain ½ k (d − c)₊² (δ = 0), whose stiffness jumps
+/// from 0 to k at d = c, the catheter's Newton stalled in examples/catheter_arch: the set of wire
+/// vertices pressing on it changed at every iterate and the largest residual walked along it a
+/// vertex or two per iteration (192 subdivided steps and 4 unconverged ones at dt 5 ms). The
+/// jump's Newton basin grows with δ: 0.05 c left 89 subdivided steps, 0.1 c 47, 0.3 c none
+/// (docs/catheter.md).
+inline constexpr double lumen_onset_fraction = 0.3;
+
+/// @brief φ(g) = ½ g² for g ≥ δ/2, u³/(6δ) with u = g + δ/2 for |g| < δ/2, 0 below, plus
+/// δ²/24 on the quadratic part so that φ, φ′ and φ″ are continuous (φ″ ramps from 0 to 1 over the
+/// band): the penalty's force k φ′ is that of ½ k g₊² beyond the band, and its stiffness k φ″ has
+/// no jump. δ = 0: the plain ½ g₊². @p d1, @p d2: φ′ and φ″.
+[[nodiscard]] double onset_quadratic(double g, double delta, double* d1 = nullptr, double* d2 = nullptr);
+
 /// @brief Energy, gradients and diagonal Hessian blocks of the lumen penalty
-/// E = ½ k (d − c)² for one point x and one edge [a, b] (d: distance from x to the edge).
+/// E = k φ(d − c) (onset_quadratic) for one point x and one edge [a, b] (d: distance from x to
+/// the edge).
 struct LumenPenalty {
   double energy = 0.0;
   double distance = 0.0;
@@ -57,16 +75,18 @@ struct LumenPenalty {
   Eigen::Matrix3d hess_xx, hess_aa, hess_bb;          ///< ∂²E/∂x², ∂²E/∂a², ∂²E/∂b²
   Eigen::Matrix3d hess_ab;                            ///< ∂²E/∂a∂b
 };
-/// @brief The penalty of x against edge [a, b] with clearance @p c and stiffness @p k
-/// (zero when d ≤ c). Exact derivatives of the distance to the segment (interior or end).
+/// @brief The penalty of x against edge [a, b] with clearance @p c, stiffness @p k and onset
+/// width @p onset (δ of onset_quadratic; zero when d ≤ c − δ/2). Exact derivatives of the
+/// distance to the segment (interior or end).
 /// @p open_before_a: [a, b] is the catheter's tip edge, a its open end. Before a the distance
 /// is to the edge's line (a wire vertex level with the tip is held by its lateral distance
 /// only), and the penalty is weighted by tip_weight(α), the vertex's share of its cell inside
 /// the lumen: full half an edge inside the tip, none half an edge beyond it, where the vertex
 /// leaves the lumen (LumenContact::nearest_edge). The wire's exit is then C² in the weight and
-/// the energy C¹ as a whole (the penalty's own ½ k (d − c)₊²), with no force switched off.
+/// the energy at least C¹ as a whole, with no force switched off.
 [[nodiscard]] LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a,
-                                         const Eigen::Vector3d& b, double c, double k, bool open_before_a = false);
+                                         const Eigen::Vector3d& b, double c, double k, bool open_before_a = false,
+                                         double onset = 0.0);
 
 /// @brief The weight of the lumen penalty at the catheter's open tip end for a wire vertex at
 /// α along the tip edge (α = 0 at the tip end, < 0 beyond it): the quintic smoothstep of
@@ -78,7 +98,9 @@ struct LumenPenalty {
 /// `wire_snapshot`). The coupling loop refreshes the snapshots between the two solves.
 class LumenContact {
  public:
-  LumenContact(double clearance, double stiffness) : clearance_(clearance), stiffness_(stiffness) {}
+  /// @param onset_fraction the penalty's onset width over the clearance (lumen_onset_fraction)
+  LumenContact(double clearance, double stiffness, double onset_fraction = lumen_onset_fraction)
+      : clearance_(clearance), stiffness_(stiffness), onset_(onset_fraction * clearance) {}
   /// @brief Held catheter: its vertices (tip first) and arc lengths from the entry.
   std::vector<Eigen::Vector3d> catheter_snapshot;
   std::vector<double> catheter_arc;
@@ -107,10 +129,13 @@ class LumenContact {
   void hold_wire(const rod::RodSimulator& wire);
   [[nodiscard]] double clearance() const { return clearance_; }
   [[nodiscard]] double stiffness() const { return stiffness_; }
+  /// @brief Width δ of the penalty's smoothed onset [m].
+  [[nodiscard]] double onset() const { return onset_; }
 
  private:
   double clearance_;
   double stiffness_;
+  double onset_;
 };
 
 /// @brief Outcome of a coupled static solve.
