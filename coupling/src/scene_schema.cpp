@@ -1,6 +1,7 @@
 // The declaration of every scene key. docs/scene-keys.md is generated from it
 // (`flowire help scene`).
 #include "flowire/coupling/scene.hpp"
+#include "flowire/flow/spec.hpp"
 
 #include <string_view>
 
@@ -52,64 +53,7 @@ config::Schema make_schema() {
   add("vessels.generator.radius_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: r(k+1)/r(k) (Murray 2^-1/3)");
   add("vessels.generator.length_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: L(k+1)/L(k)");
 
-  // ---- flow
-  add("flow", Type::Section, "", D::None, "blood flow in the network (absent: no flow is computed)");
-  add("flow.model", Type::Enum, "poiseuille", D::None, "poiseuille: resistances only; rlc: also inertance and wall compliance",
-      {"poiseuille", "rlc"});
-  add("flow.solver", Type::Enum, "superposition", D::None,
-      "superposition (factor once, affine in the sources) | dense_inverse (the published precomputed K^-1) | sparse "
-      "(a direct solve per frame) | petsc (distributed)",
-      {"superposition", "dense_inverse", "sparse", "petsc"});
-  add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity, "blood dynamic viscosity");
-  add("flow.density", Type::Number, "1060", D::Density, "blood density");
-  add("flow.inertance", Type::Enum, "poiseuille", D::None,
-      "rlc: inertance per segment, poiseuille = rho*l/(pi*r^2), womersley = 4*rho*l/(3*pi*r^2)", {"poiseuille", "womersley"});
-  add("flow.wall", Type::Section, "", D::None, "rlc: the vessel wall (compliance C = 3 pi r^3 l / (2 E h))");
-  add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus");
-  add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
-  add("flow.profile", Type::Enum, "laminar", D::None,
-      "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
-      "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
-      "docs/blood-drag.md)",
-      {"laminar", "womersley"});
-  add("flow.inlet", Type::Section, "{}", D::None, "inlet boundary condition");
-  add("flow.inlet.node", Type::StringOrInteger, "", D::None, "inlet node id (default: the network end with the largest radius)");
-  // The inlet: a pressure (by default the 120/80 mmHg sine, declared here once) or a flow.
-  // A flow has no default amplitude: a flow sine needs its systolic and diastolic values.
-  for (const char* what : {"pressure", "flow"}) {
-    const bool p = std::string_view(what) == "pressure";
-    const D dim = p ? D::Pressure : D::FlowRate;
-    const std::string base = std::string("flow.inlet.") + what;
-    const std::string q = p ? "P" : "Q";
-    if (p)
-      add(base, Type::NumberOrSection, "{waveform: sine}", dim,
-          "inlet pressure: a constant, or a waveform section (default: the sine with the defaults below)");
-    else
-      add(base, Type::NumberOrSection, "", dim,
-          "prescribed inlet flow instead of a pressure: a constant or a waveform section");
-    add(base + ".waveform", Type::Enum, "", D::None,
-        "sine: (" + q + "1-" + q + "2)/2 sin(2 pi t/T) + (" + q + "1+" + q +
-            "2)/2; constant; table (default: table if file is given, else sine)",
-        {"sine", "constant", "table"});
-    add(base + ".systolic", Type::Number, p ? "120 mmHg" : "", dim,
-        p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
-    add(base + ".diastolic", Type::Number, p ? "80 mmHg" : "", dim,
-        p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
-    add(base + ".period", Type::Number, "0.8 s", D::Time, "sine: period T");
-    add(base + ".value", Type::Number, "", dim, "constant: the value");
-    add(base + ".file", Type::String, "", D::None, "table: CSV with a header and columns time,value (SI), periodic");
-  }
-  add("flow.outlets", Type::Section, "{}", D::None, "boundary condition at every other network end");
-  add("flow.outlets.pressure", Type::Number, "", D::Pressure, "fixed outlet pressure (default 0 when nothing else is given)");
-  add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure");
-  add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
-  add("flow.outlets.scaling", Type::Enum, "none", D::None,
-      "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so each outlet flow is proportional to r^3", {"none", "murray"});
-  add("flow.outlets.rcr", Type::Section, "", D::None, "RCR windkessel at every outlet");
-  add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance");
-  add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance");
-  add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance");
-  add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure, "distal pressure");
+  flow::declare_scene_keys(s);
 
   // ---- wire
   add("wire", Type::Section, "", D::None, "the guidewire (absent: no rod is simulated)");

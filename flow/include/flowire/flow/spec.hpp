@@ -18,6 +18,7 @@
 
 namespace flowire::config {
 class Config;
+class Schema;
 }
 
 namespace flowire::flow {
@@ -133,7 +134,11 @@ FlowSpec default_spec(const Network& net, const Waveform& inlet_pressure);
 /// list (or the template outlet with node -1) is copied to every end that is no inlet.
 void resolve_nodes(FlowSpec& spec, const Network& net);
 
-/// @brief Read the `flow:` section of a validated scene (keys listed in docs of the header).
+/// @brief Declare the keys of a scene's `flow:` section (type, default, unit, doc): the
+/// ones from_config reads, part of the scene's one declaration (coupling::scene_schema).
+void declare_scene_keys(config::Schema& schema);
+
+/// @brief Read the `flow:` section of a validated scene (keys as declare_scene_keys declares them).
 ///
 /// Keys: flow.model (poiseuille|rlc), flow.solver (superposition|dense_inverse|sparse|petsc),
 /// flow.viscosity, flow.density, flow.inertance (poiseuille|womersley), flow.profile
