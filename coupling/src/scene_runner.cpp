@@ -9,11 +9,8 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <limits>
 #include <optional>
 #include <map>
-#include <numbers>
-#include <sstream>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"

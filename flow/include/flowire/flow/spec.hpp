@@ -147,7 +147,7 @@ void declare_scene_keys(config::Schema& schema);
 /// flow.inlet.flow (number, or the same section), flow.outlets.pressure,
 /// flow.outlets.resistance, flow.outlets.distal_pressure, flow.outlets.rcr.{Rp,C,Rd,Pd},
 /// flow.wall.youngs_modulus, flow.wall.thickness_ratio, solve.dt (rlc step).
-/// Absent keys keep the FlowSpec defaults.
+/// The scene is one validated against that declaration (its defaults filled in).
 /// @throws flowire::Error (input) naming the key where a value is inconsistent.
 FlowSpec from_config(const config::Config& cfg, const Network& net);
 
