@@ -23,6 +23,11 @@ Schema& Schema::add(Key key) {
   return *this;
 }
 
+Schema& Schema::add(std::string path, Type type, std::string default_text, units::Dimension dim, std::string doc,
+                    std::vector<std::string> choices) {
+  return add(Key{std::move(path), type, std::move(default_text), dim, std::move(doc), std::move(choices)});
+}
+
 const Key* Schema::find(std::string_view path) const {
   auto it = index_.find(path);
   return it == index_.end() ? nullptr : &keys_[it->second];
@@ -340,6 +345,29 @@ Config load_config_text(const std::string& text, const std::string& name, const 
   Loader loader(schema, name, cfg, std::move(overridden));
   loader.map(root, "", "");
   loader.defaults();
+  return cfg;
+}
+
+Config declared_defaults(const Schema& schema, std::string_view section) {
+  const Key* key = schema.find(section);
+  if (!key || key->type != Type::Section)
+    throw_usage_error(fmt::format("declared_defaults: '{}' is not a declared section", section));
+  YAML::Node root(YAML::NodeType::Map);
+  std::vector<YAML::Node> chain{root};  // handles, as in apply_override
+  std::stringstream ss{std::string(section)};
+  for (std::string part; std::getline(ss, part, '.');) {
+    chain.back()[part] = YAML::Node(YAML::NodeType::Map);
+    chain.push_back(chain.back()[part]);
+  }
+  Config cfg;
+  Loader loader(schema, "default", cfg, {});
+  loader.map(root, "", "");
+  loader.defaults();
+  for (const auto& [path, v] : cfg.values()) {
+    Value d = v;
+    d.where = "default";
+    cfg.set(path, std::move(d));
+  }
   return cfg;
 }
 

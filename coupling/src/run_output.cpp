@@ -23,8 +23,21 @@
 #include "flowire/rod/simulator.hpp"
 #include "flowire/vessels/io.hpp"
 #include "flowire/vessels/spatial.hpp"
+#include "scene_sections.hpp"
 
 namespace flowire::coupling {
+
+// The output: keys: what RunRecorder writes and run_scene where and how often.
+void declare_output_keys(config::Schema& s) {
+  using config::Type;
+  using D = units::Dimension;
+  s.add("output", Type::Section, "{}", D::None, "what is written and where");
+  s.add("output.dir", Type::String, "out", D::None, "output folder (relative to the working directory)");
+  s.add("output.every", Type::Number, "0", D::Time, "output interval of simulated time (0: only the final state)");
+  s.add("output.vtk", Type::Bool, "true", D::None, "write .vtp/.pvd files");
+  s.add("output.csv", Type::Bool, "true", D::None, "write .csv files");
+  s.add("output.png", Type::Bool, "false", D::None, "render PNG pictures (needs an X server, e.g. xvfb-run)");
+}
 
 namespace {
 
@@ -272,7 +285,7 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
       }
       if (forces->drag().law != DragLaw::None) {
         const auto total = forces->total_drag();
-        s["drag"] = {{"law", c.string_or("coupling.drag", "cylinder")},
+        s["drag"] = {{"law", given_or_declared(c, "coupling").string("coupling.drag")},
                      {"total", {total.x(), total.y(), total.z()}},
                      {"max_normal_reynolds", st.max_reynolds}};
         if (forces->drag().law == DragLaw::Cylinder && st.max_reynolds > kCylinderDragMaxReynolds)

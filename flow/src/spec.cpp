@@ -232,6 +232,69 @@ int node_from(const Config& cfg, const std::string& path, const Network& net) {
 
 }  // namespace
 
+// The keys from_config reads, declared where they are read.
+void declare_scene_keys(config::Schema& s) {
+  using config::Type;
+  using D = units::Dimension;
+  s.add("flow", Type::Section, "", D::None, "blood flow in the network (absent: no flow is computed)");
+  s.add("flow.model", Type::Enum, "poiseuille", D::None, "poiseuille: resistances only; rlc: also inertance and wall compliance",
+      {"poiseuille", "rlc"});
+  s.add("flow.solver", Type::Enum, "superposition", D::None,
+      "superposition (factor once, affine in the sources) | dense_inverse (the published precomputed K^-1) | sparse "
+      "(a direct solve per frame) | petsc (distributed)",
+      {"superposition", "dense_inverse", "sparse", "petsc"});
+  s.add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity, "blood dynamic viscosity");
+  s.add("flow.density", Type::Number, "1060", D::Density, "blood density");
+  s.add("flow.inertance", Type::Enum, "poiseuille", D::None,
+      "rlc: inertance per segment, poiseuille = rho*l/(pi*r^2), womersley = 4*rho*l/(3*pi*r^2)", {"poiseuille", "womersley"});
+  s.add("flow.wall", Type::Section, "", D::None, "rlc: the vessel wall (compliance C = 3 pi r^3 l / (2 E h))");
+  s.add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus");
+  s.add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
+  s.add("flow.profile", Type::Enum, "laminar", D::None,
+      "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
+      "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
+      "docs/blood-drag.md)",
+      {"laminar", "womersley"});
+  s.add("flow.inlet", Type::Section, "{}", D::None, "inlet boundary condition");
+  s.add("flow.inlet.node", Type::StringOrInteger, "", D::None, "inlet node id (default: the network end with the largest radius)");
+  // The inlet: a pressure (by default the 120/80 mmHg sine, declared here once) or a flow.
+  // A flow has no default amplitude: a flow sine needs its systolic and diastolic values.
+  for (const char* what : {"pressure", "flow"}) {
+    const bool p = std::string_view(what) == "pressure";
+    const D dim = p ? D::Pressure : D::FlowRate;
+    const std::string base = std::string("flow.inlet.") + what;
+    const std::string q = p ? "P" : "Q";
+    if (p)
+      s.add(base, Type::NumberOrSection, "{waveform: sine}", dim,
+          "inlet pressure: a constant, or a waveform section (default: the sine with the defaults below)");
+    else
+      s.add(base, Type::NumberOrSection, "", dim,
+          "prescribed inlet flow instead of a pressure: a constant or a waveform section");
+    s.add(base + ".waveform", Type::Enum, "", D::None,
+        "sine: (" + q + "1-" + q + "2)/2 sin(2 pi t/T) + (" + q + "1+" + q +
+            "2)/2; constant; table (default: table if file is given, else sine)",
+        {"sine", "constant", "table"});
+    s.add(base + ".systolic", Type::Number, p ? "120 mmHg" : "", dim,
+        p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
+    s.add(base + ".diastolic", Type::Number, p ? "80 mmHg" : "", dim,
+        p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
+    s.add(base + ".period", Type::Number, "0.8 s", D::Time, "sine: period T");
+    s.add(base + ".value", Type::Number, "", dim, "constant: the value");
+    s.add(base + ".file", Type::String, "", D::None, "table: CSV with a header and columns time,value (SI), periodic");
+  }
+  s.add("flow.outlets", Type::Section, "{}", D::None, "boundary condition at every other network end");
+  s.add("flow.outlets.pressure", Type::Number, "", D::Pressure, "fixed outlet pressure (default 0 when nothing else is given)");
+  s.add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure");
+  s.add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
+  s.add("flow.outlets.scaling", Type::Enum, "none", D::None,
+      "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so each outlet flow is proportional to r^3", {"none", "murray"});
+  s.add("flow.outlets.rcr", Type::Section, "", D::None, "RCR windkessel at every outlet");
+  s.add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance");
+  s.add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance");
+  s.add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance");
+  s.add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure, "distal pressure");
+}
+
 FlowSpec from_config(const config::Config& cfg, const Network& net) {
   FlowSpec s;
   if (cfg.has("flow.model")) {
@@ -289,12 +352,12 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
     o.rp = cfg.number_or("flow.outlets.rcr.Rp", 0.0);
     o.c = cfg.number_or("flow.outlets.rcr.C", 0.0);
     o.rd = cfg.number_or("flow.outlets.rcr.Rd", 0.0);
-    o.distal_pressure = cfg.number_or("flow.outlets.rcr.Pd", 0.0);
+    o.distal_pressure = cfg.number("flow.outlets.rcr.Pd");
     if (!(o.rp + o.rd > 0.0)) throw_input_error(cfg.where("flow.outlets.rcr"), "Rp + Rd must be positive");
   } else if (has_r) {
     o.type = OutletBC::Type::Resistance;
     o.resistance = cfg.number("flow.outlets.resistance");
-    o.distal_pressure = cfg.number_or("flow.outlets.distal_pressure", 0.0);
+    o.distal_pressure = cfg.number("flow.outlets.distal_pressure");
     if (!(o.resistance > 0.0)) throw_input_error(cfg.where("flow.outlets.resistance"), "resistance must be positive");
   } else {
     o.type = OutletBC::Type::Pressure;
@@ -305,7 +368,7 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
 
   // Murray scaling: the given resistance / RCR is the total of all outlets in parallel,
   // split so that each outlet's flow is proportional to r³.
-  if (cfg.string_or("flow.outlets.scaling", "none") == "murray" && o.type != OutletBC::Type::Pressure) {
+  if (cfg.string("flow.outlets.scaling") == "murray" && o.type != OutletBC::Type::Pressure) {
     auto end_radius = [&](int node) {
       const auto [b, e] = net.node_segments(node);
       if (b == e) return 0.0;

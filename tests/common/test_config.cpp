@@ -109,3 +109,33 @@ TEST(Config, SchemaMarkdownListsEveryKey) {
   EXPECT_NE(md.find("superposition \\| sparse \\| dense_inverse"), std::string::npos);
   EXPECT_NE(md.find("| Pa*s |"), std::string::npos);
 }
+
+TEST(Config, DeclaredDefaultsAreThoseOfTheSectionGivenEmpty) {
+  const auto d = declared_defaults(test_schema(), "wire");
+  EXPECT_DOUBLE_EQ(d.number("wire.radius"), 0.45e-3);
+  EXPECT_EQ(d.integer("wire.segments"), 100);
+  EXPECT_EQ(d.where("wire.radius"), "default: wire.radius");
+  EXPECT_FALSE(d.has_section("wire.base"));  // no default: absent, as in a scene
+  EXPECT_FALSE(d.has_section("flow"));
+  // The same values as a scene that writes the section empty.
+  const auto c = load_config_text("wire: {}\n", "scene.yaml", test_schema());
+  EXPECT_EQ(d.values().size(), c.values().size());
+  for (const auto& [path, v] : c.values()) {
+    ASSERT_TRUE(d.has(path)) << path;
+    EXPECT_EQ(d.values().at(path).number, v.number) << path;
+  }
+  EXPECT_THROW((void)declared_defaults(test_schema(), "wire.radius"), flowire::Error);  // a key, not a section
+  EXPECT_THROW((void)declared_defaults(test_schema(), "catheter"), flowire::Error);     // not declared
+}
+
+TEST(Config, KeysDeclaredByFieldsEqualKeysDeclaredWhole) {
+  Schema s;
+  s.add("wire", Type::Section, "", Dimension::None, "wire");
+  s.add("wire.tip", Type::Enum, "j", Dimension::None, "tip shape", {"straight", "j"});
+  const Key* k = s.find("wire.tip");
+  ASSERT_NE(k, nullptr);
+  EXPECT_EQ(k->default_text, "j");
+  EXPECT_EQ(k->doc, "tip shape");
+  EXPECT_EQ(k->choices, (std::vector<std::string>{"straight", "j"}));
+  EXPECT_THROW(s.add("wire.tip", Type::Number, "", Dimension::None, "again"), flowire::Error);
+}

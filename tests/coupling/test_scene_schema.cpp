@@ -1,7 +1,7 @@
 // The declaration of every scene key (coupling/src/scene_schema.cpp): well formed (every
 // key under a declared section, every enum default among its choices), every default a
 // valid value of its unit, given in SI as written by hand here, and every example scene of
-// examples/ accepted.
+// examples/ accepted; a section a scene leaves out reads as its declared defaults.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,8 +12,10 @@
 #include <string>
 
 #include "flowire/common/config.hpp"
+#include "flowire/common/error.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire_test.hpp"
+#include "scene_sections.hpp"
 
 using namespace flowire;
 using config::Type;
@@ -150,6 +152,20 @@ TEST(SceneSchema, EveryExampleSceneIsAccepted) {
     }
   }
   EXPECT_GE(scenes, 15);
+}
+
+TEST(SceneSchema, ASectionTheSceneLeavesOutReadsAsItsDeclaredDefaults) {
+  const auto c = config::load_config_text("wire: {}\ncontact:\n  friction: 0.3\n", "scene.yaml", coupling::scene_schema());
+  EXPECT_EQ(&coupling::given_or_declared(c, "wire"), &c);
+  EXPECT_EQ(&coupling::given_or_declared(c, "contact"), &c);
+  EXPECT_EQ(c.where("contact.friction"), "scene.yaml:3: contact.friction");
+  const auto& coupling = coupling::given_or_declared(c, "coupling");
+  ASSERT_NE(&coupling, &c);
+  EXPECT_EQ(coupling.string("coupling.drag"), coupling::scene_schema().find("coupling.drag")->default_text);
+  EXPECT_EQ(coupling.where("coupling.drag"), "default: coupling.drag");
+  EXPECT_FALSE(coupling.has_section("coupling.steering"));  // no default: absent
+  EXPECT_FALSE(coupling.has_section("contact"));
+  EXPECT_THROW((void)coupling::declared_scene_defaults("coupling.steering"), flowire::Error);  // not top-level
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// FlowSpec from a validated scene (keys as the scene schema declares them).
+// FlowSpec from a validated scene (keys as flow::declare_scene_keys declares them for the scene).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -12,44 +12,35 @@
 namespace flowire::flow {
 namespace {
 
-using config::Key;
-using config::Type;
-using D = units::Dimension;
-
+/// The flow keys as the scene declares them (declare_scene_keys).
 config::Schema flow_schema() {
   config::Schema s;
-  auto add = [&](std::string p, Type t, std::string def, D d, std::vector<std::string> choices = {}) {
-    s.add(Key{std::move(p), t, std::move(def), d, "", std::move(choices)});
-  };
-  add("flow", Type::Section, "", D::None);
-  add("flow.model", Type::Enum, "poiseuille", D::None, {"poiseuille", "rlc"});
-  add("flow.solver", Type::Enum, "superposition", D::None, {"superposition", "dense_inverse", "sparse", "petsc"});
-  add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity);
-  add("flow.density", Type::Number, "1060", D::Density);
-  add("flow.inlet", Type::Section, "{}", D::None);
-  add("flow.inlet.node", Type::StringOrInteger, "", D::None);
-  for (std::string w : {"pressure", "flow"}) {
-    const bool p = w == "pressure";
-    const D d = p ? D::Pressure : D::FlowRate;
-    add("flow.inlet." + w, Type::NumberOrSection, p ? "{waveform: sine}" : "", d);
-    add("flow.inlet." + w + ".waveform", Type::Enum, "", D::None, {"sine", "constant", "table"});
-    add("flow.inlet." + w + ".systolic", Type::Number, p ? "120 mmHg" : "", d);
-    add("flow.inlet." + w + ".diastolic", Type::Number, p ? "80 mmHg" : "", d);
-    add("flow.inlet." + w + ".period", Type::Number, "0.8 s", D::Time);
-    add("flow.inlet." + w + ".value", Type::Number, "", d);
-    add("flow.inlet." + w + ".file", Type::String, "", D::None);
-  }
-  add("flow.outlets", Type::Section, "{}", D::None);
-  add("flow.outlets.pressure", Type::Number, "", D::Pressure);
-  add("flow.outlets.resistance", Type::Number, "", D::Resistance);
-  add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure);
-  add("flow.outlets.scaling", Type::Enum, "none", D::None, {"none", "murray"});
-  add("flow.outlets.rcr", Type::Section, "", D::None);
-  add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance);
-  add("flow.outlets.rcr.C", Type::Number, "", D::Compliance);
-  add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance);
-  add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure);
+  declare_scene_keys(s);
   return s;
+}
+
+TEST(FlowSpec, TheFlowDeclaresOnlyFlowKeysEachWithADoc) {
+  const auto s = flow_schema();
+  ASSERT_GT(s.keys().size(), 30u);
+  EXPECT_EQ(s.keys().front().path, "flow");
+  for (const auto& k : s.keys()) {
+    EXPECT_EQ(k.path.rfind("flow", 0), 0u) << k.path;
+    EXPECT_FALSE(k.doc.empty()) << k.path;
+  }
+}
+
+TEST(FlowSpec, ABadViscosityIsRejectedNamingFileLineAndKey) {
+  const Network net = test::murray_tree(1);
+  const auto cfg = config::load_config_text("flow:\n  model: rlc\n  viscosity: -1 cP\n", "scene.yaml", flow_schema());
+  EXPECT_EQ(from_config(config::load_config_text("flow:\n  viscosity: 4 cP\n", "s.yaml", flow_schema()), net).viscosity,
+            4e-3);
+  try {
+    (void)from_config(cfg, net);
+    FAIL() << "a negative viscosity was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("scene.yaml:3: flow.viscosity"), std::string::npos) << e.what();
+  }
 }
 
 TEST(FlowSpec, SineInletAndResistanceOutletsFromAScene) {

@@ -42,6 +42,9 @@ struct Key {
 class Schema {
  public:
   Schema& add(Key key);
+  /// @brief Declare a key: add(Key{path, type, default_text, dim, doc, choices}).
+  Schema& add(std::string path, Type type, std::string default_text, units::Dimension dim, std::string doc,
+              std::vector<std::string> choices = {});
   [[nodiscard]] const Key* find(std::string_view path) const;
   [[nodiscard]] const std::vector<Key>& keys() const { return keys_; }
   /// @brief Children declared directly under `path` ("" for the top level).
@@ -101,6 +104,12 @@ class Config {
 /// @throws flowire::Error (input) naming file, line and key.
 Config load_config(const std::string& file, const Schema& schema,
                    const std::vector<std::string>& overrides = {});
+/// @brief The values of a scene that gives @p section empty: the defaults its keys declare
+/// (their place "default"). For a section whose keys act even where a scene leaves it out
+/// (a wire in vessels touches the walls without a contact: section), so that the code reading
+/// it does not state those defaults a second time.
+/// @throws flowire::Error (usage) if @p section is not a declared section.
+Config declared_defaults(const Schema& schema, std::string_view section);
 /// @brief Same, from YAML text (`name` is used in messages in place of a file name).
 Config load_config_text(const std::string& text, const std::string& name, const Schema& schema,
                         const std::vector<std::string>& overrides = {});

@@ -21,6 +21,7 @@
 #include <string>
 
 #include "flowire/common/config.hpp"
+#include "flowire/coupling/catheter.hpp"
 #include "flowire/coupling/schedule.hpp"
 #include "flowire/rod/simulator.hpp"
 #include "flowire/coupling/wire_output.hpp"
@@ -120,6 +121,19 @@ class CoSimulation {
   [[nodiscard]] int catheter_unconverged_steps() const { return cath_failures_; }
 
  private:
+  // The set-up steps of the constructor, in order; each reads its own sections.
+  void build_network(nlohmann::json& facts);  ///< vessels:
+  void build_flow(nlohmann::json& facts);     ///< flow:
+  /// wire: (placed at its entry), catheter:, loads:, insertion:, and what acts on them.
+  void build_wire(nlohmann::json& facts);
+  void build_catheter(const rod::WireSpec& wire);
+  /// Lays the wire (and catheter) along the vessel path if laid straight it would leave the lumen.
+  void lay_along_vessels(const rod::WireSpec& wire, int entry);
+  /// Wall contact and blood drag (contact:, coupling:, vessels.surface), on the catheter too.
+  void add_wall_forces(const rod::WireSpec& wire, int entry, nlohmann::json& facts);
+  void couple_catheter(nlohmann::json& facts);  ///< the wire in the catheter's lumen
+  void plan_steps();        ///< solve:, coupling.flow_every, insertion: speeds, limit, schedule
+  void couple_occlusion();  ///< coupling.occlusion
   /// Sets the flow's segment occlusion from the wire of the last accepted step.
   void occlude();
   config::Config scene_;
@@ -133,6 +147,7 @@ class CoSimulation {
   std::unique_ptr<WireOcclusion> occlusion_;
   // catheter: (catheter.hpp): its rod, wall forces and the contact with the wire in its lumen
   std::unique_ptr<rod::RodSimulator> cath_;
+  std::optional<CatheterSpec> cath_spec_;
   std::shared_ptr<VesselForces> cath_forces_;
   std::shared_ptr<LumenContact> lumen_;
   int cath_failures_ = 0;

@@ -18,6 +18,7 @@
 
 namespace flowire::config {
 class Config;
+class Schema;
 }
 
 namespace flowire::flow {
@@ -133,7 +134,11 @@ FlowSpec default_spec(const Network& net, const Waveform& inlet_pressure);
 /// list (or the template outlet with node -1) is copied to every end that is no inlet.
 void resolve_nodes(FlowSpec& spec, const Network& net);
 
-/// @brief Read the `flow:` section of a validated scene (keys listed in docs of the header).
+/// @brief Declare the keys of a scene's `flow:` section (type, default, unit, doc): the
+/// ones from_config reads, part of the scene's one declaration (coupling::scene_schema).
+void declare_scene_keys(config::Schema& schema);
+
+/// @brief Read the `flow:` section of a validated scene (keys as declare_scene_keys declares them).
 ///
 /// Keys: flow.model (poiseuille|rlc), flow.solver (superposition|dense_inverse|sparse|petsc),
 /// flow.viscosity, flow.density, flow.inertance (poiseuille|womersley), flow.profile
@@ -142,7 +147,7 @@ void resolve_nodes(FlowSpec& spec, const Network& net);
 /// flow.inlet.flow (number, or the same section), flow.outlets.pressure,
 /// flow.outlets.resistance, flow.outlets.distal_pressure, flow.outlets.rcr.{Rp,C,Rd,Pd},
 /// flow.wall.youngs_modulus, flow.wall.thickness_ratio, solve.dt (rlc step).
-/// Absent keys keep the FlowSpec defaults.
+/// The scene is one validated against that declaration (its defaults filled in).
 /// @throws flowire::Error (input) naming the key where a value is inconsistent.
 FlowSpec from_config(const config::Config& cfg, const Network& net);
 
