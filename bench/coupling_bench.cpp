@@ -10,8 +10,8 @@
 #include <numbers>
 
 #include "flowire/common/config.hpp"
-#include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/occlusion.hpp"
+#include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/vessel_path.hpp"
 #include "flowire/flow/solver.hpp"
@@ -214,9 +214,15 @@ void BM_ArchScaling(benchmark::State& st) {
   run_arch(st, 1e-4 * static_cast<double>(st.range(1)), false, 0.01 * static_cast<double>(st.range(0)));
 }
 BENCHMARK(BM_ArchScaling)
-    ->Args({20, 50})->Args({39, 50})->Args({78, 50})
-    ->Args({78, 20})->Args({78, 10})->Args({78, 5})
-    ->ArgNames({"inserted_cm", "network_tenth_mm"})->Unit(benchmark::kMillisecond)->Iterations(200);
+    ->Args({20, 50})
+    ->Args({39, 50})
+    ->Args({78, 50})
+    ->Args({78, 20})
+    ->Args({78, 10})
+    ->Args({78, 5})
+    ->ArgNames({"inserted_cm", "network_tenth_mm"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(200);
 
 void BM_CoSimStep_All(benchmark::State& st) { run(st, true, true, 0.1); }
 void BM_CoSimStep_NoFriction(benchmark::State& st) { run(st, true, true, 0.0); }
@@ -244,9 +250,8 @@ void BM_RealArch_SurfaceVsCylinderContact(benchmark::State& state) {
   const auto scene = std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR) / "examples/real/feelpp_arch.yaml";
   const auto out = std::filesystem::temp_directory_path() / "flowire-bench-real-arch";
   auto contact_per_step = [&](bool surface) {
-    std::vector<std::string> sets = {"vessels.file=" + (data / "centerlinesAORTA.vtk").string(),
-                                     "output.vtk=false", "output.csv=false",
-                                     "output.dir=" + out.string()};
+    std::vector<std::string> sets = {"vessels.file=" + (data / "centerlinesAORTA.vtk").string(), "output.vtk=false",
+                                     "output.csv=false", "output.dir=" + out.string()};
     std::ifstream in(scene);
     std::string text, line;
     while (std::getline(in, line))

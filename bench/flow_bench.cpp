@@ -12,12 +12,12 @@
 // Run: build-flow/bench/bench_flow --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
 #include <chrono>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <random>
-#include <unistd.h>
 
 #include "flowire/common/units.hpp"
 #include "flowire/flow/solver.hpp"
@@ -98,7 +98,8 @@ void full_frame(flow::FlowSolver& s, double t, std::vector<double>& p, std::vect
 void BM_Frame(benchmark::State& state) {
   const auto kind = static_cast<flow::SolverKind>(state.range(0));
   auto& s = solver(kind);
-  std::vector<double> p(static_cast<size_t>(published().num_nodes())), q(static_cast<size_t>(published().num_segments()));
+  std::vector<double> p(static_cast<size_t>(published().num_nodes())),
+      q(static_cast<size_t>(published().num_segments()));
   double t = 0.0;
   for (auto _ : state) {
     full_frame(s, t, p, q);
@@ -158,7 +159,8 @@ void BM_FrameRatio(benchmark::State& state) {
   auto& dense = solver(flow::SolverKind::DenseInverse);
   auto& sup = solver(flow::SolverKind::Superposition);
   const auto segs = wire_segments();
-  std::vector<double> p(static_cast<size_t>(published().num_nodes())), q(static_cast<size_t>(published().num_segments()));
+  std::vector<double> p(static_cast<size_t>(published().num_nodes())),
+      q(static_cast<size_t>(published().num_segments()));
   double dense_s = 0.0, full_s = 0.0, lazy_s = 0.0, sum = 0.0;
   long n = 0;
   for (auto _ : state) {

@@ -76,10 +76,14 @@ void run_steps(benchmark::State& state, LinearSolver solver) {
 void BM_RodStepBanded(benchmark::State& state) { run_steps(state, LinearSolver::Banded); }
 void BM_RodStepSparse(benchmark::State& state) { run_steps(state, LinearSolver::SparseLDLT); }
 
-BENCHMARK(BM_RodStepBanded)->RangeMultiplier(10)->Range(10, 10000)->Arg(1700)
-    ->Iterations(2 * kCycle)->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
-BENCHMARK(BM_RodStepSparse)->Arg(100)->Arg(1700)->Arg(10000)->Iterations(kCycle)
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RodStepBanded)
+    ->RangeMultiplier(10)
+    ->Range(10, 10000)
+    ->Arg(1700)
+    ->Iterations(2 * kCycle)
+    ->Unit(benchmark::kMicrosecond)
+    ->Complexity(benchmark::oN);
+BENCHMARK(BM_RodStepSparse)->Arg(100)->Arg(1700)->Arg(10000)->Iterations(kCycle)->Unit(benchmark::kMicrosecond);
 
 /// A random SPD matrix with the rod's band (half-width 10), n unknowns.
 BandedMatrix rod_like_matrix(int n) {
@@ -151,8 +155,7 @@ void bend_twist_kernel(benchmark::State& state) {
   Mat11 H;
   int i = 0;
   for (auto _ : state) {
-    const double e = Kernel(a[i], b[i], 0.1 * i, 0.3 + 0.05 * i, 0.0, p, &g,
-                            hessian ? &H : nullptr, gauss_newton);
+    const double e = Kernel(a[i], b[i], 0.1 * i, 0.3 + 0.05 * i, 0.0, p, &g, hessian ? &H : nullptr, gauss_newton);
     i = (i + 1) % kStencils;
     benchmark::DoNotOptimize(e);
     benchmark::DoNotOptimize(g.data());
@@ -161,9 +164,9 @@ void bend_twist_kernel(benchmark::State& state) {
   }
 }
 
-using KernelFn = double (*)(const flowire::rod::EdgeGeometry&, const flowire::rod::EdgeGeometry&,
-                            double, double, double, const flowire::rod::VertexParams&,
-                            flowire::rod::Vec11*, flowire::rod::Mat11*, bool);
+using KernelFn = double (*)(const flowire::rod::EdgeGeometry&, const flowire::rod::EdgeGeometry&, double, double,
+                            double, const flowire::rod::VertexParams&, flowire::rod::Vec11*, flowire::rod::Mat11*,
+                            bool);
 constexpr KernelFn kFast = &flowire::rod::bend_twist;
 constexpr KernelFn kReference = &flowire::rod::detail::bend_twist_reference;
 

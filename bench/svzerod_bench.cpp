@@ -27,8 +27,9 @@ std::string write_tree(int depth) {
     p += fmt::format("{}{}", k ? "," : "", 13333.0 + 2667.0 * std::sin(2.0 * std::numbers::pi * tk / 0.8));
     t += fmt::format("{}{}", k ? "," : "", tk);
   }
-  std::string vessels, junctions, bcs = fmt::format(
-      R"({{"bc_name": "INFLOW", "bc_type": "PRESSURE", "bc_values": {{"P": [{}], "t": [{}]}}}})", p, t);
+  std::string vessels, junctions,
+      bcs =
+          fmt::format(R"({{"bc_name": "INFLOW", "bc_type": "PRESSURE", "bc_values": {{"P": [{}], "t": [{}]}}}})", p, t);
   for (int i = 0; i < n; ++i) {
     const int level = static_cast<int>(std::log2(i + 1));
     const double scale = std::pow(2.0, level / 3.0);  // Murray: r ∝ 2^{−level/3}
@@ -36,8 +37,8 @@ std::string write_tree(int depth) {
     if (i == 0) bc = R"(, "boundary_conditions": {"inlet": "INFLOW"})";
     if (2 * i + 1 >= n) {
       bc = fmt::format(R"(, "boundary_conditions": {{"outlet": "OUT{}"}})", i);
-      bcs += fmt::format(R"(, {{"bc_name": "OUT{}", "bc_type": "RESISTANCE", "bc_values": {{"R": {}, "Pd": 0.0}}}})",
-                         i, 1e9 * scale);
+      bcs += fmt::format(R"(, {{"bc_name": "OUT{}", "bc_type": "RESISTANCE", "bc_values": {{"R": {}, "Pd": 0.0}}}})", i,
+                         1e9 * scale);
     } else {
       junctions += fmt::format(R"({}{{"junction_name": "J{}", "junction_type": "NORMAL_JUNCTION",
         "inlet_vessels": [{}], "outlet_vessels": [{}, {}]}})",

@@ -68,8 +68,8 @@ void BM_LocateWire_Window(benchmark::State& state) {
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * sc.wire.size()));
   state.counters["segments"] = sc.net.num_segments();
-  state.counters["fallback_fraction"] =
-      static_cast<double>(index.stats().fallbacks) / static_cast<double>(index.stats().fallbacks + index.stats().window_hits);
+  state.counters["fallback_fraction"] = static_cast<double>(index.stats().fallbacks) /
+                                        static_cast<double>(index.stats().fallbacks + index.stats().window_hits);
 }
 BENCHMARK(BM_LocateWire_Window)->Arg(4);
 

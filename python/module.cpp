@@ -119,8 +119,7 @@ config::Config load(const std::string& scene, const std::vector<std::string>& se
 
 /// The flow of a scene's network alone (its vessels: and flow: sections).
 struct PyFlow {
-  explicit PyFlow(const std::string& scene, const std::vector<std::string>& sets)
-      : config(load(scene, sets, {})) {
+  explicit PyFlow(const std::string& scene, const std::vector<std::string>& sets) : config(load(scene, sets, {})) {
     if (!config.has_section("flow")) throw_input_error(config.where("flow"), "the scene has no flow: section");
     net = std::make_shared<vessels::Network>(coupling::build_scene_network(config));
     solver = flow::make_solver(*net, flow::from_config(config, *net));
@@ -158,8 +157,10 @@ PYBIND11_MODULE(_flowire, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const Error& e) {
-      if (e.kind() == ErrorKind::Numerical) numerical_error(e.what());
-      else input_error(e.what());
+      if (e.kind() == ErrorKind::Numerical)
+        numerical_error(e.what());
+      else
+        input_error(e.what());
     }
   });
 
@@ -203,10 +204,12 @@ PYBIND11_MODULE(_flowire, m) {
                                for (const auto& b : n.net->branches()) names.push_back(b.name);
                                return names;
                              })
-      .def("counts", [](const PyNetwork& n) { return counts_dict(n.net->counts()); },
-           "branches, nodes, segments, junctions, ends, loops, components, total_length, radius_min, radius_max "
-           "(as `flowire network info --json`)")
-      .def("widest_end", [](const PyNetwork& n) { return n.net->widest_end(); }, "the default flow inlet node")
+      .def(
+          "counts", [](const PyNetwork& n) { return counts_dict(n.net->counts()); },
+          "branches, nodes, segments, junctions, ends, loops, components, total_length, radius_min, radius_max "
+          "(as `flowire network info --json`)")
+      .def(
+          "widest_end", [](const PyNetwork& n) { return n.net->widest_end(); }, "the default flow inlet node")
       .def("__repr__", [](const PyNetwork& n) {
         const auto c = n.net->counts();
         return "<flowire.Network: " + std::to_string(c.nodes) + " nodes, " + std::to_string(c.segments) + " segments>";
@@ -239,7 +242,9 @@ PYBIND11_MODULE(_flowire, m) {
            }),
            py::arg("scene"), py::arg("set") = py::none())
       .def_property_readonly("network",
-                             [](py::object self) { return PyNetwork{self.cast<PyFlow&>().net, self}; })
+                             [](py::object self) {
+                               return PyNetwork{self.cast<PyFlow&>().net, self};
+                             })
       .def_property_readonly("solver", [](const PyFlow& f) { return std::string(f.solver->name()); })
       .def_property_readonly("time", [](const PyFlow& f) { return f.solver->time(); })
       .def(
@@ -268,25 +273,33 @@ PYBIND11_MODULE(_flowire, m) {
       .def_property_readonly("dt", [](const PyCoSimulation& s) { return s.sim->dt(); })
       .def_property_readonly("time", [](const PyCoSimulation& s) { return s.sim->time(); })
       .def_property_readonly("step_count", [](const PyCoSimulation& s) { return s.sim->step_count(); })
-      .def_property_readonly("planned_steps", [](const PyCoSimulation& s) { return s.sim->planned_steps(); },
-                             "steps of solve.duration")
+      .def_property_readonly(
+          "planned_steps", [](const PyCoSimulation& s) { return s.sim->planned_steps(); }, "steps of solve.duration")
       .def_property_readonly("unconverged_steps", [](const PyCoSimulation& s) { return s.sim->unconverged_steps(); })
       .def_property(
-          "insertion_speed", [](const PyCoSimulation& s) { (void)s.rod();
-            return s.sim->insertion_speed(); },
+          "insertion_speed",
+          [](const PyCoSimulation& s) {
+            (void)s.rod();
+            return s.sim->insertion_speed();
+          },
           [](PyCoSimulation& s, double v) { s.sim->set_insertion_speed(v); },
           "feeding speed at the clamp [m/s] for the next steps (> 0 pushes in)")
       .def_property(
-          "rotation_speed", [](const PyCoSimulation& s) { (void)s.rod();
-            return s.sim->rotation_speed(); },
+          "rotation_speed",
+          [](const PyCoSimulation& s) {
+            (void)s.rod();
+            return s.sim->rotation_speed();
+          },
           [](PyCoSimulation& s, double w) { s.sim->set_rotation_speed(w); },
           "clamp rotation speed about the insertion direction [rad/s]")
       .def_property_readonly("inserted_length", [](const PyCoSimulation& s) { return s.rod().inserted_length(); })
       .def_property_readonly("tip", [](const PyCoSimulation& s) { return vec3_array(s.rod().tip_position()); })
-      .def_property_readonly("base_force", [](const PyCoSimulation& s) { return vec3_array(s.rod().base_force()); },
-                             "force the clamp exerts on the wire in the last step [N]")
-      .def_property_readonly("base_torque", [](const PyCoSimulation& s) { return vec3_array(s.rod().base_torque()); },
-                             "torque the clamp exerts on the wire about the entry point [N m]")
+      .def_property_readonly(
+          "base_force", [](const PyCoSimulation& s) { return vec3_array(s.rod().base_force()); },
+          "force the clamp exerts on the wire in the last step [N]")
+      .def_property_readonly(
+          "base_torque", [](const PyCoSimulation& s) { return vec3_array(s.rod().base_torque()); },
+          "torque the clamp exerts on the wire about the entry point [N m]")
       .def(
           "wire",
           [](const PyCoSimulation& s) {
@@ -305,24 +318,27 @@ PYBIND11_MODULE(_flowire, m) {
           },
           "The inserted wire from the base (s = 0) to the tip: s (n), x (n x 3) [m], force, drag, contact "
           "(n x 3) [N], flow_velocity (n x 3) [m/s] (as wire.csv)")
-      .def_property_readonly("vertices", [](const PyCoSimulation& s) { return vec3_copy(s.sim->wire_frame().x); },
-                             "(n x 3) inserted wire vertices from the base to the tip [m]")
+      .def_property_readonly(
+          "vertices", [](const PyCoSimulation& s) { return vec3_copy(s.sim->wire_frame().x); },
+          "(n x 3) inserted wire vertices from the base to the tip [m]")
       .def_property_readonly("network",
                              [](py::object self) -> py::object {
                                auto& s = self.cast<PyCoSimulation&>();
                                if (!s.sim->network()) return py::none();
                                // Borrowed: the co-simulation object owns it and is kept alive.
-                               std::shared_ptr<const vessels::Network> net(s.sim->network(), [](const vessels::Network*) {});
+                               std::shared_ptr<const vessels::Network> net(s.sim->network(),
+                                                                           [](const vessels::Network*) {});
                                return py::cast(PyNetwork{net, self});
                              })
-      .def("flow",
-           [](const PyCoSimulation& s) -> py::object {
-             if (!s.sim->flow()) return py::none();
-             PyFlowFrame f;
-             f.frame = flow::capture_frame(*s.sim->flow());
-             return py::cast(std::move(f));
-           },
-           "The network flow at the last flow update (None without a flow: section).");
+      .def(
+          "flow",
+          [](const PyCoSimulation& s) -> py::object {
+            if (!s.sim->flow()) return py::none();
+            PyFlowFrame f;
+            f.frame = flow::capture_frame(*s.sim->flow());
+            return py::cast(std::move(f));
+          },
+          "The network flow at the last flow update (None without a flow: section).");
 
   m.def(
       "_run",

@@ -14,11 +14,16 @@ namespace flowire::cmaes {
 
 std::string to_string(Stop s) {
   switch (s) {
-    case Stop::Target: return "target";
-    case Stop::MaxEvaluations: return "max_evaluations";
-    case Stop::TolX: return "tol_x";
-    case Stop::TolFun: return "tol_fun";
-    case Stop::ConditionCov: return "condition_cov";
+    case Stop::Target:
+      return "target";
+    case Stop::MaxEvaluations:
+      return "max_evaluations";
+    case Stop::TolX:
+      return "tol_x";
+    case Stop::TolFun:
+      return "tol_fun";
+    case Stop::ConditionCov:
+      return "condition_cov";
   }
   return "unknown";
 }
@@ -29,8 +34,7 @@ Eigen::VectorXd clip_unit(const Eigen::VectorXd& x) { return x.cwiseMax(0.0).cwi
 
 }  // namespace
 
-Result minimize(const BatchEvaluator& evaluate, const Eigen::VectorXd& x0, const Options& o,
-                const Observer& observer) {
+Result minimize(const BatchEvaluator& evaluate, const Eigen::VectorXd& x0, const Options& o, const Observer& observer) {
   const int n = static_cast<int>(x0.size());
   if (n == 0) throw_usage_error("CMA-ES: the start point has no coordinates");
   if (!(o.sigma0 > 0)) throw_usage_error(fmt::format("CMA-ES: sigma0 = {} must be positive", o.sigma0));

@@ -47,17 +47,28 @@ std::string_view leaf_of(std::string_view path) {
 
 std::string_view type_name(Type t) {
   switch (t) {
-    case Type::Number: return "number";
-    case Type::Integer: return "integer";
-    case Type::Bool: return "bool";
-    case Type::String: return "string";
-    case Type::Enum: return "enum";
-    case Type::Vector3: return "[x, y, z]";
-    case Type::NumberList: return "list of numbers";
-    case Type::Section: return "section";
-    case Type::List: return "list of sections";
-    case Type::NumberOrSection: return "number or section";
-    case Type::StringOrInteger: return "name or index";
+    case Type::Number:
+      return "number";
+    case Type::Integer:
+      return "integer";
+    case Type::Bool:
+      return "bool";
+    case Type::String:
+      return "string";
+    case Type::Enum:
+      return "enum";
+    case Type::Vector3:
+      return "[x, y, z]";
+    case Type::NumberList:
+      return "list of numbers";
+    case Type::Section:
+      return "section";
+    case Type::List:
+      return "list of sections";
+    case Type::NumberOrSection:
+      return "number or section";
+    case Type::StringOrInteger:
+      return "name or index";
   }
   return "?";
 }
@@ -130,9 +141,7 @@ Eigen::Vector3d Config::vector3(std::string_view path) const {
   return {l.at(0), l.at(1), l.at(2)};
 }
 const std::vector<double>& Config::list(std::string_view path) const { return get(path).list; }
-int Config::count(std::string_view path) const {
-  return has(path) ? static_cast<int>(get(path).number) : 0;
-}
+int Config::count(std::string_view path) const { return has(path) ? static_cast<int>(get(path).number) : 0; }
 std::string Config::where(std::string_view path) const {
   auto it = values_.find(path);
   const std::string src = it == values_.end() ? file_ : it->second.where;
@@ -170,8 +179,8 @@ class Loader {
     std::string allowed;
     for (const auto* k : schema_.children(parent_of(decl_path)))
       allowed += (allowed.empty() ? "" : ", ") + std::string(leaf_of(k->path));
-    const std::string hint = best ? fmt::format(" (did you mean '{}'?)", leaf_of(best->path))
-                                  : fmt::format(" (allowed here: {})", allowed);
+    const std::string hint =
+        best ? fmt::format(" (did you mean '{}'?)", leaf_of(best->path)) : fmt::format(" (allowed here: {})", allowed);
     throw_input_error(where(key_node), fmt::format("unknown key '{}'{}", decl_path, hint));
   }
 
@@ -196,7 +205,9 @@ class Loader {
     auto scalar = [&]() -> std::string {
       if (!node.IsScalar())
         throw_input_error(w, fmt::format("expected a {}, got a {}", type_name(k.type),
-                                         node.IsMap() ? "map" : node.IsSequence() ? "list" : "null"));
+                                         node.IsMap()        ? "map"
+                                         : node.IsSequence() ? "list"
+                                                             : "null"));
       return node.Scalar();
     };
     switch (k.type) {
@@ -219,7 +230,9 @@ class Loader {
         v.number = i;
         break;
       }
-      case Type::Number: v.number = units::parse_quantity(scalar(), k.dim, w); break;
+      case Type::Number:
+        v.number = units::parse_quantity(scalar(), k.dim, w);
+        break;
       case Type::Integer: {
         v.number = units::parse_quantity(scalar(), units::Dimension::None, w);
         if (v.number != std::floor(v.number) || std::abs(v.number) > 2e9)
@@ -228,13 +241,18 @@ class Loader {
       }
       case Type::Bool: {
         const auto s = scalar();
-        if (s == "true" || s == "yes" || s == "on") v.boolean = true;
-        else if (s == "false" || s == "no" || s == "off") v.boolean = false;
-        else throw_input_error(w, fmt::format("'{}' must be true or false", s));
+        if (s == "true" || s == "yes" || s == "on")
+          v.boolean = true;
+        else if (s == "false" || s == "no" || s == "off")
+          v.boolean = false;
+        else
+          throw_input_error(w, fmt::format("'{}' must be true or false", s));
         break;
       }
       case Type::String:
-      case Type::StringOrInteger: v.text = scalar(); break;
+      case Type::StringOrInteger:
+        v.text = scalar();
+        break;
       case Type::Enum: {
         v.text = scalar();
         if (std::find(k.choices.begin(), k.choices.end(), v.text) == k.choices.end()) {
@@ -282,7 +300,11 @@ class Loader {
         if (out_.has(cpath) || out_.has_section(cpath)) continue;
         YAML::Node node = YAML::Load(k.default_text);
         value(node, k, k.path, cpath);
-        out_.set(cpath, [&] { Value v = out_.values().at(cpath); v.where = "default"; return v; }());
+        out_.set(cpath, [&] {
+          Value v = out_.values().at(cpath);
+          v.where = "default";
+          return v;
+        }());
       }
     }
   }
@@ -296,8 +318,7 @@ class Loader {
 
 std::string apply_override(YAML::Node& root, const std::string& text, const Schema& schema) {
   const auto eq = text.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw_input_error("--set", fmt::format("'{}' must be KEY=VALUE", text));
+  if (eq == std::string::npos || eq == 0) throw_input_error("--set", fmt::format("'{}' must be KEY=VALUE", text));
   const std::string path = text.substr(0, eq);
   const std::string val = text.substr(eq + 1);
   if (!schema.find(path)) throw_input_error("--set", fmt::format("unknown key '{}'", path));

@@ -11,8 +11,6 @@ void throw_input_error(std::string_view where, std::string_view what) {
 
 void throw_usage_error(std::string_view what) { throw Error(ErrorKind::Usage, std::string(what)); }
 
-void throw_numerical_error(std::string_view what) {
-  throw Error(ErrorKind::Numerical, std::string(what));
-}
+void throw_numerical_error(std::string_view what) { throw Error(ErrorKind::Numerical, std::string(what)); }
 
 }  // namespace flowire

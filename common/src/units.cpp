@@ -95,22 +95,38 @@ std::string units_of(Dimension d) {
 
 std::string_view dimension_name(Dimension d) {
   switch (d) {
-    case Dimension::None: return "dimensionless";
-    case Dimension::Length: return "length";
-    case Dimension::Pressure: return "pressure";
-    case Dimension::Time: return "time";
-    case Dimension::Viscosity: return "viscosity";
-    case Dimension::Density: return "density";
-    case Dimension::FlowRate: return "flow rate";
-    case Dimension::Velocity: return "velocity";
-    case Dimension::Angle: return "angle";
-    case Dimension::AngularSpeed: return "angular speed";
-    case Dimension::Frequency: return "frequency";
-    case Dimension::Force: return "force";
-    case Dimension::Moment: return "moment";
-    case Dimension::Resistance: return "resistance";
-    case Dimension::Compliance: return "compliance";
-    case Dimension::Acceleration: return "acceleration";
+    case Dimension::None:
+      return "dimensionless";
+    case Dimension::Length:
+      return "length";
+    case Dimension::Pressure:
+      return "pressure";
+    case Dimension::Time:
+      return "time";
+    case Dimension::Viscosity:
+      return "viscosity";
+    case Dimension::Density:
+      return "density";
+    case Dimension::FlowRate:
+      return "flow rate";
+    case Dimension::Velocity:
+      return "velocity";
+    case Dimension::Angle:
+      return "angle";
+    case Dimension::AngularSpeed:
+      return "angular speed";
+    case Dimension::Frequency:
+      return "frequency";
+    case Dimension::Force:
+      return "force";
+    case Dimension::Moment:
+      return "moment";
+    case Dimension::Resistance:
+      return "resistance";
+    case Dimension::Compliance:
+      return "compliance";
+    case Dimension::Acceleration:
+      return "acceleration";
   }
   return "?";
 }
@@ -139,17 +155,15 @@ double parse_quantity(std::string_view text, Dimension d, std::string_view where
   const std::string_view unit = trim(std::string_view(ptr, static_cast<size_t>(end - ptr)));
   if (unit.empty()) return value;
   if (d == Dimension::None)
-    throw_input_error(where, fmt::format("'{}': this value is dimensionless, remove the unit '{}'",
-                                         text, unit));
+    throw_input_error(where, fmt::format("'{}': this value is dimensionless, remove the unit '{}'", text, unit));
   const auto f = unit_factor(unit, d);
   if (!f) {
     for (const auto& u : kUnits)
       if (u.name == unit)
-        throw_input_error(where, fmt::format("unit '{}' is a {} but a {} is expected (use one of: {})",
-                                             unit, dimension_name(u.dim), dimension_name(d),
-                                             units_of(d)));
-    throw_input_error(where, fmt::format("unknown unit '{}' for a {} (use one of: {})", unit,
-                                         dimension_name(d), units_of(d)));
+        throw_input_error(where, fmt::format("unit '{}' is a {} but a {} is expected (use one of: {})", unit,
+                                             dimension_name(u.dim), dimension_name(d), units_of(d)));
+    throw_input_error(where,
+                      fmt::format("unknown unit '{}' for a {} (use one of: {})", unit, dimension_name(d), units_of(d)));
   }
   return value * *f;
 }
@@ -157,8 +171,8 @@ double parse_quantity(std::string_view text, Dimension d, std::string_view where
 double length_unit_factor(std::string_view unit, std::string_view where) {
   const auto f = unit_factor(trim(unit), Dimension::Length);
   if (!f)
-    throw_input_error(where, fmt::format("unknown length unit '{}' (use one of: {})", unit,
-                                         units_of(Dimension::Length)));
+    throw_input_error(where,
+                      fmt::format("unknown length unit '{}' (use one of: {})", unit, units_of(Dimension::Length)));
   return *f;
 }
 

@@ -258,7 +258,8 @@ PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& c
     (void)wire.solve_static();
     contact.hold_wire(wire);
     (void)catheter.solve_static();
-    const Eigen::VectorXd h = flat(std::vector<Eigen::Vector3d>(catheter.positions().begin(), catheter.positions().end()));
+    const Eigen::VectorXd h =
+        flat(std::vector<Eigen::Vector3d>(catheter.positions().begin(), catheter.positions().end()));
     if (h.size() != c.size()) {  // the vertex set changed: restart the history
       rs.clear(), hs.clear();
       c = h;

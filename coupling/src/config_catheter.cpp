@@ -13,16 +13,16 @@ void declare_catheter_keys(config::Schema& s) {
   using config::Type;
   using D = units::Dimension;
   s.add("catheter", Type::Section, "", D::None,
-      "a hollow catheter over the wire, entering at the same point (docs/catheter.md); the wire runs in its lumen");
+        "a hollow catheter over the wire, entering at the same point (docs/catheter.md); the wire runs in its lumen");
   s.add("catheter.length", Type::Number, "1.0", D::Length, "total catheter length");
   s.add("catheter.outer_radius", Type::Number, "1 mm", D::Length, "outer radius (the wall contact uses it)");
   s.add("catheter.inner_radius", Type::Number, "0.55 mm", D::Length,
-      "lumen radius: the wire's axis stays within inner_radius - wire.radius of the catheter's axis");
+        "lumen radius: the wire's axis stays within inner_radius - wire.radius of the catheter's axis");
   s.add("catheter.youngs_modulus", Type::Number, "2 GPa", D::Pressure, "Young's modulus of the catheter wall");
   s.add("catheter.density", Type::Number, "1200", D::Density, "density of the catheter wall");
   s.add("catheter.initial_length", Type::Number, "2 cm", D::Length, "catheter length inside at t = 0");
   s.add("catheter.stiffness", Type::Number, "3e4", D::None,
-      "lumen penalty per wire vertex (N/m): a wire vertex pushing on the lumen with force F sinks F/k into it");
+        "lumen penalty per wire vertex (N/m): a wire vertex pushing on the lumen with force F sinks F/k into it");
   s.add("catheter.insertion", Type::Section, "", D::None, "pushing and turning the catheter at the entry");
   s.add("catheter.insertion.speed", Type::Number, "0", D::Velocity, "catheter insertion speed (negative: pull back)");
   s.add("catheter.insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "catheter rotation speed");

@@ -31,22 +31,23 @@ void declare_coupling_keys(config::Schema& s) {
   using D = units::Dimension;
   s.add("coupling", Type::Section, "", D::None, "how blood acts on the wire");
   s.add("coupling.drag", Type::Enum, "cylinder", D::None,
-      "cylinder: cross-flow drag from the cylinder drag curve C_D(Re) (creeping flow to Re 2e5) and the exact "
-      "annular Poiseuille shear along the wire | slender_body: resistive-force (Stokes) drag, Re << 1 only | "
-      "velocity_offset: the published form (blood velocity added to the velocity update) | none",
-      {"cylinder", "slender_body", "velocity_offset", "none"});
+        "cylinder: cross-flow drag from the cylinder drag curve C_D(Re) (creeping flow to Re 2e5) and the exact "
+        "annular Poiseuille shear along the wire | slender_body: resistive-force (Stokes) drag, Re << 1 only | "
+        "velocity_offset: the published form (blood velocity added to the velocity update) | none",
+        {"cylinder", "slender_body", "velocity_offset", "none"});
   s.add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force");
   s.add("coupling.occlusion", Type::Enum, "annulus", D::None,
-      "annulus: the wire raises the resistance of the segments it lies in (concentric to eccentric annular "
-      "Poiseuille flow at its offset; updated every flow evaluation; needs flow.solver superposition, sparse or "
-      "flow.model rlc) | none: the flow ignores the wire",
-      {"annulus", "none"});
+        "annulus: the wire raises the resistance of the segments it lies in (concentric to eccentric annular "
+        "Poiseuille flow at its offset; updated every flow evaluation; needs flow.solver superposition, sparse or "
+        "flow.model rlc) | none: the flow ignores the wire",
+        {"annulus", "none"});
   s.add("coupling.flow_every", Type::Integer, "1", D::None, "evaluate the flow every this many rod steps");
   s.add("coupling.steering", Type::Section, "", D::None, "a lateral force on the tip towards a chosen branch");
   s.add("coupling.steering.branch", Type::String, "", D::None, "name of the branch to steer into");
   s.add("coupling.steering.force", Type::Number, "5 mN", D::Force, "steering force");
   s.add("coupling.steering.range", Type::Number, "2 cm", D::Length, "active while the tip is this close to the target");
-  s.add("coupling.steering.offset", Type::Number, "1 cm", D::Length, "target: this far along the branch from its start");
+  s.add("coupling.steering.offset", Type::Number, "1 cm", D::Length,
+        "target: this far along the branch from its start");
 }
 
 DragModel drag_model(const config::Config& scene, const rod::WireSpec& spec, bool has_flow) {
@@ -54,7 +55,7 @@ DragModel drag_model(const config::Config& scene, const rod::WireSpec& spec, boo
   const config::Config& blood = given_or_declared(scene, "flow");
   DragModel dp;
   const std::string& law = c.string("coupling.drag");
-  dp.law = !has_flow || law == "none"          ? DragLaw::None
+  dp.law = !has_flow || law == "none" ? DragLaw::None
            : law == "velocity_offset" ? DragLaw::VelocityOffset
            : law == "slender_body"    ? DragLaw::SlenderBody
                                       : DragLaw::Cylinder;

@@ -26,35 +26,38 @@ void declare_fem_keys(config::Schema& s) {
   using D = units::Dimension;
   s.add("fem", Type::Section, "", D::None, "finite-element comparison of the flow (needs FLOWIRE_WITH_FEM)");
   s.add("fem.geometry", Type::Enum, "network", D::None,
-      "network: the lumen of the vessels (compared with the flow); dfg_3d_1z: the DFG benchmark 3D-1Z channel "
-      "around a cylinder with its own fluid and inflow (needs no vessels or flow; writes fem_forces.csv, c_D, c_L "
-      "and the pressure difference in summary.json); lumen: the real lumen of vessels.surface, its open ends "
-      "tagged by the nearest centerline ends, compared with the flow as network is",
-      {"network", "dfg_3d_1z", "lumen"});
+        "network: the lumen of the vessels (compared with the flow); dfg_3d_1z: the DFG benchmark 3D-1Z channel "
+        "around a cylinder with its own fluid and inflow (needs no vessels or flow; writes fem_forces.csv, c_D, c_L "
+        "and the pressure difference in summary.json); lumen: the real lumen of vessels.surface, its open ends "
+        "tagged by the nearest centerline ends, compared with the flow as network is",
+        {"network", "dfg_3d_1z", "lumen"});
   s.add("fem.mesh_size", Type::Number, "", D::Length,
-      "target tetrahedron size (network: default from the smallest radius; dfg_3d_1z: far field, default 0.08 m)");
+        "target tetrahedron size (network: default from the smallest radius; dfg_3d_1z: far field, default 0.08 m)");
   s.add("fem.size_factor", Type::Number, "0.3", D::None,
-      "network / lumen without fem.mesh_size: tetrahedron size = this times the radius of the nearest vessel");
+        "network / lumen without fem.mesh_size: tetrahedron size = this times the radius of the nearest vessel");
   s.add("fem.obstacle_mesh_size", Type::Number, "", D::Length,
-      "dfg_3d_1z: tetrahedron size on the cylinder (default a quarter of fem.mesh_size), growing with the distance "
-      "from it by fem.mesh_growth");
+        "dfg_3d_1z: tetrahedron size on the cylinder (default a quarter of fem.mesh_size), growing with the distance "
+        "from it by fem.mesh_growth");
   s.add("fem.mesh_growth", Type::Number, "0.3", D::None,
-      "dfg_3d_1z: increase of the tetrahedron size per unit distance from the obstacle");
+        "dfg_3d_1z: increase of the tetrahedron size per unit distance from the obstacle");
   s.add("fem.equations", Type::Enum, "stokes", D::None, "stokes | navier_stokes", {"stokes", "navier_stokes"});
-  s.add("fem.solver", Type::Enum, "mumps", D::None, "direct (mumps) or iterative (fieldsplit, Stokes only)", {"mumps", "fieldsplit"});
+  s.add("fem.solver", Type::Enum, "mumps", D::None, "direct (mumps) or iterative (fieldsplit, Stokes only)",
+        {"mumps", "fieldsplit"});
   s.add("fem.stabilization", Type::Enum, "supg", D::None,
-      "navier_stokes: supg (SUPG + grad-div, consistent) or none (plain Galerkin)", {"supg", "none"});
+        "navier_stokes: supg (SUPG + grad-div, consistent) or none (plain Galerkin)", {"supg", "none"});
   s.add("fem.inlet", Type::Enum, "profile", D::None,
-      "navier_stokes: profile (a Poiseuille velocity profile scaled to the inlet pressure or flow) or traction",
-      {"profile", "traction"});
-  s.add("fem.backflow", Type::Number, "1", D::None, "navier_stokes: outlet backflow stabilization coefficient (0: off)");
+        "navier_stokes: profile (a Poiseuille velocity profile scaled to the inlet pressure or flow) or traction",
+        {"profile", "traction"});
+  s.add("fem.backflow", Type::Number, "1", D::None,
+        "navier_stokes: outlet backflow stabilization coefficient (0: off)");
   s.add("fem.time_dependent", Type::Bool, "false", D::None,
-      "frames from time-dependent Stokes (BDF2, inertia included) instead of quasi-steady solves; needs fem.frames");
+        "frames from time-dependent Stokes (BDF2, inertia included) instead of quasi-steady solves; needs fem.frames");
   s.add("fem.steps_per_period", Type::Integer, "200", D::None,
-      "time steps per period of a time-dependent series or of windkessel outlets (rounded up to a multiple of fem.frames)");
+        "time steps per period of a time-dependent series or of windkessel outlets (rounded up to a multiple of "
+        "fem.frames)");
   s.add("fem.samples_per_branch", Type::Integer, "10", D::None, "comparison points per branch");
   s.add("fem.frames", Type::Integer, "0", D::None,
-      "0: steady comparison only; N: also N quasi-steady frames over one inlet period (fem_pulsatile*.csv, fem.pvd)");
+        "0: steady comparison only; N: also N quasi-steady frames over one inlet period (fem_pulsatile*.csv, fem.pvd)");
 }
 
 bool fem_on_network(const config::Config& c) {
@@ -102,7 +105,8 @@ nlohmann::json run_fem_geometry(const config::Config& c, const std::filesystem::
 #ifdef FLOWIRE_HAVE_FEM
   fem::ObstacleMesh sizes;
   sizes.mesh_size = c.has("fem.mesh_size") ? c.number("fem.mesh_size") : 0.08;
-  sizes.obstacle_mesh_size = c.has("fem.obstacle_mesh_size") ? c.number("fem.obstacle_mesh_size") : 0.25 * sizes.mesh_size;
+  sizes.obstacle_mesh_size =
+      c.has("fem.obstacle_mesh_size") ? c.number("fem.obstacle_mesh_size") : 0.25 * sizes.mesh_size;
   sizes.growth = c.number("fem.mesh_growth");
   const auto stab = c.string("fem.stabilization") == "none" ? fem::Stabilization::None : fem::Stabilization::Supg;
   const fem::ObstacleResult r = fem::dfg_3d_1z(sizes, stab, out.string(), c.boolean("output.vtk"));
@@ -134,13 +138,14 @@ void check_fem(const config::Config& c, const flow::FlowSolver* fs, const vessel
     if (!c.has("vessels.surface")) throw_input_error(c.where("fem.geometry"), "lumen needs vessels.surface");
     const std::string surface = c.resolve_path(c.string("vessels.surface"));
     if (!std::filesystem::is_regular_file(surface))
-      throw_input_error(fmt::format("{}: {}", c.where("vessels.surface"), surface), "the lumen surface file does not exist");
+      throw_input_error(fmt::format("{}: {}", c.where("vessels.surface"), surface),
+                        "the lumen surface file does not exist");
 #ifdef FLOWIRE_HAVE_FEM
     // Read it and match its open ends now (cheap), so that bad input stops the run before any output.
     if (net)
-      (void)fem::prepare_lumen(*net, fem::read_surface(surface, units::length_unit_factor(
-                                                                    c.string_or("vessels.length_unit", "m"),
-                                                                    c.where("vessels.length_unit"))));
+      (void)fem::prepare_lumen(
+          *net, fem::read_surface(surface, units::length_unit_factor(c.string_or("vessels.length_unit", "m"),
+                                                                     c.where("vessels.length_unit"))));
 #endif
   }
   const int frames = c.integer("fem.frames");
@@ -159,8 +164,8 @@ void check_fem(const config::Config& c, const flow::FlowSolver* fs, const vessel
   if (frames > 0 && !(fs->spec().cycle() > 0.0))
     throw_input_error(c.where("fem.frames"), "a pulsatile comparison needs a periodic inlet waveform (sine or table)");
   if (fs->spec().inlets.size() != 1)
-    throw_input_error(c.where("fem"), fmt::format("the comparison needs exactly one inlet; the flow has {}",
-                                                  fs->spec().inlets.size()));
+    throw_input_error(c.where("fem"),
+                      fmt::format("the comparison needs exactly one inlet; the flow has {}", fs->spec().inlets.size()));
 }
 
 /// The FEM reference on the same geometry with the network's own boundary conditions (the
@@ -178,8 +183,9 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   // Windkessel dynamics on both sides when the network integrates them (rlc model).
   const bool dynamic_rcr = has_rcr && spec.model == flow::Model::Rlc;
   if (has_rcr && !dynamic_rcr)
-    warn("fem: RCR outlets are compared quasi-steadily, as the resistance Rp + Rd to Pd (the poiseuille flow model "
-         "has no capacitor; use flow.model: rlc with fem.frames for the windkessel dynamics)");
+    warn(
+        "fem: RCR outlets are compared quasi-steadily, as the resistance Rp + Rd to Pd (the poiseuille flow model "
+        "has no capacitor; use flow.model: rlc with fem.frames for the windkessel dynamics)");
   fem::FemOptions fo;
   if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
   fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
@@ -219,7 +225,8 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
     dyn.values_at = [&spec, &net](double t) { return fem::boundary_values(spec, net, t); };
     if (dynamic_rcr)
       for (const auto& o : spec.outlets)
-        if (o.type == flow::OutletBC::Type::Rcr) dyn.windkessels.push_back({o.node, o.rp, o.c, o.rd, o.distal_pressure});
+        if (o.type == flow::OutletBC::Type::Rcr)
+          dyn.windkessels.push_back({o.node, o.rp, o.c, o.rd, o.distal_pressure});
     if (spec.model == flow::Model::Rlc) {
       periodic = flow::make_solver(net, spec);
       const double start = 30.0 * period;

@@ -17,15 +17,15 @@ void declare_insertion_keys(config::Schema& s) {
   s.add("insertion.rotation_angle", Type::Number, "0", D::Angle, "base rotation at the start (turns a pre-shaped tip)");
   s.add("insertion.initial_length", Type::Number, "2 cm", D::Length, "length inside at t = 0");
   s.add("insertion.schedule", Type::String, "", D::None,
-      "CSV with columns time,speed,rotation_speed (SI): from each row's time on, push (> 0), pull (< 0) or hold, "
-      "and turn; replaces speed and rotation_speed (docs/insertion.md)");
+        "CSV with columns time,speed,rotation_speed (SI): from each row's time on, push (> 0), pull (< 0) or hold, "
+        "and turn; replaces speed and rotation_speed (docs/insertion.md)");
   s.add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length");
   s.add("insertion.max_force", Type::Number, "", D::Force,
-      "force-limited feeding: hold the feed in steps that start with the wire pushed in harder than this "
-      "(a drive's or a hand's limit); default unlimited (the feed is kinematic)");
+        "force-limited feeding: hold the feed in steps that start with the wire pushed in harder than this "
+        "(a drive's or a hand's limit); default unlimited (the feed is kinematic)");
   s.add("insertion.force", Type::Number, "", D::Force,
-      "force-driven feeding: push the base with this constant force; each step's feed is the one for which the "
-      "clamp's axial force equals it (replaces speed; docs/insertion.md)");
+        "force-driven feeding: push the base with this constant force; each step's feed is the one for which the "
+        "clamp's axial force equals it (replaces speed; docs/insertion.md)");
 }
 
 namespace {
@@ -48,7 +48,9 @@ void drive_wire(const config::Config& c, rod::RodSimulator& sim) {
     if (!(f > 0.0)) throw_input_error(c.where("insertion.force"), "insertion.force must be > 0 N");
     for (const char* key : {"insertion.speed", "insertion.schedule", "insertion.max_force"})
       if (written(c, key))
-        throw_input_error(c.where(key), fmt::format("give either insertion.force (the feed follows from the force) or {}, not both", key));
+        throw_input_error(
+            c.where(key),
+            fmt::format("give either insertion.force (the feed follows from the force) or {}, not both", key));
     sim.set_push_force(f);
   }
 }
@@ -63,9 +65,11 @@ InsertionPlan insertion_plan(const config::Config& c, bool has_wire) {
   if (c.has("insertion.schedule")) {
     for (const char* key : {"insertion.speed", "insertion.rotation_speed"})
       if (written(c, key))
-        throw_input_error(c.where(key), "give either insertion.schedule or insertion.speed and rotation_speed, not both");
+        throw_input_error(c.where(key),
+                          "give either insertion.schedule or insertion.speed and rotation_speed, not both");
     if (!has_wire) throw_input_error(c.where("insertion.schedule"), "a schedule drives the wire: the scene has none");
-    plan.schedule = std::make_unique<DriveSchedule>(DriveSchedule::read_csv(c.resolve_path(c.string("insertion.schedule"))));
+    plan.schedule =
+        std::make_unique<DriveSchedule>(DriveSchedule::read_csv(c.resolve_path(c.string("insertion.schedule"))));
   }
   return plan;
 }

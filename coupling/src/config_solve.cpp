@@ -10,10 +10,12 @@ void declare_solve_keys(config::Schema& s) {
   using config::Type;
   using D = units::Dimension;
   s.add("solve", Type::Section, "{}", D::None, "time stepping (also drives flow-only scenes: one flow frame per step)");
-  s.add("solve.mode", Type::Enum, "dynamic", D::None, "static: equilibrium; dynamic: time stepping", {"static", "dynamic"});
+  s.add("solve.mode", Type::Enum, "dynamic", D::None, "static: equilibrium; dynamic: time stepping",
+        {"static", "dynamic"});
   s.add("solve.dt", Type::Number, "1 ms", D::Time, "time step");
   s.add("solve.duration", Type::Number, "0", D::Time, "simulated time (0: one frame / the steady state)");
-  s.add("solve.integrator", Type::Enum, "implicit_euler", D::None, "rod time integrator", {"implicit_euler", "implicit_midpoint"});
+  s.add("solve.integrator", Type::Enum, "implicit_euler", D::None, "rod time integrator",
+        {"implicit_euler", "implicit_midpoint"});
 }
 
 SolveSettings solve_settings(const config::Config& c) {
@@ -28,6 +30,8 @@ SolveSettings solve_settings(const config::Config& c) {
   return s;
 }
 
-rod::Integrator scene_integrator(const config::Config& c) { return rod::parse_integrator(c.string("solve.integrator")); }
+rod::Integrator scene_integrator(const config::Config& c) {
+  return rod::parse_integrator(c.string("solve.integrator"));
+}
 
 }  // namespace flowire::coupling

@@ -17,35 +17,40 @@ void declare_vessel_keys(config::Schema& s) {
   using D = units::Dimension;
   s.add("vessels", Type::Section, "", D::None, "the vessel network (required by flow, contact and fem)");
   s.add("vessels.file", Type::String, "", D::None,
-      "centerline / network file: VMTK or SimVascular .vtp, legacy .vtk, flowire .vtp/.yaml, svOneDSolver .in");
-  s.add("vessels.length_unit", Type::Enum, "", D::None, "unit of the file's coordinates and radii (default: the file's own, else m)",
-      {"m", "cm", "mm", "um"});
+        "centerline / network file: VMTK or SimVascular .vtp, legacy .vtk, flowire .vtp/.yaml, svOneDSolver .in");
+  s.add("vessels.length_unit", Type::Enum, "", D::None,
+        "unit of the file's coordinates and radii (default: the file's own, else m)", {"m", "cm", "mm", "um"});
   s.add("vessels.surface", Type::String, "", D::None,
-      "lumen surface (.vtp, .stl, .obj; in length_unit): the wall the wire touches instead of the network's "
-      "cylinders (signed distance to the triangles, open ends open, caps at the network's ends removed); the "
-      "network still carries the flow; fem.geometry: lumen meshes it for the FEM comparison");
+        "lumen surface (.vtp, .stl, .obj; in length_unit): the wall the wire touches instead of the network's "
+        "cylinders (signed distance to the triangles, open ends open, caps at the network's ends removed); the "
+        "network still carries the flow; fem.geometry: lumen meshes it for the FEM comparison");
   s.add("vessels.surface_smoothing", Type::Number, "", D::Length,
-      "width of the Gaussian weights of the smooth implicit surface (a weighted mean of the nearby triangles' "
-      "planes) whose distance the contact uses (default 0.4 of the mean edge length; 0: the exact distance)");
-  s.add("vessels.max_segment_length", Type::Number, "5 mm", D::Length, "branches are split into cylinders no longer than this");
-  s.add("vessels.radius_change", Type::Number, "0.1", D::None, "also split where the radius changes by more than this fraction");
+        "width of the Gaussian weights of the smooth implicit surface (a weighted mean of the nearby triangles' "
+        "planes) whose distance the contact uses (default 0.4 of the mean edge length; 0: the exact distance)");
+  s.add("vessels.max_segment_length", Type::Number, "5 mm", D::Length,
+        "branches are split into cylinders no longer than this");
+  s.add("vessels.radius_change", Type::Number, "0.1", D::None,
+        "also split where the radius changes by more than this fraction");
   s.add("vessels.keep_inlet_piece", Type::Bool, "false", D::None,
-      "if the network is in several pieces keep the one holding the inlet (with a warning) instead of failing");
+        "if the network is in several pieces keep the one holding the inlet (with a warning) instead of failing");
   s.add("vessels.generator", Type::Section, "", D::None, "a built-in anatomy instead of a file");
   s.add("vessels.generator.type", Type::Enum, "", D::None, "which anatomy",
-      {"straight_tube", "y_bifurcation", "aortic_arch", "binary_tree", "arterial_tree"});
+        {"straight_tube", "y_bifurcation", "aortic_arch", "binary_tree", "arterial_tree"});
   s.add("vessels.generator.length", Type::Number, "0.1", D::Length, "straight_tube: length");
   s.add("vessels.generator.radius", Type::Number, "2 mm", D::Length, "straight_tube: radius");
-  s.add("vessels.generator.parent_radius", Type::Number, "5 mm", D::Length, "y_bifurcation: parent radius (daughters by Murray's law)");
+  s.add("vessels.generator.parent_radius", Type::Number, "5 mm", D::Length,
+        "y_bifurcation: parent radius (daughters by Murray's law)");
   s.add("vessels.generator.parent_length", Type::Number, "40 mm", D::Length, "y_bifurcation: parent length");
   s.add("vessels.generator.child_length", Type::Number, "40 mm", D::Length, "y_bifurcation: daughter length");
-  s.add("vessels.generator.angle", Type::Number, "0.6 rad", D::Angle, "y_bifurcation / binary_tree: branching half-angle");
+  s.add("vessels.generator.angle", Type::Number, "0.6 rad", D::Angle,
+        "y_bifurcation / binary_tree: branching half-angle");
   s.add("vessels.generator.asymmetry", Type::Number, "0", D::None, "y_bifurcation: flow-split asymmetry in (-1, 1)");
   s.add("vessels.generator.scale", Type::Number, "1", D::None, "aortic_arch / arterial_tree: size factor (1 = adult)");
   s.add("vessels.generator.depth", Type::Integer, "5", D::None, "binary_tree: generations (2^(depth+1) - 1 vessels)");
   s.add("vessels.generator.root_radius", Type::Number, "2 mm", D::Length, "binary_tree: root radius");
   s.add("vessels.generator.root_length", Type::Number, "20 mm", D::Length, "binary_tree: root length");
-  s.add("vessels.generator.radius_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: r(k+1)/r(k) (Murray 2^-1/3)");
+  s.add("vessels.generator.radius_ratio", Type::Number, "0.7937005259840998", D::None,
+        "binary_tree: r(k+1)/r(k) (Murray 2^-1/3)");
   s.add("vessels.generator.length_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: L(k+1)/L(k)");
 }
 
@@ -55,7 +60,8 @@ vessels::Network build_scene_network(const config::Config& c) {
   build.radius_change = c.number("vessels.radius_change");
   const bool has_file = c.has("vessels.file");
   const bool has_gen = c.has_section("vessels.generator");
-  if (has_file == has_gen) throw_input_error(c.where("vessels"), "give exactly one of vessels.file or vessels.generator");
+  if (has_file == has_gen)
+    throw_input_error(c.where("vessels"), "give exactly one of vessels.file or vessels.generator");
   if (has_file) {
     vessels::ReadOptions ro;
     ro.length_unit = c.string_or("vessels.length_unit", "");

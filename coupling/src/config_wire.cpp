@@ -29,19 +29,23 @@ void declare_wire_keys(config::Schema& s) {
   s.add("wire.tip.youngs_modulus", Type::Number, "10 GPa", D::Pressure, "tip Young's modulus");
   s.add("wire.tip.shape", Type::Enum, "straight", D::None, "tip shape", {"straight", "angled", "j"});
   s.add("wire.tip.angle", Type::Number, "", D::Angle,
-      "angled/j: total bend angle of the tip (default by shape: 45 deg angled, 180 deg j, the J of the published "
-      "experiment)");
+        "angled/j: total bend angle of the tip (default by shape: 45 deg angled, 180 deg j, the J of the published "
+        "experiment)");
   s.add("wire.tip.bend_radius", Type::Number, "3 mm", D::Length, "angled/j: radius of the pre-bent arc");
   s.add("wire.adapt", Type::Section, "", D::None,
-      "curvature-adaptive resampling: split edges where the wire bends, merge them back where it is straight");
-  s.add("wire.adapt.min_segment_length", Type::Number, "", D::Length, "finest edge (default a quarter of the segment length)");
+        "curvature-adaptive resampling: split edges where the wire bends, merge them back where it is straight");
+  s.add("wire.adapt.min_segment_length", Type::Number, "", D::Length,
+        "finest edge (default a quarter of the segment length)");
   s.add("wire.adapt.max_segment_length", Type::Number, "", D::Length,
-      "coarsest edge (default the segment length: merging only undoes refinement)");
-  s.add("wire.adapt.split_angle", Type::Number, "0.1 rad", D::Angle, "turning angle at a vertex above which its edges are split");
-  s.add("wire.adapt.merge_angle", Type::Number, "", D::Angle, "turning angle below which edges merge (default split_angle / 4)");
+        "coarsest edge (default the segment length: merging only undoes refinement)");
+  s.add("wire.adapt.split_angle", Type::Number, "0.1 rad", D::Angle,
+        "turning angle at a vertex above which its edges are split");
+  s.add("wire.adapt.merge_angle", Type::Number, "", D::Angle,
+        "turning angle below which edges merge (default split_angle / 4)");
   s.add("wire.base", Type::Section, "", D::None, "where the wire is held");
   s.add("wire.base.position", Type::Vector3, "[0, 0, 0]", D::Length, "base position (vessel scenes: the entry node)");
-  s.add("wire.base.direction", Type::Vector3, "[1, 0, 0]", D::None, "base direction (vessel scenes: into the entry vessel)");
+  s.add("wire.base.direction", Type::Vector3, "[1, 0, 0]", D::None,
+        "base direction (vessel scenes: into the entry vessel)");
   s.add("wire.entry", Type::StringOrInteger, "auto", D::None, "network end where the wire enters (node id, or auto)");
 }
 
@@ -134,18 +138,22 @@ int enter_network(const config::Config& c, const vessels::Network& net, rod::Wir
     w.base_position = net.node(entry);
     w.base_direction = (net.node(other) - net.node(entry)).normalized();
   }
-  if (w.inserted_length < 0) w.inserted_length = declared_scene_defaults("insertion").number("insertion.initial_length");
+  if (w.inserted_length < 0)
+    w.inserted_length = declared_scene_defaults("insertion").number("insertion.initial_length");
   return entry;
 }
 
 void apply_loads(const config::Config& c, rod::RodSimulator& sim, rod::RodSimulator* catheter) {
   for (int i = 0; i < c.count("loads"); ++i) {
     const std::string p = fmt::format("loads[{}].", i);
-    if (!c.has(p + "type") || !c.has(p + "value")) throw_input_error(c.where(p + "type"), "a load needs type and value");
+    if (!c.has(p + "type") || !c.has(p + "value"))
+      throw_input_error(c.where(p + "type"), "a load needs type and value");
     const auto& type = c.string(p + "type");
     const Eigen::Vector3d v = c.vector3(p + "value");
-    if (type == "tip_force") sim.set_tip_force(v);
-    else if (type == "tip_moment") sim.set_tip_moment(v);
+    if (type == "tip_force")
+      sim.set_tip_force(v);
+    else if (type == "tip_moment")
+      sim.set_tip_moment(v);
     else if (type == "gravity") {
       sim.set_gravity(v);
       if (catheter) catheter->set_gravity(v);  // gravity acts on the catheter too (the other loads are the wire's)

@@ -121,8 +121,10 @@ DragForce cylinder_drag(const DragModel& m, const DragInput& in) {
 
 DragForce blood_drag(const DragModel& m, const DragInput& in) {
   switch (m.law) {
-    case DragLaw::None: return {};
-    case DragLaw::Cylinder: return cylinder_drag(m, in);
+    case DragLaw::None:
+      return {};
+    case DragLaw::Cylinder:
+      return cylinder_drag(m, in);
     case DragLaw::SlenderBody: {
       auto d = slender_body_drag(in.u, in.v, in.t, m.viscosity, m.wire_length, m.wire_radius, m.scale * in.ell);
       return d;

@@ -46,7 +46,8 @@ std::unique_ptr<vessels::LumenSurface> make_scene_surface(const config::Config& 
           {"components", k.components},
           {"nonmanifold_edges", k.nonmanifold_edges},
           {"mean_edge", k.mean_edge}};
-  smoothing = c.has("vessels.surface_smoothing") ? c.number("vessels.surface_smoothing") : default_surface_smoothing(*s);
+  smoothing =
+      c.has("vessels.surface_smoothing") ? c.number("vessels.surface_smoothing") : default_surface_smoothing(*s);
   if (!(smoothing >= 0.0)) throw_input_error(c.where("vessels.surface_smoothing"), "must be >= 0");
   info["smoothing"] = smoothing;
   return s;

@@ -107,10 +107,10 @@ bool write_paraview_script(const std::filesystem::path& dir, const ParaViewScene
       "#   pvpython view.py                           (a render window)\n"
       "#   pvpython --force-offscreen-rendering view.py --screenshot view.png   (a picture)\n"
       "import os\nimport sys\n\nfrom paraview.simple import *  # noqa: F401,F403\n\n";
-  text += fmt::format("NETWORK = {}\nWIRE = {}\nWIRE_DRAW_RADIUS = {:.6g}  # [m] 3 x the wire radius, at least 1.2 mm\n"
-                      "TITLE = {}\n",
-                      py_string(s.network), py_string(s.wire), std::max(3.0 * s.wire_radius, 1.2e-3),
-                      py_string(s.title));
+  text += fmt::format(
+      "NETWORK = {}\nWIRE = {}\nWIRE_DRAW_RADIUS = {:.6g}  # [m] 3 x the wire radius, at least 1.2 mm\n"
+      "TITLE = {}\n",
+      py_string(s.network), py_string(s.wire), std::max(3.0 * s.wire_radius, 1.2e-3), py_string(s.title));
   text += kBody;
   write_text_atomically(dir / "view.py", text);
   return true;

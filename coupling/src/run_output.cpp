@@ -99,7 +99,8 @@ void render_pictures(const config::Config& c, const vessels::Network& net, flow:
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (int i = 0; i < net.num_nodes(); ++i) cov += (net.node(i) - mean) * (net.node(i) - mean).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);  // ascending eigenvalues
-  const vessels::Vec3 thin = eig.eigenvectors().col(0), middle = eig.eigenvectors().col(1), along = eig.eigenvectors().col(2);
+  const vessels::Vec3 thin = eig.eigenvectors().col(0), middle = eig.eigenvectors().col(1),
+                      along = eig.eigenvectors().col(2);
   // Up: the longest direction, pointing to +z where it has a z part (a body stands upright).
   ro.view_up = along.z() < 0.0 ? vessels::Vec3(-along) : along;
   ro.view_direction = thin;
@@ -122,7 +123,11 @@ ParaViewScene paraview_scene(const config::Config& c, const std::filesystem::pat
 }  // namespace
 
 RunRecorder::RunRecorder(const config::Config& scene, const CoSimulation& cosim, std::filesystem::path out)
-    : c_(scene), cosim_(cosim), out_(std::move(out)), csv_(scene.boolean("output.csv")), vtk_(scene.boolean("output.vtk")) {
+    : c_(scene),
+      cosim_(cosim),
+      out_(std::move(out)),
+      csv_(scene.boolean("output.csv")),
+      vtk_(scene.boolean("output.vtk")) {
   if (cosim_.rod() && (csv_ || vtk_)) wire_.emplace(out_, csv_, vtk_);
   if (cosim_.catheter() && (csv_ || vtk_)) catheter_.emplace(out_, csv_, vtk_, "catheter");
 }
@@ -161,8 +166,10 @@ void RunRecorder::finish(bool series) {
       flow::write_segments_csv(*fsolver, flow_frames_, out_ / "segments.csv");
     }
     if (vtk_) {
-      if (series) flow::write_network_series(*fsolver, flow_frames_, out_, "network");
-      else flow::write_network_vtp(*fsolver, flow_frames_.back(), out_ / "network.vtp");
+      if (series)
+        flow::write_network_series(*fsolver, flow_frames_, out_, "network");
+      else
+        flow::write_network_vtp(*fsolver, flow_frames_.back(), out_ / "network.vtp");
     }
   }
   if (c_.boolean("output.png") && net) render_pictures(c_, *net, fsolver, sim, cosim_.catheter(), out_);
@@ -251,8 +258,8 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
       for (size_t i = 0; i < lc.wire_snapshot.size(); ++i) {
         const int j = lc.nearest_edge(lc.wire_snapshot[i], lc.wire_arc[i], lc.catheter_snapshot, lc.catheter_arc);
         if (j >= 0)
-          worst = std::max(worst, lumen_penalty(lc.wire_snapshot[i], lc.catheter_snapshot[j], lc.catheter_snapshot[j + 1],
-                                                lc.clearance(), lc.stiffness(), j == 0)
+          worst = std::max(worst, lumen_penalty(lc.wire_snapshot[i], lc.catheter_snapshot[j],
+                                                lc.catheter_snapshot[j + 1], lc.clearance(), lc.stiffness(), j == 0)
                                       .distance);
       }
       k["max_wire_offset"] = worst;
@@ -289,8 +296,10 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
                      {"total", {total.x(), total.y(), total.z()}},
                      {"max_normal_reynolds", st.max_reynolds}};
         if (forces->drag().law == DragLaw::Cylinder && st.max_reynolds > kCylinderDragMaxReynolds)
-          warn(fmt::format("drag: the normal Reynolds number reached {:.3g}, beyond the cylinder drag curve's range "
-                           "(up to {:.0e})", st.max_reynolds, kCylinderDragMaxReynolds));
+          warn(
+              fmt::format("drag: the normal Reynolds number reached {:.3g}, beyond the cylinder drag curve's range "
+                          "(up to {:.0e})",
+                          st.max_reynolds, kCylinderDragMaxReynolds));
       }
       split.contact = st.seconds_lookup + st.seconds_contact;
       split.coupling = st.seconds_drag;

@@ -9,27 +9,27 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <optional>
 #include <map>
+#include <optional>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/coupling/cosimulation.hpp"
+#include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/occlusion.hpp"
 #include "flowire/coupling/paraview_script.hpp"
-#include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
 #include "flowire/coupling/vessel_path.hpp"
 #include "flowire/coupling/wire_output.hpp"
-#include "run_output.hpp"
-#include "scene_sections.hpp"
 #include "flowire/flow/output.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/rod/simulator.hpp"
 #include "flowire/vessels/spatial.hpp"
+#include "run_output.hpp"
+#include "scene_sections.hpp"
 
 namespace flowire::coupling {
 
@@ -43,23 +43,38 @@ nlohmann::json resolved_scene(const config::Config& c) {
   for (const auto& [path, v] : c.values()) {
     switch (v.type) {
       case config::Type::Section:
-      case config::Type::List: break;
+      case config::Type::List:
+        break;
       case config::Type::Number:
       case config::Type::Integer:
-      case config::Type::NumberOrSection: j[path] = v.number; break;
-      case config::Type::Bool: j[path] = v.boolean; break;
+      case config::Type::NumberOrSection:
+        j[path] = v.number;
+        break;
+      case config::Type::Bool:
+        j[path] = v.boolean;
+        break;
       case config::Type::Vector3:
-      case config::Type::NumberList: j[path] = v.list; break;
-      default: j[path] = v.text;
+      case config::Type::NumberList:
+        j[path] = v.list;
+        break;
+      default:
+        j[path] = v.text;
     }
   }
   return j;
 }
 
 nlohmann::json counts_json(const vessels::NetworkCounts& n) {
-  return {{"branches", n.branches},   {"nodes", n.nodes}, {"segments", n.segments},         {"junctions", n.junctions},
-          {"ends", n.ends},           {"loops", n.loops}, {"components", n.components},     {"total_length", n.total_length},
-          {"radius_min", n.radius_min}, {"radius_max", n.radius_max}};
+  return {{"branches", n.branches},
+          {"nodes", n.nodes},
+          {"segments", n.segments},
+          {"junctions", n.junctions},
+          {"ends", n.ends},
+          {"loops", n.loops},
+          {"components", n.components},
+          {"total_length", n.total_length},
+          {"radius_min", n.radius_min},
+          {"radius_max", n.radius_max}};
 }
 
 }  // namespace
@@ -122,7 +137,8 @@ void CoSimulation::build_wire(nlohmann::json& s) {
 
 void CoSimulation::build_catheter(const rod::WireSpec& wire) {
   if (wire.adapt.enabled)
-    throw_input_error(scene_.where("wire.adapt"), "wire.adapt is not available with a catheter (both rods share one grid)");
+    throw_input_error(scene_.where("wire.adapt"),
+                      "wire.adapt is not available with a catheter (both rods share one grid)");
   cath_spec_ = scene_catheter_spec(scene_, wire);
   cath_ = std::make_unique<rod::RodSimulator>(catheter_rod_spec(*cath_spec_, wire));
   cath_->set_integrator(sim_->settings().integrator);
@@ -292,13 +308,15 @@ void CoSimulation::step() {
       sim_->set_rotation_speed(rotation_speed_);
       sim_->set_insertion_speed(insertion_speed_);
     }
-    if (sim_->inserted_length() >= max_length_ && insertion_speed_ > 0.0) sim_->set_insertion_speed(insertion_speed_ = 0.0);
+    if (sim_->inserted_length() >= max_length_ && insertion_speed_ > 0.0)
+      sim_->set_insertion_speed(insertion_speed_ = 0.0);
     if (sim_->inserted_length() >= max_length_ && sim_->push_force() > 0.0) sim_->set_push_force(0.0);  // held there
     const auto tr = Clock::now();
     const auto rep = sim_->step(dt_);
     t_rod_ += seconds_since(tr);
     if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
-      throw_numerical_error(fmt::format("rod step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(rep.status)));
+      throw_numerical_error(
+          fmt::format("rod step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(rep.status)));
     if (!rep.converged()) ++failures_;
     if (cath_) {
       // Staggered (catheter.hpp): the wire above stepped against the catheter of the last
@@ -321,7 +339,8 @@ rod::StepReport CoSimulation::solve_static_all() {
   if (!cath_) return sim_->solve_static();
   const PairStaticReport pair = solve_static_pair(*sim_, *cath_, *lumen_, 100, 1e-3 * sim_->model().h);
   rod::StepReport rep = sim_->last_report();
-  if (rep.converged() && (!pair.converged || !cath_->last_report().converged())) rep.status = rod::SolveStatus::MaxIterations;
+  if (rep.converged() && (!pair.converged || !cath_->last_report().converged()))
+    rep.status = rod::SolveStatus::MaxIterations;
   return rep;
 }
 
@@ -357,7 +376,6 @@ WireFrame CoSimulation::wire_frame() const { return rod_frame(sim_.get(), forces
 
 WireFrame CoSimulation::catheter_frame() const { return rod_frame(cath_.get(), cath_forces_.get(), time()); }
 
-
 RunResult run_scene(const config::Config& c, const RunOptions& options) {
   const auto t_start = Clock::now();
   (void)take_warnings();
@@ -368,7 +386,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
   s["steps"] = 0;
   s["scene"] = resolved_scene(c);
   if (c.has("name")) s["name"] = c.string("name");
-  nlohmann::json timings = {{"setup", 0.0}, {"flow", 0.0},   {"rod", 0.0},  {"contact", 0.0},
+  nlohmann::json timings = {{"setup", 0.0},    {"flow", 0.0},   {"rod", 0.0},  {"contact", 0.0},
                             {"coupling", 0.0}, {"output", 0.0}, {"total", 0.0}};
   const std::filesystem::path out(result.out_dir);
   auto finish = [&](const std::string& status) {
@@ -408,7 +426,8 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
       cosim.step();
       recorder.after_step();
       if (series && (step + 1) % out_every == 0) recorder.record(t1);
-      if (options.progress) options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
+      if (options.progress)
+        options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
     }
     if (!series && steps > 0) recorder.record(static_cast<double>(steps) * dt);
     s["steps"] = steps;
@@ -447,7 +466,8 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     const std::string msg = o["outside"]["message"];
     warn(msg);
     finish("outside");
-    if (!contact_settings(c).allow_outside) throw_numerical_error(msg + " (contact.allow_outside: true accepts such a run)");
+    if (!contact_settings(c).allow_outside)
+      throw_numerical_error(msg + " (contact.allow_outside: true accepts such a run)");
     return result;
   }
   finish("ok");

@@ -50,7 +50,8 @@ const config::Config& declared_scene_defaults(std::string_view section) {
     return m;
   }();
   const auto it = declared.find(section);
-  if (it == declared.end()) throw_usage_error(fmt::format("declared_scene_defaults: '{}' is no top-level section", section));
+  if (it == declared.end())
+    throw_usage_error(fmt::format("declared_scene_defaults: '{}' is no top-level section", section));
   return it->second;
 }
 

@@ -81,10 +81,10 @@ struct InsertionPlan {
 // ---- contact: (config_contact.cpp)
 void declare_contact_keys(config::Schema& schema);
 struct ContactSettings {
-  ContactParams params;  ///< all but tip_length (the rod's) and slip_speed (the model's)
-  bool settle = true;         ///< contact.settle
-  bool allow_outside = false; ///< contact.allow_outside
-  bool introducer = true;     ///< contact.introducer
+  ContactParams params;        ///< all but tip_length (the rod's) and slip_speed (the model's)
+  bool settle = true;          ///< contact.settle
+  bool allow_outside = false;  ///< contact.allow_outside
+  bool introducer = true;      ///< contact.introducer
 };
 /// @brief The contact: section, or its declared defaults where the scene has none.
 [[nodiscard]] ContactSettings contact_settings(const config::Config& scene);
@@ -99,9 +99,9 @@ void declare_coupling_keys(config::Schema& schema);
 /// @throws flowire::Error (input) naming the obstacle or steering key at fault.
 [[nodiscard]] std::shared_ptr<TipForces> make_tip_forces(const config::Config& scene, const vessels::Network* net);
 struct CouplingSettings {
-  bool occlusion = true;          ///< coupling.occlusion: annulus
-  bool occlusion_given = false;   ///< coupling.occlusion in the scene (given or defaulted in its coupling:)
-  int flow_every = 1;             ///< coupling.flow_every, at least 1
+  bool occlusion = true;         ///< coupling.occlusion: annulus
+  bool occlusion_given = false;  ///< coupling.occlusion in the scene (given or defaulted in its coupling:)
+  int flow_every = 1;            ///< coupling.flow_every, at least 1
 };
 [[nodiscard]] CouplingSettings coupling_settings(const config::Config& scene);
 

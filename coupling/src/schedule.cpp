@@ -53,24 +53,29 @@ DriveSchedule DriveSchedule::read_csv(const std::string& path) {
         if (cells[k] == names[static_cast<size_t>(n)]) which = n;
       const auto where = fmt::format("{}:{}", path, lineno);
       if (which < 0)
-        throw_input_error(where, fmt::format("unknown column '{}' (the columns are time,speed,rotation_speed)", cells[k]));
-      if (col[static_cast<size_t>(which)] >= 0) throw_input_error(where, fmt::format("column '{}' appears twice", cells[k]));
+        throw_input_error(where,
+                          fmt::format("unknown column '{}' (the columns are time,speed,rotation_speed)", cells[k]));
+      if (col[static_cast<size_t>(which)] >= 0)
+        throw_input_error(where, fmt::format("column '{}' appears twice", cells[k]));
       col[static_cast<size_t>(which)] = static_cast<int>(k);
     }
     for (int n = 0; n < 3; ++n)
       if (col[static_cast<size_t>(n)] < 0)
         throw_input_error(fmt::format("{}:{}", path, lineno),
-                          fmt::format("missing column '{}' (the header must name time,speed,rotation_speed)", names[static_cast<size_t>(n)]));
+                          fmt::format("missing column '{}' (the header must name time,speed,rotation_speed)",
+                                      names[static_cast<size_t>(n)]));
     break;
   }
-  if (ncols == 0) throw_input_error(path, "the insertion schedule is empty (expected a header time,speed,rotation_speed)");
+  if (ncols == 0)
+    throw_input_error(path, "the insertion schedule is empty (expected a header time,speed,rotation_speed)");
   std::vector<Row> rows;
   while (std::getline(in, line)) {
     ++lineno;
     if (trim(line).empty()) continue;
     const auto where = fmt::format("{}:{}", path, lineno);
     const auto cells = split(line);
-    if (cells.size() != ncols) throw_input_error(where, fmt::format("expected {} values, found {}", ncols, cells.size()));
+    if (cells.size() != ncols)
+      throw_input_error(where, fmt::format("expected {} values, found {}", ncols, cells.size()));
     double v[3];
     for (int n = 0; n < 3; ++n) {
       const std::string& cell = cells[static_cast<size_t>(col[static_cast<size_t>(n)])];
@@ -82,7 +87,8 @@ DriveSchedule DriveSchedule::read_csv(const std::string& path) {
       }
       if (cell.empty() || used != cell.size())
         throw_input_error(where, fmt::format("{}: '{}' is not a number", names[static_cast<size_t>(n)], cell));
-      if (!std::isfinite(v[n])) throw_input_error(where, fmt::format("{} is not finite", names[static_cast<size_t>(n)]));
+      if (!std::isfinite(v[n]))
+        throw_input_error(where, fmt::format("{} is not finite", names[static_cast<size_t>(n)]));
     }
     if (v[0] < 0.0) throw_input_error(where, fmt::format("time {} s is negative", v[0]));
     if (!rows.empty() && !(v[0] > rows.back().time))

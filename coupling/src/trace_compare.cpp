@@ -45,8 +45,8 @@ std::vector<TracePoint> read_tip_trace(const std::string& path) {
 namespace {
 /// Position at inserted length L, interpolating along a trace sorted by inserted length.
 Eigen::Vector3d at_length(const std::vector<TracePoint>& t, double L) {
-  auto it = std::lower_bound(t.begin(), t.end(), L,
-                             [](const TracePoint& p, double v) { return p.inserted_length < v; });
+  auto it =
+      std::lower_bound(t.begin(), t.end(), L, [](const TracePoint& p, double v) { return p.inserted_length < v; });
   if (it == t.begin()) return it->x;
   if (it == t.end()) return t.back().x;
   const auto& b = *it;
@@ -65,9 +65,10 @@ std::vector<TracePoint> monotone(std::vector<TracePoint> t) {
 }
 }  // namespace
 
-CompareResult compare_traces(const std::vector<TracePoint>& a_in, const std::vector<TracePoint>& b_in,
-                             double spacing, double row_spacing) {
-  if (!(spacing > 0) || !(row_spacing >= spacing)) throw_usage_error("compare: spacing must be positive and <= row spacing");
+CompareResult compare_traces(const std::vector<TracePoint>& a_in, const std::vector<TracePoint>& b_in, double spacing,
+                             double row_spacing) {
+  if (!(spacing > 0) || !(row_spacing >= spacing))
+    throw_usage_error("compare: spacing must be positive and <= row spacing");
   const auto a = monotone(a_in), b = monotone(b_in);
   const double lo = std::max(a.front().inserted_length, b.front().inserted_length);
   const double hi = std::min(a.back().inserted_length, b.back().inserted_length);

@@ -19,12 +19,14 @@ VesselForces::VesselForces(const vessels::SpatialIndex& index, double wire_radiu
     : index_(index), wire_radius_(wire_radius), contact_(contact), drag_(drag), velocity_(std::move(velocity)) {
   drag_.wire_radius = wire_radius;
   // Checks the slender-body length once, at set-up, not in the first step.
-  if (drag_.law == DragLaw::SlenderBody) (void)slender_body_normal_coefficient(drag_.viscosity, drag_.wire_length, wire_radius);
+  if (drag_.law == DragLaw::SlenderBody)
+    (void)slender_body_normal_coefficient(drag_.viscosity, drag_.wire_length, wire_radius);
 }
 
 Vec3 VesselForces::total_drag() const {
   Vec3 sum = Vec3::Zero();
-  for (int i = 0; i < free_ && i < static_cast<int>(drag_force_.size()); ++i) sum += drag_force_[static_cast<size_t>(i)];
+  for (int i = 0; i < free_ && i < static_cast<int>(drag_force_.size()); ++i)
+    sum += drag_force_[static_cast<size_t>(i)];
   return sum;
 }
 
@@ -228,7 +230,8 @@ void VesselForces::end_step(const rod::RodView& rod) {
       // distance measures how far outside the wire is. A vertex deeper than surf_skip_ has
       // no normal force, and its distance, below −a, cannot raise the maxima recorded below
       // (both ≥ 0).
-      const auto q = surface_->smooth_distance(rod.position(i), smoothing_, surf_near_[k], surf_margin_, nullptr, surf_skip_);
+      const auto q =
+          surface_->smooth_distance(rod.position(i), smoothing_, surf_near_[k], surf_margin_, nullptr, surf_skip_);
       if (q.skipped) continue;
       nrm = q.gradient;
       if (q.distance + wire_radius_ > 0.0) {
@@ -239,20 +242,22 @@ void VesselForces::end_step(const rod::RodView& rod) {
       // The wire passes the open inlet near the entry: measured from entry_margin on.
       if (!rod.arc_length.empty() && rod.arc_length[k] < entry_margin_) continue;
     } else {
-    const int s = segment_[static_cast<size_t>(i)];
-    if (s < 0) continue;
-    const auto& seg = index_.network().segment(s);
-    const auto& net = index_.network();
-    // Deep inside the located capsule the union's wall is farther still: nothing to record.
-    if (capsule_distance(rod.position(i), net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr,
-                         nullptr) + wire_radius_ < 0.0)
-      continue;
-    const auto loc = index_.locate(rod.position(i), s, near_[k]);
-    d = index_.wall_distance(rod.position(i), loc, near_[k], &nrm);
-    if (d + wire_radius_ > 0.0) {
-      lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * rod.cell_weight(i) * (d + wire_radius_);
-      lag_normal_[static_cast<size_t>(i)] = nrm;
-    }
+      const int s = segment_[static_cast<size_t>(i)];
+      if (s < 0) continue;
+      const auto& seg = index_.network().segment(s);
+      const auto& net = index_.network();
+      // Deep inside the located capsule the union's wall is farther still: nothing to record.
+      if (capsule_distance(rod.position(i), net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr,
+                           nullptr) +
+              wire_radius_ <
+          0.0)
+        continue;
+      const auto loc = index_.locate(rod.position(i), s, near_[k]);
+      d = index_.wall_distance(rod.position(i), loc, near_[k], &nrm);
+      if (d + wire_radius_ > 0.0) {
+        lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * rod.cell_weight(i) * (d + wire_radius_);
+        lag_normal_[static_cast<size_t>(i)] = nrm;
+      }
     }
     stats_.max_outside = std::max(stats_.max_outside, d);
     if (d > wire_radius_ && stats_.outside_time < 0.0) {

@@ -40,12 +40,15 @@ void WireOutput::add_tip(double time, double inserted_length, const Eigen::Vecto
 
 void WireOutput::add_frame(const WireFrame& f) {
   ++frame_count_;
-  auto at = [](const std::vector<Eigen::Vector3d>& v, size_t i) { return i < v.size() ? v[i] : Eigen::Vector3d::Zero(); };
+  auto at = [](const std::vector<Eigen::Vector3d>& v, size_t i) {
+    return i < v.size() ? v[i] : Eigen::Vector3d::Zero();
+  };
   if (csv_)
     for (size_t i = 0; i < f.x.size(); ++i) {
       const Eigen::Vector3d d = at(f.drag, i), c = at(f.contact, i);
-      wire_csv_ += fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", f.time, i,
-                               f.s[i], f.x[i].x(), f.x[i].y(), f.x[i].z(), d.x(), d.y(), d.z(), c.x(), c.y(), c.z());
+      wire_csv_ +=
+          fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", f.time, i,
+                      f.s[i], f.x[i].x(), f.x[i].y(), f.x[i].z(), d.x(), d.y(), d.z(), c.x(), c.y(), c.z());
     }
 #ifdef FLOWIRE_HAVE_VTK
   if (!vtk_) return;

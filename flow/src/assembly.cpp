@@ -5,9 +5,9 @@
 #include <cmath>
 #include <numeric>
 
-#include "flowire/common/union_find.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/union_find.hpp"
 #include "flowire/flow/solver.hpp"
 
 namespace flowire::flow::detail {
@@ -17,7 +17,6 @@ void check_node(const Network& net, int node, const char* what) {
   if (node < 0 || node >= net.num_nodes())
     throw_usage_error(fmt::format("flow: {} node {} is not in the network (0..{})", what, node, net.num_nodes() - 1));
 }
-
 
 }  // namespace
 
@@ -33,8 +32,9 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
     const auto& seg = net.segment(static_cast<int>(s));
     resistance[s] = segment_resistance(spec.viscosity, seg);
     if (!(resistance[s] > 0.0) || !std::isfinite(resistance[s]))
-      throw_input_error(net.source(), fmt::format("segment {}: resistance {} is not positive and finite (r = {} to {}, l = {})",
-                                                  s, resistance[s], seg.radius_from, seg.radius_to, seg.length));
+      throw_input_error(net.source(),
+                        fmt::format("segment {}: resistance {} is not positive and finite (r = {} to {}, l = {})", s,
+                                    resistance[s], seg.radius_from, seg.radius_to, seg.length));
     a.conductance[s] = 1.0 / resistance[s];
   }
   a.dirichlet.assign(nn, 0);
@@ -80,8 +80,9 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
           }
           r = o.rp + o.rd;
           if (!warned_rcr) {
-            warn("flow: the quasi-steady Poiseuille model uses each RCR outlet's total resistance Rp + Rd to Pd "
-                 "(its compliance needs flow.model: rlc)");
+            warn(
+                "flow: the quasi-steady Poiseuille model uses each RCR outlet's total resistance Rp + Rd to Pd "
+                "(its compliance needs flow.model: rlc)");
             warned_rcr = true;
           }
         }
@@ -126,7 +127,8 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
     if (root_grounded[root]) continue;
     std::vector<int> members;
     for (size_t j = 0; j < nn; ++j)
-      if (!a.dirichlet[j] && static_cast<size_t>(uf.find(static_cast<int>(j))) == root) members.push_back(static_cast<int>(j));
+      if (!a.dirichlet[j] && static_cast<size_t>(uf.find(static_cast<int>(j))) == root)
+        members.push_back(static_cast<int>(j));
     std::string list;
     for (size_t m = 0; m < members.size() && m < 8; ++m) list += (m ? ", " : "") + std::to_string(members[m]);
     if (members.size() > 8) list += ", ...";

@@ -65,8 +65,8 @@ void write_nodes_csv(const Network& net, std::span<const FlowFrame> frames, cons
       for (int i = 0; i < net.num_nodes(); ++i) {
         const auto& x = net.node(i);
         buf.clear();
-        fmt::format_to(std::back_inserter(buf), "{:.9g},{},{:.9g},{:.9g},{:.9g},{:.12g}\n", f.time, i, x.x(), x.y(), x.z(),
-                       f.pressure[static_cast<size_t>(i)]);
+        fmt::format_to(std::back_inserter(buf), "{:.9g},{},{:.9g},{:.9g},{:.9g},{:.12g}\n", f.time, i, x.x(), x.y(),
+                       x.z(), f.pressure[static_cast<size_t>(i)]);
         out << buf;
       }
     }
@@ -74,7 +74,8 @@ void write_nodes_csv(const Network& net, std::span<const FlowFrame> frames, cons
   });
 }
 
-void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> frames, const std::filesystem::path& path) {
+void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> frames,
+                        const std::filesystem::path& path) {
   const auto& net = solver.network();
   const double eta = solver.spec().viscosity, rho = solver.spec().density;
   for (const auto& f : frames) check_frame(net, f);
@@ -90,8 +91,9 @@ void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> fra
         const double r = seg.radius;
         const double v = q / (kPi * r * r);
         buf.clear();
-        fmt::format_to(std::back_inserter(buf), "{:.9g},{},{},{},{:.9g},{:.9g},{:.9g},{:.12g},{:.12g},{:.12g},{:.9g},{:.9g},{:.12g}\n",
-                       f.time, s, seg.node_from, seg.node_to, seg.length, r, solver.resistance(s), q, v,
+        fmt::format_to(std::back_inserter(buf),
+                       "{:.9g},{},{},{},{:.9g},{:.9g},{:.9g},{:.12g},{:.12g},{:.12g},{:.9g},{:.9g},{:.12g}\n", f.time,
+                       s, seg.node_from, seg.node_to, seg.length, r, solver.resistance(s), q, v,
                        4.0 * eta * std::abs(q) / (kPi * r * r * r), rho * std::abs(v) * 2.0 * r / eta,
                        f.occupied(static_cast<size_t>(s)), f.factor(static_cast<size_t>(s)));
         out << buf;
@@ -120,7 +122,8 @@ void write_network_vtp(const FlowSolver& solver, const FlowFrame& frame, const s
     w.values[s] = 4.0 * eta * std::abs(frame.flow[s]) / (kPi * r * r * r);
     re.values[s] = rho * std::abs(v.values[s]) * 2.0 * r / eta;
   }
-  vessels::write_network_vtp(net, path.string(), {vessels::DataArray{"pressure", frame.pressure, 1}}, {q, v, w, re, occ, fac});
+  vessels::write_network_vtp(net, path.string(), {vessels::DataArray{"pressure", frame.pressure, 1}},
+                             {q, v, w, re, occ, fac});
 }
 
 void write_network_series(const FlowSolver& solver, std::span<const FlowFrame> frames, const std::filesystem::path& dir,
@@ -130,7 +133,8 @@ void write_network_series(const FlowSolver& solver, std::span<const FlowFrame> f
   std::filesystem::create_directories(dir, ec);
   if (ec) throw_input_error(dir.string(), fmt::format("cannot create the output folder: {}", ec.message()));
   std::string pvd =
-      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  "
+      "<Collection>\n";
   for (size_t i = 0; i < frames.size(); ++i) {
     const std::string name = fmt::format("{}_{:06d}.vtp", stem, i);
     write_network_vtp(solver, frames[i], dir / name);

@@ -111,9 +111,10 @@ class PetscSolver final : public ResponseSolver {
         FLOWIRE_PETSC(KSPGetIterationNumber(ksp, &its));
         iterations_ += static_cast<int>(its);
         if (reason < 0)
-          throw_numerical_error(fmt::format("flow (petsc): CG did not converge (reason {}, {} iterations); "
-                                            "try petsc_pc hypre or the superposition solver",
-                                            static_cast<int>(reason), its));
+          throw_numerical_error(
+              fmt::format("flow (petsc): CG did not converge (reason {}, {} iterations); "
+                          "try petsc_pc hypre or the superposition solver",
+                          static_cast<int>(reason), its));
         FLOWIRE_PETSC(VecScatterBegin(scatter, sol, all, INSERT_VALUES, SCATTER_FORWARD));
         FLOWIRE_PETSC(VecScatterEnd(scatter, sol, all, INSERT_VALUES, SCATTER_FORWARD));
         const PetscScalar* arr = nullptr;

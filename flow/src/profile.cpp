@@ -50,7 +50,8 @@ double womersley_velocity(std::complex<double> flow_amplitude, double radius, do
   if (alpha < 1e-3) return 2.0 * (flow_amplitude * phase).real() / area * (1.0 - rho * rho);
   const std::complex<double> lambda = alpha * std::polar(1.0, 0.75 * kPi);
   const std::complex<double> j0 = bessel_j0(lambda);
-  const std::complex<double> shape = (1.0 - bessel_j0(lambda * rho) / j0) / (1.0 - 2.0 * bessel_j1(lambda) / (lambda * j0));
+  const std::complex<double> shape =
+      (1.0 - bessel_j0(lambda * rho) / j0) / (1.0 - 2.0 * bessel_j1(lambda) / (lambda * j0));
   return (flow_amplitude / area * shape * phase).real();
 }
 

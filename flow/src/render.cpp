@@ -8,6 +8,7 @@
 #include "flowire/flow/output.hpp"
 
 #ifdef FLOWIRE_FLOW_HAVE_VTK
+#include <X11/Xlib.h>
 #include <vtkActor.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
@@ -20,21 +21,20 @@
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
-#include <X11/Xlib.h>
 #undef Status
 #undef None
 #undef Bool
 #undef Success
 #include <vtkRenderWindow.h>
 
-#include <chrono>
-#include <thread>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkTubeFilter.h>
 #include <vtkWindowToImageFilter.h>
+#include <chrono>
+#include <thread>
 #endif
 
 namespace flowire::flow {
@@ -68,7 +68,8 @@ void render_network_png(const Network& net, std::span<const double> node_values,
     throw_usage_error("render_network_png: node_values must have one value per node");
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display)
-    throw_input_error(path.string(), "rendering a PNG needs an X display; run under xvfb-run -a -s \"-screen 0 1024x768x24\"");
+    throw_input_error(path.string(),
+                      "rendering a PNG needs an X display; run under xvfb-run -a -s \"-screen 0 1024x768x24\"");
   // VTK aborts the process when it cannot open the display: open it here and hand the
   // connection to the render window (which then opens none of its own; a second connection
   // per render occasionally failed under a busy Xvfb). Closed after the window is gone.
@@ -83,7 +84,8 @@ void render_network_png(const Network& net, std::span<const double> node_values,
     if (!x.d) std::this_thread::sleep_for(std::chrono::milliseconds(100 << attempt));
   }
   if (!x.d)
-    throw_input_error(path.string(), fmt::format("cannot connect to the X display '{}'; run under xvfb-run -a", display));
+    throw_input_error(path.string(),
+                      fmt::format("cannot connect to the X display '{}'; run under xvfb-run -a", display));
 
   // Vessels: one polydata, tubes of radius varying with the node radius.
   vtkNew<vtkPoints> pts;
@@ -158,7 +160,7 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   ren->SetBackground(1.0, 1.0, 1.0);
   ren->AddActor(vessels_actor);
 
-  std::vector<vtkSmartPointer<vtkPolyData>> keep;
+  std::vector<vtkSmartPointer<vtkPolyData> > keep;
   for (const auto& ov : opt.overlays) {
     if (ov.points.size() < 2) continue;
     auto p = vtkSmartPointer<vtkPolyData>::New();

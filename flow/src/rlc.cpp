@@ -185,13 +185,14 @@ class RlcSolver final : public FlowSolver {
     for (size_t s = 0; s < ne; ++s) {
       const auto& seg = net_.segment(static_cast<int>(s));
       const int row = qi(s);
-      inertance_.push_back(segment_inertance(spec_.inertance, spec_.density, seg.length, seg.radius_from, seg.radius_to));
+      inertance_.push_back(
+          segment_inertance(spec_.inertance, spec_.density, seg.length, seg.radius_from, seg.radius_to));
       te.emplace_back(row, row, inertance_.back());
       tf.emplace_back(row, row, resistance_[s]);
       tf.emplace_back(row, seg.node_from, -1.0);
       tf.emplace_back(row, seg.node_to, 1.0);
-      const double c = segment_compliance(spec_.wall_youngs_modulus, spec_.wall_thickness_ratio, seg.length, seg.radius_from,
-                                          seg.radius_to);
+      const double c = segment_compliance(spec_.wall_youngs_modulus, spec_.wall_thickness_ratio, seg.length,
+                                          seg.radius_from, seg.radius_to);
       node_c[static_cast<size_t>(seg.node_from)] += 0.5 * c;
       node_c[static_cast<size_t>(seg.node_to)] += 0.5 * c;
       // Node balance rows (non-Dirichlet): C dp/dt + sum_out Q - sum_in Q + outflow = injected.

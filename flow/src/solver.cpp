@@ -2,11 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <unistd.h>
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <cmath>
-#include <unistd.h>
 
 #include "assembly.hpp"
 #include "flowire/common/diagnostics.hpp"
@@ -53,11 +53,11 @@ double FlowSolver::segment_flow(int segment) const {
 
 void FlowSolver::set_occlusion(std::span<const SegmentOcclusion> occlusion) {
   if (!supports_occlusion())
-    throw_usage_error(fmt::format("flow: the {} solver keeps its matrix; occlusion needs superposition, sparse or rlc",
-                                  name()));
+    throw_usage_error(
+        fmt::format("flow: the {} solver keeps its matrix; occlusion needs superposition, sparse or rlc", name()));
   if (occlusion.size() != static_cast<size_t>(net_.num_segments()))
-    throw_usage_error(fmt::format("flow: occlusion for {} segments, the network has {}", occlusion.size(),
-                                  net_.num_segments()));
+    throw_usage_error(
+        fmt::format("flow: occlusion for {} segments, the network has {}", occlusion.size(), net_.num_segments()));
   bool changed = occlusion_.empty();
   for (size_t s = 0; s < occlusion.size(); ++s) {
     const auto& o = occlusion[s];
@@ -84,7 +84,8 @@ void FlowSolver::node_pressures(std::span<double> out) const {
 }
 
 void FlowSolver::segment_flows(std::span<double> out) const {
-  if (out.size() != static_cast<size_t>(net_.num_segments())) throw_usage_error("segment_flows: span size != num_segments");
+  if (out.size() != static_cast<size_t>(net_.num_segments()))
+    throw_usage_error("segment_flows: span size != num_segments");
   for (int s = 0; s < net_.num_segments(); ++s) out[static_cast<size_t>(s)] = segment_flow(s);
 }
 
@@ -124,13 +125,14 @@ double FlowSolver::profile_velocity(int segment, double rho2, double t) const {
     const auto k = base + static_cast<size_t>(n - 1);
     if (harmonic_[k] == 0.0) continue;
     if (!shape_[k]) {
-      const double a_n = womersley_number(r, omega_, spec_.density, spec_.viscosity) * std::sqrt(static_cast<double>(n));
+      const double a_n =
+          womersley_number(r, omega_, spec_.density, spec_.viscosity) * std::sqrt(static_cast<double>(n));
       auto& cached = shape_by_alpha_[a_n];
       if (!cached) cached = std::make_shared<const WomersleyShape>(a_n);
       shape_[k] = cached;
     }
     const std::complex<double> qn = harmonic_[k] * phase;
-    u += ((*shape_[k])(rho) * qn).real() / area - laminar * qn.real();
+    u += ((*shape_[k])(rho)*qn).real() / area - laminar * qn.real();
   }
   return g * u;
 }
@@ -162,8 +164,9 @@ void FlowSolver::prepare_profile() {
     if (!(in.waveform.is_constant() || std::abs(c - period) <= 1e-12 * period)) periodic = false;
   }
   if (!periodic) {
-    warn("flow.profile: womersley needs the quasi-steady model driven by periodic waveforms of one period; "
-         "using the laminar profile");
+    warn(
+        "flow.profile: womersley needs the quasi-steady model driven by periodic waveforms of one period; "
+        "using the laminar profile");
     return;
   }
   const auto ne = static_cast<size_t>(net_.num_segments());
@@ -242,7 +245,8 @@ void ResponseSolver::set_responses(const Eigen::MatrixXd& x) {
 }
 
 void ResponseSolver::update_conductances() {
-  for (size_t s = 0; s < a_.conductance.size(); ++s) a_.conductance[s] = 1.0 / effective_resistance(static_cast<int>(s));
+  for (size_t s = 0; s < a_.conductance.size(); ++s)
+    a_.conductance[s] = 1.0 / effective_resistance(static_cast<int>(s));
 }
 
 void ResponseSolver::compute_harmonics() {
@@ -319,7 +323,8 @@ void ResponseSolver::node_pressures(std::span<double> out) const {
 }
 
 void ResponseSolver::segment_flows(std::span<double> out) const {
-  if (out.size() != static_cast<size_t>(net_.num_segments())) throw_usage_error("segment_flows: span size != num_segments");
+  if (out.size() != static_cast<size_t>(net_.num_segments()))
+    throw_usage_error("segment_flows: span size != num_segments");
   const auto kk = static_cast<size_t>(k_);
   for (size_t s = 0; s < out.size(); ++s) {
     const auto& seg = net_.segment(static_cast<int>(s));
@@ -433,7 +438,8 @@ class SparseSolver final : public FrameSolver {
 
  protected:
   void apply_occlusion() override {
-    for (size_t s = 0; s < a_.conductance.size(); ++s) a_.conductance[s] = 1.0 / effective_resistance(static_cast<int>(s));
+    for (size_t s = 0; s < a_.conductance.size(); ++s)
+      a_.conductance[s] = 1.0 / effective_resistance(static_cast<int>(s));
     for (size_t k = 0; k < b_.size(); ++k) {  // a pressure source enters through the conductances next to it
       b_[k].setZero();
       add_nodal_rhs(net_, a_, a_.sources[k], 1.0, b_[k]);
@@ -510,7 +516,8 @@ class DenseInverseSolver final : public FrameSolver {
     Eigen::PartialPivLU<Eigen::MatrixXd> lu(k);
     k.resize(0, 0);
     const double rc = lu.rcond();
-    if (!(rc > 1e-300)) throw_numerical_error(fmt::format("flow: the published system K is singular (rcond {:.3g})", rc));
+    if (!(rc > 1e-300))
+      throw_numerical_error(fmt::format("flow: the published system K is singular (rcond {:.3g})", rc));
     kinv_ = lu.inverse();
     if (!kinv_.allFinite()) throw_numerical_error("flow: the dense inverse of K is not finite");
     coef_.resize(static_cast<size_t>(a_.num_sources()));
@@ -560,10 +567,18 @@ std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec) {
     s = detail::make_rlc_solver(net, std::move(spec));
   } else {
     switch (spec.solver) {
-      case SolverKind::Superposition: s = std::make_unique<detail::SuperpositionSolver>(net, std::move(spec)); break;
-      case SolverKind::Sparse: s = std::make_unique<detail::SparseSolver>(net, std::move(spec)); break;
-      case SolverKind::DenseInverse: s = std::make_unique<detail::DenseInverseSolver>(net, std::move(spec)); break;
-      case SolverKind::Petsc: s = detail::make_petsc_solver(net, std::move(spec)); break;
+      case SolverKind::Superposition:
+        s = std::make_unique<detail::SuperpositionSolver>(net, std::move(spec));
+        break;
+      case SolverKind::Sparse:
+        s = std::make_unique<detail::SparseSolver>(net, std::move(spec));
+        break;
+      case SolverKind::DenseInverse:
+        s = std::make_unique<detail::DenseInverseSolver>(net, std::move(spec));
+        break;
+      case SolverKind::Petsc:
+        s = detail::make_petsc_solver(net, std::move(spec));
+        break;
     }
   }
   s->prepare_profile();

@@ -35,8 +35,8 @@ class ResponseSolver : public FlowSolver {
   void compute_harmonics() override;
   Assembly a_;
   int k_ = 0;
-  std::vector<double> p_;     // (num_nodes x k) node pressure response to each source
-  std::vector<double> coef_;  // (k) f_k(time)
+  std::vector<double> p_;                              // (num_nodes x k) node pressure response to each source
+  std::vector<double> coef_;                           // (k) f_k(time)
   std::vector<std::complex<double>> source_harmonic_;  // (k x kHarmonics) of each waveform, once
 };
 

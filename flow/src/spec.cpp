@@ -24,7 +24,8 @@ Waveform Waveform::constant(double v) {
 }
 
 Waveform Waveform::sine(double systolic, double diastolic, double period) {
-  if (!(period > 0.0) || !std::isfinite(period)) throw_usage_error(fmt::format("sine waveform: period {} must be positive", period));
+  if (!(period > 0.0) || !std::isfinite(period))
+    throw_usage_error(fmt::format("sine waveform: period {} must be positive", period));
   Waveform w;
   w.kind = Kind::Sine;
   w.systolic = systolic;
@@ -48,7 +49,8 @@ Waveform Waveform::table(std::vector<double> times, std::vector<double> values, 
 
 double Waveform::operator()(double t) const {
   switch (kind) {
-    case Kind::Constant: return value;
+    case Kind::Constant:
+      return value;
     case Kind::Sine:
       return 0.5 * (systolic - diastolic) * std::sin(2.0 * kPi * t / period) + 0.5 * (systolic + diastolic);
     case Kind::Table: {
@@ -73,8 +75,10 @@ double Waveform::operator()(double t) const {
 
 double Waveform::mean() const {
   switch (kind) {
-    case Kind::Constant: return value;
-    case Kind::Sine: return 0.5 * (systolic + diastolic);
+    case Kind::Constant:
+      return value;
+    case Kind::Sine:
+      return 0.5 * (systolic + diastolic);
     case Kind::Table: {
       if (times.size() == 1) return values[0];
       double s = 0.0;
@@ -87,9 +91,12 @@ double Waveform::mean() const {
 
 double Waveform::cycle() const {
   switch (kind) {
-    case Kind::Constant: return 0.0;
-    case Kind::Sine: return period;
-    case Kind::Table: return periodic ? times.back() - times.front() : 0.0;
+    case Kind::Constant:
+      return 0.0;
+    case Kind::Sine:
+      return period;
+    case Kind::Table:
+      return periodic ? times.back() - times.front() : 0.0;
   }
   return 0.0;
 }
@@ -110,8 +117,7 @@ Waveform read_waveform_csv(const std::string& path) {
       if (t.empty() && lineno == 1) continue;  // header
       throw_input_error(fmt::format("{}:{}", path, lineno), "expected two numbers: time,value");
     }
-    if (!t.empty() && !(a > t.back()))
-      throw_input_error(fmt::format("{}:{}", path, lineno), "times must increase");
+    if (!t.empty() && !(a > t.back())) throw_input_error(fmt::format("{}:{}", path, lineno), "times must increase");
     t.push_back(a);
     v.push_back(b);
   }
@@ -123,10 +129,14 @@ std::string_view to_string(Model m) { return m == Model::Rlc ? "rlc" : "poiseuil
 
 std::string_view to_string(SolverKind s) {
   switch (s) {
-    case SolverKind::Superposition: return "superposition";
-    case SolverKind::DenseInverse: return "dense_inverse";
-    case SolverKind::Sparse: return "sparse";
-    case SolverKind::Petsc: return "petsc";
+    case SolverKind::Superposition:
+      return "superposition";
+    case SolverKind::DenseInverse:
+      return "dense_inverse";
+    case SolverKind::Sparse:
+      return "sparse";
+    case SolverKind::Petsc:
+      return "petsc";
   }
   return "?";
 }
@@ -161,7 +171,8 @@ void resolve_nodes(FlowSpec& spec, const Network& net) {
   if (expand) {
     spec.outlets.clear();
     for (int e : net.ends()) {
-      const bool is_inlet = std::any_of(spec.inlets.begin(), spec.inlets.end(), [&](const InletBC& i) { return i.node == e; });
+      const bool is_inlet =
+          std::any_of(spec.inlets.begin(), spec.inlets.end(), [&](const InletBC& i) { return i.node == e; });
       if (is_inlet) continue;
       OutletBC o = tmpl;
       o.node = e;
@@ -195,8 +206,9 @@ Waveform waveform_from(const Config& cfg, const std::string& path) {
     // sine has them, a flow sine has none): nothing is assumed here.
     for (const char* key : {"systolic", "diastolic", "period"})
       if (!cfg.has(path + "." + key))
-        throw_input_error(cfg.where(path), fmt::format("a sine waveform needs '{}.{}'{}", path, key,
-                                                       path.ends_with(".flow") ? " (a flow has no default amplitude)" : ""));
+        throw_input_error(cfg.where(path),
+                          fmt::format("a sine waveform needs '{}.{}'{}", path, key,
+                                      path.ends_with(".flow") ? " (a flow has no default amplitude)" : ""));
     const double period = cfg.number(path + ".period");
     if (!(period > 0.0)) throw_input_error(cfg.where(path + ".period"), "period must be positive");
     return Waveform::sine(cfg.number(path + ".systolic"), cfg.number(path + ".diastolic"), period);
@@ -215,7 +227,8 @@ int node_from(const Config& cfg, const std::string& path, const Network& net) {
     const int n = std::stoi(text, &used);
     if (used == text.size()) {
       if (n < 0 || n >= net.num_nodes())
-        throw_input_error(cfg.where(path), fmt::format("node {} is not in the network (0..{})", n, net.num_nodes() - 1));
+        throw_input_error(cfg.where(path),
+                          fmt::format("node {} is not in the network (0..{})", n, net.num_nodes() - 1));
       return n;
     }
   } catch (const std::logic_error&) {
@@ -237,26 +250,28 @@ void declare_scene_keys(config::Schema& s) {
   using config::Type;
   using D = units::Dimension;
   s.add("flow", Type::Section, "", D::None, "blood flow in the network (absent: no flow is computed)");
-  s.add("flow.model", Type::Enum, "poiseuille", D::None, "poiseuille: resistances only; rlc: also inertance and wall compliance",
-      {"poiseuille", "rlc"});
+  s.add("flow.model", Type::Enum, "poiseuille", D::None,
+        "poiseuille: resistances only; rlc: also inertance and wall compliance", {"poiseuille", "rlc"});
   s.add("flow.solver", Type::Enum, "superposition", D::None,
-      "superposition (factor once, affine in the sources) | dense_inverse (the published precomputed K^-1) | sparse "
-      "(a direct solve per frame) | petsc (distributed)",
-      {"superposition", "dense_inverse", "sparse", "petsc"});
+        "superposition (factor once, affine in the sources) | dense_inverse (the published precomputed K^-1) | sparse "
+        "(a direct solve per frame) | petsc (distributed)",
+        {"superposition", "dense_inverse", "sparse", "petsc"});
   s.add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity, "blood dynamic viscosity");
   s.add("flow.density", Type::Number, "1060", D::Density, "blood density");
   s.add("flow.inertance", Type::Enum, "poiseuille", D::None,
-      "rlc: inertance per segment, poiseuille = rho*l/(pi*r^2), womersley = 4*rho*l/(3*pi*r^2)", {"poiseuille", "womersley"});
+        "rlc: inertance per segment, poiseuille = rho*l/(pi*r^2), womersley = 4*rho*l/(3*pi*r^2)",
+        {"poiseuille", "womersley"});
   s.add("flow.wall", Type::Section, "", D::None, "rlc: the vessel wall (compliance C = 3 pi r^3 l / (2 E h))");
   s.add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus");
   s.add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
   s.add("flow.profile", Type::Enum, "laminar", D::None,
-      "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
-      "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
-      "docs/blood-drag.md)",
-      {"laminar", "womersley"});
+        "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
+        "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
+        "docs/blood-drag.md)",
+        {"laminar", "womersley"});
   s.add("flow.inlet", Type::Section, "{}", D::None, "inlet boundary condition");
-  s.add("flow.inlet.node", Type::StringOrInteger, "", D::None, "inlet node id (default: the network end with the largest radius)");
+  s.add("flow.inlet.node", Type::StringOrInteger, "", D::None,
+        "inlet node id (default: the network end with the largest radius)");
   // The inlet: a pressure (by default the 120/80 mmHg sine, declared here once) or a flow.
   // A flow has no default amplitude: a flow sine needs its systolic and diastolic values.
   for (const char* what : {"pressure", "flow"}) {
@@ -266,28 +281,31 @@ void declare_scene_keys(config::Schema& s) {
     const std::string q = p ? "P" : "Q";
     if (p)
       s.add(base, Type::NumberOrSection, "{waveform: sine}", dim,
-          "inlet pressure: a constant, or a waveform section (default: the sine with the defaults below)");
+            "inlet pressure: a constant, or a waveform section (default: the sine with the defaults below)");
     else
       s.add(base, Type::NumberOrSection, "", dim,
-          "prescribed inlet flow instead of a pressure: a constant or a waveform section");
+            "prescribed inlet flow instead of a pressure: a constant or a waveform section");
     s.add(base + ".waveform", Type::Enum, "", D::None,
-        "sine: (" + q + "1-" + q + "2)/2 sin(2 pi t/T) + (" + q + "1+" + q +
-            "2)/2; constant; table (default: table if file is given, else sine)",
-        {"sine", "constant", "table"});
+          "sine: (" + q + "1-" + q + "2)/2 sin(2 pi t/T) + (" + q + "1+" + q +
+              "2)/2; constant; table (default: table if file is given, else sine)",
+          {"sine", "constant", "table"});
     s.add(base + ".systolic", Type::Number, p ? "120 mmHg" : "", dim,
-        p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
+          p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
     s.add(base + ".diastolic", Type::Number, p ? "80 mmHg" : "", dim,
-        p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
+          p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
     s.add(base + ".period", Type::Number, "0.8 s", D::Time, "sine: period T");
     s.add(base + ".value", Type::Number, "", dim, "constant: the value");
     s.add(base + ".file", Type::String, "", D::None, "table: CSV with a header and columns time,value (SI), periodic");
   }
   s.add("flow.outlets", Type::Section, "{}", D::None, "boundary condition at every other network end");
-  s.add("flow.outlets.pressure", Type::Number, "", D::Pressure, "fixed outlet pressure (default 0 when nothing else is given)");
+  s.add("flow.outlets.pressure", Type::Number, "", D::Pressure,
+        "fixed outlet pressure (default 0 when nothing else is given)");
   s.add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure");
   s.add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
   s.add("flow.outlets.scaling", Type::Enum, "none", D::None,
-      "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so each outlet flow is proportional to r^3", {"none", "murray"});
+        "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so "
+        "each outlet flow is proportional to r^3",
+        {"none", "murray"});
   s.add("flow.outlets.rcr", Type::Section, "", D::None, "RCR windkessel at every outlet");
   s.add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance");
   s.add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance");
@@ -299,20 +317,31 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   FlowSpec s;
   if (cfg.has("flow.model")) {
     const auto& m = cfg.string("flow.model");
-    if (m == "poiseuille") s.model = Model::Poiseuille;
-    else if (m == "rlc") s.model = Model::Rlc;
-    else throw_input_error(cfg.where("flow.model"), fmt::format("'{}' is not one of: poiseuille, rlc", m));
+    if (m == "poiseuille")
+      s.model = Model::Poiseuille;
+    else if (m == "rlc")
+      s.model = Model::Rlc;
+    else
+      throw_input_error(cfg.where("flow.model"), fmt::format("'{}' is not one of: poiseuille, rlc", m));
   }
   if (cfg.has("flow.solver")) {
     const auto& m = cfg.string("flow.solver");
-    if (m == "superposition") s.solver = SolverKind::Superposition;
-    else if (m == "dense_inverse") s.solver = SolverKind::DenseInverse;
-    else if (m == "sparse") s.solver = SolverKind::Sparse;
-    else if (m == "petsc") s.solver = SolverKind::Petsc;
-    else throw_input_error(cfg.where("flow.solver"), fmt::format("'{}' is not one of: superposition, dense_inverse, sparse, petsc", m));
+    if (m == "superposition")
+      s.solver = SolverKind::Superposition;
+    else if (m == "dense_inverse")
+      s.solver = SolverKind::DenseInverse;
+    else if (m == "sparse")
+      s.solver = SolverKind::Sparse;
+    else if (m == "petsc")
+      s.solver = SolverKind::Petsc;
+    else
+      throw_input_error(cfg.where("flow.solver"),
+                        fmt::format("'{}' is not one of: superposition, dense_inverse, sparse, petsc", m));
   }
-  if (cfg.has("flow.inertance")) s.inertance = cfg.string("flow.inertance") == "womersley" ? Inertance::Womersley : Inertance::Poiseuille;
-  if (cfg.has("flow.profile")) s.profile = cfg.string("flow.profile") == "womersley" ? Profile::Womersley : Profile::Laminar;
+  if (cfg.has("flow.inertance"))
+    s.inertance = cfg.string("flow.inertance") == "womersley" ? Inertance::Womersley : Inertance::Poiseuille;
+  if (cfg.has("flow.profile"))
+    s.profile = cfg.string("flow.profile") == "womersley" ? Profile::Womersley : Profile::Laminar;
   s.viscosity = cfg.number_or("flow.viscosity", s.viscosity);
   s.density = cfg.number_or("flow.density", s.density);
   if (!(s.viscosity > 0.0)) throw_input_error(cfg.where("flow.viscosity"), "viscosity must be positive");
@@ -346,7 +375,9 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   OutletBC o;  // template for every other end
   const bool has_r = cfg.has("flow.outlets.resistance");
   const bool has_rcr = cfg.has_section("flow.outlets.rcr");
-  if (has_r && has_rcr) throw_input_error(cfg.where("flow.outlets.resistance"), "give either flow.outlets.resistance or flow.outlets.rcr, not both");
+  if (has_r && has_rcr)
+    throw_input_error(cfg.where("flow.outlets.resistance"),
+                      "give either flow.outlets.resistance or flow.outlets.rcr, not both");
   if (has_rcr) {
     o.type = OutletBC::Type::Rcr;
     o.rp = cfg.number_or("flow.outlets.rcr.Rp", 0.0);

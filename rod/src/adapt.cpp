@@ -44,8 +44,7 @@ bool RodSimulator::adapt_for(double pull_back) {
       const Vec3 te = (s.x[k] - s.x[k - 1]).normalized();
       const Vec3 tf = (s.x[k + 1] - s.x[k]).normalized();
       const double phi = std::atan2(te.cross(tf).norm(), te.dot(tf));
-      const double rest =
-          2.0 * std::atan(0.5 * std::hypot(disc_.rest_kappa1[k], disc_.rest_kappa2[k]));
+      const double rest = 2.0 * std::atan(0.5 * std::hypot(disc_.rest_kappa1[k], disc_.rest_kappa2[k]));
       w.turn_angle[k] = std::max(phi, rest);
     }
     w.split_edge.assign(nv - 1, 0);
@@ -59,8 +58,7 @@ bool RodSimulator::adapt_for(double pull_back) {
     for (int j = lowest; j < nv - 1; ++j)
       if (s.u[j + 1] > zone + tol && len(j) > h + tol) w.split_edge[j] = 1;
     for (int k = std::max(lowest, 1); k < nv - 1; ++k)
-      if (s.u[k] > zone - tol && !aligned(s.u[k], h) && sibling_pair(k) && !w.split_edge[k - 1] &&
-          !w.split_edge[k])
+      if (s.u[k] > zone - tol && !aligned(s.u[k], h) && sibling_pair(k) && !w.split_edge[k - 1] && !w.split_edge[k])
         w.remove_vertex[k] = 1;
     if (round == 0) {
       auto splittable = [&](int j) {  // the new vertex stays free over the next step
@@ -75,8 +73,7 @@ bool RodSimulator::adapt_for(double pull_back) {
         again = false;
         for (int j = 0; j < nv - 1; ++j)
           for (int i : {j - 1, j + 1})
-            if (i >= 0 && i < nv - 1 && !w.split_edge[i] && final_len(i) > 2.0 * final_len(j) + tol &&
-                splittable(i)) {
+            if (i >= 0 && i < nv - 1 && !w.split_edge[i] && final_len(i) > 2.0 * final_len(j) + tol && splittable(i)) {
               w.split_edge[i] = 1;
               again = true;
             }
@@ -93,8 +90,7 @@ bool RodSimulator::adapt_for(double pull_back) {
         // (m_k/8)|v_{k−1} − v_{k+1}|² (exact for a linear velocity field): merge only where
         // that is negligible, so a rod swinging through straight is not coarsened.
         const double dke = 0.125 * disc_.mass[k] * (s.v[k - 1] - s.v[k + 1]).squaredNorm();
-        const double ke = 0.5 * (disc_.mass[k - 1] * s.v[k - 1].squaredNorm() +
-                                 disc_.mass[k] * s.v[k].squaredNorm() +
+        const double ke = 0.5 * (disc_.mass[k - 1] * s.v[k - 1].squaredNorm() + disc_.mass[k] * s.v[k].squaredNorm() +
                                  disc_.mass[k + 1] * s.v[k + 1].squaredNorm());
         if (dke > 1e-4 * ke) continue;
         w.remove_vertex[k] = 1;
@@ -202,8 +198,8 @@ void RodSimulator::resample(const std::vector<double>& u_new) {
   for (int m = 1; m < nn - 1; ++m) {
     const int k = w.new_source[m];
     const double previous = (k > 0 && k < nv - 1) ? w.old_ref_twist[k] : 0.0;
-    s.ref_twist[m] = reference_twist(s.frame[m - 1].d1, (s.x[m] - s.x[m - 1]).normalized(),
-                                     s.frame[m].d1, (s.x[m + 1] - s.x[m]).normalized(), previous);
+    s.ref_twist[m] = reference_twist(s.frame[m - 1].d1, (s.x[m] - s.x[m - 1]).normalized(), s.frame[m].d1,
+                                     (s.x[m + 1] - s.x[m]).normalized(), previous);
   }
   // Material angles swept from the clamp (whose edges are unchanged): each vertex carries
   // the old twist density times its new cell.

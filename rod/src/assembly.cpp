@@ -94,8 +94,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
     w.vel.resize(nv);
     w.spin.resize(nv - 1);
     w.tangent.resize(nv - 1);
-    for (int k = 0; k < nv; ++k)
-      w.vel[k] = mode == Mode::Dynamic ? Vec3((s.x[k] - w.x0[k]) / h) : Vec3::Zero();
+    for (int k = 0; k < nv; ++k) w.vel[k] = mode == Mode::Dynamic ? Vec3((s.x[k] - w.x0[k]) / h) : Vec3::Zero();
     for (int j = 0; j < nv - 1; ++j) {
       w.spin[j] = mode == Mode::Dynamic ? (s.theta[j] - w.theta0[j]) / h : 0.0;
       w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
@@ -119,8 +118,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
     w.has_ext_k = true;
     for (int j = 0; j < nv - 1; ++j) {
       w.fext(4 * j + 3) += w.acc.twist_torques()[j];
-      w.ext_spin_k[j] =
-          mode == Mode::Dynamic ? -w.acc.twist_torque_spin_derivatives()[j] / h : 0.0;
+      w.ext_spin_k[j] = mode == Mode::Dynamic ? -w.acc.twist_torque_spin_derivatives()[j] / h : 0.0;
     }
     w.has_ext_edge_k = w.acc.has_edge_jacobians();
     if (w.has_ext_edge_k) {
@@ -140,8 +138,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   }
 }
 
-double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need, bool psd,
-                              bool reuse_loads) {
+double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need, bool psd, bool reuse_loads) {
   Work& w = *work_;
   const RodState& s = state_;
   const int nv = s.vertex_count();
@@ -184,8 +181,7 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
   }
   // Bending and twisting: per-edge geometry once, then one stencil per interior vertex.
   w.edges.resize(nv - 1);
-  for (int j = 0; j < nv - 1; ++j)
-    w.edges[j] = edge_geometry(s.x[j], s.x[j + 1], s.frame[j], s.theta[j]);
+  for (int j = 0; j < nv - 1; ++j) w.edges[j] = edge_geometry(s.x[j], s.x[j + 1], s.frame[j], s.theta[j]);
   VertexParams p;
   Vec11 gs;
   Mat11 hs;
@@ -252,8 +248,8 @@ double RodSimulator::force_scale(double load_scale) const {
     lmin = std::min(lmin, disc_.rest_length[j]);
   }
   const double L = std::max(s.inserted_length, model_.h);
-  double f = std::max({ei / (L * L), load_scale * total_mass * gravity_.norm(),
-                       load_scale * tip_force_.norm(), load_scale * tip_moment_.norm() / L});
+  double f = std::max({ei / (L * L), load_scale * total_mass * gravity_.norm(), load_scale * tip_force_.norm(),
+                       load_scale * tip_moment_.norm() / L});
   for (const auto& pf : point_forces_) f = std::max(f, load_scale * pf.f.norm());
   const double xscale = model_.base_position.norm() + L;
   const double floor = 4.0 * std::numeric_limits<double>::epsilon() * ea * (1.0 + xscale / lmin);

@@ -34,8 +34,7 @@ void BandedMatrix::set_identity_row(int i) {
   lower(i, i) = 1.0;
 }
 
-void BandedMatrix::multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
-                            Eigen::Ref<Eigen::VectorXd> y) const {
+void BandedMatrix::multiply(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const {
   y.setZero();
   for (int i = 0; i < n_; ++i) {
     const double* row = &data_[static_cast<size_t>(i) * (b_ + 1)];
@@ -84,8 +83,9 @@ namespace {
 typedef double V2 __attribute__((vector_size(16)));
 
 template <int B>
-__attribute__((always_inline)) inline bool factorize_band(double* __restrict L, int n, int b_runtime, double tiny, double min_pivot,
-                    double* __restrict w, int& negative, int& modified, double& min_pivot_seen) {
+__attribute__((always_inline)) inline bool factorize_band(double* __restrict L, int n, int b_runtime, double tiny,
+                                                          double min_pivot, double* __restrict w, int& negative,
+                                                          int& modified, double& min_pivot_seen) {
   const int b = B > 0 ? B : b_runtime;
   const size_t stride = static_cast<size_t>(b) + 1;
   double w_local[B > 0 ? B : 1];
@@ -151,7 +151,8 @@ __attribute__((always_inline)) inline bool factorize_band(double* __restrict L, 
 /// Forward (L y = r), diagonal and backward (Lᵀ x = z) substitution in place; with B > 0
 /// the interior rows run with a compile-time bandwidth.
 template <int B>
-__attribute__((always_inline)) inline void solve_band(const double* __restrict L, int n, int b_runtime, double* __restrict x) {
+__attribute__((always_inline)) inline void solve_band(const double* __restrict L, int n, int b_runtime,
+                                                      double* __restrict x) {
   const int b = B > 0 ? B : b_runtime;
   const size_t stride = static_cast<size_t>(b) + 1;
   for (int i = 0; i < n; ++i) {  // L y = rhs
@@ -179,7 +180,7 @@ __attribute__((always_inline)) inline void solve_band(const double* __restrict L
     x[i] = s;
   }
   for (int i = 0; i < n; ++i) x[i] /= L[static_cast<size_t>(i) * stride + b];  // D z = y
-  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z
+  for (int i = n - 1; i >= 0; --i) {                                           // Lᵀ x = z
     const double* li = L + static_cast<size_t>(i) * stride;
     const double xi = x[i];
     if (B > 0 && i >= B) {
@@ -206,12 +207,10 @@ bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
   min_pivot_ = n > 0 ? a.lower(0, 0) : 0.0;
   const double tiny = 1e-14 * std::max(a.max_diagonal(), 1e-300);
   const size_t stride = static_cast<size_t>(b) + 1;
-  std::copy(a.data().begin(), a.data().begin() + static_cast<std::ptrdiff_t>(n * stride),
-            l_.data().begin());
+  std::copy(a.data().begin(), a.data().begin() + static_cast<std::ptrdiff_t>(n * stride), l_.data().begin());
   double* L = l_.data().data();
   double* w = work_.data();
-  if (b == 10)
-    return factorize_band<10>(L, n, b, tiny, min_pivot, w, negative_, modified_, min_pivot_);
+  if (b == 10) return factorize_band<10>(L, n, b, tiny, min_pivot, w, negative_, modified_, min_pivot_);
   return factorize_band<0>(L, n, b, tiny, min_pivot, w, negative_, modified_, min_pivot_);
 }
 

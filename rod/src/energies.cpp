@@ -118,15 +118,14 @@ void add_curvature_hessians(const Local& L, double w1, double w2, Mat8& H) {
   const Vec3* T[2] = {&L.te, &L.tf};
   for (int edge = 0; edge < 2; ++edge) {
     const int tcol = 3 * edge, acol = 6 + edge;
-    const Vec6 p = L.dkb.transpose() * (*T[edge]);  // Kᵀ t
+    const Vec6 p = L.dkb.transpose() * (*T[edge]);   // Kᵀ t
     const Vec6 q = L.dkb.transpose() * (*Dp[edge]);  // Kᵀ d'
     const Eigen::Matrix<double, 6, 3> pd = -p * D[edge]->transpose();
     H.block<6, 3>(0, tcol) += pd;
     H.block<3, 6>(tcol, 0) += pd.transpose();
     H.block<6, 1>(0, acol) += q;
     H.block<1, 6>(acol, 0) += q.transpose();
-    H.block<3, 3>(tcol, tcol) -=
-        0.5 * ((*D[edge]) * L.kb.transpose() + L.kb * D[edge]->transpose());
+    H.block<3, 3>(tcol, tcol) -= 0.5 * ((*D[edge]) * L.kb.transpose() + L.kb * D[edge]->transpose());
     H(acol, acol) -= L.kb.dot(*D[edge]);  // κb·d'' with d'' = −d
   }
 }
@@ -134,15 +133,12 @@ void add_curvature_hessians(const Local& L, double w1, double w2, Mat8& H) {
 /// Second derivative of t = e/|e| contracted with p: Σ_k p_k ∂²t_k/∂e².
 Mat3 tangent_curvature_term(const Vec3& p, const Vec3& t, double l) {
   const double pt = p.dot(t);
-  return -(t * p.transpose() + p * t.transpose() +
-           pt * (Mat3::Identity() - 3.0 * t * t.transpose())) /
-         (l * l);
+  return -(t * p.transpose() + p * t.transpose() + pt * (Mat3::Identity() - 3.0 * t * t.transpose())) / (l * l);
 }
 
 /// Chain rule from y = (te, tf, θe, θf) to the stencil unknowns (x0, θe, x1, θf, x2),
 /// with te depending on (x0, x1) through Pe = (I − te teᵀ)/le and tf on (x1, x2).
-void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11* Hx,
-                bool first_order_only = false) {
+void to_stencil(const Local& L, const Vec8& gy, const Mat8* Hy, Vec11* gx, Mat11* Hx, bool first_order_only = false) {
   const Mat3 Pe = (Mat3::Identity() - L.te * L.te.transpose()) / L.le;
   const Mat3 Pf = (Mat3::Identity() - L.tf * L.tf.transpose()) / L.lf;
   if (gx) {
@@ -211,8 +207,8 @@ double bend_y(const Local& L, const VertexParams& p, Vec8* gy, Mat8* Hy, bool gn
 }
 
 /// Twisting energy with gradient/Hessian in y.
-double twist_y(const Local& L, double theta_e, double theta_f, const VertexParams& p, Vec8* gy,
-               Mat8* Hy, bool gn = false) {
+double twist_y(const Local& L, double theta_e, double theta_f, const VertexParams& p, Vec8* gy, Mat8* Hy,
+               bool gn = false) {
   const double m = theta_f - theta_e + L.ref_twist;
   const double dm = m - p.rest_twist;
   const double c = p.twist_stiffness / p.voronoi_length;
@@ -240,7 +236,6 @@ double twist_y(const Local& L, double theta_e, double theta_f, const VertexParam
   }
   return 0.5 * c * dm * dm;
 }
-
 
 // Small value types for the stencil kernel below: plain structs of doubles that the compiler
 // keeps in registers and inlines completely (fixed-size Eigen 3-vectors in an expression of
@@ -310,10 +305,9 @@ struct S3 {
 /// - the (x0,x0) and (x2,x2) blocks are built as symmetric 3×3 matrices, and the 11×11
 ///   result is written once, both triangles, from the three position blocks Ee, Ef, Ff.
 FLOWIRE_ROD_KERNEL_CLONES
-double bend_twist_kernel(const Vec3& te_, const Vec3& tf_, double le, double lf,
-                         const Vec3& m1e_, const Vec3& m2e_, const Vec3& m1f_, const Vec3& m2f_,
-                         double theta_e, double theta_f, double ref_twist, const VertexParams& p,
-                         Vec11* gradient, Mat11* hessian, bool gauss_newton) {
+double bend_twist_kernel(const Vec3& te_, const Vec3& tf_, double le, double lf, const Vec3& m1e_, const Vec3& m2e_,
+                         const Vec3& m1f_, const Vec3& m2f_, double theta_e, double theta_f, double ref_twist,
+                         const VertexParams& p, Vec11* gradient, Mat11* hessian, bool gauss_newton) {
   const V3 te = v3(te_), tf = v3(tf_);
   const V3 m1e = v3(m1e_), m2e = v3(m2e_), m1f = v3(m1f_), m2f = v3(m2f_);
   const double chi = 1.0 + dot(te, tf);
@@ -333,7 +327,7 @@ double bend_twist_kernel(const Vec3& te_, const Vec3& tf_, double le, double lf,
   const double s1 = c1 * d1, s2 = c2 * d2, st = ct * dm;
   const double two_ic = 2.0 * ic, two_ic2 = two_ic * ic;
   // (ke, kf) = ∂(κb)/∂(te, tf)ᵀ v.
-  auto apply_kt = [&](V3 v, V3& ke, V3& kf) __attribute__((always_inline)) {
+  auto apply_kt = [&](V3 v, V3 & ke, V3 & kf) __attribute__((always_inline)) {
     const double wv = two_ic2 * dot(w, v);
     ke = two_ic * cross(tf, v) - wv * tf;
     kf = two_ic * cross(v, te) - wv * te;
@@ -406,7 +400,7 @@ double bend_twist_kernel(const Vec3& te_, const Vec3& tf_, double le, double lf,
     const double D = 2.0 * chi;
     const double beta = 2.0 * st / (D * D);
     const V3 n = -w;
-    const double cte = chi - 1.0;  // te·tf
+    const double cte = chi - 1.0;   // te·tf
     const V3 tf_e = tf - cte * te;  // Qe tf = Qe gD
     const V3 te_f = te - cte * tf;  // Qf te = Qf gD
     const V3 uqe = Qe(ue), uqf = Qf(uf);
@@ -491,9 +485,7 @@ double bend_twist_kernel(const Vec3& te_, const Vec3& tf_, double le, double lf,
 
 }  // namespace
 
-Vec3 curvature_binormal(const Vec3& te, const Vec3& tf) {
-  return 2.0 * te.cross(tf) / (1.0 + te.dot(tf));
-}
+Vec3 curvature_binormal(const Vec3& te, const Vec3& tf) { return 2.0 * te.cross(tf) / (1.0 + te.dot(tf)); }
 
 double stretch_energy(const Vec3& x0, const Vec3& x1, double ks, double rest_length) {
   const double strain = (x1 - x0).norm() / rest_length - 1.0;
@@ -509,8 +501,7 @@ Vec6 stretch_gradient(const Vec3& x0, const Vec3& x1, double ks, double rest_len
   return out;
 }
 
-Mat6 stretch_hessian(const Vec3& x0, const Vec3& x1, double ks, double rest_length,
-                     bool clamp_compression) {
+Mat6 stretch_hessian(const Vec3& x0, const Vec3& x1, double ks, double rest_length, bool clamp_compression) {
   const Vec3 e = x1 - x0;
   const double l = e.norm();
   const Vec3 t = e / l;
@@ -581,11 +572,10 @@ Mat11 twist_hessian(const VertexStencil& s, const VertexParams& p) {
   return H;
 }
 
-double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient, Mat11* hessian,
-                  bool gauss_newton) {
+double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient, Mat11* hessian, bool gauss_newton) {
   const Local L = make_local(s, false);
-  return bend_twist_kernel(L.te, L.tf, L.le, L.lf, L.m1e, L.m2e, L.m1f, L.m2f, s.theta_e,
-                           s.theta_f, L.ref_twist, p, gradient, hessian, gauss_newton);
+  return bend_twist_kernel(L.te, L.tf, L.le, L.lf, L.m1e, L.m2e, L.m1f, L.m2f, s.theta_e, s.theta_f, L.ref_twist, p,
+                           gradient, hessian, gauss_newton);
 }
 
 EdgeGeometry edge_geometry(const Vec3& x0, const Vec3& x1, const EdgeFrame& frame, double theta) {
@@ -599,18 +589,17 @@ EdgeGeometry edge_geometry(const Vec3& x0, const Vec3& x1, const EdgeFrame& fram
   return g;
 }
 
-double bend_twist(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f,
-                  double ref_twist, const VertexParams& p, Vec11* gradient, Mat11* hessian,
-                  bool gauss_newton) {
-  return bend_twist_kernel(e.t, f.t, e.length, f.length, e.m1, e.m2, f.m1, f.m2, theta_e, theta_f,
-                           ref_twist, p, gradient, hessian, gauss_newton);
+double bend_twist(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f, double ref_twist,
+                  const VertexParams& p, Vec11* gradient, Mat11* hessian, bool gauss_newton) {
+  return bend_twist_kernel(e.t, f.t, e.length, f.length, e.m1, e.m2, f.m1, f.m2, theta_e, theta_f, ref_twist, p,
+                           gradient, hessian, gauss_newton);
 }
 
 namespace detail {
 
-double bend_twist_reference(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e,
-                            double theta_f, double ref_twist, const VertexParams& p,
-                            Vec11* gradient, Mat11* hessian, bool gauss_newton) {
+double bend_twist_reference(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f,
+                            double ref_twist, const VertexParams& p, Vec11* gradient, Mat11* hessian,
+                            bool gauss_newton) {
   Local L;
   L.te = e.t;
   L.tf = f.t;

@@ -79,8 +79,8 @@ void RodSimulator::update_vertex_set(double new_inserted) {
     for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k, ++idx) {
       const double m_old = work_->feed_twist[idx];
       const double previous = m_old - (s.theta[k] - s.theta[k - 1]);
-      s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(),
-                                       s.frame[k].d1, (s.x[k + 1] - s.x[k]).normalized(), previous);
+      s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(), s.frame[k].d1,
+                                       (s.x[k + 1] - s.x[k]).normalized(), previous);
     }
     work_->feed_twist.clear();
   }
@@ -150,8 +150,7 @@ void RodSimulator::predict_feed(double fed, double h) {
 StepReport RodSimulator::step_at_feed(double dt, double speed) {
   feed_speed_ = speed;
   adapt_for(std::max(0.0, -feed_speed_ * dt));
-  return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt)
-                                                              : step_euler(dt);
+  return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt) : step_euler(dt);
 }
 
 StepReport RodSimulator::step_force_fed(double dt) {

@@ -26,17 +26,20 @@ TipShape parse_tip_shape(std::string_view name) {
 
 const char* to_string(TipShape shape) {
   switch (shape) {
-    case TipShape::Straight: return "straight";
-    case TipShape::Angled: return "angled";
-    case TipShape::J: return "j";
+    case TipShape::Straight:
+      return "straight";
+    case TipShape::Angled:
+      return "angled";
+    case TipShape::J:
+      return "j";
   }
   return "straight";
 }
 
 RodModel RodModel::from_spec(const WireSpec& s) {
   require(s.length > 0.0, "length must be > 0");
-  require(s.radius > 0.0 || (s.bending_stiffness > 0 && s.stretch_stiffness > 0 &&
-                             s.mass_per_length > 0 && s.twist_stiffness > 0),
+  require(s.radius > 0.0 ||
+              (s.bending_stiffness > 0 && s.stretch_stiffness > 0 && s.mass_per_length > 0 && s.twist_stiffness > 0),
           "radius must be > 0");
   require(s.youngs_modulus > 0.0, "youngs_modulus must be > 0");
   require(s.density > 0.0, "density must be > 0");
@@ -55,15 +58,14 @@ RodModel RodModel::from_spec(const WireSpec& s) {
   m.base_direction = s.base_direction.normalized();
   Eigen::Vector3d n = s.base_normal - m.base_direction * m.base_direction.dot(s.base_normal);
   if (n.norm() < 1e-12) {
-    const Eigen::Vector3d trial = std::abs(m.base_direction.z()) < 0.9 ? Eigen::Vector3d::UnitZ()
-                                                                       : Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d trial =
+        std::abs(m.base_direction.z()) < 0.9 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
     n = trial - m.base_direction * m.base_direction.dot(trial);
   }
   m.base_normal = n.normalized();
   m.damping = s.damping;
 
-  m.G_shaft_ =
-      s.shear_modulus > 0.0 ? s.shear_modulus : s.youngs_modulus / (2.0 * (1.0 + s.poisson_ratio));
+  m.G_shaft_ = s.shear_modulus > 0.0 ? s.shear_modulus : s.youngs_modulus / (2.0 * (1.0 + s.poisson_ratio));
   m.E_shaft_ = s.youngs_modulus;
   m.E_tip_ = s.tip.youngs_modulus > 0.0 ? s.tip.youngs_modulus : s.youngs_modulus;
   m.r_shaft_ = s.radius;
@@ -81,8 +83,7 @@ RodModel RodModel::from_spec(const WireSpec& s) {
   m.arc_radius_ = s.tip.bend_radius;
   if (s.tip.shape != TipShape::Straight) {
     const bool j_shape = s.tip.shape == TipShape::J;
-    const double angle = s.tip.angle >= 0.0 ? s.tip.angle
-                                             : (j_shape ? std::numbers::pi : std::numbers::pi / 4.0);
+    const double angle = s.tip.angle >= 0.0 ? s.tip.angle : (j_shape ? std::numbers::pi : std::numbers::pi / 4.0);
     require(angle < 2.0 * std::numbers::pi, "tip angle must be < 2π");
     const double offset = s.tip.bend_offset >= 0.0 ? s.tip.bend_offset : (j_shape ? 0.0 : 0.002);
     // The distal half segment cannot bend (no vertex there): start the arc at h/2 at the
@@ -99,8 +100,7 @@ RodModel RodModel::from_spec(const WireSpec& s) {
   if (m.adapt.enabled) {
     require(m.adapt.min_segment_length <= m.h && m.adapt.max_segment_length >= m.h,
             "adapt: min_segment_length <= segment length <= max_segment_length");
-    require(m.adapt.split_angle > 0.0 && m.adapt.split_angle < 1.5,
-            "adapt: split_angle must be in (0, 1.5) rad");
+    require(m.adapt.split_angle > 0.0 && m.adapt.split_angle < 1.5, "adapt: split_angle must be in (0, 1.5) rad");
     require(m.adapt.merge_angle >= 0.0 && m.adapt.merge_angle < 0.5 * m.adapt.split_angle,
             "adapt: merge_angle must be below split_angle / 2 (hysteresis)");
   }
@@ -145,8 +145,8 @@ double RodModel::rest_turning(double a, double b) const {
 }
 
 void Discretization::reserve(int vertices) {
-  for (auto* v : {&rest_length, &stretch_stiffness, &rho_a, &twist_inertia, &edge_radius, &mass,
-                  &cell_length, &bend_stiffness, &twist_stiffness, &rest_kappa1, &rest_kappa2})
+  for (auto* v : {&rest_length, &stretch_stiffness, &rho_a, &twist_inertia, &edge_radius, &mass, &cell_length,
+                  &bend_stiffness, &twist_stiffness, &rest_kappa1, &rest_kappa2})
     v->reserve(static_cast<size_t>(vertices));
 }
 

@@ -100,8 +100,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
       rep.residual = residual_norm(first_free, first_fixed);
       // No decrease left along a descent direction: at the round-off level of the
       // stretching forces (within 100× the floor-based tolerance) that is convergence.
-      rep.status = rep.residual <= 100.0 * rep.tolerance ? SolveStatus::Converged
-                                                         : SolveStatus::LineSearchFailed;
+      rep.status = rep.residual <= 100.0 * rep.tolerance ? SolveStatus::Converged : SolveStatus::LineSearchFailed;
       break;
     }
     const double previous = rep.residual;
@@ -184,8 +183,8 @@ bool RodSimulator::solve_direction(Mode mode, double h, double load_scale, bool 
   return ok;
 }
 
-double RodSimulator::line_search(Mode mode, double h, double load_scale, int first_free, int first_fixed,
-                                 double& phi, double& max_step, StepReport& rep) {
+double RodSimulator::line_search(Mode mode, double h, double load_scale, int first_free, int first_fixed, double& phi,
+                                 double& max_step, StepReport& rep) {
   Work& w = *work_;
   RodState& s = state_;
   const int nv = s.vertex_count();
@@ -226,8 +225,7 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
           const Vec3 xn = s.x[j];
           const Vec3 eb = w.x_accepted[j + 1] - w.x_accepted[j];
           const double lb = eb.norm();
-          const double target =
-              lb + alpha * (eb / lb).dot(dq.segment<3>(4 * (j + 1)) - dq.segment<3>(4 * j));
+          const double target = lb + alpha * (eb / lb).dot(dq.segment<3>(4 * (j + 1)) - dq.segment<3>(4 * j));
           const Vec3 d = next_unprojected - xn;
           s.x[j] = s.x[j + 1] - std::max(target, 0.1 * lb) * d / d.norm();
           next_unprojected = xn;
@@ -241,8 +239,7 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
       // The full step is usually accepted: evaluate its gradient with the value. Shorter
       // trials are evaluated for the merit only; the gradient follows on acceptance.
       const bool with_gradient = cut == 0;
-      const double phi_t =
-          assemble(mode, h, load_scale, with_gradient ? Need::Gradient : Need::Value);
+      const double phi_t = assemble(mode, h, load_scale, with_gradient ? Need::Gradient : Need::Value);
       const auto dqt = w.q.head(nd) - w.rhs.head(nd);
       double work = 0.5 * (w.fext_accepted.head(nd) + w.fext.head(nd)).dot(dqt);
       double merit0 = phi, merit_t = phi_t;
@@ -261,10 +258,8 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
         merit_t -= w.ext_energy;
       }
       merit_t -= work;
-      bool good = std::isfinite(phi_t) &&
-                  merit_t <= merit0 + 1e-4 * alpha * slope + 1e-14 * std::abs(merit0);
-      if (good && !with_gradient)
-        assemble(mode, h, load_scale, Need::Gradient, false, /*reuse_loads=*/true);
+      bool good = std::isfinite(phi_t) && merit_t <= merit0 + 1e-4 * alpha * slope + 1e-14 * std::abs(merit0);
+      if (good && !with_gradient) assemble(mode, h, load_scale, Need::Gradient, false, /*reuse_loads=*/true);
       good = good && finite(w.grad.head(nd));
       if (good) {
         accepted = true;

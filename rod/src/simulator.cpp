@@ -16,11 +16,16 @@ using detail::kBandwidth;
 
 const char* to_string(SolveStatus s) {
   switch (s) {
-    case SolveStatus::Converged: return "converged";
-    case SolveStatus::MaxIterations: return "maximum Newton iterations reached";
-    case SolveStatus::LineSearchFailed: return "line search failed";
-    case SolveStatus::NonFinite: return "non-finite values";
-    case SolveStatus::SingularMatrix: return "singular matrix";
+    case SolveStatus::Converged:
+      return "converged";
+    case SolveStatus::MaxIterations:
+      return "maximum Newton iterations reached";
+    case SolveStatus::LineSearchFailed:
+      return "line search failed";
+    case SolveStatus::NonFinite:
+      return "non-finite values";
+    case SolveStatus::SingularMatrix:
+      return "singular matrix";
   }
   return "unknown";
 }
@@ -35,19 +40,17 @@ const char* to_string(Integrator integrator) {
   return integrator == Integrator::ImplicitMidpoint ? "implicit_midpoint" : "implicit_euler";
 }
 
-RodSimulator::RodSimulator(const WireSpec& spec)
-    : model_(RodModel::from_spec(spec)), work_(std::make_unique<Work>()) {
+RodSimulator::RodSimulator(const WireSpec& spec) : model_(RodModel::from_spec(spec)), work_(std::make_unique<Work>()) {
   // Adaptive refinement may hold up to one vertex per finest edge.
-  const int nvmax =
-      model_.adapt.enabled
-          ? std::max(model_.grid_vertices,
-                     static_cast<int>(std::ceil(model_.length / model_.adapt.min_segment_length)) + 4)
-          : model_.grid_vertices;
+  const int nvmax = model_.adapt.enabled
+                        ? std::max(model_.grid_vertices,
+                                   static_cast<int>(std::ceil(model_.length / model_.adapt.min_segment_length)) + 4)
+                        : model_.grid_vertices;
   const int max_dof = 4 * nvmax - 1;
   Work& w = *work_;
   w.max_dof = max_dof;
-  for (Eigen::VectorXd* v : {&w.q, &w.grad, &w.rhs, &w.dq, &w.mass, &w.damp, &w.fext, &w.fext_accepted,
-                             &w.q0, &w.qhat, &w.fcons, &w.fcons_accepted})
+  for (Eigen::VectorXd* v : {&w.q, &w.grad, &w.rhs, &w.dq, &w.mass, &w.damp, &w.fext, &w.fext_accepted, &w.q0, &w.qhat,
+                             &w.fcons, &w.fcons_accepted})
     v->setZero(max_dof);
   w.H.reserve(max_dof, kBandwidth);
   w.ldlt.reserve(max_dof, kBandwidth);
@@ -58,8 +61,9 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   for (auto* v : {&w.vel, &w.x0, &w.v0, &w.x_accepted, &w.x_mid, &w.tangent, &w.x_end, &w.v_guess}) v->reserve(nvmax);
   w.spin.reserve(nvmax);
   w.ext_spin_k.reserve(nvmax);
-  for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.theta_accepted, &w.twist_accepted, &w.new_twist_density, &w.feed_twist, &w.old_u, &w.old_twist_density,
-                  &w.old_cell, &w.old_theta, &w.old_omega, &w.old_ref_twist, &w.turn_angle, &w.new_u, &w.omega_guess})
+  for (auto* v : {&w.theta0, &w.omega0, &w.twist0, &w.theta_accepted, &w.twist_accepted, &w.new_twist_density,
+                  &w.feed_twist, &w.old_u, &w.old_twist_density, &w.old_cell, &w.old_theta, &w.old_omega,
+                  &w.old_ref_twist, &w.turn_angle, &w.new_u, &w.omega_guess})
     v->reserve(nvmax);
   for (auto* v : {&w.old_x, &w.old_v, &w.old_tangent}) v->reserve(nvmax);
   w.old_frame.reserve(nvmax);
@@ -94,9 +98,9 @@ RodSimulator::RodSimulator(const WireSpec& spec)
   base_d1_ = base_d2_.cross(t);
   double inserted = spec.inserted_length < 0.0 ? spec.length : spec.inserted_length;
   if (inserted < 2.0 * model_.h || inserted > spec.length + 1e-12)
-    throw_usage_error(fmt::format(
-        "WireSpec: inserted_length {} m must be between two segments ({} m) and the length ({} m)",
-        inserted, 2.0 * model_.h, spec.length));
+    throw_usage_error(
+        fmt::format("WireSpec: inserted_length {} m must be between two segments ({} m) and the length ({} m)",
+                    inserted, 2.0 * model_.h, spec.length));
   build_initial_state(inserted);
   if (model_.adapt.enabled) {
     // Resolve the rest shape (a pre-shaped tip) before the first step, then lay it out
@@ -172,8 +176,8 @@ void RodSimulator::layout_rest_shape() {
     s.frame[j].d1 = s.frame[j].d2.cross(t);
   }
   for (int k = 1; k < nv - 1; ++k)
-    s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(),
-                                     s.frame[k].d1, (s.x[k + 1] - s.x[k]).normalized(), 0.0);
+    s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(), s.frame[k].d1,
+                                     (s.x[k + 1] - s.x[k]).normalized(), 0.0);
   refresh_arc_lengths();
 }
 
@@ -201,8 +205,7 @@ void RodSimulator::lay_along(const std::function<Vec3(double)>& along) {
 
 void RodSimulator::refresh_arc_lengths() {
   arc_length_.resize(state_.x.size());
-  for (size_t k = 0; k < state_.x.size(); ++k)
-    arc_length_[k] = state_.inserted_length - state_.u[k];
+  for (size_t k = 0; k < state_.x.size(); ++k) arc_length_[k] = state_.inserted_length - state_.u[k];
 }
 
 RodView RodSimulator::current_view(double dt) {
@@ -231,10 +234,8 @@ RodView RodSimulator::current_view(double dt) {
 // -----------------------------------------------------------------------------------------
 
 FLOWIRE_ROD_KERNEL_CLONES
-void RodSimulator::transport_frames_to(const std::vector<Vec3>& x_new,
-                                       const std::vector<EdgeFrame>& frame_from,
-                                       const std::vector<double>& twist_from,
-                                       std::vector<EdgeFrame>& frame_to,
+void RodSimulator::transport_frames_to(const std::vector<Vec3>& x_new, const std::vector<EdgeFrame>& frame_from,
+                                       const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
                                        std::vector<double>& twist_to) const {
   // One pass: edge j's frame, then the reference twist at the vertex before it from the
   // two new frames (their tangents kept, not re-derived as d1 × d2). In place is allowed.
@@ -280,15 +281,13 @@ void RodSimulator::compute_base_reaction() {
 void RodSimulator::report(const StepReport& r, const char* what) {
   last_report_ = r;
   if (r.converged()) return;
-  warn(fmt::format("rod: {} at t = {:.6g} s: {} after {} Newton iterations "
-                   "(residual {:.3g} N, tolerance {:.3g} N)",
-                   what, state_.time, to_string(r.status), r.newton_iterations, r.residual,
-                   r.tolerance));
+  warn(
+      fmt::format("rod: {} at t = {:.6g} s: {} after {} Newton iterations "
+                  "(residual {:.3g} N, tolerance {:.3g} N)",
+                  what, state_.time, to_string(r.status), r.newton_iterations, r.residual, r.tolerance));
 }
 
-void RodSimulator::record_trace() {
-  trace_.push_back({state_.time, state_.inserted_length, state_.x.front()});
-}
+void RodSimulator::record_trace() { trace_.push_back({state_.time, state_.inserted_length, state_.x.front()}); }
 
 // -----------------------------------------------------------------------------------------
 // Diagnostics

@@ -56,18 +56,18 @@ struct RodSimulator::Work {
   int max_dof = 0;
 
   // Step start (stepping.cpp): for velocities, the inertial target and rollback.
-  std::vector<Vec3> x0, v0;                      ///< (nv)
-  std::vector<double> theta0, omega0, twist0;    ///< (ne)
-  std::vector<EdgeFrame> frame0;                 ///< (ne)
-  Eigen::VectorXd q0;                            ///< (nd) unknowns at the step start
-  Eigen::VectorXd qhat;                          ///< (nd) inertial target q₀ + h q̇₀
-  std::vector<Vec3> x_end;        ///< (nv) where the last implicit Euler step ended …
-  double h_end = 0.0;             ///< … and its step, for the next step's predictor
-  std::vector<Vec3> v_guess;      ///< (nv) velocity of Newton's initial guess
-  std::vector<double> omega_guess;  ///< (ne)
-  std::vector<Vec3> x_mid;        ///< (nv) implicit midpoint: positions at the midpoint
-  std::vector<double> feed_twist; ///< (nv) feeding: each vertex's total twist, kept across a re-layout
-  struct Saved {                  ///< a step start kept for a retry in substeps
+  std::vector<Vec3> x0, v0;                    ///< (nv)
+  std::vector<double> theta0, omega0, twist0;  ///< (ne)
+  std::vector<EdgeFrame> frame0;               ///< (ne)
+  Eigen::VectorXd q0;                          ///< (nd) unknowns at the step start
+  Eigen::VectorXd qhat;                        ///< (nd) inertial target q₀ + h q̇₀
+  std::vector<Vec3> x_end;                     ///< (nv) where the last implicit Euler step ended …
+  double h_end = 0.0;                          ///< … and its step, for the next step's predictor
+  std::vector<Vec3> v_guess;                   ///< (nv) velocity of Newton's initial guess
+  std::vector<double> omega_guess;             ///< (ne)
+  std::vector<Vec3> x_mid;                     ///< (nv) implicit midpoint: positions at the midpoint
+  std::vector<double> feed_twist;              ///< (nv) feeding: each vertex's total twist, kept across a re-layout
+  struct Saved {                               ///< a step start kept for a retry in substeps
     RodState state;
     double target_angle = 0.0, insertion_speed = 0.0;
     int first_clamped = 0;
@@ -77,10 +77,10 @@ struct RodSimulator::Work {
   std::vector<Saved> saved;  ///< one per subdivision level
 
   // Assembly (assembly.cpp).
-  Eigen::VectorXd mass, damp;  ///< (nd) lumped mass and damping diagonals
-  Eigen::VectorXd fext;        ///< (nd) loads: gravity, point forces, external forces
-  Eigen::VectorXd fcons;       ///< (nd) the conservative part of fext (it has a potential)
-  double ext_energy = 0.0;     ///< potential of the conservative external forces
+  Eigen::VectorXd mass, damp;       ///< (nd) lumped mass and damping diagonals
+  Eigen::VectorXd fext;             ///< (nd) loads: gravity, point forces, external forces
+  Eigen::VectorXd fcons;            ///< (nd) the conservative part of fext (it has a potential)
+  double ext_energy = 0.0;          ///< potential of the conservative external forces
   std::vector<EdgeGeometry> edges;  ///< (ne) tangent, length, material frame
   Mat3 moment_k = Mat3::Zero();     ///< −∂f₁/∂e of the tip couple, symmetrized
   ForceAccumulator acc;             ///< what the external forces return
@@ -91,31 +91,31 @@ struct RodSimulator::Work {
   bool has_ext_k = false;
   std::vector<Eigen::Matrix<double, 6, 6>> ext_edge_k;  ///< (ne) −∂(f_j, f_j+1)/∂(x_j, x_j+1), symmetrized
   bool has_ext_edge_k = false;
-  std::vector<double> ext_spin_k;   ///< (ne) −∂τ/∂ω / h
+  std::vector<double> ext_spin_k;  ///< (ne) −∂τ/∂ω / h
 
   // Newton (newton.cpp).
-  Eigen::VectorXd q;     ///< (nd) unknowns at the iterate
-  Eigen::VectorXd grad;  ///< (nd) gradient of the incremental potential minus the loads
-  Eigen::VectorXd rhs;   ///< (nd) −grad on the free unknowns; in the line search, the trial q
-  Eigen::VectorXd dq;    ///< (nd) Newton direction
-  BandedMatrix H;        ///< (nd, half-band 10) Hessian, lower band
-  BandedLDLT ldlt;       ///< its factorization, kept for chord iterations
+  Eigen::VectorXd q;                   ///< (nd) unknowns at the iterate
+  Eigen::VectorXd grad;                ///< (nd) gradient of the incremental potential minus the loads
+  Eigen::VectorXd rhs;                 ///< (nd) −grad on the free unknowns; in the line search, the trial q
+  Eigen::VectorXd dq;                  ///< (nd) Newton direction
+  BandedMatrix H;                      ///< (nd, half-band 10) Hessian, lower band
+  BandedLDLT ldlt;                     ///< its factorization, kept for chord iterations
   Eigen::SparseMatrix<double> sparse;  ///< the general sparse back end (LinearSolver::SparseLDLT)
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> sparse_ldlt;
   int sparse_pattern_size = -1;
   // The accepted iterate while the line search tries points along the direction.
-  std::vector<Vec3> x_accepted;              ///< (nv)
+  std::vector<Vec3> x_accepted;                        ///< (nv)
   std::vector<double> theta_accepted, twist_accepted;  ///< (ne), (nv)
-  std::vector<EdgeFrame> frame_accepted;     ///< (ne)
-  Eigen::VectorXd fext_accepted, fcons_accepted;  ///< (nd) its loads
+  std::vector<EdgeFrame> frame_accepted;               ///< (ne)
+  Eigen::VectorXd fext_accepted, fcons_accepted;       ///< (nd) its loads
 
   // Adaptivity (adapt.cpp): the plan, and the old state while resampling.
-  std::vector<double> turn_angle;           ///< (nv) turning angle, or the rest shape's if larger
-  std::vector<char> split_edge;             ///< (ne) edges to halve
-  std::vector<char> remove_vertex;          ///< (nv) vertices to merge away
-  std::vector<double> new_u;                ///< (new nv) arc positions from the tip
-  std::vector<int> new_source;              ///< (new nv) the old vertex a new one copies, or −1
-  std::vector<double> new_twist_density;    ///< (new nv)
+  std::vector<double> turn_angle;         ///< (nv) turning angle, or the rest shape's if larger
+  std::vector<char> split_edge;           ///< (ne) edges to halve
+  std::vector<char> remove_vertex;        ///< (nv) vertices to merge away
+  std::vector<double> new_u;              ///< (new nv) arc positions from the tip
+  std::vector<int> new_source;            ///< (new nv) the old vertex a new one copies, or −1
+  std::vector<double> new_twist_density;  ///< (new nv)
   std::vector<double> old_u, old_cell, old_theta, old_omega, old_ref_twist, old_twist_density;
   std::vector<Vec3> old_x, old_v, old_tangent;
   std::vector<EdgeFrame> old_frame;

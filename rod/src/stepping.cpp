@@ -21,8 +21,7 @@ using detail::finite;
 StepReport RodSimulator::step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
   const StepReport rep = step_subdivided(dt, 0);
-  report(rep, settings_.integrator == Integrator::ImplicitMidpoint ? "implicit midpoint step"
-                                                                   : "implicit Euler step");
+  report(rep, settings_.integrator == Integrator::ImplicitMidpoint ? "implicit midpoint step" : "implicit Euler step");
   return rep;
 }
 
@@ -82,8 +81,7 @@ void RodSimulator::restore_state(int depth) {
 StepReport RodSimulator::step_once(double dt) {
   if (push_force_ > 0.0) return step_force_fed(dt);
   double speed = insertion_speed_;
-  if (speed > 0.0 && max_insertion_force_ > 0.0 &&
-      base_force_.dot(model_.base_direction) > max_insertion_force_) {
+  if (speed > 0.0 && max_insertion_force_ > 0.0 && base_force_.dot(model_.base_direction) > max_insertion_force_) {
     speed = 0.0;
     ++held_steps_;
   }
@@ -207,8 +205,7 @@ StepReport RodSimulator::step_midpoint(double dt) {
   start_stage(L_half, angle_half, L_half - L_start, hh);
 
   StepReport rep = newton(Mode::Dynamic, hh, 1.0);
-  const bool failed =
-      rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix;
+  const bool failed = rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix;
   compute_base_reaction();
   if (failed) {
     s.x = w.x0;

@@ -34,7 +34,8 @@ double sphere(const Eigen::VectorXd& x) { return x.squaredNorm(); }
 double ellipsoid(const Eigen::VectorXd& x) {
   const auto n = x.size();
   double f = 0;
-  for (Eigen::Index i = 0; i < n; ++i) f += std::pow(1e6, static_cast<double>(i) / static_cast<double>(n - 1)) * x[i] * x[i];
+  for (Eigen::Index i = 0; i < n; ++i)
+    f += std::pow(1e6, static_cast<double>(i) / static_cast<double>(n - 1)) * x[i] * x[i];
   return f;
 }
 
@@ -173,7 +174,8 @@ TEST(Cmaes, EqualSeedsGiveEqualRuns) {
   Options o;
   o.seed = 7;
   o.max_evaluations = 500;
-  const auto a = minimize(rosenbrock, Eigen::VectorXd::Zero(4), o), b = minimize(rosenbrock, Eigen::VectorXd::Zero(4), o);
+  const auto a = minimize(rosenbrock, Eigen::VectorXd::Zero(4), o),
+             b = minimize(rosenbrock, Eigen::VectorXd::Zero(4), o);
   EXPECT_EQ(a.f_best, b.f_best);
   EXPECT_EQ(a.evaluations, b.evaluations);
   o.seed = 8;

@@ -13,7 +13,12 @@ namespace {
 Schema test_schema() {
   Schema s;
   s.add({"flow", Type::Section, "", Dimension::None, "flow section", {}});
-  s.add({"flow.solver", Type::Enum, "superposition", Dimension::None, "solver", {"superposition", "sparse", "dense_inverse"}});
+  s.add({"flow.solver",
+         Type::Enum,
+         "superposition",
+         Dimension::None,
+         "solver",
+         {"superposition", "sparse", "dense_inverse"}});
   s.add({"flow.viscosity", Type::Number, "3.5e-3", Dimension::Viscosity, "viscosity", {}});
   s.add({"flow.inlet", Type::Section, "{}", Dimension::None, "inlet", {}});
   s.add({"flow.inlet.pressure", Type::NumberOrSection, "13000", Dimension::Pressure, "inlet pressure", {}});

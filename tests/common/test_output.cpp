@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -92,8 +92,7 @@ TEST(Output, AnUnwritablePlaceIsAnInputErrorNamingTheFile) {
     EXPECT_EQ(e.kind(), ErrorKind::Input);
     EXPECT_NE(std::string(e.what()).find(target.string()), std::string::npos) << e.what();
   } catch (const std::exception& e) {
-    ADD_FAILURE() << "not a flowire::Error (the command line would report an unexpected failure, exit 3): "
-                  << e.what();
+    ADD_FAILURE() << "not a flowire::Error (the command line would report an unexpected failure, exit 3): " << e.what();
   }
 }
 

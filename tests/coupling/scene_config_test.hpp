@@ -34,7 +34,8 @@ inline void expect_section_of_scene(const std::vector<std::string>& paths, std::
   ASSERT_FALSE(paths.empty());
   for (const auto& p : paths) {
     bool under = false;
-    for (auto s : sections) under = under || p == s || p.starts_with(std::string(s) + ".") || p.starts_with(std::string(s) + "[");
+    for (auto s : sections)
+      under = under || p == s || p.starts_with(std::string(s) + ".") || p.starts_with(std::string(s) + "[");
     EXPECT_TRUE(under) << p << " is outside its section";
     EXPECT_NE(scene_schema().find(p), nullptr) << p << " is not in the scene's declaration";
   }

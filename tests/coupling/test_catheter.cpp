@@ -91,7 +91,7 @@ TEST(LumenPenalty, SmoothedOnsetDerivativesMatchCentralDifferences) {
     for (int which = 0; which < 3; ++which) {
       check_block(a + 0.4 * e + off, a, b, c, k, false, which, onset);  // interior
       check_block(a + 0.7 * e + off, a, b, c, k, true, which, onset);   // tip edge, full weight
-      for (const double alpha : {-0.3, 0.1})  // the taper
+      for (const double alpha : {-0.3, 0.1})                            // the taper
         check_block(a + alpha * e + off, a, b, c, k, true, which, onset);
     }
     check_block(b + d * e.normalized(), a, b, c, k, false, 0, onset);  // beyond b: distance to the end point
@@ -401,7 +401,8 @@ insertion: {speed: 0, initial_length: 1 cm}
 catheter: {length: 0.4, outer_radius: 1 mm, inner_radius: 0.55 mm, youngs_modulus: 2 GPa, density: 1200,
            initial_length: 24 cm, insertion: {speed: 1 cm/s}}
 loads: [{type: gravity, value: [0, 0, -9.81]}]
-contact: {friction: )" + std::to_string(mu) + R"(}
+contact: {friction: )" + std::to_string(mu) +
+                             R"(}
 solve: {dt: 5 ms, duration: 1 s}
 output: {csv: false, vtk: false}
 )";

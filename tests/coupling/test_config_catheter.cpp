@@ -13,8 +13,9 @@ TEST(ConfigCatheter, DeclaresTheCatheterKeysOfTheScene) {
 }
 
 TEST(ConfigCatheter, ValuesGivenInTheSceneAreRead) {
-  const auto c = test::scene("wire: {radius: 0.3 mm}\ncatheter: {outer_radius: 1.2 mm, inner_radius: 0.7 mm, "
-                             "insertion: {speed: 1 cm/s}}\n");
+  const auto c = test::scene(
+      "wire: {radius: 0.3 mm}\ncatheter: {outer_radius: 1.2 mm, inner_radius: 0.7 mm, "
+      "insertion: {speed: 1 cm/s}}\n");
   const CatheterSpec k = scene_catheter_spec(c, scene_wire_spec(c));
   EXPECT_DOUBLE_EQ(k.outer_radius, 1.2e-3);
   EXPECT_DOUBLE_EQ(k.inner_radius, 0.7e-3);
@@ -27,8 +28,9 @@ TEST(ConfigCatheter, ALumenNarrowerThanTheWireIsRejectedNamingFileLineAndKey) {
   const std::string e = test::input_error([&] { (void)scene_catheter_spec(c, scene_wire_spec(c)); });
   EXPECT_NE(e.find("scene.yaml:3: catheter.inner_radius"), std::string::npos) << e;
   const auto thin = test::scene("wire: {}\ncatheter:\n  outer_radius: 0.5 mm\n");
-  EXPECT_NE(test::input_error([&] { (void)scene_catheter_spec(thin, scene_wire_spec(thin)); })
-                .find("scene.yaml:3: catheter.outer_radius"),
+  EXPECT_NE(test::input_error([&] {
+              (void)scene_catheter_spec(thin, scene_wire_spec(thin));
+            }).find("scene.yaml:3: catheter.outer_radius"),
             std::string::npos);
 }
 

@@ -13,9 +13,10 @@ TEST(ConfigContact, DeclaresTheContactKeysOfTheScene) {
 }
 
 TEST(ConfigContact, ValuesGivenInTheSceneAreRead) {
-  const auto k = contact_settings(test::scene(
-      "contact: {enabled: false, stiffness: 2e3, friction: 0.3, tip_friction: 0.05, viscous_friction: 4, settle: false,\n"
-      "          allow_outside: true, introducer: false}\n"));
+  const auto k =
+      contact_settings(test::scene("contact: {enabled: false, stiffness: 2e3, friction: 0.3, tip_friction: 0.05, "
+                                   "viscous_friction: 4, settle: false,\n"
+                                   "          allow_outside: true, introducer: false}\n"));
   EXPECT_FALSE(k.params.enabled);
   EXPECT_DOUBLE_EQ(k.params.stiffness, 2e3);
   EXPECT_DOUBLE_EQ(k.params.friction, 0.3);

@@ -23,7 +23,8 @@ TEST(ConfigSolve, StepsFollowFromDurationAndDtAndAStaticSceneHasNone) {
   const auto none = solve_settings(test::scene(""));
   EXPECT_DOUBLE_EQ(none.dt, 1e-3);
   EXPECT_EQ(none.steps, 0);
-  EXPECT_EQ(scene_integrator(test::scene("solve: {integrator: implicit_midpoint}\n")), rod::Integrator::ImplicitMidpoint);
+  EXPECT_EQ(scene_integrator(test::scene("solve: {integrator: implicit_midpoint}\n")),
+            rod::Integrator::ImplicitMidpoint);
   EXPECT_EQ(scene_integrator(test::scene("")), rod::Integrator::ImplicitEuler);
 }
 

@@ -17,9 +17,9 @@ TEST(ConfigWire, DeclaresTheWireAndLoadKeysOfTheScene) {
 }
 
 TEST(ConfigWire, ValuesGivenInTheSceneAreRead) {
-  const rod::WireSpec w = scene_wire_spec(test::scene(
-      "wire:\n  length: 0.5\n  radius: 0.2 mm\n  segment_length: 5 mm\n  tip: {shape: j, length: 2 cm}\n"
-      "insertion: {initial_length: 3 cm}\n"));
+  const rod::WireSpec w = scene_wire_spec(
+      test::scene("wire:\n  length: 0.5\n  radius: 0.2 mm\n  segment_length: 5 mm\n  tip: {shape: j, length: 2 cm}\n"
+                  "insertion: {initial_length: 3 cm}\n"));
   EXPECT_DOUBLE_EQ(w.length, 0.5);
   EXPECT_DOUBLE_EQ(w.radius, 0.2e-3);
   EXPECT_EQ(w.segments, 0);
@@ -58,7 +58,8 @@ TEST(ConfigWire, TheWireEntersAtTheFarthestEndOrTheNodeGiven) {
 TEST(ConfigWire, ALoadWithoutItsValueOrArcLengthIsRejectedNamingFileLineAndKey) {
   const auto c = test::scene("wire: {}\nloads:\n  - {type: point_force, value: [0, 0, 1e-3]}\n");
   rod::RodSimulator sim(scene_wire_spec(c));
-  EXPECT_NE(test::input_error([&] { apply_loads(c, sim, nullptr); }).find("scene.yaml:3: loads[0].type"), std::string::npos);
+  EXPECT_NE(test::input_error([&] { apply_loads(c, sim, nullptr); }).find("scene.yaml:3: loads[0].type"),
+            std::string::npos);
   const auto ok = test::scene("wire: {}\nloads:\n  - {type: point_force, value: [0, 0, 1e-3], s: 0.5}\n");
   apply_loads(ok, sim, nullptr);
 }

@@ -20,7 +20,8 @@ using vessels::Vec3;
 
 TEST(CoSim, UniformCrossFlowBendsAClampedWireLikeABeamUnderUniformLoad) {
   // Small deflection: w_tip = q L⁴ / (8 EI) with q = c⊥ u (the flow is normal to the wire).
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 2.0, .radius = 0.5}), {.max_segment_length = 0.1});
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 2.0, .radius = 0.5}), {.max_segment_length = 0.1});
   const vessels::SpatialIndex index(net);
   rod::WireSpec spec;
   spec.length = 0.2;
@@ -51,7 +52,8 @@ TEST(CoSim, UniformCrossFlowBendsAClampedWireLikeABeamUnderUniformLoad) {
 TEST(CoSim, ContactForcesBalanceThePushInAStaticCheck) {
   // A wire pushed by a tip force into the closed end of a tube: at equilibrium the wall's
   // forces, the clamp's reaction and the load sum to zero.
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = 3e-3}), {.max_segment_length = 5e-3});
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = 3e-3}), {.max_segment_length = 5e-3});
   const vessels::SpatialIndex index(net);
   rod::WireSpec spec;
   spec.length = 0.2;
@@ -76,8 +78,8 @@ TEST(CoSim, ContactForcesBalanceThePushInAStaticCheck) {
   Vec3 wall = Vec3::Zero();
   for (int i = 0; i < sim.first_clamped_vertex(); ++i) wall += forces->force()[static_cast<size_t>(i)];
   EXPECT_GT(wall.norm(), 0.5 * F.norm());  // the end wall takes the push
-  EXPECT_LT((wall + sim.base_force() + F).norm(), 1e-6 * F.norm()) << "wall " << wall.transpose() << " base "
-                                                                    << sim.base_force().transpose();
+  EXPECT_LT((wall + sim.base_force() + F).norm(), 1e-6 * F.norm())
+      << "wall " << wall.transpose() << " base " << sim.base_force().transpose();
 }
 
 namespace {
@@ -243,7 +245,8 @@ wire:
   density: 6450
   segment_length: 2 mm
   tip: {length: 3 cm, youngs_modulus: 10 GPa, shape: j, angle: 180 deg, bend_radius: 4 mm}
-)" << extra << "insertion: {speed: 1 cm/s, initial_length: " << initial_length << R"(}
+)" << extra
+    << "insertion: {speed: 1 cm/s, initial_length: " << initial_length << R"(}
 contact: {friction: 0.2, tip_friction: 0.05}
 coupling: {drag: slender_body}
 solve: {dt: 10 ms, duration: 0.1 s}
@@ -268,9 +271,10 @@ TEST(CoSim, AStraightLongWireThroughTheWallsSettlesAndEveryStepConverges) {
   const Vec3 dir = (net.node(seg.node_from == end ? seg.node_to : seg.node_from) - entry).normalized();
   std::ostringstream base;
   base.precision(17);
-  base << "  base: {position: [" << entry.x() << ", " << entry.y() << ", " << entry.z() << "], direction: ["
-       << dir.x() << ", " << dir.y() << ", " << dir.z() << "]}\n";
-  const auto s = run_text(long_wire_scene(0.78, base.str()), flowire::testing::scratch_dir("cosim-long-straight").string());
+  base << "  base: {position: [" << entry.x() << ", " << entry.y() << ", " << entry.z() << "], direction: [" << dir.x()
+       << ", " << dir.y() << ", " << dir.z() << "]}\n";
+  const auto s =
+      run_text(long_wire_scene(0.78, base.str()), flowire::testing::scratch_dir("cosim-long-straight").string());
   ASSERT_EQ(s["status"], "ok");
   EXPECT_EQ(s["wire"]["initial_layout"], "straight");
   EXPECT_TRUE(s["wire"]["settle"]["converged"].get<bool>());

@@ -46,8 +46,8 @@ double lamb(double re) { return 8.0 * kPi / (re * (0.5 - 0.5772156649 - std::log
 
 /// Three vertices of a wire at rest, 1 mm apart, on the axis of a 2 mm tube.
 struct ShortWire {
-  vessels::Network net = vessels::Network::build(vessels::straight_tube({.length = 0.05, .radius = 2e-3}),
-                                                 {.max_segment_length = 5e-3});
+  vessels::Network net =
+      vessels::Network::build(vessels::straight_tube({.length = 0.05, .radius = 2e-3}), {.max_segment_length = 5e-3});
   vessels::SpatialIndex index{net};
   Vec3 axis = (net.node(net.segment(net.num_segments() - 1).node_to) - net.node(net.segment(0).node_from)).normalized();
   std::vector<Vec3> x, v = std::vector<Vec3>(3, Vec3::Zero());
@@ -131,7 +131,8 @@ TEST(CylinderDrag, CrossFlowForceIsTheDragCurvesAtTheNormalReynoldsNumber) {
     const auto d = blood_drag(m, in);
     const double re = 1060 * U * 0.89e-3 / 3.5e-3;
     EXPECT_NEAR(d.reynolds_normal, re, 1e-12 * re);
-    EXPECT_NEAR(d.force.y(), 0.5 * 1060 * cylinder_drag_coefficient(re) * 0.89e-3 * U * U * 2e-3, 1e-12 * d.force.norm());
+    EXPECT_NEAR(d.force.y(), 0.5 * 1060 * cylinder_drag_coefficient(re) * 0.89e-3 * U * U * 2e-3,
+                1e-12 * d.force.norm());
     EXPECT_NEAR(d.force.x(), 0.0, 1e-18);
   }
   // At Re ≈ 100 the law is about 50× the Stokes (slender-body) law the project used before.
@@ -237,7 +238,8 @@ TEST(CylinderDrag, CoaxialWireInATubeReceivesTheExactAnnularForce) {
   //   F' = (πG/2)[(R² − a²)/ln(R/a) − 2a²]
   // (from u = (G/4η)[R² − r² − (R² − a²) ln(R/r)/ln(R/a)]).
   const double R = 1.5e-3, a = 0.178e-3, Ltube = 0.05, dp = 100.0, eta = 3.5e-3;
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = Ltube, .radius = R}), {.max_segment_length = 5e-3});
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = Ltube, .radius = R}), {.max_segment_length = 5e-3});
   const vessels::SpatialIndex index(net);
   auto spec = flow::default_spec(net, flow::Waveform::constant(dp));
   spec.viscosity = eta;

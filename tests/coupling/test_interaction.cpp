@@ -104,8 +104,8 @@ TEST(Interaction, FrictionForceIsMinusTheGradientOfItsDissipationPotential) {
       auto F = [&](const Vec3& w) { return coulomb_friction(w, n, N, mu, eps).force; };
       EXPECT_LT((f.force + fd_gradient(D, v)).norm(), 1e-6 * (1 + f.force.norm()));
       EXPECT_LT((f.dfdv - fd_jacobian(F, v)).norm(), 1e-5 * (1 + f.dfdv.norm()));
-      EXPECT_LE(f.force.norm(), mu * N * (1 + 1e-12));                 // never more than μN
-      EXPECT_NEAR(f.force.dot(n), 0.0, 1e-12);                         // tangential
+      EXPECT_LE(f.force.norm(), mu * N * (1 + 1e-12));                                         // never more than μN
+      EXPECT_NEAR(f.force.dot(n), 0.0, 1e-12);                                                 // tangential
       EXPECT_LE(Eigen::SelfAdjointEigenSolver<Mat3>(f.dfdv).eigenvalues().maxCoeff(), 1e-12);  // dissipative
     }
   }

@@ -32,8 +32,8 @@ fs::path write_capped_tube(const fs::path& dir) {
   for (int k = 0; k < kRings; ++k)
     for (int j = 0; j < kSides; ++j) {
       const double phi = 2.0 * M_PI * j / kSides;
-      out << "v " << kLengthMm * k / (kRings - 1) << ' ' << kRadiusMm * std::cos(phi) << ' ' << kRadiusMm * std::sin(phi)
-          << '\n';
+      out << "v " << kLengthMm * k / (kRings - 1) << ' ' << kRadiusMm * std::cos(phi) << ' '
+          << kRadiusMm * std::sin(phi) << '\n';
     }
   out << "v 0 0 0\nv " << kLengthMm << " 0 0\n";
   auto id = [](int k, int j) { return k * kSides + (j % kSides) + 1; };  // OBJ counts from 1
@@ -77,8 +77,8 @@ TEST(SceneLumen, CapsAtTheNetworksEndsAreRemovedAndTheUnitApplies) {
   const fs::path obj = write_capped_tube(dir);
   nlohmann::json info;
   double smoothing = 0.0;
-  const auto s = coupling::make_scene_surface(
-      scene("  length_unit: mm\n  surface: " + obj.string() + "\n"), tube_network(), info, smoothing);
+  const auto s = coupling::make_scene_surface(scene("  length_unit: mm\n  surface: " + obj.string() + "\n"),
+                                              tube_network(), info, smoothing);
   ASSERT_NE(s, nullptr);
   EXPECT_EQ(info["cap_triangles_removed"], 2 * kSides);
   EXPECT_EQ(info["triangles"], 2 * kSides * (kRings - 1));
@@ -128,8 +128,8 @@ TEST(SceneLumen, SmoothingAndFileComeFromTheSceneAndBadValuesNameTheirKey) {
     EXPECT_NE(std::string(e.what()).find("scene.yaml:5: vessels.surface_smoothing"), std::string::npos) << e.what();
   }
   try {
-    (void)coupling::make_scene_surface(scene("  surface: " + (dir / "nowhere.stl").string() + "\n"), tube_network(), info,
-                                       smoothing);
+    (void)coupling::make_scene_surface(scene("  surface: " + (dir / "nowhere.stl").string() + "\n"), tube_network(),
+                                       info, smoothing);
     ADD_FAILURE() << "a missing surface was accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("nowhere.stl"), std::string::npos) << e.what();

@@ -35,8 +35,8 @@ void check_scene(const Case& k) {
   // The scenes name the data relative to themselves (../../../shared): point them at the
   // shared folder this test uses.
   auto cfg = coupling::load_scene(scene.string(),
-                                  {fmt_set("vessels.file", shared / k.centerline), fmt_set("vessels.surface", shared / k.surface),
-                                   "output.vtk=false"},
+                                  {fmt_set("vessels.file", shared / k.centerline),
+                                   fmt_set("vessels.surface", shared / k.surface), "output.vtk=false"},
                                   out.string());
   const auto r = coupling::run_scene(cfg);
   const auto& s = r.summary;

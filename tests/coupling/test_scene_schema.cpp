@@ -155,7 +155,8 @@ TEST(SceneSchema, EveryExampleSceneIsAccepted) {
 }
 
 TEST(SceneSchema, ASectionTheSceneLeavesOutReadsAsItsDeclaredDefaults) {
-  const auto c = config::load_config_text("wire: {}\ncontact:\n  friction: 0.3\n", "scene.yaml", coupling::scene_schema());
+  const auto c =
+      config::load_config_text("wire: {}\ncontact:\n  friction: 0.3\n", "scene.yaml", coupling::scene_schema());
   EXPECT_EQ(&coupling::given_or_declared(c, "wire"), &c);
   EXPECT_EQ(&coupling::given_or_declared(c, "contact"), &c);
   EXPECT_EQ(c.where("contact.friction"), "scene.yaml:3: contact.friction");

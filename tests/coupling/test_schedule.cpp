@@ -92,7 +92,7 @@ output: {{dir: {}, csv: false, vtk: false}}
   }
   ASSERT_EQ(sim.planned_steps(), 130);
   EXPECT_NEAR(sim.rod()->inserted_length() - L0, 0.02 * 0.487 - 0.01 * 0.3, 1e-12);  // pushed, then pulled
-  EXPECT_NEAR(sim.rod()->state().base_angle, 0.9 - 0.4, 1e-12);                     // turned both ways
+  EXPECT_NEAR(sim.rod()->state().base_angle, 0.9 - 0.4, 1e-12);                      // turned both ways
   EXPECT_LT(worst_length, 1e-12);
   EXPECT_LT(worst_angle, 1e-12);
 }
@@ -115,7 +115,8 @@ TEST(Schedule, MalformedFilesNameTheFileAndLine) {
       {"trailing.csv", "time,speed,rotation_speed\n0,0.1x,0\n", "trailing.csv:2"},
       {"short.csv", "time,speed,rotation_speed\n0,0.1\n", "short.csv:2: expected 3 values, found 2"},
       {"negative.csv", "time,speed,rotation_speed\n-1,0.1,0\n", "negative.csv:2: time -1 s is negative"},
-      {"unsorted.csv", "time,speed,rotation_speed\n0,0.1,0\n2,0,0\n1,0,0\n", "unsorted.csv:4: time 1 s does not come after"},
+      {"unsorted.csv", "time,speed,rotation_speed\n0,0.1,0\n2,0,0\n1,0,0\n",
+       "unsorted.csv:4: time 1 s does not come after"},
       {"repeated.csv", "time,speed,rotation_speed\n0,0.1,0\n0,0.2,0\n", "repeated.csv:3"},
   };
   for (const auto& c : cases) {

@@ -164,7 +164,8 @@ TEST(SurfaceContact, SmoothDistanceConvergesToTheCylinderAtSecondOrder) {
       const double th = 2.0 * M_PI * i / 400.0 * 1.013, z = -2e-3 + 4e-3 * i / 400.0;
       for (const double depth : {0.2e-3, 0.5e-3, 1e-3}) {
         const double r = R - depth;
-        worst = std::max(worst, std::abs(s.smooth_distance(Vec3(r * std::cos(th), r * std::sin(th), z), sigma).distance + depth));
+        worst = std::max(
+            worst, std::abs(s.smooth_distance(Vec3(r * std::cos(th), r * std::sin(th), z), sigma).distance + depth));
       }
     }
     h.push_back(mean_edge(s));
@@ -253,13 +254,15 @@ TEST(SurfaceContact, SkippedDeepVerticesHaveNoContactOnTheRealLumens) {
     // "inside" by it lies outside its neighbours' planes. Not sampled.
     std::vector<Vec3> vertex_normal(v.size(), Vec3::Zero());
     for (const auto& t : tri) {
-      const Vec3 area = (v[static_cast<size_t>(t[1])] - v[static_cast<size_t>(t[0])]).cross(v[static_cast<size_t>(t[2])] - v[static_cast<size_t>(t[0])]);
+      const Vec3 area = (v[static_cast<size_t>(t[1])] - v[static_cast<size_t>(t[0])])
+                            .cross(v[static_cast<size_t>(t[2])] - v[static_cast<size_t>(t[0])]);
       for (int k : t) vertex_normal[static_cast<size_t>(k)] += area;
     }
     int checked = 0, near_wall = 0;
     double worst_band = 0.0, worst_deep = -1.0;
     for (size_t f = 0; f < tri.size(); f += 7) {
-      const Vec3 A = v[static_cast<size_t>(tri[f][0])], B = v[static_cast<size_t>(tri[f][1])], C = v[static_cast<size_t>(tri[f][2])];
+      const Vec3 A = v[static_cast<size_t>(tri[f][0])], B = v[static_cast<size_t>(tri[f][1])],
+                 C = v[static_cast<size_t>(tri[f][2])];
       double b1 = unit(rng), b2 = unit(rng);
       if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
       const Vec3 p = A + b1 * (B - A) + b2 * (C - A);
@@ -277,9 +280,11 @@ TEST(SurfaceContact, SkippedDeepVerticesHaveNoContactOnTheRealLumens) {
       if (e.distance > -m.a) ++near_wall, worst_band = std::max(worst_band, std::abs(ds - e.distance));
     }
     EXPECT_GT(checked, 200) << m.file;
-    EXPECT_LT(worst_deep, 0.0) << m.file << ": a skipped vertex would touch the wall (d_σ + a = " << worst_deep << " m)";
-    std::printf("%s: σ %.3f mm, skip band %.3f mm; max |d_σ − d| within a wire radius of the wall %.4f mm (%d points); "
-                "deepest skipped d_σ + a = %.3f mm\n",
-                m.file, 1e3 * sigma, 1e3 * skip, 1e3 * worst_band, near_wall, 1e3 * worst_deep);
+    EXPECT_LT(worst_deep, 0.0) << m.file << ": a skipped vertex would touch the wall (d_σ + a = " << worst_deep
+                               << " m)";
+    std::printf(
+        "%s: σ %.3f mm, skip band %.3f mm; max |d_σ − d| within a wire radius of the wall %.4f mm (%d points); "
+        "deepest skipped d_σ + a = %.3f mm\n",
+        m.file, 1e3 * sigma, 1e3 * skip, 1e3 * worst_band, near_wall, 1e3 * worst_deep);
   }
 }

@@ -103,7 +103,7 @@ TEST(TipForces, SteeringPullsTheTipSidewaysTowardsTheTarget) {
 
 TEST(TipForces, ObstacleAndSteeringAdd) {
   Wire w({Vec3(0, 0, 0), Vec3(0, -1, 0), Vec3(0, -2, 0)});  // t = +y
-  Steering st{true, Vec3(0, 1, -1), 0.04, 2.0};               // lateral direction −z
+  Steering st{true, Vec3(0, 1, -1), 0.04, 2.0};             // lateral direction −z
   TipForces tf({{Vec3::Zero(), 0.1, 0.3}}, st);
   tf.start(w.view);
   expect_vec_near(evaluate(tf, w.view).force[0], Vec3(0, -0.3, -0.04), 1e-15);

@@ -25,7 +25,8 @@ struct RigidWire {
   double m;  ///< mass per unit length
   double length = 0;
   Vec3 V = Vec3::Zero();
-  RigidWire(std::vector<Vec3> x0, double mass_per_length) : x(std::move(x0)), v(x.size(), Vec3::Zero()), m(mass_per_length) {
+  RigidWire(std::vector<Vec3> x0, double mass_per_length)
+      : x(std::move(x0)), v(x.size(), Vec3::Zero()), m(mass_per_length) {
     const double h = (x[1] - x[0]).norm();
     ell.assign(x.size(), h);
     ell.front() = ell.back() = 0.5 * h;
@@ -75,7 +76,8 @@ struct RigidWire {
 TEST(VesselForces, SlenderBodyTerminalVelocityAlongTheAxis) {
   // A straight wire on the axis of a wide tube, blood at u along the axis, a load F per
   // vertex against the flow: the terminal velocity is u − F/(c∥ ℓ) with c∥ = 2πη/ln(L/r).
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 1.0, .radius = 0.01}), {.max_segment_length = 0.01});
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 1.0, .radius = 0.01}), {.max_segment_length = 0.01});
   const vessels::SpatialIndex index(net);
   const double a = 0.45e-3, ell = 1e-3, eta = 3.5e-3, L = 1.0, u = 0.3;
   std::vector<Vec3> x0;
@@ -83,13 +85,15 @@ TEST(VesselForces, SlenderBodyTerminalVelocityAlongTheAxis) {
   RigidWire pm(x0, 1e-4);  // relaxation time ρA/c∥ ≈ 35 ms
   const double c_par = 2 * std::numbers::pi * eta / std::log(L / a);
   const double F = 0.5 * c_par * u;  // per unit length: halves the terminal velocity
-  VesselForces f(index, a, ContactParams{.enabled = false}, DragModel{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
+  VesselForces f(index, a, ContactParams{.enabled = false},
+                 DragModel{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
                  [&](int, const Vec3&) { return Vec3(u, 0, 0); });
   for (int k = 0; k < 2000; ++k) pm.step(f, 1e-3, Vec3(-F, 0, 0));
   EXPECT_NEAR(pm.V.x(), u - F / c_par, 1e-9 * u);
   // Sideways flow drags twice as hard: c⊥ = 2 c∥.
   RigidWire side(x0, 1e-4);
-  VesselForces g(index, a, ContactParams{.enabled = false}, DragModel{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
+  VesselForces g(index, a, ContactParams{.enabled = false},
+                 DragModel{.law = DragLaw::SlenderBody, .viscosity = eta, .wire_length = L},
                  [&](int, const Vec3&) { return Vec3(0, u, 0); });
   for (int k = 0; k < 2000; ++k) side.step(g, 1e-3, Vec3(0, -F, 0));
   EXPECT_NEAR(side.V.y(), u - F / (2 * c_par), 1e-9 * u);
@@ -98,7 +102,8 @@ TEST(VesselForces, SlenderBodyTerminalVelocityAlongTheAxis) {
 TEST(VesselForces, VelocityOffsetIsTheImpulsePerStepOfThePublishedForm) {
   // Eq. 10 adds u to every velocity update. With linear damping c per vertex the terminal
   // velocity is ρA·u/(c·Δt) (c per unit length): the published form depends on the step size.
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 1.0, .radius = 0.01}), {.max_segment_length = 0.01});
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 1.0, .radius = 0.01}), {.max_segment_length = 0.01});
   const vessels::SpatialIndex index(net);
   const double ell = 1e-3, rhoA = 4.0e-3, u = 0.2, c = 4.0;
   std::vector<Vec3> x0;
@@ -117,7 +122,8 @@ TEST(VesselForces, CoulombFrictionOnTheWallNeedsMuTimesNToSlide) {
   // DisMech's case (reference README): a 1 kg wire, μ = 0.4, lying on the wall under
   // gravity, pulled along with a total force F for 1 s reaches ½(|F| − 3.92)² J.
   const double R = 1.0, a = 0.45e-3, g = 9.81, mu = 0.4;
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 10.0, .radius = R}), {.max_segment_length = 0.5});
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 10.0, .radius = R}), {.max_segment_length = 0.5});
   const vessels::SpatialIndex index(net);
   const int n = 20;
   std::vector<Vec3> x0;
@@ -154,8 +160,8 @@ TEST(VesselForces, WallStiffnessScalesWithTheVertexEdgesOfARefinedWire) {
   // Two vertices pressed equally deep into the wall of a straight tube, one with grid
   // edges h, one with refined edges h/4: the wall pushes the refined one a quarter as
   // hard, so the wall stays equally stiff per unit length of wire.
-  const auto net = vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = 2e-3}),
-                                           {.max_segment_length = 5e-3});
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = 2e-3}), {.max_segment_length = 5e-3});
   const vessels::SpatialIndex index(net);
   ContactParams cp;
   cp.stiffness = 1e4;
@@ -180,8 +186,8 @@ TEST(VesselForces, WallStiffnessScalesWithTheVertexEdgesOfARefinedWire) {
     rod::ForceAccumulator acc;
     acc.reset(5);
     forces.evaluate(view, acc);
-    const double f_grid = acc.forces()[0].norm();   // edges h
-    const double f_mid = acc.forces()[2].norm();    // edges `refined`
+    const double f_grid = acc.forces()[0].norm();  // edges h
+    const double f_mid = acc.forces()[2].norm();   // edges `refined`
     ASSERT_GT(f_grid, 0.0);
     EXPECT_NEAR(f_mid / f_grid, refined / h, 1e-9);
     EXPECT_NEAR(f_grid, cp.stiffness * 0.1e-3, 1e-9);  // k δ on the grid

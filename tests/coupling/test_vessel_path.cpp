@@ -36,8 +36,7 @@ TEST(VesselPath, FollowsTheAortaFromTheFemoralEntryToTheRoot) {
     // Arc length: the path's own polyline length, independent of how finely it is sampled.
     double sum = 0.0;
     const int n = 20000;
-    for (int i = 0; i < n; ++i)
-      sum += (path.at((i + 1) * path.length() / n) - path.at(i * path.length() / n)).norm();
+    for (int i = 0; i < n; ++i) sum += (path.at((i + 1) * path.length() / n) - path.at(i * path.length() / n)).norm();
     EXPECT_NEAR(sum, path.length(), 1e-5 * path.length());  // chords cut the corners
   }
 }

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
-#include "flowire/flow/solver.hpp"
 #include "flowire/fem/compare.hpp"
+#include "flowire/flow/solver.hpp"
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
@@ -76,8 +76,10 @@ int main(int argc, char** argv) {
         double& worst = iterative[i] ? worst_iterative : worst_direct;
         worst = std::max(worst, std::abs(values[i] - expected[i]));
       }
-      std::printf("rank %d of %d: largest difference to the one-rank run (fraction of the flow / of the drop): "
-                  "MUMPS %.3e, fieldsplit %.3e\n", rank, size, worst_direct, worst_iterative);
+      std::printf(
+          "rank %d of %d: largest difference to the one-rank run (fraction of the flow / of the drop): "
+          "MUMPS %.3e, fieldsplit %.3e\n",
+          rank, size, worst_direct, worst_iterative);
       if (!(worst_direct <= 1e-9) || !(worst_iterative <= 1e-5)) failures = 1;
     }
   } catch (const std::exception& e) {

@@ -5,11 +5,10 @@
 // own Taylor–Hood elements (PetscFE P2/P1, pointwise weak forms as in PETSc's Stokes
 // tutorial snes/tutorials/ex62, here with the gradient form of the viscous term and a
 // pressure traction on the end faces instead of ex62's manufactured solution) and solves
-// with MUMPS, and its outlet flow is L⁻¹∫u_x (see axial_velocity). The gmsh reader of PETSc 3.18 is used with straight-sided (vertex)
-// geometry, so flowire solves the same mesh with its edge nodes moved to the edge
-// midpoints: the same discrete problem assembled twice by independent code, whose outlet
-// flows must agree to round-off. flowire's curved-mesh flow is checked against
-// Hagen–Poiseuille.
+// with MUMPS, and its outlet flow is L⁻¹∫u_x (see axial_velocity). The gmsh reader of PETSc 3.18 is used with
+// straight-sided (vertex) geometry, so flowire solves the same mesh with its edge nodes moved to the edge midpoints:
+// the same discrete problem assembled twice by independent code, whose outlet flows must agree to round-off. flowire's
+// curved-mesh flow is checked against Hagen–Poiseuille.
 //
 // Usage: fem_petsc_plex_check DIR   (writes DIR/tube.msh). Exit status 0 when the flows
 // agree to 1e-8 and the curved one is within 0.5% of Hagen–Poiseuille, 1 otherwise, 77
@@ -26,11 +25,10 @@
 #include <string>
 
 #include "fem_test_cases.hpp"
-#include "flowire/flow/solver.hpp"
-#include "flowire/flow/solver.hpp"
 #include "flowire/fem/element.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/stokes.hpp"
+#include "flowire/flow/solver.hpp"
 
 namespace {
 
@@ -47,8 +45,8 @@ void f0_zero(PetscInt dim, PetscInt, PetscInt, const PetscInt[], const PetscInt[
 // Viscous stress in gradient form and pressure: f1 = η∇u − p I.
 void f1_u(PetscInt dim, PetscInt, PetscInt, const PetscInt uOff[], const PetscInt[], const PetscScalar u[],
           const PetscScalar[], const PetscScalar u_x[], const PetscInt[], const PetscInt[], const PetscScalar[],
-          const PetscScalar[], const PetscScalar[], PetscReal, const PetscReal[], PetscInt, const PetscScalar constants[],
-          PetscScalar f1[]) {
+          const PetscScalar[], const PetscScalar[], PetscReal, const PetscReal[], PetscInt,
+          const PetscScalar constants[], PetscScalar f1[]) {
   const PetscReal eta = PetscRealPart(constants[0]);
   for (PetscInt c = 0; c < dim; ++c) {
     for (PetscInt d = 0; d < dim; ++d) f1[c * dim + d] = eta * u_x[c * dim + d];
@@ -162,11 +160,11 @@ PetscErrorCode plex_solve(const std::string& file, PlexResult& res) {
   PetscCall(ISDestroy(&wall_faces));
   PetscCall(DMPlexLabelComplete(dm, wall));
   const PetscInt one = 1, inlet_id = kInlet;
-  PetscCall(DMAddBoundary(dm, DM_BC_ESSENTIAL, "wall", wall, 1, &one, 0, 0, nullptr, reinterpret_cast<void (*)(void)>(zero), nullptr,
-                          nullptr, nullptr));
+  PetscCall(DMAddBoundary(dm, DM_BC_ESSENTIAL, "wall", wall, 1, &one, 0, 0, nullptr,
+                          reinterpret_cast<void (*)(void)>(zero), nullptr, nullptr, nullptr));
   PetscInt bd = 0;
-  PetscCall(DMAddBoundary(dm, DM_BC_NATURAL, "inlet", face_sets, 1, &inlet_id, 0, 0, nullptr, nullptr, nullptr,
-                          nullptr, &bd));
+  PetscCall(DMAddBoundary(dm, DM_BC_NATURAL, "inlet", face_sets, 1, &inlet_id, 0, 0, nullptr, nullptr, nullptr, nullptr,
+                          &bd));
   PetscWeakForm wf;
   PetscCall(PetscDSGetBoundary(ds, bd, &wf, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr,
                                nullptr, nullptr, nullptr));
@@ -249,18 +247,19 @@ int main(int argc, char** argv) {
       status = 77;
     } else {
       const double diff = plex.q_out / q_flowire - 1.0;
-      std::printf("tube r = %.1f mm, L = %.0f mm, dp = %.0f Pa; %d flowire tets / %ld PETSc cells, %d / %ld unknowns\n"
-                  "outlet flow on the straight-sided mesh: flowire %.10e, PETSc DMPlex/PetscFE %.10e m^3/s "
-                  "(relative difference %.3e); PETSc read %.1f s, total %.1f s\n"
-                  "Hagen-Poiseuille %.10e: flowire curved mesh %.3e, straight-sided (both codes) %.3e\n",
-                  kR * 1e3, kL * 1e3, kDp, mesh.num_tets(), static_cast<long>(plex.cells), sol.unknowns,
-                  static_cast<long>(plex.unknowns), q_flowire, plex.q_out, diff, plex.read_seconds, plex.seconds,
-                  q_hp, curved.group_flow[2] / q_hp - 1.0, q_flowire / q_hp - 1.0);
+      std::printf(
+          "tube r = %.1f mm, L = %.0f mm, dp = %.0f Pa; %d flowire tets / %ld PETSc cells, %d / %ld unknowns\n"
+          "outlet flow on the straight-sided mesh: flowire %.10e, PETSc DMPlex/PetscFE %.10e m^3/s "
+          "(relative difference %.3e); PETSc read %.1f s, total %.1f s\n"
+          "Hagen-Poiseuille %.10e: flowire curved mesh %.3e, straight-sided (both codes) %.3e\n",
+          kR * 1e3, kL * 1e3, kDp, mesh.num_tets(), static_cast<long>(plex.cells), sol.unknowns,
+          static_cast<long>(plex.unknowns), q_flowire, plex.q_out, diff, plex.read_seconds, plex.seconds, q_hp,
+          curved.group_flow[2] / q_hp - 1.0, q_flowire / q_hp - 1.0);
       // Same discrete problem (affine P2/P1, every integrand a polynomial integrated
       // exactly by both): the flows agree to the solvers' round-off. The curved mesh is
       // the accurate one (the straight sides cut the lumen by a few percent).
-      const bool ok = std::abs(diff) < 1e-8 && plex.cells == mesh.num_tets() &&
-                      std::abs(curved.group_flow[2] / q_hp - 1.0) < 5e-3;
+      const bool ok =
+          std::abs(diff) < 1e-8 && plex.cells == mesh.num_tets() && std::abs(curved.group_flow[2] / q_hp - 1.0) < 5e-3;
       status = ok ? 0 : 1;
     }
   } catch (const std::exception& e) {

@@ -49,8 +49,8 @@ TEST(FemBoundary, TubeWithOutletResistanceCarriesDropOverSeriesResistance) {
   const StokesSolution sol = solve_stokes(mesh, std::span<const GroupCondition>(c), stokes());
   const double q_exact = (p_in - p_d) / (rt + r_out);
   const double q = sol.group_flow[2];
-  std::printf("tube + outlet resistance: Q = %.6e m^3/s, (R_tube + R) formula %.6e, error %.3e; outlet p %.5f Pa\n",
-              q, q_exact, q / q_exact - 1.0, sol.group_pressure[2]);
+  std::printf("tube + outlet resistance: Q = %.6e m^3/s, (R_tube + R) formula %.6e, error %.3e; outlet p %.5f Pa\n", q,
+              q_exact, q / q_exact - 1.0, sol.group_pressure[2]);
   EXPECT_LT(std::abs(q / q_exact - 1.0), testing::tol(5e-3));
   // The outlet pressure is the one of the resistance law, to round-off.
   EXPECT_NEAR(sol.group_pressure[2], p_d + r_out * q, 1e-9 * p_in);
@@ -83,8 +83,10 @@ TEST(FemBoundary, BasisCombinationEqualsDirectSolveToRoundOff) {
   EXPECT_NEAR(f[0][1] + f[1][1], 0.0, 1e-9 * std::abs(f[0][1]));
   for (int k = 0; k < 3; ++k) {
     std::vector<GroupCondition> c(mesh.groups.size());
-    if (k == 1) c[1] = GroupCondition::with_flow(-3e-7);
-    else c[1] = GroupCondition::at_pressure(10.0 + 7.0 * k);
+    if (k == 1)
+      c[1] = GroupCondition::with_flow(-3e-7);
+    else
+      c[1] = GroupCondition::at_pressure(10.0 + 7.0 * k);
     c[2] = k == 0 ? GroupCondition::at_pressure(1.5) : GroupCondition::with_resistance(tube_resistance() * k, 0.5 * k);
     const StokesSolution a = basis.solve(c);
     const StokesSolution b = solve_stokes(mesh, std::span<const GroupCondition>(c), stokes());
@@ -149,11 +151,12 @@ TEST(FemBoundary, YWithUnequalOutletResistancesSplitsLikeTheNetwork) {
   ASSERT_EQ(r.outlets.size(), 2u);
   const double qn = r.outlets[0].flow_network + r.outlets[1].flow_network;
   const double qf = r.outlets[0].flow_fem + r.outlets[1].flow_fem;
-  std::printf("Y, outlet resistances 1:4: network split %.4f / %.4f, FEM %.4f / %.4f, split error %.3e, flow error "
-              "%.3e; outlet pressures network %.3f / %.3f Pa, FEM %.3f / %.3f Pa\n",
-              r.outlets[0].flow_network / qn, r.outlets[1].flow_network / qn, r.outlets[0].flow_fem / qf,
-              r.outlets[1].flow_fem / qf, r.max_flow_split_error, r.max_flow_error, r.outlets[0].pressure_network,
-              r.outlets[1].pressure_network, r.outlets[0].pressure_fem, r.outlets[1].pressure_fem);
+  std::printf(
+      "Y, outlet resistances 1:4: network split %.4f / %.4f, FEM %.4f / %.4f, split error %.3e, flow error "
+      "%.3e; outlet pressures network %.3f / %.3f Pa, FEM %.3f / %.3f Pa\n",
+      r.outlets[0].flow_network / qn, r.outlets[1].flow_network / qn, r.outlets[0].flow_fem / qf,
+      r.outlets[1].flow_fem / qf, r.max_flow_split_error, r.max_flow_error, r.outlets[0].pressure_network,
+      r.outlets[1].pressure_network, r.outlets[0].pressure_fem, r.outlets[1].pressure_fem);
   EXPECT_GT(std::abs(r.outlets[0].flow_network / qn - 0.5), 0.1);  // the resistances do change the split
   EXPECT_LT(r.max_flow_split_error, testing::tol(1e-2));
   EXPECT_LT(r.max_rel_diff_drop_away, testing::tol(2e-2));
@@ -184,16 +187,18 @@ TEST(FemBoundary, PulsatileFramesEqualDirectSolvesAndFollowTheNetwork) {
   const PulsatileResult p = compare_pulsatile(net, times, frames, base, 0.0, opt, dir.string());
   ASSERT_EQ(p.frames.size(), 4u);
   EXPECT_EQ(p.factorizations, 1);
-  std::printf("pulsatile Y (4 frames): max split error %.3e, max drop difference away %.3e; basis %.2f s, "
-              "frames %.2f s\n", p.max_flow_split_error, p.max_rel_diff_drop_away, p.basis_seconds,
-              p.frames_seconds);
+  std::printf(
+      "pulsatile Y (4 frames): max split error %.3e, max drop difference away %.3e; basis %.2f s, "
+      "frames %.2f s\n",
+      p.max_flow_split_error, p.max_rel_diff_drop_away, p.basis_seconds, p.frames_seconds);
   EXPECT_LT(p.max_flow_split_error, testing::tol(1e-2));
   EXPECT_LT(p.max_rel_diff_drop_away, testing::tol(2e-2));
   // Frame 1 (systole) against the steady comparison solved directly at its boundary values.
   const CompareResult direct = compare(net, frames[1], opt, "");
   ASSERT_EQ(direct.outlets.size(), p.frames[1].outlets.size());
   for (size_t k = 0; k < direct.outlets.size(); ++k) {
-    EXPECT_NEAR(p.frames[1].outlets[k].flow_fem, direct.outlets[k].flow_fem, 1e-9 * std::abs(direct.outlets[k].flow_fem));
+    EXPECT_NEAR(p.frames[1].outlets[k].flow_fem, direct.outlets[k].flow_fem,
+                1e-9 * std::abs(direct.outlets[k].flow_fem));
     EXPECT_NEAR(p.frames[1].outlets[k].pressure_fem, direct.outlets[k].pressure_fem, 1e-9 * 300.0);
   }
   ASSERT_EQ(direct.samples.size(), p.frames[1].samples.size());

@@ -24,11 +24,12 @@ BoundaryValues paper_like() {
 }
 
 void report(const char* name, const CompareResult& r) {
-  std::printf("%s: %d tets, %d unknowns; flow split error %.3e, flow error %.3e; pressure difference "
-              "(fraction of the drop) away from the junction %.3e, near it %.3e; mesh %.2f s, assembly "
-              "%.2f s, solve %.2f s\n", name, r.tets, r.unknowns, r.max_flow_split_error, r.max_flow_error,
-              r.max_rel_diff_drop_away, r.max_rel_diff_drop_junction, r.mesh_seconds, r.assemble_seconds,
-              r.solve_seconds);
+  std::printf(
+      "%s: %d tets, %d unknowns; flow split error %.3e, flow error %.3e; pressure difference "
+      "(fraction of the drop) away from the junction %.3e, near it %.3e; mesh %.2f s, assembly "
+      "%.2f s, solve %.2f s\n",
+      name, r.tets, r.unknowns, r.max_flow_split_error, r.max_flow_error, r.max_rel_diff_drop_away,
+      r.max_rel_diff_drop_junction, r.mesh_seconds, r.assemble_seconds, r.solve_seconds);
 }
 
 TEST(FemCompare, SymmetricYSplitsFiftyFiftyLikeTheNetwork) {

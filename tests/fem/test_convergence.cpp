@@ -61,8 +61,8 @@ TEST(FemConvergence, StraightTubeObservedOrder) {
     h[k] = factors[k] * kR;
     e_u[k] = velocity_l2_error(mesh, sol);
     e_q[k] = std::abs(sol.group_flow[2] / q_exact - 1.0);
-    std::printf("h = %.3f mm: %d tets, velocity L2 error %.3e, flow error %.3e\n", h[k] * 1e3, mesh.num_tets(),
-                e_u[k], e_q[k]);
+    std::printf("h = %.3f mm: %d tets, velocity L2 error %.3e, flow error %.3e\n", h[k] * 1e3, mesh.num_tets(), e_u[k],
+                e_q[k]);
   }
   const double order_u = std::log(e_u[0] / e_u[2]) / std::log(h[0] / h[2]);
   const double order_q = std::log(e_q[0] / e_q[2]) / std::log(h[0] / h[2]);

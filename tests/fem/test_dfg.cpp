@@ -17,10 +17,11 @@ ObstacleResult dfg(double h, double h_cyl) {
   sizes.obstacle_mesh_size = h_cyl;
   sizes.growth = 0.3;
   const ObstacleResult r = dfg_3d_1z(sizes, Stabilization::None, "");
-  std::printf("DFG 3D-1Z h %.3f, cylinder %.4f: %d tets, %d unknowns, %d Newton steps: c_D %.5f, c_L %.6f, "
-              "dp %.5f (mesh %.1f s, solve %.1f s)\n",
-              h, h_cyl, r.tets, r.unknowns, r.newton_iterations, r.drag_coefficient, r.lift_coefficient,
-              r.pressure_difference, r.mesh_seconds, r.solve_seconds);
+  std::printf(
+      "DFG 3D-1Z h %.3f, cylinder %.4f: %d tets, %d unknowns, %d Newton steps: c_D %.5f, c_L %.6f, "
+      "dp %.5f (mesh %.1f s, solve %.1f s)\n",
+      h, h_cyl, r.tets, r.unknowns, r.newton_iterations, r.drag_coefficient, r.lift_coefficient, r.pressure_difference,
+      r.mesh_seconds, r.solve_seconds);
   return r;
 }
 

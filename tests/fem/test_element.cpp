@@ -40,8 +40,16 @@ TEST(FemElement, TriQuadratureIsExactToDegreeFour) {
 }
 
 TEST(FemElement, P2BasisIsNodalAndGradientsMatchDifferences) {
-  const std::array<std::array<double, 3>, 10> nodes{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, 0, 0},
-                                                     {.5, .5, 0}, {0, .5, 0}, {0, 0, .5}, {.5, 0, .5}, {0, .5, .5}}};
+  const std::array<std::array<double, 3>, 10> nodes{{{0, 0, 0},
+                                                     {1, 0, 0},
+                                                     {0, 1, 0},
+                                                     {0, 0, 1},
+                                                     {.5, 0, 0},
+                                                     {.5, .5, 0},
+                                                     {0, .5, 0},
+                                                     {0, 0, .5},
+                                                     {.5, 0, .5},
+                                                     {0, .5, .5}}};
   double v[10];
   for (int i = 0; i < 10; ++i) {
     tet_p2(nodes[static_cast<size_t>(i)], v);
@@ -73,8 +81,16 @@ struct Quadratic {
   }
 };
 
-const std::array<std::array<double, 3>, 10> kTetNodes{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, 0, 0},
-                                                       {.5, .5, 0}, {0, .5, 0}, {0, 0, .5}, {.5, 0, .5}, {0, .5, .5}}};
+const std::array<std::array<double, 3>, 10> kTetNodes{{{0, 0, 0},
+                                                       {1, 0, 0},
+                                                       {0, 1, 0},
+                                                       {0, 0, 1},
+                                                       {.5, 0, 0},
+                                                       {.5, .5, 0},
+                                                       {0, .5, 0},
+                                                       {0, 0, .5},
+                                                       {.5, 0, .5},
+                                                       {0, .5, .5}}};
 
 TEST(FemElement, P2InterpolationReproducesEveryQuadraticAndItsGradient) {
   std::mt19937 rng(5);
@@ -146,7 +162,8 @@ TEST(FemElement, P1IsTheBarycentricCoordinates) {
 }
 
 TEST(FemElement, TriangleP2IsNodalReproducesQuadraticsAndItsGradientMatchesDifferences) {
-  const std::array<std::array<double, 3>, 6> nodes{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {.5, 0, 0}, {.5, .5, 0}, {0, .5, 0}}};
+  const std::array<std::array<double, 3>, 6> nodes{
+      {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {.5, 0, 0}, {.5, .5, 0}, {0, .5, 0}}};
   double v[6];
   for (int i = 0; i < 6; ++i) {
     tri_p2(nodes[static_cast<size_t>(i)], v);

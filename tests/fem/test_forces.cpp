@@ -98,10 +98,11 @@ AnnulusResult annulus(double h, double h_wire) {
   const double g = dp / l;
   const double fw = annulus_inner_force(r, a, g) * l, fo = annulus_outer_force(r, a, g) * l;
   AnnulusResult res{h_wire, f[3].x() / fw - 1.0, f[0].x() / fo - 1.0, fs[3].x() / fw - 1.0, mesh.num_tets()};
-  std::printf("annulus h_wire %.3f mm, %d tets, %d unknowns: wire force %.6e N (exact %.6e), weak form %.2e, "
-              "surface %.2e; wall %.2e; lateral force on the wire %.1e of the axial\n",
-              h_wire * 1e3, mesh.num_tets(), sol.unknowns, f[3].x(), fw, res.wire_error, res.wire_surface_error,
-              res.wall_error, std::hypot(f[3].y(), f[3].z()) / fw);
+  std::printf(
+      "annulus h_wire %.3f mm, %d tets, %d unknowns: wire force %.6e N (exact %.6e), weak form %.2e, "
+      "surface %.2e; wall %.2e; lateral force on the wire %.1e of the axial\n",
+      h_wire * 1e3, mesh.num_tets(), sol.unknowns, f[3].x(), fw, res.wire_error, res.wire_surface_error, res.wall_error,
+      std::hypot(f[3].y(), f[3].z()) / fw);
   // The two walls share the load Δp·π(R² − a²) (exactly, for the weak form).
   EXPECT_NEAR((f[0].x() + f[3].x()) / (fw + fo), 1.0, 1e-3);
   return res;
@@ -114,8 +115,7 @@ TEST(FemForces, CoaxialWireMatchesAnnularPoiseuille) {
   EXPECT_LT(std::abs(fine.wall_error), 5e-4);
   const double ratio = coarse.h / fine.h;
   const double order = std::log(std::abs(coarse.wire_error / fine.wire_error)) / std::log(ratio);
-  const double order_s =
-      std::log(std::abs(coarse.wire_surface_error / fine.wire_surface_error)) / std::log(ratio);
+  const double order_s = std::log(std::abs(coarse.wire_surface_error / fine.wire_surface_error)) / std::log(ratio);
   std::printf("observed order of the wire force: weak form %.2f, surface integral %.2f\n", order, order_s);
   // Measured: weak form 4.1e-4 -> 2.0e-4 (order 1.9), surface integral 3.4e-2 -> 1.9e-2
   // (order 1.6): the weak form is some 90 times closer on the same field.

@@ -6,14 +6,14 @@
 #include <vtkClipPolyData.h>
 #include <vtkFillHolesFilter.h>
 #include <vtkImplicitBoolean.h>
-#include <vtkPlane.h>
-#include <vtkPolyDataNormals.h>
-#include <vtkSphere.h>
 #include <vtkMassProperties.h>
 #include <vtkNew.h>
+#include <vtkPlane.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkPolyDataNormals.h>
 #include <vtkSTLReader.h>
+#include <vtkSphere.h>
 #include <vtkTriangleFilter.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
@@ -139,10 +139,11 @@ void check_lumen(const Anatomy& a, size_t expected_ends, double size_factor) {
     const LumenCap& cap = lumen.caps[c];
     EXPECT_EQ(cap.node, ends[c]);
     const double r_end = net.segment(*net.node_segments(cap.node).first).radius;
-    std::printf("cap at end %d: %d loop points, r_eq %.3f mm (centerline %.3f mm), %.3f mm from the end, "
-                "planarity %.4f, file's own cap %d\n",
-                cap.node, cap.loop_points, cap.radius * 1e3, r_end * 1e3, cap.distance * 1e3, cap.planarity,
-                cap.was_capped ? 1 : 0);
+    std::printf(
+        "cap at end %d: %d loop points, r_eq %.3f mm (centerline %.3f mm), %.3f mm from the end, "
+        "planarity %.4f, file's own cap %d\n",
+        cap.node, cap.loop_points, cap.radius * 1e3, r_end * 1e3, cap.distance * 1e3, cap.planarity,
+        cap.was_capped ? 1 : 0);
     // The cap's equivalent radius is the vessel's at its end (MISR is inscribed: a bit smaller).
     EXPECT_GT(cap.radius, 0.8 * r_end);
     EXPECT_LT(cap.radius, 1.6 * r_end);
@@ -162,10 +163,11 @@ void check_lumen(const Anatomy& a, size_t expected_ends, double size_factor) {
     EXPECT_NEAR(area / expected, 1.0, 0.02) << mesh.groups[static_cast<size_t>(g)].name;
   }
   const double v_mesh = mesh.volume(), v_vtk = vtk_volume(a, net);
-  std::printf("%s: %d tets, %d nodes, mesh %.2f s; volume: mesh %.4f mL, VTK (filled holes) %.4f mL, capped "
-              "triangulation %.4f mL; mesh / VTK - 1 = %.2e\n",
-              a.surface.c_str(), mesh.num_tets(), mesh.num_nodes(), mesh.mesh_seconds, v_mesh * 1e6, v_vtk * 1e6,
-              lumen.enclosed_volume * 1e6, v_mesh / v_vtk - 1.0);
+  std::printf(
+      "%s: %d tets, %d nodes, mesh %.2f s; volume: mesh %.4f mL, VTK (filled holes) %.4f mL, capped "
+      "triangulation %.4f mL; mesh / VTK - 1 = %.2e\n",
+      a.surface.c_str(), mesh.num_tets(), mesh.num_nodes(), mesh.mesh_seconds, v_mesh * 1e6, v_vtk * 1e6,
+      lumen.enclosed_volume * 1e6, v_mesh / v_vtk - 1.0);
   EXPECT_NEAR(v_mesh / v_vtk, 1.0, 0.005);  // measured: 1.0e-3 (arch), 4.5e-4 (abdominal)
 }
 
@@ -278,8 +280,10 @@ TEST(FemLumen, FacetedTubeSurfaceMatchesHagenPoiseuille) {
   const double n = kAround;
   const double r_eq = r * std::sqrt(n / (2.0 * std::numbers::pi) * std::sin(2.0 * std::numbers::pi / n));
   const double p_exact = 8.0 * eta * length * q / (std::numbers::pi * std::pow(r_eq, 4));
-  std::printf("faceted tube: %d tets; inlet pressure FEM %.6g Pa, Hagen-Poiseuille (r_eq) %.6g Pa, network "
-              "(r) %.6g Pa\n", res.tets, res.inlet_pressure_fem, p_exact, res.inlet_pressure_network);
+  std::printf(
+      "faceted tube: %d tets; inlet pressure FEM %.6g Pa, Hagen-Poiseuille (r_eq) %.6g Pa, network "
+      "(r) %.6g Pa\n",
+      res.tets, res.inlet_pressure_fem, p_exact, res.inlet_pressure_network);
   EXPECT_NEAR(res.inlet_pressure_fem / p_exact, 1.0, 0.01);
   EXPECT_NEAR(res.inlet_flow_fem / q, 1.0, 1e-9);
   int interior = 0;
@@ -288,8 +292,8 @@ TEST(FemLumen, FacetedTubeSurfaceMatchesHagenPoiseuille) {
     ++interior;
     std::printf("  s = %.1f mm: flow FEM / Q = %.5f, r_fem / r_eq = %.5f, p FEM / exact = %.5f\n", sp.s * 1e3,
                 sp.flow_fem / q, sp.radius_fem / r_eq, sp.pressure_fem / (p_exact * (1.0 - sp.s / length)));
-    EXPECT_NEAR(sp.flow_fem / q, 1.0, 0.01);          // the section flux quadrature
-    EXPECT_NEAR(sp.radius_fem / r_eq, 1.0, 0.01);     // the section area
+    EXPECT_NEAR(sp.flow_fem / q, 1.0, 0.01);       // the section flux quadrature
+    EXPECT_NEAR(sp.radius_fem / r_eq, 1.0, 0.01);  // the section area
     EXPECT_NEAR(sp.pressure_fem / (p_exact * (1.0 - sp.s / length)), 1.0, 0.02);
   }
   EXPECT_EQ(interior, 3);

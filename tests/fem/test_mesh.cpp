@@ -42,8 +42,8 @@ TEST(FemMesh, SameNetworkGivesTheSameMesh) {
 
 TEST(FemMesh, TooSharpBendIsAnInputError) {
   vessels::Centerlines c;
-  c.branches.push_back({"hairpin", {vessels::Vec3(0, 0, 0), vessels::Vec3(10e-3, 0, 0), vessels::Vec3(0, 1e-3, 0)},
-                        {2e-3, 2e-3, 2e-3}});
+  c.branches.push_back(
+      {"hairpin", {vessels::Vec3(0, 0, 0), vessels::Vec3(10e-3, 0, 0), vessels::Vec3(0, 1e-3, 0)}, {2e-3, 2e-3, 2e-3}});
   const auto net = vessels::Network::build(c);
   try {
     (void)build_mesh(net);

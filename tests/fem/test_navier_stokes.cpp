@@ -51,7 +51,7 @@ struct Manufactured {
     const double y = x.y(), z = x.z(), ss = s(x), qq = q(x.x()), dqq = dq(x.x()), r2 = r * r;
     const double sy = -2 * y / r2, sz = -2 * z / r2;
     Eigen::Matrix3d g;
-    g << 0.0, u0 * sy, u0 * sz,                                               //
+    g << 0.0, u0 * sy, u0 * sz,                                                    //
         -omega * z * ss * dqq, -omega * z * sy * qq, -omega * (ss + z * sz) * qq,  //
         omega * y * ss * dqq, omega * (ss + y * sy) * qq, omega * y * sz * qq;
     return g;
@@ -64,9 +64,7 @@ struct Manufactured {
     const Vec3 u = velocity(x);
     return kRho * (gradient(x) * u) - kEta * laplacian(x) + Vec3(-p0 / l, 0.0, 0.0);
   }
-  [[nodiscard]] Vec3 traction(const Vec3& x, const Vec3& n) const {
-    return kEta * (gradient(x) * n) - pressure(x) * n;
-  }
+  [[nodiscard]] Vec3 traction(const Vec3& x, const Vec3& n) const { return kEta * (gradient(x) * n) - pressure(x) * n; }
 };
 
 StokesOptions ns_options(const Manufactured& m, Stabilization stab) {
@@ -99,7 +97,8 @@ std::pair<double, double> l2_errors(const TetMesh& mesh, const StokesSolution& s
         u += phi[i] * sol.velocity[n];
       }
       for (int l = 0; l < 4; ++l)
-        p += psi[l] * sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
+        p += psi[l] *
+             sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
       const double w = q.weight * j.determinant();
       eu += w * (u - m.velocity(x)).squaredNorm();
       nu += w * m.velocity(x).squaredNorm();
@@ -135,8 +134,10 @@ double element_jacobian_error(const TetMesh& mesh, int tet, const StokesOptions&
   double worst = 0.0;
   for (int col = 0; col < 34; ++col) {
     double* value = nullptr;
-    if (col < 30) value = &u[static_cast<size_t>(t[static_cast<size_t>(col / 3)])][col % 3];
-    else value = &p[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(col - 30)])])];
+    if (col < 30)
+      value = &u[static_cast<size_t>(t[static_cast<size_t>(col / 3)])][col % 3];
+    else
+      value = &p[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(col - 30)])])];
     const double v0 = *value, h = 1e-6 * std::max(1.0, std::abs(v0));
     *value = v0 + h;
     detail::navier_stokes_element(mesh, tet, so, u, p, rp, scratch);
@@ -324,10 +325,11 @@ TEST(FemNavierStokes, YBifurcationAtCarotidReynoldsNumber) {
   const StokesSolution ns = y_at_reynolds(0.5, 600.0, kRho);
   const StokesSolution st = y_at_reynolds(0.5, 600.0, kRho * 1e-9);
   const double out = ns.group_flow[2] + ns.group_flow[3];
-  std::printf("Y at Re %.0f: inlet pressure %.2f Pa (without inertia %.2f Pa), split %.5f / %.5f, %d Newton steps "
-              "in %d density steps, mass balance %.2e\n", ns.reynolds, ns.group_pressure[1], st.group_pressure[1],
-              ns.group_flow[2] / out, ns.group_flow[3] / out, ns.newton_iterations, ns.continuation_steps,
-              (out + ns.group_flow[1]) / out);
+  std::printf(
+      "Y at Re %.0f: inlet pressure %.2f Pa (without inertia %.2f Pa), split %.5f / %.5f, %d Newton steps "
+      "in %d density steps, mass balance %.2e\n",
+      ns.reynolds, ns.group_pressure[1], st.group_pressure[1], ns.group_flow[2] / out, ns.group_flow[3] / out,
+      ns.newton_iterations, ns.continuation_steps, (out + ns.group_flow[1]) / out);
   EXPECT_NEAR(ns.reynolds, 600.0, 1.0);
   EXPECT_LT(std::abs(out + ns.group_flow[1]), 1e-9 * out);
   EXPECT_NEAR(ns.group_flow[2] / out, 0.5, 5e-3);
@@ -350,9 +352,11 @@ TEST(FemNavierStokesSlow, YBifurcationAtRe600MeshConvergence) {
     const StokesSolution ns = y_at_reynolds(factors[k], 600.0, kRho, &tets, 0.3);
     p[k] = ns.group_pressure[1];
     split[k] = ns.group_flow[2] / (ns.group_flow[2] + ns.group_flow[3]);
-    std::printf("size factor %.3f: %d tets, inlet pressure %.4f Pa, split %.5f, %d Newton steps in %d density "
-                "steps, %.1f s\n", factors[k], tets, p[k], split[k], ns.newton_iterations, ns.continuation_steps,
-                ns.assemble_seconds + ns.solve_seconds);
+    std::printf(
+        "size factor %.3f: %d tets, inlet pressure %.4f Pa, split %.5f, %d Newton steps in %d density "
+        "steps, %.1f s\n",
+        factors[k], tets, p[k], split[k], ns.newton_iterations, ns.continuation_steps,
+        ns.assemble_seconds + ns.solve_seconds);
   }
   for (const auto* v : {p, split}) {
     const double d01 = v[0] - v[1], d12 = v[1] - v[2];

@@ -54,7 +54,8 @@ TEST(FemObstacle, TheDfgChannelIsTheBoxMinusTheCylinder) {
 
 TEST(FemObstacle, AWireAlongATubeLeavesTheAnnulus) {
   const double R = 1.5e-3, a = 0.2e-3, L = 2e-3, offset = 0.6e-3;
-  const TetMesh mesh = build_mesh(wire_along_tube_domain(R, L, a, offset, {.mesh_size = 0.5e-3, .obstacle_mesh_size = 0.12e-3, .growth = 0.5}));
+  const TetMesh mesh = build_mesh(
+      wire_along_tube_domain(R, L, a, offset, {.mesh_size = 0.5e-3, .obstacle_mesh_size = 0.12e-3, .growth = 0.5}));
   EXPECT_EQ(group_names(mesh), (std::set<std::string>{"wall", "obstacle", "inlet", "outlet"}));
   EXPECT_LT(rel(mesh.volume(), kPi * (R * R - a * a) * L), 1e-4);
   EXPECT_LT(rel(mesh.area(mesh.group_named("obstacle")), 2 * kPi * a * L), 1e-3);
@@ -75,8 +76,8 @@ TEST(FemObstacle, AWireAlongATubeLeavesTheAnnulus) {
 
 TEST(FemObstacle, AWireAcrossATubeTakesItsChordsOutOfTheFluid) {
   const double R = 1.5e-3, a = 0.1e-3, L = 4e-3;
-  const TetMesh mesh =
-      build_mesh(wire_in_tube_domain(R, L, a, true, 1.5e-3, {.mesh_size = 0.6e-3, .obstacle_mesh_size = 0.08e-3, .growth = 0.5}));
+  const TetMesh mesh = build_mesh(
+      wire_in_tube_domain(R, L, a, true, 1.5e-3, {.mesh_size = 0.6e-3, .obstacle_mesh_size = 0.08e-3, .growth = 0.5}));
   EXPECT_EQ(group_names(mesh), (std::set<std::string>{"wall", "obstacle", "inlet", "outlet"}));
   EXPECT_LT(rel(mesh.area(mesh.group_named("inlet")), kPi * R * R), 1e-4);
   EXPECT_LT(rel(mesh.area(mesh.group_named("outlet")), kPi * R * R), 1e-4);

@@ -68,7 +68,8 @@ TetMesh kuhn_box(int n) {
 }
 
 Vec3 quadratic_velocity(const Vec3& x) {
-  return Vec3(x.x() * x.x() - 0.5 * x.y() * x.z(), 1.0 + x.x() * x.y() - x.z(), 0.3 * x.z() * x.z() - x.y() * x.y() + 2.0);
+  return Vec3(x.x() * x.x() - 0.5 * x.y() * x.z(), 1.0 + x.x() * x.y() - x.z(),
+              0.3 * x.z() * x.z() - x.y() * x.y() + 2.0);
 }
 double linear_pressure(const Vec3& x) { return 3.0 + 2.0 * x.x() - x.y() + 0.5 * x.z(); }
 

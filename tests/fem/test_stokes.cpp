@@ -56,9 +56,11 @@ TubeResult solve_tube(double size_factor, LinearSolver solver, Equations eq = Eq
     if (v) worst = std::max(worst, std::abs(v->velocity.x() / umax - 1.0));
   }
   r.axis_error = worst;
-  std::printf("size factor %.3f: %d tets, %d unknowns, flow error %.3e, axis velocity error %.3e, "
-              "assembly %.2f s, solve %.2f s (%d its)\n", size_factor, r.tets, sol.unknowns, r.flow_error,
-              r.axis_error, sol.assemble_seconds, sol.solve_seconds, sol.krylov_iterations);
+  std::printf(
+      "size factor %.3f: %d tets, %d unknowns, flow error %.3e, axis velocity error %.3e, "
+      "assembly %.2f s, solve %.2f s (%d its)\n",
+      size_factor, r.tets, sol.unknowns, r.flow_error, r.axis_error, sol.assemble_seconds, sol.solve_seconds,
+      sol.krylov_iterations);
   return r;
 }
 

@@ -57,7 +57,8 @@ cd fem_flow_amplitude(const TetMesh& mesh, double omega, int n, int periods) {
     const StokesSolution& sol = solver.step(cond);
     EXPECT_NEAR(solver.time(), t, 1e-12);
     // Discrete Fourier coefficient of Q(t) = Im(Q̂ e^{iωt}) = (Q̂ e^{iωt} − conj)/(2i).
-    if (s > (periods - 1) * n) amp += sol.group_flow[2] * 2.0 * cd(0.0, 1.0) * std::exp(cd(0.0, -omega * t)) / double(n);
+    if (s > (periods - 1) * n)
+      amp += sol.group_flow[2] * 2.0 * cd(0.0, 1.0) * std::exp(cd(0.0, -omega * t)) / double(n);
   }
   return amp;
 }
@@ -79,7 +80,8 @@ TEST(FemUnsteady, StraightTubeFollowsWomersleyAtOrderTwoInTime) {
     const cd ratio = q[k] / exact * womersley_ratio(alpha);
     std::printf("α = 3, %d tets, %d steps per period: |Q/Q_P| %.5f (Womersley %.5f), phase %.3f° (%.3f°), error %.3e\n",
                 mesh.num_tets(), steps[k], std::abs(ratio), std::abs(womersley_ratio(alpha)),
-                std::arg(ratio) * 180 / kPi, std::arg(womersley_ratio(alpha)) * 180 / kPi, std::abs(q[k] / exact - 1.0));
+                std::arg(ratio) * 180 / kPi, std::arg(womersley_ratio(alpha)) * 180 / kPi,
+                std::abs(q[k] / exact - 1.0));
   }
   const double e0 = std::abs(q[0] / q[3] - 1.0), e2 = std::abs(q[2] / q[3] - 1.0);
   const double order = std::log(e0 / e2) / std::log(4.0);

@@ -67,7 +67,8 @@ cd outlet_amplitude(const TubeWindkessel& s, int steps, bool time_dependent, int
   cd amp = 0.0;
   for (const auto& f : r.frames)
     for (const auto& o : f.outlets)
-      if (o.node == s.outlet) amp += o.flow_fem * 2.0 * cd(0.0, 1.0) * std::exp(cd(0.0, -omega * f.time)) / double(frames);
+      if (o.node == s.outlet)
+        amp += o.flow_fem * 2.0 * cd(0.0, 1.0) * std::exp(cd(0.0, -omega * f.time)) / double(frames);
   std::printf("%s, %d steps per period: %d periods to periodic (change %.1e), Q̂ = %.5e ∠ %.3f°\n",
               time_dependent ? "time-dependent" : "quasi-steady", r.steps_per_period, r.periods, r.periodic_change,
               std::abs(amp), std::arg(amp) * 180 / kPi);
@@ -101,7 +102,8 @@ TEST(FemWindkessel, TimeDependentTubeFollowsWomersleyAndTheCircuit) {
   const double omega = 2 * kPi / kPeriod;
   const double alpha = kR * std::sqrt(omega * kRho / kEta);
   const cd lam = std::sqrt(cd(0.0, -1.0)) * alpha;
-  const cd ratio = 8.0 / (cd(0.0, 1.0) * alpha * alpha) * (1.0 - 2.0 * test::bessel_j(1, lam) / (lam * test::bessel_j(0, lam)));
+  const cd ratio =
+      8.0 / (cd(0.0, 1.0) * alpha * alpha) * (1.0 - 2.0 * test::bessel_j(1, lam) / (lam * test::bessel_j(0, lam)));
   const cd exact = circuit_flow(s, 8 * kEta * kL / (kPi * std::pow(kR, 4)) / ratio);
   const cd quasi = circuit_flow(s, 8 * kEta * kL / (kPi * std::pow(kR, 4)));
   const cd q = outlet_amplitude(s, 320, true);

@@ -26,11 +26,11 @@ constexpr double kEta = 3.5e-3, kRho = 1060.0;
 constexpr double kR = 1.5e-3, kA = 0.178e-3;  // 3 mm vessel, 0.014" wire
 
 struct CrossWire {
-  double re_d = 0.0;           ///< ρ U d/η with U the mean axial velocity
-  double force_per_length = 0.0;  ///< FEM, N/m
-  double curve = 0.0;          ///< ½ρ C_D(Re_w) d U_w², U_w the span-averaged velocity
-  double curve_local = 0.0;    ///< the same law integrated along the span with the local u(y)
-  double law = 0.0;            ///< blood_drag at U_w (the confinement floor included)
+  double re_d = 0.0;                 ///< ρ U d/η with U the mean axial velocity
+  double force_per_length = 0.0;     ///< FEM, N/m
+  double curve = 0.0;                ///< ½ρ C_D(Re_w) d U_w², U_w the span-averaged velocity
+  double curve_local = 0.0;          ///< the same law integrated along the span with the local u(y)
+  double law = 0.0;                  ///< blood_drag at U_w (the confinement floor included)
   double g_fem = 0.0, g_conf = 0.0;  ///< F'/(η U_w) of the FEM; the law's confined Stokes floor
   int tets = 0, unknowns = 0, newton = 0;
 };
@@ -82,10 +82,12 @@ CrossWire cross_wire(double re_d, double h, double h_wire, double growth, Vec3& 
   r.law = coupling::blood_drag(model, in).force.x();
   r.g_fem = r.force_per_length / (kEta * uw);
   r.g_conf = 4.0 * kPi / (std::log(kR / kA) - (kR * kR - kA * kA) / (kR * kR + kA * kA));
-  std::printf("cross wire Re_d %5.1f: %d tets, %d unknowns, %d Newton steps; F' FEM %.4e N/m, curve %.4e (ratio %.3f), "
-              "curve local %.4e (ratio %.3f), law %.4e (ratio %.3f); g FEM %.2f, g_conf %.2f; sideways %.1e of F_x\n",
-              re_d, r.tets, r.unknowns, r.newton, r.force_per_length, r.curve, r.force_per_length / r.curve,
-              r.curve_local, r.force_per_length / r.curve_local, r.law, r.force_per_length / r.law, r.g_fem, r.g_conf, std::hypot(f.y(), f.z()) / f.x());
+  std::printf(
+      "cross wire Re_d %5.1f: %d tets, %d unknowns, %d Newton steps; F' FEM %.4e N/m, curve %.4e (ratio %.3f), "
+      "curve local %.4e (ratio %.3f), law %.4e (ratio %.3f); g FEM %.2f, g_conf %.2f; sideways %.1e of F_x\n",
+      re_d, r.tets, r.unknowns, r.newton, r.force_per_length, r.curve, r.force_per_length / r.curve, r.curve_local,
+      r.force_per_length / r.curve_local, r.law, r.force_per_length / r.law, r.g_fem, r.g_conf,
+      std::hypot(f.y(), f.z()) / f.x());
   return r;
 }
 

@@ -87,9 +87,10 @@ TEST(FemWireOcclusion, TubeWithAWireAgainstTheAnnulusAndTheNetwork) {
     const double exact = q_tube * flow::annulus_flow_fraction(kA / kR, e);
     const double q_fem = fem_flow(offset, h, h_wire, &tets);
     const double q_net = network_flow(offset);
-    std::printf("wire at e = %.3f: %d tets, FEM/empty %.4f, exact annulus/empty %.4f, network/empty %.4f, "
-                "FEM/network %.4f\n",
-                e, tets, q_fem / q_tube, exact / q_tube, q_net / q_tube, q_fem / q_net);
+    std::printf(
+        "wire at e = %.3f: %d tets, FEM/empty %.4f, exact annulus/empty %.4f, network/empty %.4f, "
+        "FEM/network %.4f\n",
+        e, tets, q_fem / q_tube, exact / q_tube, q_net / q_tube, q_fem / q_net);
     // The network carries the exact annulus (its only approximation here is none: a
     // straight wire at one offset over the whole segment).
     EXPECT_NEAR(q_net / exact, 1.0, 1e-9) << e;

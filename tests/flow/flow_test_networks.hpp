@@ -42,10 +42,13 @@ inline Network murray_tree(int depth) {
 /// Wheatstone loop of reference 3: S–A 1, S–B 2, A–T 2, B–T 1, A–B 1 (use kUnitViscosity).
 inline constexpr int kS = 0, kA = 1, kB = 2, kT = 3, kAB = 4;
 inline Network wheatstone() {
-  std::vector<Vec3> nodes = {Vec3(0, 0, 0), Vec3(1, 1, 0), Vec3(1, -1, 0), Vec3(2, 0, 0), Vec3(-1, 0, 0),
-                             Vec3(3, 0, 0)};
-  std::vector<vessels::Segment> segs = {{kS, kA, 1.0, 1.0, -1}, {kS, kB, 1.0, 2.0, -1}, {kA, kT, 1.0, 2.0, -1},
-                                        {kB, kT, 1.0, 1.0, -1}, {kA, kB, 1.0, 1.0, -1}};
+  std::vector<Vec3> nodes = {Vec3(0, 0, 0), Vec3(1, 1, 0),  Vec3(1, -1, 0),
+                             Vec3(2, 0, 0), Vec3(-1, 0, 0), Vec3(3, 0, 0)};
+  std::vector<vessels::Segment> segs = {{kS, kA, 1.0, 1.0, -1},
+                                        {kS, kB, 1.0, 2.0, -1},
+                                        {kA, kT, 1.0, 2.0, -1},
+                                        {kB, kT, 1.0, 1.0, -1},
+                                        {kA, kB, 1.0, 1.0, -1}};
   // Only the four nodes; the spare points are not referenced.
   nodes.resize(4);
   return Network::from_graph(nodes, segs);

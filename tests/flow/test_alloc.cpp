@@ -38,7 +38,8 @@ TEST(FlowAllocation, AdvanceAndVelocityQueriesDoNotAllocate) {
     auto s = make_solver(net, spec);
     double sum = 0.0;
     // The first velocity query in a segment tabulates its Womersley shape (once per run).
-    for (int seg = 0; seg < net.num_segments(); ++seg) sum += s->velocity_at(seg, net.node(net.segment(seg).node_from)).norm();
+    for (int seg = 0; seg < net.num_segments(); ++seg)
+      sum += s->velocity_at(seg, net.node(net.segment(seg).node_from)).norm();
     const long before = g_allocations.load();
     for (int k = 0; k < 2000; ++k) {
       const double t = 1e-3 * k;

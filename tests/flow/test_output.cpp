@@ -37,9 +37,10 @@ TEST(FlowOutput, CsvFilesFollowTheContract) {
   EXPECT_EQ(nodes[1].substr(0, 4), "0,0,");
   const auto segs = lines_of(dir / "segments.csv");
   ASSERT_EQ(segs.size(), 1u + 4u * static_cast<size_t>(net.num_segments()));
-  EXPECT_EQ(segs[0],
-            "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
-            "occupied_fraction,resistance_factor");
+  EXPECT_EQ(
+      segs[0],
+      "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
+      "occupied_fraction,resistance_factor");
   // Row of segment 0 at t = 0.2: flow equals the solver's.
   std::stringstream row(segs[1 + static_cast<size_t>(net.num_segments())]);
   std::vector<double> v;

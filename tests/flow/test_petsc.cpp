@@ -16,7 +16,9 @@ using namespace flowire::flow::test;
 // PETSc is finalized by the free function flow::finalize_petsc (what an MPI program calls
 // before MPI_Finalize, tests/flow/petsc_mpi_main.cpp); a solver has no member of that name.
 template <class T>
-concept HasFinalizeMember = requires { &T::finalize_petsc; };
+concept HasFinalizeMember = requires {
+  &T::finalize_petsc;
+};
 static_assert(!HasFinalizeMember<FlowSolver>, "FlowSolver::finalize_petsc would be declared without a definition");
 static_assert(std::is_same_v<decltype(&finalize_petsc), void (*)()>);
 

@@ -192,10 +192,10 @@ TEST(FlowPoiseuille, SolversAgreeOnRandomNetworksWithLoops) {
 
 TEST(FlowPoiseuille, DisconnectedPieceIsAClearError) {
   // Two tubes that do not touch; only the first has boundary conditions.
-  std::vector<Vec3> nodes = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0.02, 0, 0), Vec3(0, 1, 0), Vec3(0.01, 1, 0),
-                             Vec3(0.02, 1, 0)};
-  std::vector<vessels::Segment> segs = {{0, 1, 1e-3, 0.0, -1}, {1, 2, 1e-3, 0.0, -1}, {3, 4, 1e-3, 0.0, -1},
-                                        {4, 5, 1e-3, 0.0, -1}};
+  std::vector<Vec3> nodes = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0.02, 0, 0),
+                             Vec3(0, 1, 0), Vec3(0.01, 1, 0), Vec3(0.02, 1, 0)};
+  std::vector<vessels::Segment> segs = {
+      {0, 1, 1e-3, 0.0, -1}, {1, 2, 1e-3, 0.0, -1}, {3, 4, 1e-3, 0.0, -1}, {4, 5, 1e-3, 0.0, -1}};
   const Network net = Network::from_graph(nodes, segs);
   for (const auto kind : kSolvers) {
     FlowSpec spec = pressure_spec(net, 0, Waveform::constant(100.0), {{2, 0.0}});

@@ -44,8 +44,7 @@ TEST(FlowProfile, BesselSeriesEqualsTheKelvinFunctionsAndAnArbitraryPrecisionEva
                               {2, 0.75173418271380823, 0.97229162730666121},
                               {5, -6.2300824786663577, 0.11603438155020038},
                               {10, 138.84046594163265, 56.370458553906638}};
-  for (const auto& k : kelvin)
-    EXPECT_LT(rel(bessel_j0(k[0] * i32), {k[1], k[2]}), 1e-13) << "x = " << k[0];
+  for (const auto& k : kelvin) EXPECT_LT(rel(bessel_j0(k[0] * i32), {k[1], k[2]}), 1e-13) << "x = " << k[0];
   EXPECT_LT(rel(bessel_j1(10.0 * i32), {-59.477610426263329, 131.87863917568693}), 1e-13);
   EXPECT_LT(rel(bessel_j0({3.0, -2.0}), {-1.2492348796074222, 0.94798379205773478}), 1e-14);
   EXPECT_LT(rel(bessel_j1({3.0, -2.0}), {0.78014884857925378, 1.2609820602388484}), 1e-14);

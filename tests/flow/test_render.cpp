@@ -54,7 +54,8 @@ TEST(FlowRender, AColourScaleFromRedToBlueAlongAFallingPressure) {
   // A tube along +x seen from +z (x to the right), 100 mmHg at its left end, 0 at its right.
   const Network net = tube(0.1, 4e-3, 20);
   std::vector<double> p(static_cast<size_t>(net.num_nodes()));
-  for (int i = 0; i < net.num_nodes(); ++i) p[static_cast<size_t>(i)] = 100.0 * 133.322387415 * (1.0 - net.node(i).x() / 0.1);
+  for (int i = 0; i < net.num_nodes(); ++i)
+    p[static_cast<size_t>(i)] = 100.0 * 133.322387415 * (1.0 - net.node(i).x() / 0.1);
   RenderOptions opt;
   opt.width = 400;
   opt.height = 300;
@@ -71,7 +72,8 @@ TEST(FlowRender, AColourScaleFromRedToBlueAlongAFallingPressure) {
   ASSERT_EQ(dims[1], 300);
   ASSERT_GE(img->GetNumberOfScalarComponents(), 3);
   auto rgb = [&](int x, int y) {
-    return std::array<double, 3>{img->GetScalarComponentAsDouble(x, y, 0, 0), img->GetScalarComponentAsDouble(x, y, 0, 1),
+    return std::array<double, 3>{img->GetScalarComponentAsDouble(x, y, 0, 0),
+                                 img->GetScalarComponentAsDouble(x, y, 0, 1),
                                  img->GetScalarComponentAsDouble(x, y, 0, 2)};
   };
   auto white = [](const std::array<double, 3>& c) { return c[0] > 250 && c[1] > 250 && c[2] > 250; };
@@ -88,7 +90,8 @@ TEST(FlowRender, AColourScaleFromRedToBlueAlongAFallingPressure) {
   const auto left = rgb(first + 3, row), mid = rgb((first + last) / 2, row), right = rgb(last - 3, row);
   EXPECT_GT(left[0], 2 * left[2]) << "high pressure is not red: " << left[0] << ' ' << left[1] << ' ' << left[2];
   EXPECT_GT(right[2], 2 * right[0]) << "low pressure is not blue: " << right[0] << ' ' << right[1] << ' ' << right[2];
-  EXPECT_GT(mid[1], 1.5 * std::max(mid[0], mid[2])) << "halfway is not green: " << mid[0] << ' ' << mid[1] << ' ' << mid[2];
+  EXPECT_GT(mid[1], 1.5 * std::max(mid[0], mid[2]))
+      << "halfway is not green: " << mid[0] << ' ' << mid[1] << ' ' << mid[2];
 #endif
 }
 

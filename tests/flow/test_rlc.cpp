@@ -56,8 +56,10 @@ TEST(FlowRlc, WomersleyInertanceCorrectsTheQuasiSteadyError) {
     const double mag = row[1] > 0 ? row[1] : std::abs(exact);
     const double phase = row[1] > 0 ? row[2] : std::arg(exact) * 180.0 / M_PI;
     const auto rlc = measured_ratio(alpha, Inertance::Womersley);
-    std::printf("alpha %.0f: Womersley |Q/QP| %.3f phase %.1f deg; rlc (4rho l/3pi r^2) %.3f %.1f deg; quasi-steady 1.000 0.0 deg\n",
-                alpha, mag, phase, std::abs(rlc), std::arg(rlc) * 180.0 / M_PI);
+    std::printf(
+        "alpha %.0f: Womersley |Q/QP| %.3f phase %.1f deg; rlc (4rho l/3pi r^2) %.3f %.1f deg; quasi-steady 1.000 0.0 "
+        "deg\n",
+        alpha, mag, phase, std::abs(rlc), std::arg(rlc) * 180.0 / M_PI);
     const double quasi_steady_error = std::abs(1.0 - mag) / mag;  // plain Poiseuille: |ratio| = 1, phase 0
     const double rlc_error = std::abs(std::abs(rlc) - mag) / mag;
     EXPECT_LT(rlc_error, 0.04) << "alpha " << alpha << " |Q/QP| " << std::abs(rlc) << " vs " << mag;

@@ -54,7 +54,8 @@ flow:
   outlets:
     resistance: 1.2 mmHg*s/mL
     distal_pressure: 5 mmHg
-)", "scene.yaml", flow_schema());
+)",
+                                            "scene.yaml", flow_schema());
   const FlowSpec s = from_config(cfg, net);
   EXPECT_EQ(s.solver, SolverKind::Sparse);
   EXPECT_DOUBLE_EQ(s.viscosity, 4e-3);
@@ -82,7 +83,8 @@ flow:
   outlets:
     scaling: murray
     rcr: {Rp: 1e8, C: 1e-9, Rd: 1e9}
-)", (dir / "scene.yaml").string(), flow_schema());
+)",
+                                      (dir / "scene.yaml").string(), flow_schema());
   cfg.set_file((dir / "scene.yaml").string());
   const FlowSpec s = from_config(cfg, net);
   EXPECT_EQ(s.inlets[0].type, InletBC::Type::Flow);

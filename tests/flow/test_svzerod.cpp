@@ -28,8 +28,7 @@ std::set<std::string> unsupported_blocks(const json& cfg) {
       out.insert(v["zero_d_element_type"]);
   for (const auto& b : cfg.value("boundary_conditions", json::array())) {
     const std::string t = b["bc_type"];
-    if (t != "FLOW" && t != "PRESSURE" && t != "RESISTANCE" && t != "RCR" && t != "CORONARY" &&
-        t != "CORONARY_VAR_RES")
+    if (t != "FLOW" && t != "PRESSURE" && t != "RESISTANCE" && t != "RCR" && t != "CORONARY" && t != "CORONARY_VAR_RES")
       out.insert(t);
   }
   for (const auto& j : cfg.value("junctions", json::array()))
@@ -119,7 +118,8 @@ TEST(FlowSvZeroD, PeerCasesWithSupportedBlocksMatchStoredResults) {
       failed.push_back(name);
     }
   }
-  std::printf("svZeroDSolver peer cases: %zu pass, %zu fail, %zu skipped\n", passed.size(), failed.size(), skipped.size());
+  std::printf("svZeroDSolver peer cases: %zu pass, %zu fail, %zu skipped\n", passed.size(), failed.size(),
+              skipped.size());
   for (const auto& s : passed) std::printf("  pass  %s\n", s.c_str());
   for (const auto& s : failed) std::printf("  FAIL  %s\n", s.c_str());
   for (const auto& s : skipped) std::printf("  skip  %s\n", s.c_str());
@@ -129,7 +129,8 @@ TEST(FlowSvZeroD, PeerCasesWithSupportedBlocksMatchStoredResults) {
 TEST(FlowSvZeroD, RunWritesTheResultCsv) {
   FLOWIRE_REQUIRE_SHARED("peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json");
   const auto out = flowire::testing::scratch_dir("flow_svzerod_run");
-  const auto s = svzerod::run((flowire::testing::shared_dir() / "peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json").string(), out);
+  const auto s = svzerod::run(
+      (flowire::testing::shared_dir() / "peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json").string(), out);
   EXPECT_EQ(s.vessels, 3);
   EXPECT_EQ(s.junctions, 1);
   std::ifstream in(out / "svzerod_result.csv");

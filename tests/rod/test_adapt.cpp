@@ -52,8 +52,8 @@ TEST(RodAdapt, ElasticaRefinedWhereBentBeatsUniformPerVertex) {
   RecordProperty("error_uniform10", std::to_string(e_coarse));
   RecordProperty("error_uniform40", std::to_string(e_fine));
   RecordProperty("error_adaptive", std::to_string(e_adapt));
-  std::printf("elastica a=5: uniform 10: %.3e (%d v), uniform 40: %.3e (%d v), adaptive: %.3e (%d v)\n",
-              e_coarse, coarse.vertices, e_fine, fine.vertices, e_adapt, adapt.vertices);
+  std::printf("elastica a=5: uniform 10: %.3e (%d v), uniform 40: %.3e (%d v), adaptive: %.3e (%d v)\n", e_coarse,
+              coarse.vertices, e_fine, fine.vertices, e_adapt, adapt.vertices);
   EXPECT_LT(e_adapt, 0.2 * e_coarse);
   EXPECT_LT(adapt.vertices, fine.vertices);
   // The reference error times vertices² (the O(h²) work measure) is smaller adaptively.
@@ -165,8 +165,8 @@ TEST(RodAdapt, FreeVibrationFollowsTheFineRunAndKeepsTheEnergy) {
   const Swing coarse = swing(unit_rod_spec(10));
   const Swing adapt = swing(adaptive(unit_rod_spec(10)));
   const double e_c = trajectory_error(coarse, ref), e_a = trajectory_error(adapt, ref);
-  std::printf("swing: uniform 10 %.3e, adaptive %.3e (max %d v); energy drift uniform %.2e adaptive %.2e\n",
-              e_c, e_a, adapt.vertices, coarse.energy_drift, adapt.energy_drift);
+  std::printf("swing: uniform 10 %.3e, adaptive %.3e (max %d v); energy drift uniform %.2e adaptive %.2e\n", e_c, e_a,
+              adapt.vertices, coarse.energy_drift, adapt.energy_drift);
   // Refining the bent part near the clamp helps the trajectory; the resampling (splits
   // as it bends, merges only where that does not change the kinetic energy) adds no
   // energy beyond the integrator's own error.
@@ -198,8 +198,8 @@ TEST(RodAdapt, FeedingInAndOutKeepsTheGridAtTheClampAndTheLength) {
     EXPECT_NEAR(u[fc] / 1e-3, std::round(u[fc] / 1e-3), 1e-7);
     EXPECT_NEAR(u[fc + 1] - u[fc], 1e-3, 1e-12);
   }
-  std::printf("feeding: max tip difference %.3e m, max length drift %.2e, splits %ld merges %ld\n", max_diff,
-              max_drift, refined.adapt_splits(), refined.adapt_merges());
+  std::printf("feeding: max tip difference %.3e m, max length drift %.2e, splits %ld merges %ld\n", max_diff, max_drift,
+              refined.adapt_splits(), refined.adapt_merges());
   EXPECT_GT(refined.adapt_splits(), 0);
   EXPECT_GT(refined.adapt_merges(), 0);
   EXPECT_LT(max_drift, 1e-3);

@@ -39,13 +39,12 @@ TEST(RodAllocation, StepsAllocateNothing) {
   sim.set_gravity({0.0, 0.0, -9.81});
   sim.set_insertion_speed(0.1);  // vertices are added during the steps
   sim.set_rotation_speed(2.0 * std::numbers::pi);
-  sim.add_external(std::make_shared<ExternalForceFunction>(
-      [](const RodView& rod, ForceAccumulator& out) {
-        for (int i = 0; i < rod.first_clamped_vertex; ++i) {
-          out.add_force(i, -1e-3 * rod.velocity(i));
-          out.add_velocity_jacobian(i, -1e-3 * Eigen::Matrix3d::Identity());
-        }
-      }));
+  sim.add_external(std::make_shared<ExternalForceFunction>([](const RodView& rod, ForceAccumulator& out) {
+    for (int i = 0; i < rod.first_clamped_vertex; ++i) {
+      out.add_force(i, -1e-3 * rod.velocity(i));
+      out.add_velocity_jacobian(i, -1e-3 * Eigen::Matrix3d::Identity());
+    }
+  }));
   sim.step(1e-3);  // first call may size lazily-built buffers
   g_allocations = 0;
   g_counting = true;

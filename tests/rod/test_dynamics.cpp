@@ -237,8 +237,8 @@ TEST(RodDynamics, WireFedAlongATubeWallByPenaltyContact) {
       worst = std::max(worst, std::hypot(sim.positions()[v].y(), sim.positions()[v].z()));
   }
   EXPECT_NEAR(sim.inserted_length(), 0.07, 1e-9);
-  EXPECT_GT(worst, R);          // the wall was reached
-  EXPECT_LT(worst, R + 2e-4);   // penetration a fraction of a millimetre
+  EXPECT_GT(worst, R);         // the wall was reached
+  EXPECT_LT(worst, R + 2e-4);  // penetration a fraction of a millimetre
   EXPECT_LT(sim.length_drift(), 1e-3);
 }
 
@@ -262,8 +262,8 @@ TubeRun stiff_tube_run(bool conservative, double k) {
   spec.base_direction = Eigen::Vector3d(std::cos(tilt), std::sin(tilt), 0.0);
   RodSimulator sim(spec);
   const double R = 1.5e-3;
-  sim.add_external(std::make_shared<ExternalForceFunction>(
-      [R, k, conservative](const RodView& rod, ForceAccumulator& out) {
+  sim.add_external(
+      std::make_shared<ExternalForceFunction>([R, k, conservative](const RodView& rod, ForceAccumulator& out) {
         Eigen::Matrix3d P = Eigen::Matrix3d::Identity();
         P(0, 0) = 0.0;
         for (int i = 0; i < rod.first_clamped_vertex; ++i) {

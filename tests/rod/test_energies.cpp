@@ -14,8 +14,8 @@
 namespace flowire::rod {
 namespace {
 
-using Eigen::VectorXd;
 using Eigen::MatrixXd;
+using Eigen::VectorXd;
 
 /// Unpack the 11 stencil unknowns (x0, θe, x1, θf, x2) into a copy of `base`.
 VertexStencil with_unknowns(const VertexStencil& base, const Vec11& q) {
@@ -57,8 +57,8 @@ VertexStencil make_stencil(const Vec3& x0, const Vec3& x1, const Vec3& x2, std::
   s.frame_e = frame_for((x1 - x0).normalized(), u(rng));
   s.frame_f = frame_for((x2 - x1).normalized(), u(rng));
   const double k = std::round(u(rng));  // a few full turns of accumulated reference twist
-  s.ref_twist = reference_twist(s.frame_e.d1, (x1 - x0).normalized(), s.frame_f.d1,
-                                (x2 - x1).normalized(), 2.0 * std::numbers::pi * k);
+  s.ref_twist = reference_twist(s.frame_e.d1, (x1 - x0).normalized(), s.frame_f.d1, (x2 - x1).normalized(),
+                                2.0 * std::numbers::pi * k);
   return s;
 }
 
@@ -104,8 +104,7 @@ Mat11 fd_hessian(const std::function<double(const Vec11&)>& E, const Vec11& q, d
   return H;
 }
 
-void check_stencil(const VertexStencil& s, const VertexParams& p, double h, double rtol,
-                   const std::string& name) {
+void check_stencil(const VertexStencil& s, const VertexParams& p, double h, double rtol, const std::string& name) {
   SCOPED_TRACE(name);
   const Vec11 q = unknowns(s);
   auto Eb = [&](const Vec11& y) { return bend_energy(with_unknowns(s, y), p); };
@@ -114,20 +113,20 @@ void check_stencil(const VertexStencil& s, const VertexParams& p, double h, doub
   const Vec11 gb = bend_gradient(s, p);
   const Vec11 gb_fd = fd_gradient(Eb, q, h);
   EXPECT_LE((gb - gb_fd).norm(), rtol * (1.0 + gb_fd.norm())) << "bend gradient\n"
-      << gb.transpose() << "\n" << gb_fd.transpose();
+                                                              << gb.transpose() << "\n"
+                                                              << gb_fd.transpose();
   const Mat11 Hb = bend_hessian(s, p);
   const Mat11 Hb_fd = fd_hessian(Eb, q, h);
-  EXPECT_LE((Hb - Hb_fd).norm(), rtol * (1.0 + Hb_fd.norm())) << "bend Hessian\n"
-      << Hb << "\n---\n" << Hb_fd;
+  EXPECT_LE((Hb - Hb_fd).norm(), rtol * (1.0 + Hb_fd.norm())) << "bend Hessian\n" << Hb << "\n---\n" << Hb_fd;
 
   const Vec11 gt = twist_gradient(s, p);
   const Vec11 gt_fd = fd_gradient(Et, q, h);
   EXPECT_LE((gt - gt_fd).norm(), rtol * (1.0 + gt_fd.norm())) << "twist gradient\n"
-      << gt.transpose() << "\n" << gt_fd.transpose();
+                                                              << gt.transpose() << "\n"
+                                                              << gt_fd.transpose();
   const Mat11 Ht = twist_hessian(s, p);
   const Mat11 Ht_fd = fd_hessian(Et, q, h);
-  EXPECT_LE((Ht - Ht_fd).norm(), rtol * (1.0 + Ht_fd.norm())) << "twist Hessian\n"
-      << Ht << "\n---\n" << Ht_fd;
+  EXPECT_LE((Ht - Ht_fd).norm(), rtol * (1.0 + Ht_fd.norm())) << "twist Hessian\n" << Ht << "\n---\n" << Ht_fd;
 
   // The combined kernel agrees with the separate ones.
   Vec11 g;

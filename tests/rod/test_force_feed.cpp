@@ -58,7 +58,8 @@ TEST(ForceFeed, FeedAgainstDampingAndLoadFollowsTheForceBalance) {
       EXPECT_LE(sim.force_feed_unbalanced(), 1);
     }
     const double slope = std::log(err[0] / err[2]) / std::log(hs[0] / hs[2]);
-    std::printf("Q = %g: relative error of the fed length %.3g %.3g %.3g, slope %.2f\n", Q, err[0], err[1], err[2], slope);
+    std::printf("Q = %g: relative error of the fed length %.3g %.3g %.3g, slope %.2f\n", Q, err[0], err[1], err[2],
+                slope);
     EXPECT_GT(slope, 0.8) << "Q = " << Q;
     EXPECT_LT(err[2], 0.03) << "Q = " << Q;
   }

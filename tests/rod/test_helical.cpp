@@ -51,8 +51,7 @@ TEST(RodHelicalBuckling, LocalizedHelixMatchesVanDerHeijden) {
 
   const auto x = sim.positions();
   double radius = 0.0, tilt = 0.0;
-  for (int k = 0; k < sim.vertex_count(); ++k)
-    radius = std::max(radius, std::hypot(x[k].y(), x[k].z()));
+  for (int k = 0; k < sim.vertex_count(); ++k) radius = std::max(radius, std::hypot(x[k].y(), x[k].z()));
   for (int j = 0; j < sim.first_clamped_vertex(); ++j) {
     const Eigen::Vector3d t = (x[j + 1] - x[j]).normalized();
     tilt = std::max(tilt, std::acos(std::min(1.0, std::abs(t.x()))));

@@ -76,8 +76,7 @@ void check(const Case& c, const std::string& name) {
     Vec11 g, g_ref;
     Mat11 H, H_ref;
     const double e = bend_twist(ge, gf, s.theta_e, s.theta_f, s.ref_twist, p, &g, &H, gn);
-    const double e_ref = detail::bend_twist_reference(ge, gf, s.theta_e, s.theta_f, s.ref_twist,
-                                                      p, &g_ref, &H_ref, gn);
+    const double e_ref = detail::bend_twist_reference(ge, gf, s.theta_e, s.theta_f, s.ref_twist, p, &g_ref, &H_ref, gn);
     EXPECT_LE(std::abs(e - e_ref), tol * std::abs(e_ref));
     EXPECT_LE(rel(g, g_ref), tol);
     EXPECT_LE(rel(H, H_ref), tol);
@@ -124,8 +123,7 @@ TEST(RodKernel, MatchesReferenceSharplyBent) {
   std::mt19937 rng(11);
   for (const double deg : {150.0, 170.0, 175.0, 178.0}) {
     for (int i = 0; i < 20; ++i)
-      check(random_case(rng, deg * std::numbers::pi / 180.0, 1e-3),
-            std::to_string(deg) + " deg #" + std::to_string(i));
+      check(random_case(rng, deg * std::numbers::pi / 180.0, 1e-3), std::to_string(deg) + " deg #" + std::to_string(i));
   }
 }
 

@@ -31,7 +31,7 @@ TEST(RodModel, SofterThinnerTipAndShaftStiffness) {
   const RodModel m = RodModel::from_spec(tipped(TipShape::Straight, 0.0));
   const double I_shaft = std::numbers::pi * std::pow(4.45e-4, 4) / 4.0;
   const double I_tip = std::numbers::pi * std::pow(2e-4, 4) / 4.0;
-  const int k_tip = 10;    // u = 5 mm: in the tip
+  const int k_tip = 10;     // u = 5 mm: in the tip
   const int k_shaft = 200;  // u = 10 cm: in the shaft
   EXPECT_NEAR(m.bend_stiffness[k_tip], 5e9 * I_tip, 1e-9 * 5e9 * I_tip);
   EXPECT_NEAR(m.bend_stiffness[k_shaft], 67e9 * I_shaft, 1e-9 * 67e9 * I_shaft);
@@ -46,8 +46,8 @@ TEST(RodModel, SofterThinnerTipAndShaftStiffness) {
 }
 
 TEST(RodModel, RestCurvatureIntegratesToTheTipAngle) {
-  for (auto [shape, angle] : {std::pair{TipShape::Angled, std::numbers::pi / 4.0},
-                              std::pair{TipShape::J, std::numbers::pi}}) {
+  for (auto [shape, angle] :
+       {std::pair{TipShape::Angled, std::numbers::pi / 4.0}, std::pair{TipShape::J, std::numbers::pi}}) {
     const RodModel m = RodModel::from_spec(tipped(shape, angle));
     double turn = 0.0;
     for (double k : m.rest_kappa1) turn += 2.0 * std::atan(0.5 * k);
@@ -59,7 +59,7 @@ TEST(RodModel, InitialLayoutFollowsTheRestShape) {
   // A J tip: the distal edge points back along the insertion direction.
   RodSimulator sim(tipped(TipShape::J, std::numbers::pi));
   const auto x = sim.positions();
-  const Eigen::Vector3d tip_edge = (x[1] - x[0]).normalized();  // from tip toward base
+  const Eigen::Vector3d tip_edge = (x[1] - x[0]).normalized();       // from tip toward base
   EXPECT_NEAR(tip_edge.dot(sim.model().base_direction), 1.0, 1e-6);  // tip points back
   // Its elastic energy is zero: the rest shape is stress free.
   EXPECT_LT(sim.energy().total(), 1e-18);

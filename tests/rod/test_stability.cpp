@@ -71,8 +71,7 @@ SweepResult run_sweep_case(double E, double dt, double inserted) {
 void sweep(double inserted) {
   for (double E : {5e9, 67e9, 200e9}) {
     for (double dt : {1e-4, 1e-3, 1.0 / 60.0, 1.0 / 30.0}) {
-      SCOPED_TRACE(::testing::Message() << "E = " << E << " Pa, dt = " << dt << " s, length "
-                                      << inserted << " m");
+      SCOPED_TRACE(::testing::Message() << "E = " << E << " Pa, dt = " << dt << " s, length " << inserted << " m");
       const SweepResult r = run_sweep_case(E, dt, inserted);
       EXPECT_TRUE(r.finite);
       EXPECT_LT(r.max_energy, r.energy_bound);

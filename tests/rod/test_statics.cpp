@@ -20,8 +20,7 @@ struct ElasticaRef {
   double alpha, deflection, shortening;
 };
 // Bisshopp–Drucker, from the shared reference table: δ/L and (L − x)/L.
-constexpr ElasticaRef kElastica[] = {
-    {1.0, 0.30172, 0.05643}, {5.0, 0.71379, 0.38763}, {10.0, 0.81061, 0.55500}};
+constexpr ElasticaRef kElastica[] = {{1.0, 0.30172, 0.05643}, {5.0, 0.71379, 0.38763}, {10.0, 0.81061, 0.55500}};
 
 /// Tip (x along the rod, y along the load) of a unit cantilever with EI = 1 under PL²/EI = α.
 Eigen::Vector2d cantilever_tip(double alpha, int segments) {
@@ -108,8 +107,7 @@ TEST(RodStatics, GravityAndPointForceMatchBeamTheory) {
     const double P = 1e-3, a = 0.4;
     sim.add_point_force(a, {0.0, P, 0.0});  // s measured from the entry
     ASSERT_TRUE(sim.solve_static().converged());
-    EXPECT_NEAR(sim.tip_position().y(), P * a * a * (3.0 - a) / 6.0,
-                tol(0.002 * P * a * a * (3.0 - a) / 6.0));
+    EXPECT_NEAR(sim.tip_position().y(), P * a * a * (3.0 - a) / 6.0, tol(0.002 * P * a * a * (3.0 - a) / 6.0));
   }
 }
 

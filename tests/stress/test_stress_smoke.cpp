@@ -24,18 +24,36 @@ void expect_pass(const StressPoint& p) {
 }
 
 TEST(StressSmoke, SceneStep) {
-  expect_pass({.dt = 0.01, .youngs_modulus = 60e9, .wire_length = 0.8, .speed = 0.05, .rotation = 0.0,
-               .flow_scale = 1.0, .friction = 0.2, .duration = 0.3});
+  expect_pass({.dt = 0.01,
+               .youngs_modulus = 60e9,
+               .wire_length = 0.8,
+               .speed = 0.05,
+               .rotation = 0.0,
+               .flow_scale = 1.0,
+               .friction = 0.2,
+               .duration = 0.3});
 }
 
 TEST(StressSmoke, CoarseStepStiffFast) {
-  expect_pass({.dt = 1.0 / 30.0, .youngs_modulus = 200e9, .wire_length = 1.7, .speed = 0.1, .rotation = 2.0,
-               .flow_scale = 1.0, .friction = 0.05, .duration = 0.5});
+  expect_pass({.dt = 1.0 / 30.0,
+               .youngs_modulus = 200e9,
+               .wire_length = 1.7,
+               .speed = 0.1,
+               .rotation = 2.0,
+               .flow_scale = 1.0,
+               .friction = 0.05,
+               .duration = 0.5});
 }
 
 TEST(StressSmoke, SoftWireStrongFlow) {
-  expect_pass({.dt = 0.01, .youngs_modulus = 5e9, .wire_length = 0.8, .speed = 0.1, .rotation = 0.0,
-               .flow_scale = 10.0, .friction = 0.2, .duration = 0.3});
+  expect_pass({.dt = 0.01,
+               .youngs_modulus = 5e9,
+               .wire_length = 0.8,
+               .speed = 0.1,
+               .rotation = 0.0,
+               .flow_scale = 10.0,
+               .friction = 0.2,
+               .duration = 0.3});
 }
 
 }  // namespace

@@ -65,10 +65,10 @@ inline double loglog_slope(const std::vector<double>& x, const std::vector<doubl
 }  // namespace flowire::testing
 
 /// Skip the current test, with a message, when the shared data folder (or a file in it) is absent.
-#define FLOWIRE_REQUIRE_SHARED(relpath)                                                      \
-  do {                                                                                       \
-    const auto flowire_p_ = ::flowire::testing::shared_dir() / (relpath);                    \
-    if (!std::filesystem::exists(flowire_p_))                                                \
-      GTEST_SKIP() << "shared reference data not found at " << flowire_p_.string()           \
-                   << " (set FLOWIRE_SHARED_DIR); this test needs it";                       \
+#define FLOWIRE_REQUIRE_SHARED(relpath)                                            \
+  do {                                                                             \
+    const auto flowire_p_ = ::flowire::testing::shared_dir() / (relpath);          \
+    if (!std::filesystem::exists(flowire_p_))                                      \
+      GTEST_SKIP() << "shared reference data not found at " << flowire_p_.string() \
+                   << " (set FLOWIRE_SHARED_DIR); this test needs it";             \
   } while (0)

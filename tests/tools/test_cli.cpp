@@ -24,7 +24,8 @@ Result run(const std::string& args) {
   // One capture folder per test and call: CTest runs the tests of this file in parallel.
   static int calls = 0;
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto dir = flowire::testing::scratch_dir(std::string("cli-capture-") + info->name() + "-" + std::to_string(calls++));
+  const auto dir =
+      flowire::testing::scratch_dir(std::string("cli-capture-") + info->name() + "-" + std::to_string(calls++));
   const std::string cmd = std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire " + args + " >" + (dir / "o").string() +
                           " 2>" + (dir / "e").string();
   const int raw = std::system(cmd.c_str());
@@ -39,9 +40,7 @@ Result run(const std::string& args) {
   return r;
 }
 
-void write(const fs::path& p, const std::string& text) {
-  std::ofstream(p) << text;
-}
+void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
 /// A vmtkcenterlines-style file: one polyline per inlet→outlet path, overlapping along the
 /// shared trunk, radius in MaximumInscribedSphereRadius, coordinates in mm.
@@ -79,7 +78,8 @@ std::string vmtk_three_outlet_aorta(const std::string& radius_override = "") {
     << "<DataArray type=\"Float64\" Name=\"MaximumInscribedSphereRadius\" format=\"ascii\">\n";
   for (size_t i = 0; i < pts.size(); ++i)
     x << (i == 5 && !radius_override.empty() ? radius_override : std::to_string(pts[i][3])) << " ";
-  x << "\n</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  x << "\n</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+       "format=\"ascii\">\n";
   for (const auto& p : pts) x << p[0] << " " << p[1] << " " << p[2] << " ";
   x << "\n</DataArray>\n</Points>\n<Lines>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   size_t off = 0;
@@ -134,10 +134,12 @@ TEST(Cli, NetworkInfoOnAVmtkThreeOutletAorta) {
 TEST(Cli, ConvertWritesAVtpThatReadsBackIdentically) {
   const auto dir = flowire::testing::scratch_dir("cli-convert");
   write(dir / "aorta.vtp", vmtk_three_outlet_aorta());
-  ASSERT_EQ(run("network convert " + (dir / "aorta.vtp").string() + " " + (dir / "net.vtp").string() +
-                " --length-unit mm").status,
-            0);
-  const auto a = nlohmann::json::parse(run("network info " + (dir / "aorta.vtp").string() + " --length-unit mm --json").out);
+  ASSERT_EQ(
+      run("network convert " + (dir / "aorta.vtp").string() + " " + (dir / "net.vtp").string() + " --length-unit mm")
+          .status,
+      0);
+  const auto a =
+      nlohmann::json::parse(run("network info " + (dir / "aorta.vtp").string() + " --length-unit mm --json").out);
   const auto b = nlohmann::json::parse(run("network info " + (dir / "net.vtp").string() + " --json").out);
   for (const char* k : {"branches", "nodes", "segments", "junctions", "ends", "loops"}) EXPECT_EQ(a[k], b[k]) << k;
   EXPECT_NEAR(a["total_length"].get<double>(), b["total_length"].get<double>(), 1e-12);
@@ -199,10 +201,9 @@ TEST(Cli, AnOutputFolderThatCannotBeMadeExitsTwoNamingIt) {
   write(dir / "plain", "a file, not a folder\n");
   write(dir / "scene.yaml", "vessels:\n  generator: {type: y_bifurcation}\n");
   write(dir / "aorta.vtp", vmtk_three_outlet_aorta());
-  for (const std::string& args :
-       {"run " + (dir / "scene.yaml").string() + " --out " + (dir / "plain" / "out").string(),
-        "network convert " + (dir / "aorta.vtp").string() + " " + (dir / "plain" / "net.vtp").string() +
-            " --length-unit mm"}) {
+  for (const std::string& args : {"run " + (dir / "scene.yaml").string() + " --out " + (dir / "plain" / "out").string(),
+                                  "network convert " + (dir / "aorta.vtp").string() + " " +
+                                      (dir / "plain" / "net.vtp").string() + " --length-unit mm"}) {
     const auto r = run(args);
     EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
     EXPECT_EQ(r.err.rfind("flowire: error: ", 0), 0u) << r.err;
@@ -294,7 +295,8 @@ TEST(Cli, AnSvZeroDSolverModelIsNotAVesselsFile) {
   // A 0D model has no geometry: `flowire run model.json` solves it, `vessels.file` refuses it.
   FLOWIRE_REQUIRE_SHARED("peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json");
   const auto dir = flowire::testing::scratch_dir("cli-svzerod-vessels");
-  const auto model = (flowire::testing::shared_dir() / "peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json").string();
+  const auto model =
+      (flowire::testing::shared_dir() / "peers/svzerodsolver/cases/steadyFlow_bifurcationR_R1.json").string();
   write(dir / "scene.yaml", "vessels:\n  file: " + model + "\n");
   const auto r = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "o").string());
   EXPECT_EQ(r.status, 2) << r.err;
@@ -342,14 +344,16 @@ TEST(Cli, ProgressLineOnATerminalOnly) {
   const auto dir = flowire::testing::scratch_dir("cli-progress");
   const std::string scene = std::string(FLOWIRE_SOURCE_DIR) + "/examples/aorta_flow/scene.yaml";
   // Into a file (as in a pipe or a log): no progress at all.
-  const auto piped = run("run " + scene + " --out " + (dir / "piped").string() + " --set output.vtk=false --set output.png=false");
+  const auto piped =
+      run("run " + scene + " --out " + (dir / "piped").string() + " --set output.vtk=false --set output.png=false");
   ASSERT_EQ(piped.status, 0) << piped.err;
   EXPECT_EQ(piped.err.find("ETA"), std::string::npos) << piped.err;
   EXPECT_EQ(piped.err.find('\r'), std::string::npos);
   // On a terminal (a pseudo-terminal made by util-linux `script`): the line is drawn.
   if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "util-linux `script` is not installed";
-  const std::string cmd = "script -qec '" + std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire run " + scene + " --out " +
-                          (dir / "tty").string() + " --set output.vtk=false --set output.png=false' /dev/null > " + (dir / "tty.txt").string() +
+  const std::string cmd = "script -qec '" + std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire run " + scene +
+                          " --out " + (dir / "tty").string() +
+                          " --set output.vtk=false --set output.png=false' /dev/null > " + (dir / "tty.txt").string() +
                           " 2>&1 </dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   std::ifstream in(dir / "tty.txt");
@@ -496,22 +500,23 @@ output: {vtk: false}
   const auto ja = nlohmann::json::parse(sa);
   EXPECT_EQ(ja["status"], "outside");
   EXPECT_GT(ja["contact"]["outside"]["wire_radii"].get<double>(), 1.0);
-  const auto allowed =
-      run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "b").string() + " --set contact.allow_outside=true");
+  const auto allowed = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "b").string() +
+                           " --set contact.allow_outside=true");
   EXPECT_EQ(allowed.status, 0) << allowed.err;
   std::ifstream sb(dir / "b" / "summary.json");
   EXPECT_EQ(nlohmann::json::parse(sb)["status"], "outside");
   // Inside the lumen (contact on) the same push is ok.
-  const auto inside = run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "c").string() +
-                          " --set contact.enabled=true");
+  const auto inside =
+      run("run " + (dir / "scene.yaml").string() + " --out " + (dir / "c").string() + " --set contact.enabled=true");
   EXPECT_EQ(inside.status, 0) << inside.err;
 }
 
 TEST(Cli, ABadLumenSurfaceExitsTwoNamingTheFile) {
   const auto dir = flowire::testing::scratch_dir("cli-bad-surface");
   write(dir / "lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n");
-  write(dir / "nan.stl", "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nvertex 0 1 0\n"
-                         "endloop\nendfacet\nendsolid s\n");
+  write(dir / "nan.stl",
+        "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nvertex 0 1 0\n"
+        "endloop\nendfacet\nendsolid s\n");
   for (const char* surface : {"missing.vtp", "lines.obj", "nan.stl"}) {
     write(dir / "scene.yaml", std::string(R"(vessels: {generator: {type: straight_tube}, surface: )") + surface + R"(}
 wire: {length: 0.2, segment_length: 5 mm}

@@ -129,7 +129,8 @@ TEST(Fit, RecoversAHiddenRotationFromANoisyTrace) {
   for (std::string l; std::getline(h, l);) ++lines;
   EXPECT_EQ(lines, j["evaluations"].get<long>());
   // No work folder left behind.
-  for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().filename().string().find(".fit-work"), std::string::npos);
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".fit-work"), std::string::npos);
 }
 
 #else

@@ -67,12 +67,18 @@ TEST(ArterialTree, NamedVesselsMatchThePaper) {
     double l_cm, r_mm;
   };
   const Expect published[] = {
-      {"ascending_aorta", 4.0, 12.0},        {"aortic_arch_2", 3.9, 10.7},
-      {"thoracic_aorta", 15.6, 9.99},        {"left_common_carotid", 20.8, 2.5},
-      {"right_common_carotid", 17.7, 2.5},   {"right_vertebral", 14.8, 1.36},
-      {"left_brachial", 42.2, 4.03},         {"basilar", 2.9, 1.62},
-      {"left_posterior_communicating", 1.5, 0.73}, {"right_middle_cerebral", 11.9, 1.43},
-      {"anterior_communicating", 0.3, 0.74}, {"left_posterior_cerebral_p2", 8.6, 1.05},
+      {"ascending_aorta", 4.0, 12.0},
+      {"aortic_arch_2", 3.9, 10.7},
+      {"thoracic_aorta", 15.6, 9.99},
+      {"left_common_carotid", 20.8, 2.5},
+      {"right_common_carotid", 17.7, 2.5},
+      {"right_vertebral", 14.8, 1.36},
+      {"left_brachial", 42.2, 4.03},
+      {"basilar", 2.9, 1.62},
+      {"left_posterior_communicating", 1.5, 0.73},
+      {"right_middle_cerebral", 11.9, 1.43},
+      {"anterior_communicating", 0.3, 0.74},
+      {"left_posterior_cerebral_p2", 8.6, 1.05},
   };
   const Centerlines c = arterial_tree();
   for (const auto& e : published) {
@@ -122,8 +128,8 @@ TEST(ArterialTree, BranchesMeetAtThePublishedJunctions) {
   std::map<int, Vec3> at;
   for (size_t i = 0; i < table.size(); ++i) {
     const auto& b = c.branches[i];
-    for (const auto& [node, p] : {std::pair{table[i].from_node, b.points.front()},
-                                  std::pair{table[i].to_node, b.points.back()}}) {
+    for (const auto& [node, p] :
+         {std::pair{table[i].from_node, b.points.front()}, std::pair{table[i].to_node, b.points.back()}}) {
       auto [it, fresh] = at.emplace(node, p);
       if (!fresh) {
         EXPECT_EQ((it->second - p).norm(), 0.0) << table[i].name << " at node " << node;

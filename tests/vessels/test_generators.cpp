@@ -35,8 +35,8 @@ TEST(Generators, AorticArchIsAnAdultAortaWithThreeSupraAorticBranches) {
   const auto net = Network::build(c, {.max_segment_length = 5e-3});
   const auto n = net.counts();
   EXPECT_EQ(n.branches, 9);
-  EXPECT_EQ(n.junctions, 4);   // brachiocephalic, carotid, subclavian, iliac bifurcation
-  EXPECT_EQ(n.ends, 6);        // root, three supra-aortic, two femoral
+  EXPECT_EQ(n.junctions, 4);  // brachiocephalic, carotid, subclavian, iliac bifurcation
+  EXPECT_EQ(n.ends, 6);       // root, three supra-aortic, two femoral
   EXPECT_EQ(n.loops, 0);
   EXPECT_NEAR(n.radius_max, 0.014, 0.001);
   EXPECT_GT(n.radius_min, 3e-3);
@@ -83,8 +83,8 @@ TEST(Generators, StraightTubeRunsAlongItsDirectionFromItsOrigin) {
 
 TEST(Generators, YBifurcationDaughtersMakeTheHalfAngleAndSplitByMurray) {
   const double rp = 4e-3, a = 0.4, theta = 0.5;
-  const auto c = y_bifurcation({.parent_radius = rp, .parent_length = 0.03, .child_length = 0.02, .angle = theta,
-                                .asymmetry = a});
+  const auto c =
+      y_bifurcation({.parent_radius = rp, .parent_length = 0.03, .child_length = 0.02, .angle = theta, .asymmetry = a});
   ASSERT_EQ(c.branches.size(), 3u);
   const auto& parent = c.branches[0];
   const auto& d1 = c.branches[1];
@@ -143,8 +143,8 @@ TEST(Generators, AorticArchScalesExactlyAndNamesItsBranches) {
 
 TEST(Generators, BinaryTreeBranchesAtItsAngleInAlternatingPlanes) {
   const double angle = 0.45;
-  const auto net = binary_tree({.depth = 4, .root_radius = 3e-3, .root_length = 0.02, .radius_ratio = 0.8,
-                                .length_ratio = 0.7, .angle = angle});
+  const auto net = binary_tree(
+      {.depth = 4, .root_radius = 3e-3, .root_length = 0.02, .radius_ratio = 0.8, .length_ratio = 0.7, .angle = angle});
   ASSERT_EQ(net.num_segments(), 31);
   EXPECT_EQ(net.node(0), Vec3::Zero());
   auto dir = [&](int s) {

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <iterator>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -100,7 +100,8 @@ std::string legacy_text(const TestPoly& p) {
     s += "\n";
   }
   s += fmt::format("POINT_DATA {}\n", p.points.size());
-  for (const auto& a : p.point_data) s += fmt::format("SCALARS {} double\nLOOKUP_TABLE default\n{}\n", a.name, numbers(a.values));
+  for (const auto& a : p.point_data)
+    s += fmt::format("SCALARS {} double\nLOOKUP_TABLE default\n{}\n", a.name, numbers(a.values));
   return s;
 }
 
@@ -592,7 +593,9 @@ std::string small_deck(const std::string& daughter_in_area = "0.2") {
          "NODE 5 0.3 0.0 -2.0\nNODE 6 2.0 0.0 -4.0\nNODE 9 9.0 9.0 9.0\n"
          "SEGMENT main_0 0 2.0 10 0 1 1.0 0.8 0.0 MAT1 NONE 0.0 0 0 NOBOUND NONE\n"
          "SEGMENT main_1 1 3.0 10 1 2 0.8 0.5 0.0 MAT1 NONE 0.0 0 0 RESISTANCE R1\n"
-         "SEGMENT side_0 2 2.7 10 5 6 " + daughter_in_area + " 0.1 0.0 MAT1 NONE 0.0 0 0 RESISTANCE R2\n"
+         "SEGMENT side_0 2 2.7 10 5 6 " +
+         daughter_in_area +
+         " 0.1 0.0 MAT1 NONE 0.0 0 0 RESISTANCE R2\n"
          "JOINT J1 5 IN1 OUT1\nJOINTINLET IN1 1 0\nJOINTOUTLET OUT1 2 1 2\n"
          "DATATABLE R1 LIST\n0.0 100.0\nENDDATATABLE\n"
          "DATATABLE R2 LIST\n0.0 200.0\nENDDATATABLE\n"
@@ -639,7 +642,8 @@ Network sample_network() {
   c.source = "sample";
   c.branches.push_back({"aorta", {Vec3(0, 0, 0), Vec3(0, 0, -0.03), Vec3(0.001, 0, -0.06)}, {0.012, 0.011, 0.010}});
   c.branches.push_back({"left <iliac>", {Vec3(0.001, 0, -0.06), Vec3(-0.02, 0, -0.09)}, {0.005, 0.004}});
-  c.branches.push_back({"right \"iliac\"\n\\2", {Vec3(0.001, 0, -0.06), Vec3(0.0234567891234, 1e-7, -0.0912)}, {0.0051, 0.0037}});
+  c.branches.push_back(
+      {"right \"iliac\"\n\\2", {Vec3(0.001, 0, -0.06), Vec3(0.0234567891234, 1e-7, -0.0912)}, {0.0051, 0.0037}});
   BuildOptions b;
   b.max_segment_length = 7e-3;
   return Network::build(c, b);
@@ -705,8 +709,9 @@ TEST(WriteNetwork, BadArrayLeavesNoFile) {
   const auto net = sample_network();
   const auto file = (scratch_dir("io_write_bad") / "net.vtp").string();
   EXPECT_THROW(write_network_vtp(net, file, {{"pressure", {1.0, 2.0}, 1}}), Error);
-  EXPECT_THROW(write_network_vtp(net, file, {}, {{"radius", std::vector<double>(static_cast<size_t>(net.num_segments())), 1}}),
-               Error);
+  EXPECT_THROW(
+      write_network_vtp(net, file, {}, {{"radius", std::vector<double>(static_cast<size_t>(net.num_segments())), 1}}),
+      Error);
   EXPECT_FALSE(fs::exists(file));
   EXPECT_FALSE(fs::exists(file + ".partial"));
   EXPECT_THROW(write_network(net, (scratch_dir("io_write_bad") / "net.obj").string()), Error);
@@ -751,11 +756,14 @@ TEST_F(ReadersWithVtk, BadVtkInputGivesOneErrorNamingFileAndPoint) {
       {"duplicate.vtp", vtp_text(dup), "line cell 0: points 1 and 2 (ids 1 and 2) coincide (duplicate point)"},
       {"selfloop.vtp", vtp_text(loop), "line cell 1 joins point 2 to itself (self-loop)"},
       {"range.vtp", vtp_text(out_of_range), "line cell 0: point id 7 is out of range"},
-      {"garbage.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"2\">&&&<<</VTKFile>", "cannot read"},
+      {"garbage.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"2\">&&&<<</VTKFile>",
+       "cannot read"},
       {"notvtk.vtp", "hello", "not a VTK file"},
-      {"huge.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"99999999999\"></Piece></PolyData></VTKFile>",
+      {"huge.vtp",
+       "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"99999999999\"></Piece></PolyData></VTKFile>",
        "NumberOfPoints=\"99999999999\" does not fit"},
-      {"legacy_bad.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 99999999999 float\n", "POINTS"},
+      {"legacy_bad.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 99999999999 float\n",
+       "POINTS"},
       {"surface.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 float\n0 0 0\n",
        "POLYDATA"},
   };
@@ -892,18 +900,23 @@ TEST(ReadBadInput, YamlErrorsNameFileLineAndPoint) {
        "nan.yaml:2: branch 0, point 1: radius is not finite"},
       {"nanx.yaml", "branches:\n  - name: a\n    points:\n      - [0, 0, 0, 1]\n      - [.nan, 0, 0, 1]\n",
        "nanx.yaml:5: branch 0 ('a'), point 1: coordinate is not finite"},
-      {"zero.yaml", "branches:\n  - points:\n    - [0, 0, 0, 1]\n    - [1, 0, 0, 0]\n", "zero.yaml:4: branch 0, point 1: radius 0"},
-      {"neg.yaml", "branches:\n  - points:\n    - [0, 0, 0, -1]\n    - [1, 0, 0, 1]\n", "point 0: radius -1 is not positive"},
-      {"dup.yaml", "branches:\n  - points:\n    - [0, 0, 0, 1]\n    - [0, 0, 0, 1]\n", "dup.yaml:4: branch 0, point 1: same position as point 0 (duplicate point)"},
+      {"zero.yaml", "branches:\n  - points:\n    - [0, 0, 0, 1]\n    - [1, 0, 0, 0]\n",
+       "zero.yaml:4: branch 0, point 1: radius 0"},
+      {"neg.yaml", "branches:\n  - points:\n    - [0, 0, 0, -1]\n    - [1, 0, 0, 1]\n",
+       "point 0: radius -1 is not positive"},
+      {"dup.yaml", "branches:\n  - points:\n    - [0, 0, 0, 1]\n    - [0, 0, 0, 1]\n",
+       "dup.yaml:4: branch 0, point 1: same position as point 0 (duplicate point)"},
       {"word.yaml", "branches:\n  - points:\n    - [0, 0, zero, 1]\n    - [0, 0, 1, 1]\n", "'zero' is not a number"},
       {"unknown.yaml", "branches: []\nlenght_unit: mm\n", "unknown.yaml:2: unknown key 'lenght_unit'"},
       {"nobranches.yaml", "length_unit: mm\n", "no 'branches'"},
       {"badunit.yaml", "length_unit: parsec\nbranches:\n  - points: [[0, 0, 0, 1], [1, 0, 0, 1]]\n", "parsec"},
       {"loop.yaml", "branches:\n  - points: [[0, 0, 0, 1], [1, 0, 0, 1], [0, 0, 0, 1]]\n", "self-loop"},
       {"pieces.yaml",
-       "branches:\n  - name: a\n    points: [[0, 0, 0, 1], [1, 0, 0, 1]]\n  - name: b\n    points: [[5, 0, 0, 1], [6, 0, 0, 1]]\n",
+       "branches:\n  - name: a\n    points: [[0, 0, 0, 1], [1, 0, 0, 1]]\n  - name: b\n    points: [[5, 0, 0, 1], [6, "
+       "0, 0, 1]]\n",
        "2 disconnected pieces"},
-      {"segloop.yaml", "nodes: [[0, 0, 0], [1, 0, 0]]\nsegments: [[0, 0, 1, 1, 0]]\n", "segloop.yaml:2: segment 0 joins node 0 to itself (self-loop)"},
+      {"segloop.yaml", "nodes: [[0, 0, 0], [1, 0, 0]]\nsegments: [[0, 0, 1, 1, 0]]\n",
+       "segloop.yaml:2: segment 0 joins node 0 to itself (self-loop)"},
   };
   ReadOptions opt;
   opt.build.max_segment_length = 0.0;
@@ -936,14 +949,16 @@ TEST(ReadBadInput, SvOneDErrorsNameFileAndLine) {
       {"dup_node.in", replace("NODE 9 9.0", "NODE 2 9.0"), "NODE 2 is defined twice"},
       {"no_segments.in", "NODE 0 0 0 0\n", "no SEGMENT cards"},
       {"bad_joint.in", replace("JOINTOUTLET OUT1 2 1 2", "JOINTOUTLET OUT1 2 1 42"), "segment 42 is not defined"},
-      {"short.in", replace("SEGMENT side_0 2 2.7 10 5 6 0.2 0.1", "SEGMENT side_0 2 2.7 10 5"), "short.in:11: SEGMENT side_0 inlet area: 'MAT1' is not a number"},
+      {"short.in", replace("SEGMENT side_0 2 2.7 10 5 6 0.2 0.1", "SEGMENT side_0 2 2.7 10 5"),
+       "short.in:11: SEGMENT side_0 inlet area: 'MAT1' is not a number"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);
     const auto file = write_file(dir, c.name, c.text);
     const auto msg = error_of([&] { (void)read_network(file); });
-    EXPECT_CONTAINS(msg, c.name == "zero_area.in" ? std::string("zero_area.in:11: SEGMENT side_0: area 0 is not positive")
-                                                  : c.expected);
+    EXPECT_CONTAINS(msg, c.name == "zero_area.in"
+                             ? std::string("zero_area.in:11: SEGMENT side_0: area 0 is not positive")
+                             : c.expected);
     EXPECT_CONTAINS(msg, file);
   }
 }
@@ -985,7 +1000,8 @@ TEST_F(ReadersWithVtk, TruncatedFlowireVtpIsAnError) {
   std::ifstream in(file, std::ios::binary);
   const std::string full((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const double f : {0.1, 0.5, 0.9, 0.99}) {
-    const auto cut = write_file(dir, "cut.vtp", full.substr(0, static_cast<size_t>(f * static_cast<double>(full.size()))));
+    const auto cut =
+        write_file(dir, "cut.vtp", full.substr(0, static_cast<size_t>(f * static_cast<double>(full.size()))));
     ::testing::internal::CaptureStderr();
     const auto msg = error_of([&] { (void)read_network(cut); });
     EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");

@@ -35,9 +35,8 @@ void expect_physiological(const NetworkCounts& c) {
 std::string describe(const NetworkCounts& c) {
   return "branches " + std::to_string(c.branches) + ", nodes " + std::to_string(c.nodes) + ", segments " +
          std::to_string(c.segments) + ", junctions " + std::to_string(c.junctions) + ", ends " +
-         std::to_string(c.ends) + ", loops " + std::to_string(c.loops) + ", length " +
-         std::to_string(c.total_length) + " m, radius " + std::to_string(c.radius_min) + " - " +
-         std::to_string(c.radius_max) + " m";
+         std::to_string(c.ends) + ", loops " + std::to_string(c.loops) + ", length " + std::to_string(c.total_length) +
+         " m, radius " + std::to_string(c.radius_min) + " - " + std::to_string(c.radius_max) + " m";
 }
 
 #ifdef FLOWIRE_HAVE_VTK
@@ -115,7 +114,7 @@ TEST(RealData, SimVascularRomCenterlinesGiveAortaAndIliac) {
   const auto net = read_real("simvascular-demo-aorta-iliac/rom-centerlines.vtp", "cm");
   const auto c = net.counts();
   RecordProperty("counts", describe(c));
-  EXPECT_EQ(c.branches, 3);  // BranchId 0, 1, 2
+  EXPECT_EQ(c.branches, 3);   // BranchId 0, 1, 2
   EXPECT_EQ(c.junctions, 1);  // BifurcationId 0
   EXPECT_EQ(c.ends, 3);
   EXPECT_EQ(c.loops, 0);
@@ -260,12 +259,13 @@ TEST(RealData, SvOneDAortoFemoralDeckHasNineOutlets) {
 }
 
 TEST(RealData, SvOneDLeftCoronaryDeckHasSixOutlets) {
-  FLOWIRE_REQUIRE_SHARED("data/real/svonedsolver-aortofemoral-coronary/Left_coronary_inlet_pressure_wave_outlet_coronary.in");
+  FLOWIRE_REQUIRE_SHARED(
+      "data/real/svonedsolver-aortofemoral-coronary/Left_coronary_inlet_pressure_wave_outlet_coronary.in");
   ReadOptions opt;
   opt.build.max_segment_length = 0.0;
   opt.build.radius_change = 0.0;
-  const auto net =
-      read_network(real("svonedsolver-aortofemoral-coronary/Left_coronary_inlet_pressure_wave_outlet_coronary.in"), opt);
+  const auto net = read_network(
+      real("svonedsolver-aortofemoral-coronary/Left_coronary_inlet_pressure_wave_outlet_coronary.in"), opt);
   const auto c = net.counts();
   RecordProperty("counts", describe(c));
   EXPECT_EQ(c.segments, 86);
@@ -313,9 +313,10 @@ TEST(RealCenterlines, SegmentsFollowTheBendsWithinATenthOfTheRadius) {
     const char* path;
     const char* unit;
   };
-  for (const F f : {F{"aneurisk-c0015-ica-vampy/artery_centerlines.vtp", "mm"}, F{"feelpp-aortic-arch/centerlinesAORTA.vtk", "cm"},
-                    F{"vmtk-abdominal-aorta-bifurcation/aorta-centerline-branches.vtp", "mm"},
-                    F{"simvascular-demo-aorta-iliac/rom-centerlines.vtp", "cm"}}) {
+  for (const F f :
+       {F{"aneurisk-c0015-ica-vampy/artery_centerlines.vtp", "mm"}, F{"feelpp-aortic-arch/centerlinesAORTA.vtk", "cm"},
+        F{"vmtk-abdominal-aorta-bifurcation/aorta-centerline-branches.vtp", "mm"},
+        F{"simvascular-demo-aorta-iliac/rom-centerlines.vtp", "cm"}}) {
     FLOWIRE_REQUIRE_SHARED(std::string("data/real/") + f.path);
     const auto file = (flowire::testing::shared_dir() / "data/real" / f.path).string();
     auto deviation = [&](double max_chord) {
@@ -339,7 +340,8 @@ TEST(RealCenterlines, SegmentsFollowTheBendsWithinATenthOfTheRadius) {
       return worst;
     };
     const double with = deviation(0.1), without = deviation(0.0);
-    std::printf("%s: largest chord deviation / radius %.3f (uniform 5 mm sampling alone: %.3f)\n", f.path, with, without);
+    std::printf("%s: largest chord deviation / radius %.3f (uniform 5 mm sampling alone: %.3f)\n", f.path, with,
+                without);
     EXPECT_LE(with, 0.1 + 1e-9) << f.path;
   }
 }

@@ -88,7 +88,8 @@ TEST(Network, JoinsBranchEndsIntoJunctionsAndCountsLoops) {
 
 TEST(Network, CountsComponentsAndKeepsOne) {
   Centerlines c;
-  c.branches = {line("a", Vec3::Zero(), Vec3(0.01, 0, 0), 2e-3, 2e-3), line("b", Vec3(0, 1, 0), Vec3(0.01, 1, 0), 1e-3, 1e-3)};
+  c.branches = {line("a", Vec3::Zero(), Vec3(0.01, 0, 0), 2e-3, 2e-3),
+                line("b", Vec3(0, 1, 0), Vec3(0.01, 1, 0), 1e-3, 1e-3)};
   const auto net = Network::build(c);
   EXPECT_EQ(net.counts().components, 2);
   EXPECT_EQ(net.widest_end(), 0);

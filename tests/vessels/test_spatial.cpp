@@ -47,7 +47,8 @@ void check_against_brute_force(const Network& net, const std::vector<Vec3>& pts,
   for (size_t i = 0; i < pts.size(); ++i) {
     const auto& p = pts[i];
     const auto ref = index.locate_brute_force(p);
-    const auto got = index.locate(p, chain_hints ? hint : static_cast<int>(i % static_cast<size_t>(net.num_segments())));
+    const auto got =
+        index.locate(p, chain_hints ? hint : static_cast<int>(i % static_cast<size_t>(net.num_segments())));
     ASSERT_EQ(got.inside, ref.inside) << "point " << i;
     if (ref.inside) {
       ++inside;

@@ -56,8 +56,6 @@ std::string write_tube(const std::filesystem::path& dir, int resolution, double 
   return path;
 }
 
-
-
 }  // namespace
 
 TEST(Surface, SphereDistanceConvergesAtSecondOrder) {
@@ -209,7 +207,8 @@ TEST(Surface, EndCapsAreRemoved) {
   w->Write();
   auto mesh = read_surface(path);
   EXPECT_EQ(LumenSurface(mesh).counts().boundary_edges, 0);
-  const int removed = remove_end_caps(mesh, {{Vec3(0, 5, 0), Vec3(0, 1, 0), 1.0}, {Vec3(0, -5, 0), Vec3(0, -1, 0), 1.0}});
+  const int removed =
+      remove_end_caps(mesh, {{Vec3(0, 5, 0), Vec3(0, 1, 0), 1.0}, {Vec3(0, -5, 0), Vec3(0, -1, 0), 1.0}});
   EXPECT_GT(removed, 0);
   const LumenSurface open(mesh);
   EXPECT_EQ(open.counts().boundary_loops, 2);
@@ -266,7 +265,8 @@ struct RealCase {
 };
 const RealCase kReal[] = {
     {"feelpp-aortic-arch/aorta2.stl", "feelpp-aortic-arch/centerlinesAORTA.vtk", "cm", 1e-2},
-    {"vmtk-abdominal-aorta-bifurcation/aorta-surface.vtp", "vmtk-abdominal-aorta-bifurcation/aorta-centerline.vtp", "mm", 1e-3},
+    {"vmtk-abdominal-aorta-bifurcation/aorta-surface.vtp", "vmtk-abdominal-aorta-bifurcation/aorta-centerline.vtp",
+     "mm", 1e-3},
     {"simvascular-demo-aorta-iliac/model_surface.vtp", "simvascular-demo-aorta-iliac/demo-centerlines.vtp", "cm", 1e-2},
     {"aneurisk-c0015-ica-vampy/artery.vtp", "aneurisk-c0015-ica-vampy/artery_centerlines.vtp", "mm", 1e-3},
 };

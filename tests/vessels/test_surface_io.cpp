@@ -80,8 +80,10 @@ TEST(SurfaceIo, AClosedTetrahedronRoundTripsThroughEveryFormat) {
     const auto path = dir / (binary ? "tet_binary.stl" : "tet_ascii.stl");
     w->SetFileName(path.string().c_str());
     w->SetInputData(pd);
-    if (binary) w->SetFileTypeToBinary();
-    else w->SetFileTypeToASCII();
+    if (binary)
+      w->SetFileTypeToBinary();
+    else
+      w->SetFileTypeToASCII();
     ASSERT_EQ(w->Write(), 1);
     files.push_back(path.string());
   }
@@ -101,7 +103,7 @@ TEST(SurfaceIo, AClosedTetrahedronRoundTripsThroughEveryFormat) {
     // STL stores each triangle's corners: 12 points unmerged; the others share 4.
     EXPECT_EQ(m.vertices.size(), f.ends_with(".stl") ? 12u : 4u) << f;
     EXPECT_NEAR(enclosed_volume(m), 8.0 / 6.0, 1e-6) << f;  // STL stores floats
-    EXPECT_LT(area_vector(m).norm(), 1e-6) << f;             // closed
+    EXPECT_LT(area_vector(m).norm(), 1e-6) << f;            // closed
     // In millimetres: the length factor scales every coordinate.
     const SurfaceMesh mm = read_surface(f, 1e-3);
     EXPECT_NEAR(enclosed_volume(mm), 8.0 / 6.0 * 1e-9, 1e-15) << f;

@@ -50,19 +50,26 @@ int cosim_work_precision(const Options& o) {
   const double duration = o.reduced ? 3.0 : 12.0;
   const std::string dir = (std::filesystem::path(o.out_dir) / "cosim_runs").string();
   auto sets_for = [&](double dt, double seg, const std::string& tag) {
-    return std::vector<std::string>{fmt::format("solve.dt={:.9g}", dt), fmt::format("solve.duration={:.9g}", duration),
-                                    fmt::format("wire.segment_length={:.9g}", seg), "output.vtk=false",
-                                    "output.csv=true", "output.every=0", "output.dir=" + dir + "/" + tag};
+    return std::vector<std::string>{fmt::format("solve.dt={:.9g}", dt),
+                                    fmt::format("solve.duration={:.9g}", duration),
+                                    fmt::format("wire.segment_length={:.9g}", seg),
+                                    "output.vtk=false",
+                                    "output.csv=true",
+                                    "output.every=0",
+                                    "output.dir=" + dir + "/" + tag};
   };
   // Reference: finest dt and segment length of the study.
   const double ref_dt = o.reduced ? 2.5e-3 : 1e-3, ref_seg = o.reduced ? 1e-3 : 0.5e-3;
   const auto ref_summary = run(text, o.scene, sets_for(ref_dt, ref_seg, "reference"));
   const auto ref = coupling::read_tip_trace(dir + "/reference/tip_trace.csv");
-  std::string csv = "dt,segment_length,rms_error,max_error,rms_published,seconds,rod_seconds,steps,status,unconverged_steps\n";
-  csv += fmt::format("{:g},{:g},0,0,0,{:.6e},{:.6e},{},{},{}\n", ref_dt, ref_seg, ref_summary["timings"]["total"].get<double>(),
-                     ref_summary["timings"]["rod"].get<double>(), ref_summary["steps"].get<long>(),
-                     ref_summary["status"].get<std::string>(), ref_summary["wire"]["unconverged_steps"].get<int>());
-  const std::vector<double> dts = o.reduced ? std::vector<double>{20e-3, 10e-3} : std::vector<double>{40e-3, 20e-3, 10e-3, 5e-3, 2.5e-3};
+  std::string csv =
+      "dt,segment_length,rms_error,max_error,rms_published,seconds,rod_seconds,steps,status,unconverged_steps\n";
+  csv += fmt::format("{:g},{:g},0,0,0,{:.6e},{:.6e},{},{},{}\n", ref_dt, ref_seg,
+                     ref_summary["timings"]["total"].get<double>(), ref_summary["timings"]["rod"].get<double>(),
+                     ref_summary["steps"].get<long>(), ref_summary["status"].get<std::string>(),
+                     ref_summary["wire"]["unconverged_steps"].get<int>());
+  const std::vector<double> dts =
+      o.reduced ? std::vector<double>{20e-3, 10e-3} : std::vector<double>{40e-3, 20e-3, 10e-3, 5e-3, 2.5e-3};
   const std::vector<double> segs = o.reduced ? std::vector<double>{4e-3, 2e-3} : std::vector<double>{4e-3, 2e-3, 1e-3};
   for (double seg : segs)
     for (double dt : dts) {
@@ -73,8 +80,9 @@ int cosim_work_precision(const Options& o) {
       double maxd = 0.0;
       for (const auto& row : cmp.rows) maxd = std::max(maxd, row.max_distance);
       csv += fmt::format("{:g},{:g},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{}\n", dt, seg, cmp.rms_total, maxd,
-                         cmp.rms_published_total, s["timings"]["total"].get<double>(), s["timings"]["rod"].get<double>(),
-                         s["steps"].get<long>(), s["status"].get<std::string>(), s["wire"]["unconverged_steps"].get<int>());
+                         cmp.rms_published_total, s["timings"]["total"].get<double>(),
+                         s["timings"]["rod"].get<double>(), s["steps"].get<long>(), s["status"].get<std::string>(),
+                         s["wire"]["unconverged_steps"].get<int>());
     }
   emit(o, "cosim_work_precision.csv", csv);
   return 0;
@@ -102,7 +110,8 @@ int feature_cost(const Options& o) {
       // this row shows what it costs when on.
       {"adapt_on", text, {"wire.adapt.split_angle=0.1"}},
   };
-  std::string csv = "variant,setup,flow,rod,contact,coupling,output,total,steps,status,flow_frames,window_hits,fallbacks\n";
+  std::string csv =
+      "variant,setup,flow,rod,contact,coupling,output,total,steps,status,flow_frames,window_hits,fallbacks\n";
   for (auto& v : variants) {
     auto sets = common;
     sets.insert(sets.end(), v.sets.begin(), v.sets.end());

@@ -33,7 +33,8 @@ vessels::Network y_network(double max_segment_length) {
 constexpr double kInletPressure = 200.0, kOutletPressure = 10.0;  // Pa
 
 /// Outlet flows (m³/s) ordered like the outlets' positions in @p ends_at.
-std::vector<double> network_flows(const vessels::Network& net, const std::vector<vessels::Vec3>& ends_at, double& seconds) {
+std::vector<double> network_flows(const vessels::Network& net, const std::vector<vessels::Vec3>& ends_at,
+                                  double& seconds) {
   flow::FlowSpec spec;
   flow::InletBC in;
   in.type = flow::InletBC::Type::Pressure;
@@ -82,7 +83,8 @@ int flow_fem_work_precision(const Options& o) {
   opt.write_png = false;
   opt.write_vtu = false;
   const double ref_factor = o.reduced ? 0.4 : 0.2;
-  const std::vector<double> factors = o.reduced ? std::vector<double>{0.9, 0.6} : std::vector<double>{0.9, 0.6, 0.45, 0.3};
+  const std::vector<double> factors =
+      o.reduced ? std::vector<double>{0.9, 0.6} : std::vector<double>{0.9, 0.6, 0.45, 0.3};
   opt.size_factor = ref_factor;
   const fem::CompareResult ref = fem::compare(net, bv, opt, "");
   std::vector<vessels::Vec3> ends_at;

@@ -64,7 +64,9 @@ double frame_seconds(flow::FlowSolver& s, int frames, int k, std::vector<double>
 }  // namespace
 
 int flow_frame_cost(const Options& o) {
-  std::string csv = "network,segments,nodes,solver,setup_seconds,frame_all_seconds,frame_wire_seconds,ratio_dense_over_superposition\n";
+  std::string csv =
+      "network,segments,nodes,solver,setup_seconds,frame_all_seconds,frame_wire_seconds,ratio_dense_over_"
+      "superposition\n";
   std::vector<NamedNetwork> nets;
   const std::vector<int> depths = o.reduced ? std::vector<int>{5, 7, 9} : std::vector<int>{5, 7, 9, 10, 11};
   for (int d : depths) nets.push_back({fmt::format("binary_tree_d{}", d), vessels::binary_tree({.depth = d})});
@@ -99,14 +101,16 @@ int flow_frame_cost(const Options& o) {
 
   // RLC (Womersley inertance 4ρl/(3πr²), rigid wall) vs the exact Womersley flow ratio in a
   // tube (r = 2 mm, l = 5 cm), amplitude and phase error vs steps per cycle.
-  std::string rlc = "alpha,inertance,steps_per_cycle,dt,amplitude_error,phase_error_deg,quasi_steady_amplitude_error,seconds\n";
+  std::string rlc =
+      "alpha,inertance,steps_per_cycle,dt,amplitude_error,phase_error_deg,quasi_steady_amplitude_error,seconds\n";
   constexpr double eta = 3.5e-3, rho = 1060.0, R = 2e-3, l = 0.05;
   vessels::BuildOptions bo;
   bo.max_segment_length = l;
   const auto tube = vessels::Network::build(vessels::straight_tube({.length = l, .radius = R}), bo);
   const int inlet_node = 0;
   const int outlet_node = tube.segment(0).node_from == 0 ? tube.segment(0).node_to : tube.segment(0).node_from;
-  const std::vector<int> spc = o.reduced ? std::vector<int>{10, 40, 160} : std::vector<int>{5, 10, 20, 40, 80, 160, 320, 640};
+  const std::vector<int> spc =
+      o.reduced ? std::vector<int>{10, 40, 160} : std::vector<int>{5, 10, 20, 40, 80, 160, 320, 640};
   for (double alpha : {2.0, 3.0, 4.0})
     for (auto inert : {flow::Inertance::Womersley, flow::Inertance::Poiseuille})
       for (int k : spc) {
@@ -120,7 +124,8 @@ int flow_frame_cost(const Options& o) {
         spec.dt = period / k;
         spec.rho_infinity = 1.0;
         spec.periodic_tolerance = 1e-10;
-        spec.inlets.push_back({.node = inlet_node, .type = flow::InletBC::Type::Pressure,
+        spec.inlets.push_back({.node = inlet_node,
+                               .type = flow::InletBC::Type::Pressure,
                                .waveform = flow::Waveform::sine(1000.0 + amp, 1000.0 - amp, period)});
         flow::OutletBC out;
         out.node = outlet_node;
@@ -142,8 +147,8 @@ int flow_frame_cost(const Options& o) {
         const double amp_err = std::abs(std::abs(ratio) - std::abs(exact)) / std::abs(exact);
         const double ph_err = std::abs(std::arg(ratio) - std::arg(exact)) * 180.0 / std::numbers::pi;
         rlc += fmt::format("{:g},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n", alpha,
-                           inert == flow::Inertance::Womersley ? "womersley" : "poiseuille", k, spec.dt, amp_err, ph_err,
-                           std::abs(1.0 - std::abs(exact)) / std::abs(exact), sec);
+                           inert == flow::Inertance::Womersley ? "womersley" : "poiseuille", k, spec.dt, amp_err,
+                           ph_err, std::abs(1.0 - std::abs(exact)) / std::abs(exact), sec);
       }
   (void)take_warnings();
   emit(o, "rlc_womersley.csv", rlc);

@@ -54,12 +54,18 @@ int main(int argc, char** argv) {
   o.scene = std::string(FLOWIRE_SOURCE_DIR) + "/examples/aortic_arch/scene.yaml";
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--reduced" || a == "--quick") o.reduced = true;
-    else if (a == "--out" && i + 1 < argc) o.out_dir = argv[++i];
-    else if (a == "--scene" && i + 1 < argc) o.scene = argv[++i];
-    else if (a == "--known" && i + 1 < argc) o.known_failures = argv[++i];
-    else if (a == "--only" && i + 1 < argc) o.only.emplace_back(argv[++i]);
-    else return usage();
+    if (a == "--reduced" || a == "--quick")
+      o.reduced = true;
+    else if (a == "--out" && i + 1 < argc)
+      o.out_dir = argv[++i];
+    else if (a == "--scene" && i + 1 < argc)
+      o.scene = argv[++i];
+    else if (a == "--known" && i + 1 < argc)
+      o.known_failures = argv[++i];
+    else if (a == "--only" && i + 1 < argc)
+      o.only.emplace_back(argv[++i]);
+    else
+      return usage();
   }
   try {
     if (cmd == "rod-work-precision") return rod_work_precision(o);

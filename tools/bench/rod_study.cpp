@@ -54,7 +54,8 @@ double period_from_crossings(const std::vector<double>& t, const std::vector<dou
 
 int rod_work_precision(const Options& o) {
   std::string csv = "case,integrator,segments,dt,error,seconds\n";
-  const std::vector<int> seg_static = o.reduced ? std::vector<int>{10, 20, 40, 80} : std::vector<int>{10, 20, 40, 80, 160, 320, 400};
+  const std::vector<int> seg_static =
+      o.reduced ? std::vector<int>{10, 20, 40, 80} : std::vector<int>{10, 20, 40, 80, 160, 320, 400};
   struct Ref {
     double alpha, deflection, shortening;
   };
@@ -62,26 +63,26 @@ int rod_work_precision(const Options& o) {
   // Uniform segments, then curvature-adaptive ones from a coarse grid (segments column:
   // the free edges at the end; refined near the clamp where the bending moment is largest).
   for (const bool adaptive : {false, true})
-  for (const auto& ref : refs)
-    for (int n : adaptive ? std::vector<int>{5, 10, 20, 40} : seg_static) {
-      const auto t0 = Clock::now();
-      rod::WireSpec spec = unit_rod(n);
-      if (adaptive) {
-        spec.adapt.enabled = true;
-        spec.adapt.min_segment_length = 1.0 / (8 * n);
-        spec.adapt.split_angle = 0.05;
+    for (const auto& ref : refs)
+      for (int n : adaptive ? std::vector<int>{5, 10, 20, 40} : seg_static) {
+        const auto t0 = Clock::now();
+        rod::WireSpec spec = unit_rod(n);
+        if (adaptive) {
+          spec.adapt.enabled = true;
+          spec.adapt.min_segment_length = 1.0 / (8 * n);
+          spec.adapt.split_angle = 0.05;
+        }
+        rod::RodSimulator sim(spec);
+        sim.set_tip_force({0.0, ref.alpha, 0.0});
+        sim.settings().static_load_steps = ref.alpha > 5 ? 2 : 1;
+        const auto rep = sim.solve_static();
+        const double sec = since(t0);
+        const auto tip = sim.tip_position();
+        const double err = rep.converged() ? std::hypot(tip.y() - ref.deflection, 1.0 - tip.x() - ref.shortening)
+                                           : std::numeric_limits<double>::quiet_NaN();
+        csv += fmt::format("cantilever_alpha{:g},{},{},0,{:.6e},{:.6e}\n", ref.alpha,
+                           adaptive ? "static_adaptive" : "static", sim.first_clamped_vertex(), err, sec);
       }
-      rod::RodSimulator sim(spec);
-      sim.set_tip_force({0.0, ref.alpha, 0.0});
-      sim.settings().static_load_steps = ref.alpha > 5 ? 2 : 1;
-      const auto rep = sim.solve_static();
-      const double sec = since(t0);
-      const auto tip = sim.tip_position();
-      const double err = rep.converged() ? std::hypot(tip.y() - ref.deflection, 1.0 - tip.x() - ref.shortening)
-                                         : std::numeric_limits<double>::quiet_NaN();
-      csv += fmt::format("cantilever_alpha{:g},{},{},0,{:.6e},{:.6e}\n", ref.alpha,
-                         adaptive ? "static_adaptive" : "static", sim.first_clamped_vertex(), err, sec);
-    }
 
   // Euler buckling by bisection (30 halvings of [0.5, 1.5]·P_cr).
   const double pcr = std::numbers::pi * std::numbers::pi / 4.0;
@@ -107,7 +108,8 @@ int rod_work_precision(const Options& o) {
   // First cantilever frequency vs dt, 50 segments, 3 periods from a small static deflection.
   const double omega = 1.87510 * 1.87510;
   const double period = 2.0 * std::numbers::pi / omega;
-  const std::vector<int> per_period = o.reduced ? std::vector<int>{10, 20, 40, 80} : std::vector<int>{5, 10, 20, 40, 80, 160, 320};
+  const std::vector<int> per_period =
+      o.reduced ? std::vector<int>{10, 20, 40, 80} : std::vector<int>{5, 10, 20, 40, 80, 160, 320};
   for (auto integ : {rod::Integrator::ImplicitEuler, rod::Integrator::ImplicitMidpoint})
     for (int k : per_period) {
       rod::RodSimulator sim(unit_rod(50));
@@ -125,13 +127,15 @@ int rod_work_precision(const Options& o) {
       }
       const double sec = since(t0);
       const double T = period_from_crossings(t, y);
-      csv += fmt::format("frequency,{},50,{:.6e},{:.6e},{:.6e}\n", rod::to_string(integ), dt,
-                         std::isfinite(T) ? std::abs(T - period) / period : std::numeric_limits<double>::quiet_NaN(), sec);
+      csv +=
+          fmt::format("frequency,{},50,{:.6e},{:.6e},{:.6e}\n", rod::to_string(integ), dt,
+                      std::isfinite(T) ? std::abs(T - period) / period : std::numeric_limits<double>::quiet_NaN(), sec);
     }
 
   // Cost of one implicit step vs vertex count: a guidewire (E = 60 GPa, r = 0.445 mm, 1 mm
   // segments) under gravity, 20 steps of 1 ms after 3 warm-up steps; error column empty.
-  const std::vector<int> seg_cost = o.reduced ? std::vector<int>{100, 400, 1700} : std::vector<int>{10, 30, 100, 300, 1000, 1700, 3000, 10000};
+  const std::vector<int> seg_cost =
+      o.reduced ? std::vector<int>{100, 400, 1700} : std::vector<int>{10, 30, 100, 300, 1000, 1700, 3000, 10000};
   for (auto integ : {rod::Integrator::ImplicitEuler, rod::Integrator::ImplicitMidpoint})
     for (int n : seg_cost) {
       rod::WireSpec s;

@@ -143,7 +143,8 @@ StressResult run_stress_point(const std::string& scene, const StressPoint& p) {
     r.max_rms_speed = std::max(r.max_rms_speed, std::sqrt(2.0 * std::max(e.kinetic, 0.0) / mass));
     r.max_energy_ratio = std::max({r.max_energy_ratio, e.kinetic / ke_cap, elastic / elastic_cap});
     if (!(e.kinetic <= ke_cap)) fail(step, fmt::format("kinetic energy {:.3g} J above {:.3g} J", e.kinetic, ke_cap));
-    if (!(elastic <= elastic_cap)) fail(step, fmt::format("elastic energy {:.3g} J above {:.3g} J", elastic, elastic_cap));
+    if (!(elastic <= elastic_cap))
+      fail(step, fmt::format("elastic energy {:.3g} J above {:.3g} J", elastic, elastic_cap));
     if (step % 256 == 0) (void)take_warnings();  // unconverged steps are counted above
   }
   (void)take_warnings();
@@ -158,21 +159,57 @@ std::vector<StressPoint> stress_matrix(bool reduced) {
   std::vector<StressPoint> m;
   if (reduced) {
     // The corners that stress each axis, at a short duration.
-    const StressPoint base{.dt = 0.01, .youngs_modulus = 60e9, .wire_length = 0.8, .speed = 0.05, .rotation = 0.0,
-                           .flow_scale = 1.0, .friction = 0.2, .duration = 0.6};
+    const StressPoint base{.dt = 0.01,
+                           .youngs_modulus = 60e9,
+                           .wire_length = 0.8,
+                           .speed = 0.05,
+                           .rotation = 0.0,
+                           .flow_scale = 1.0,
+                           .friction = 0.2,
+                           .duration = 0.6};
     auto add = [&](auto edit) {
       StressPoint p = base;
       edit(p);
       m.push_back(p);
     };
     add([](StressPoint&) {});
-    add([](StressPoint& p) { p.dt = 1.0 / 30.0; p.youngs_modulus = 200e9; p.speed = 0.1; });
-    add([](StressPoint& p) { p.youngs_modulus = 5e9; p.flow_scale = 10.0; p.friction = 1.0; });
-    add([](StressPoint& p) { p.dt = 1e-3; p.wire_length = 1.7; p.rotation = 2.0; p.duration = 0.3; });
-    add([](StressPoint& p) { p.dt = 1.0 / 30.0; p.youngs_modulus = 5e9; p.friction = 0.05; p.flow_scale = 0.0; p.rotation = 2.0; });
-    add([](StressPoint& p) { p.youngs_modulus = 200e9; p.wire_length = 1.7; p.speed = 0.1; p.flow_scale = 10.0; p.friction = 1.0; });
+    add([](StressPoint& p) {
+      p.dt = 1.0 / 30.0;
+      p.youngs_modulus = 200e9;
+      p.speed = 0.1;
+    });
+    add([](StressPoint& p) {
+      p.youngs_modulus = 5e9;
+      p.flow_scale = 10.0;
+      p.friction = 1.0;
+    });
+    add([](StressPoint& p) {
+      p.dt = 1e-3;
+      p.wire_length = 1.7;
+      p.rotation = 2.0;
+      p.duration = 0.3;
+    });
+    add([](StressPoint& p) {
+      p.dt = 1.0 / 30.0;
+      p.youngs_modulus = 5e9;
+      p.friction = 0.05;
+      p.flow_scale = 0.0;
+      p.rotation = 2.0;
+    });
+    add([](StressPoint& p) {
+      p.youngs_modulus = 200e9;
+      p.wire_length = 1.7;
+      p.speed = 0.1;
+      p.flow_scale = 10.0;
+      p.friction = 1.0;
+    });
     // A long insertion: the 1.7 m wire fed to the scene's 50 cm limit, then held.
-    add([](StressPoint& p) { p.wire_length = 1.7; p.speed = 0.1; p.friction = 1.0; p.duration = 5.5; });
+    add([](StressPoint& p) {
+      p.wire_length = 1.7;
+      p.speed = 0.1;
+      p.friction = 1.0;
+      p.duration = 5.5;
+    });
     return m;
   }
   for (double dt : {1e-3, 1e-2, 1.0 / 30.0})
@@ -182,8 +219,14 @@ std::vector<StressPoint> stress_matrix(bool reduced) {
           for (double rot : {0.0, 2.0})
             for (double flow : {0.0, 1.0, 10.0})
               for (double mu : {0.05, 1.0}) {
-                StressPoint p{.dt = dt, .youngs_modulus = E, .wire_length = L, .speed = v, .rotation = rot,
-                              .flow_scale = flow, .friction = mu, .duration = 1.0};
+                StressPoint p{.dt = dt,
+                              .youngs_modulus = E,
+                              .wire_length = L,
+                              .speed = v,
+                              .rotation = rot,
+                              .flow_scale = flow,
+                              .friction = mu,
+                              .duration = 1.0};
                 m.push_back(p);
               }
   // Long insertions: the 1.7 m wire fed at 10 cm/s to the scene's 50 cm limit (the aorta
@@ -192,14 +235,21 @@ std::vector<StressPoint> stress_matrix(bool reduced) {
     for (double E : {5e9, 67e9, 200e9})
       for (double rot : {0.0, 2.0})
         for (double mu : {0.05, 1.0})
-          m.push_back(StressPoint{.dt = dt, .youngs_modulus = E, .wire_length = 1.7, .speed = 0.1, .rotation = rot,
-                                  .flow_scale = 1.0, .friction = mu, .duration = 5.5});
+          m.push_back(StressPoint{.dt = dt,
+                                  .youngs_modulus = E,
+                                  .wire_length = 1.7,
+                                  .speed = 0.1,
+                                  .rotation = rot,
+                                  .flow_scale = 1.0,
+                                  .friction = mu,
+                                  .duration = 5.5});
   return m;
 }
 
 std::string stress_csv_header() {
   return "dt,youngs_modulus,wire_length,speed,rotation_turns_per_s,flow_scale,friction,duration,pass,reason,"
-         "first_bad_step,steps,unconverged_steps,max_outside_over_radius,max_length_drift,max_energy_ratio,max_rms_speed,"
+         "first_bad_step,steps,unconverged_steps,max_outside_over_radius,max_length_drift,max_energy_ratio,max_rms_"
+         "speed,"
          "inserted_length,seconds,held_steps\n";
 }
 
@@ -208,11 +258,11 @@ std::string stress_csv_row(const StressResult& r) {
   std::string reason = r.reason;
   for (char& ch : reason)
     if (ch == ',' || ch == '\n') ch = ';';
-  return fmt::format("{:g},{:g},{:g},{:g},{:g},{:g},{:g},{:g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g},{}\n", p.dt,
-                     p.youngs_modulus, p.wire_length, p.speed, p.rotation, p.flow_scale, p.friction, p.duration,
-                     r.pass ? 1 : 0, reason, r.first_bad_step, r.steps, r.unconverged_steps, r.max_outside_over_radius,
-                     r.max_length_drift, r.max_energy_ratio, r.max_rms_speed, r.inserted_length, r.seconds,
-                     r.held_steps);
+  return fmt::format(
+      "{:g},{:g},{:g},{:g},{:g},{:g},{:g},{:g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g},{:.4g},{}\n", p.dt,
+      p.youngs_modulus, p.wire_length, p.speed, p.rotation, p.flow_scale, p.friction, p.duration, r.pass ? 1 : 0,
+      reason, r.first_bad_step, r.steps, r.unconverged_steps, r.max_outside_over_radius, r.max_length_drift,
+      r.max_energy_ratio, r.max_rms_speed, r.inserted_length, r.seconds, r.held_steps);
 }
 
 }  // namespace flowire::bench

@@ -21,30 +21,30 @@
 namespace flowire::bench {
 
 struct StressPoint {
-  double dt = 0.01;             ///< [s]
-  double youngs_modulus = 60e9; ///< [Pa] shaft
-  double wire_length = 0.8;     ///< [m]
-  double speed = 0.01;          ///< [m/s] insertion speed
-  double rotation = 0.0;        ///< [turns/s] base rotation speed
-  double flow_scale = 1.0;      ///< multiplies the blood drag (coupling.drag_scale)
-  double friction = 0.2;        ///< Coulomb coefficient, shaft and tip
-  double duration = 1.0;        ///< [s] simulated time
+  double dt = 0.01;              ///< [s]
+  double youngs_modulus = 60e9;  ///< [Pa] shaft
+  double wire_length = 0.8;      ///< [m]
+  double speed = 0.01;           ///< [m/s] insertion speed
+  double rotation = 0.0;         ///< [turns/s] base rotation speed
+  double flow_scale = 1.0;       ///< multiplies the blood drag (coupling.drag_scale)
+  double friction = 0.2;         ///< Coulomb coefficient, shaft and tip
+  double duration = 1.0;         ///< [s] simulated time
 };
 
 struct StressResult {
   StressPoint point;
   bool pass = false;
-  std::string reason;           ///< empty when passing
-  long held_steps = 0;          ///< steps in which the force limit held the feed
-  long first_bad_step = -1;     ///< 1-based step where a criterion first failed (−1: none)
-  long steps = 0;               ///< steps taken
-  int unconverged_steps = 0;    ///< Newton steps reported as not converged (warnings)
+  std::string reason;         ///< empty when passing
+  long held_steps = 0;        ///< steps in which the force limit held the feed
+  long first_bad_step = -1;   ///< 1-based step where a criterion first failed (−1: none)
+  long steps = 0;             ///< steps taken
+  int unconverged_steps = 0;  ///< Newton steps reported as not converged (warnings)
   double max_outside_over_radius = 0.0;
   double max_length_drift = 0.0;
-  double max_energy_ratio = 0.0;   ///< max over steps of energy / its cap (kinetic or elastic)
-  double max_rms_speed = 0.0;      ///< [m/s] max over steps of √(2 KE / m)
-  double inserted_length = 0.0;    ///< [m] at the end
-  double seconds = 0.0;            ///< wall-clock time of the run
+  double max_energy_ratio = 0.0;  ///< max over steps of energy / its cap (kinetic or elastic)
+  double max_rms_speed = 0.0;     ///< [m/s] max over steps of √(2 KE / m)
+  double inserted_length = 0.0;   ///< [m] at the end
+  double seconds = 0.0;           ///< wall-clock time of the run
 };
 
 /// @brief Run one point of the matrix on the scene file `scene`.

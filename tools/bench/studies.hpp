@@ -7,10 +7,10 @@
 namespace flowire::bench {
 
 struct Options {
-  std::string out_dir = ".";  ///< where the CSV goes
-  std::string scene;          ///< the aortic-arch scene file
-  bool reduced = false;       ///< CI / quick size
-  std::string known_failures; ///< stress: file listing the failures that are known and explained
+  std::string out_dir = ".";      ///< where the CSV goes
+  std::string scene;              ///< the aortic-arch scene file
+  bool reduced = false;           ///< CI / quick size
+  std::string known_failures;     ///< stress: file listing the failures that are known and explained
   std::vector<std::string> only;  ///< stress: run only the points whose id contains all of these
 };
 

@@ -6,10 +6,10 @@
 // run can leak into the next), up to --jobs at a time.
 #include "fit_command.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <spawn.h>
 #include <sys/wait.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -116,7 +116,7 @@ int run_child(const std::vector<std::string>& args, const fs::path& log) {
 struct RunOutcome {
   double rms = std::numeric_limits<double>::infinity();       // eq. 11, m
   double rms_mean = std::numeric_limits<double>::infinity();  // (1/n Σ)^½, m
-  int status = 0;                                            // the run's exit status
+  int status = 0;                                             // the run's exit status
 };
 
 }  // namespace
@@ -144,12 +144,15 @@ int run_fit(const FitOptions& o) {
       try {
         (void)coupling::load_scene(o.scene, sets);
       } catch (const Error& e) {
-        throw_input_error(fmt::format("--param {}", p.key), fmt::format("the scene rejects {} = {}: {}", p.key, v, e.what()));
+        throw_input_error(fmt::format("--param {}", p.key),
+                          fmt::format("the scene rejects {} = {}: {}", p.key, v, e.what()));
       }
     }
   const auto scene_cfg = coupling::load_scene(o.scene, o.sets);
-  if (!scene_cfg.has_section("wire")) throw_input_error(o.scene, "the scene has no wire: nothing to compare with a tip trace");
-  if (!scene_cfg.boolean("output.csv")) throw_input_error(o.scene, "output.csv is false: the runs would write no tip_trace.csv");
+  if (!scene_cfg.has_section("wire"))
+    throw_input_error(o.scene, "the scene has no wire: nothing to compare with a tip trace");
+  if (!scene_cfg.boolean("output.csv"))
+    throw_input_error(o.scene, "output.csv is false: the runs would write no tip_trace.csv");
   if (!fs::exists(o.trace)) throw_input_error(o.trace, "no such file (--trace)");
   const auto measured = coupling::read_tip_trace(o.trace);
   if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_input_error(o.out, "--out exists and is not a folder");
@@ -161,10 +164,11 @@ int run_fit(const FitOptions& o) {
   co.sigma0 = 0.3;
   co.seed = o.seed;
   co.max_evaluations = o.max_evaluations > 0 ? o.max_evaluations : 100L * (n + 1);
-  co.tol_x = 1e-3;       // 0.1 % of each range
-  co.tol_fun = 1e-9;     // 1 nm of trace distance
+  co.tol_x = 1e-3;    // 0.1 % of each range
+  co.tol_fun = 1e-9;  // 1 nm of trace distance
   // λ at least the number of parallel runs when the machine has many cores.
-  co.lambda = std::max(4 + static_cast<int>(std::floor(3.0 * std::log(static_cast<double>(n)))), std::min(jobs, 4 * (n + 2)));
+  co.lambda =
+      std::max(4 + static_cast<int>(std::floor(3.0 * std::log(static_cast<double>(n)))), std::min(jobs, 4 * (n + 2)));
 
   fs::path out = fs::path(o.out).lexically_normal();
   if (!out.has_filename()) out = out.parent_path();
@@ -210,7 +214,8 @@ int run_fit(const FitOptions& o) {
         r.status = run_child(args, dir / "run.log");
         if (r.status != 0 || !fs::exists(dir / "tip_trace.csv")) continue;
         try {
-          const auto c = coupling::compare_traces(measured, padded(coupling::read_tip_trace((dir / "tip_trace.csv").string()), measured));
+          const auto c = coupling::compare_traces(
+              measured, padded(coupling::read_tip_trace((dir / "tip_trace.csv").string()), measured));
           if (c.samples > 0) r.rms = c.rms_published_total, r.rms_mean = c.rms_total;
         } catch (const Error&) {
           r.status = -1;
@@ -225,7 +230,8 @@ int run_fit(const FitOptions& o) {
     std::lock_guard<std::mutex> lock(mu);
     // A first generation in which every run fails is the scene's fault (a value it rejects
     // only when it runs, a missing file): stop with the first run's own message.
-    if (generation == 0 && std::all_of(outcome.begin(), outcome.end(), [](const RunOutcome& r) { return r.status != 0; })) {
+    if (generation == 0 &&
+        std::all_of(outcome.begin(), outcome.end(), [](const RunOutcome& r) { return r.status != 0; })) {
       std::ifstream log(work / fmt::format("eval-{:05d}", ids[0]) / "run.log");
       std::string first, line;
       while (std::getline(log, line))
@@ -239,7 +245,8 @@ int run_fit(const FitOptions& o) {
       f[j] = outcome[j].rms;
       history << ids[j] << "," << generation;
       for (double v : values) history << "," << si_text(v);
-      history << "," << si_text(outcome[j].rms) << "," << si_text(outcome[j].rms_mean) << "," << outcome[j].status << "\n";
+      history << "," << si_text(outcome[j].rms) << "," << si_text(outcome[j].rms_mean) << "," << outcome[j].status
+              << "\n";
       const fs::path dir = work / fmt::format("eval-{:05d}", ids[j]);
       if (f[j] < best_rms) {
         if (best_id >= 0) fs::remove_all(work / fmt::format("eval-{:05d}", best_id));
@@ -262,9 +269,10 @@ int run_fit(const FitOptions& o) {
   }
   if (best_id < 0) {
     fs::remove_all(work);
-    throw_numerical_error(fmt::format("fit: none of the {} runs produced a comparable tip trace (first run's log: run the "
-                                      "scene with flowire run to see why)",
-                                      counter));
+    throw_numerical_error(
+        fmt::format("fit: none of the {} runs produced a comparable tip trace (first run's log: run the "
+                    "scene with flowire run to see why)",
+                    counter));
   }
   // The best run's outputs, then the history, then fit.json last: its presence means done.
   fs::create_directories(out);
@@ -281,7 +289,8 @@ int run_fit(const FitOptions& o) {
   for (int i = 0; i < n; ++i) j["params"][params[i].key] = best_values[i];
   j["rms"] = best_rms;
   j["evaluations"] = counter;
-  const auto c = coupling::compare_traces(measured, padded(coupling::read_tip_trace((out / "tip_trace.csv").string()), measured));
+  const auto c =
+      coupling::compare_traces(measured, padded(coupling::read_tip_trace((out / "tip_trace.csv").string()), measured));
   j["rms_mean"] = c.rms_total;
   j["samples"] = c.samples;
   j["generations"] = res.generations;

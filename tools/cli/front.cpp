@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   std::vector<fs::path> candidates;
   if (!ec) {
-    candidates.push_back(self.parent_path() / "flowire-full");                               // build tree
+    candidates.push_back(self.parent_path() / "flowire-full");                                // build tree
     candidates.push_back(self.parent_path().parent_path() / "libexec/flowire/flowire-full");  // installed, moved
   }
   candidates.push_back(fs::path(FLOWIRE_LIBEXECDIR) / "flowire-full");

@@ -1,17 +1,18 @@
 // The flowire command line (contract: ../shared/contract/flowire-cli.md).
 // Exit status: 0 success; 2 bad usage or bad input; 3 numerical failure.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
-#include <nlohmann/json.hpp>
 #include <new>
-#include <unistd.h>
+#include <nlohmann/json.hpp>
 
+#include "fit_command.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
@@ -19,7 +20,6 @@
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
 #include "flowire/vessels/io.hpp"
-#include "fit_command.hpp"
 #include "svzerod_command.hpp"
 
 namespace {
@@ -57,8 +57,8 @@ class ProgressLine {
     last_ = p.wall_seconds;
     const double done = static_cast<double>(p.step) / static_cast<double>(p.steps);
     const double eta = done > 0 ? p.wall_seconds * (1.0 - done) / done : 0.0;
-    std::fprintf(stderr, "\r\033[Kflowire: %5.1f%%  t = %.4g of %.4g s  elapsed %.0f s  ETA %.0f s", 100.0 * done, p.time,
-                 p.duration, p.wall_seconds, eta);
+    std::fprintf(stderr, "\r\033[Kflowire: %5.1f%%  t = %.4g of %.4g s  elapsed %.0f s  ETA %.0f s", 100.0 * done,
+                 p.time, p.duration, p.wall_seconds, eta);
     std::fflush(stderr);
     drawn_ = true;
   }
@@ -98,10 +98,18 @@ int cmd_info(const std::string& file, const std::string& unit, double max_seg, b
   const auto n = net.counts();
   print_warnings();
   if (json) {
-    nlohmann::json j = {{"file", file},           {"branches", n.branches},         {"nodes", n.nodes},
-                        {"segments", n.segments}, {"junctions", n.junctions},       {"ends", n.ends},
-                        {"loops", n.loops},       {"components", n.components},     {"total_length", n.total_length},
-                        {"radius_min", n.radius_min}, {"radius_max", n.radius_max}, {"inlet_node", net.widest_end()}};
+    nlohmann::json j = {{"file", file},
+                        {"branches", n.branches},
+                        {"nodes", n.nodes},
+                        {"segments", n.segments},
+                        {"junctions", n.junctions},
+                        {"ends", n.ends},
+                        {"loops", n.loops},
+                        {"components", n.components},
+                        {"total_length", n.total_length},
+                        {"radius_min", n.radius_min},
+                        {"radius_max", n.radius_max},
+                        {"inlet_node", net.widest_end()}};
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("file:          %s\n", file.c_str());
@@ -141,8 +149,9 @@ void plot_compare(const std::string& a, const std::string& b, const std::string&
                                       script.string(), tmp, a, b, csv_path);
   if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(tmp)) {
     std::filesystem::remove(tmp);
-    throw flowire::Error(ErrorKind::Input,
-                         fmt::format("--plot {}: plotting failed (needs /usr/bin/python3 with python3-matplotlib)", png));
+    throw flowire::Error(
+        ErrorKind::Input,
+        fmt::format("--plot {}: plotting failed (needs /usr/bin/python3 with python3-matplotlib)", png));
   }
   std::filesystem::rename(tmp, png);
 }
@@ -154,7 +163,8 @@ int cmd_compare(const std::string& a, const std::string& b, const std::string& o
   const double H = flowire::units::parse_quantity(row, Dimension::Length, "--rows");
   const auto r = flowire::coupling::compare_traces(flowire::coupling::read_tip_trace(a),
                                                    flowire::coupling::read_tip_trace(b), h, H);
-  if (r.samples == 0) throw flowire::Error(ErrorKind::Input, fmt::format("{} and {}: the traces share no inserted length", a, b));
+  if (r.samples == 0)
+    throw flowire::Error(ErrorKind::Input, fmt::format("{} and {}: the traces share no inserted length", a, b));
   const auto csv = flowire::coupling::compare_csv(r);
   if (!out.empty()) flowire::write_text_atomically(out, csv);
   if (!plot.empty()) {
@@ -165,8 +175,8 @@ int cmd_compare(const std::string& a, const std::string& b, const std::string& o
   std::printf("%-18s %8s %22s %14s %14s\n", "inserted length mm", "samples", "RMS (1/2 sum)^1/2 mm", "RMS mean mm",
               "max mm");
   for (const auto& row_ : r.rows)
-    std::printf("%18.1f %8d %22.3f %14.3f %14.3f\n", row_.inserted_length * 1e3, row_.samples,
-                row_.rms_published * 1e3, row_.rms * 1e3, row_.max_distance * 1e3);
+    std::printf("%18.1f %8d %22.3f %14.3f %14.3f\n", row_.inserted_length * 1e3, row_.samples, row_.rms_published * 1e3,
+                row_.rms * 1e3, row_.max_distance * 1e3);
   std::printf("%18s %8d %22.3f %14.3f\n", "all", r.samples, r.rms_published_total * 1e3, r.rms_total * 1e3);
   return 0;
 }
@@ -184,14 +194,16 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "run a scene: YAML scene file or svZeroDSolver JSON model");
   run->add_option("scene", scene, "scene file (.yaml) or svZeroDSolver model (.json)")->required();
   run->add_option("--out", out, "output folder (overrides output.dir)");
-  run->add_option("--set", sets, "override a scene key: --set flow.solver=sparse (repeatable)")->allow_extra_args(false);
+  run->add_option("--set", sets, "override a scene key: --set flow.solver=sparse (repeatable)")
+      ->allow_extra_args(false);
 
   auto* network = app.add_subcommand("network", "read, inspect and convert vessel networks");
   network->require_subcommand(1);
   std::string file, unit, in, outfile;
   double max_seg = 0;
   bool json = false;
-  auto* info = network->add_subcommand("info", "print branches, nodes, segments, junctions, ends, loops, length, radii");
+  auto* info =
+      network->add_subcommand("info", "print branches, nodes, segments, junctions, ends, loops, length, radii");
   info->add_option("file", file, "network file (" + flowire::vessels::network_extensions() + ")")->required();
   info->add_option("--length-unit", unit, "unit of the file's coordinates: m, cm, mm, um");
   info->add_option("--max-segment-length", max_seg, "split branches into segments no longer than this (m)");
@@ -212,7 +224,8 @@ int main(int argc, char** argv) {
   compare->add_option("--rows", rows, "table row spacing (default 50 mm)");
 
   flowire::cli::FitOptions fit_opts;
-  auto* fit = app.add_subcommand("fit", "fit scene values to a measured tip trace (CMA-ES on the trace RMS; docs/fit.md)");
+  auto* fit =
+      app.add_subcommand("fit", "fit scene values to a measured tip trace (CMA-ES on the trace RMS; docs/fit.md)");
   fit->add_option("scene", fit_opts.scene, "scene file (.yaml)")->required();
   fit->add_option("--trace", fit_opts.trace, "measured tip trace (tip_trace.csv columns: time,inserted_length,x,y,z)")
       ->required();
@@ -221,7 +234,8 @@ int main(int argc, char** argv) {
                   "--param insertion.rotation_angle=0deg..180deg (repeatable)")
       ->required()
       ->allow_extra_args(false);
-  fit->add_option("--out", fit_opts.out, "output folder: fit.json, fit_history.csv and the best run's outputs")->required();
+  fit->add_option("--out", fit_opts.out, "output folder: fit.json, fit_history.csv and the best run's outputs")
+      ->required();
   fit->add_option("--set", fit_opts.sets, "fix a scene key for every run: --set solve.dt=5ms (repeatable)")
       ->allow_extra_args(false);
   fit->add_option("--jobs", fit_opts.jobs, "runs at a time (default: the number of hardware threads)")
@@ -262,9 +276,9 @@ int main(int argc, char** argv) {
                  help_topic[0] == "fit") {
         std::cout << app.get_subcommand(help_topic[0])->help();
       } else {
-        return error_exit(fmt::format("help: unknown command '{}' (commands: run, network, compare, fit, help scene)",
-                                      help_topic[0]),
-                          2);
+        return error_exit(
+            fmt::format("help: unknown command '{}' (commands: run, network, compare, fit, help scene)", help_topic[0]),
+            2);
       }
       return 0;
     }

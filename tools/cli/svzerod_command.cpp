@@ -21,7 +21,8 @@ using flowire::ErrorKind;
 /// An svZeroDSolver model: simulated as svZeroDSolver does, svzerod_result.csv written like it.
 int run_svzerod(const std::string& model, const std::string& out, const std::vector<std::string>& sets) {
   if (!sets.empty())
-    throw flowire::Error(ErrorKind::Usage, fmt::format("{}: --set applies to YAML scenes, not svZeroDSolver models", model));
+    throw flowire::Error(ErrorKind::Usage,
+                         fmt::format("{}: --set applies to YAML scenes, not svZeroDSolver models", model));
   const std::filesystem::path dir = out.empty() ? std::filesystem::path("out") : std::filesystem::path(out);
   const auto t0 = std::chrono::steady_clock::now();
   flowire::flow::svzerod::Summary s;
@@ -38,13 +39,25 @@ int run_svzerod(const std::string& model, const std::string& out, const std::vec
   nlohmann::json j = {{"status", "ok"},
                       {"model", model},
                       {"steps", s.steps},
-                      {"svzerod", {{"vessels", s.vessels}, {"junctions", s.junctions},
-                                   {"boundary_conditions", s.boundary_conditions}, {"unknowns", s.unknowns},
-                                   {"cycles", s.cycles}, {"period", s.period}, {"dt", s.dt}, {"rows", s.rows},
-                                   {"newton_iterations_per_step", s.newton_iterations_per_step},
-                                   {"factorizations", s.factorizations}}},
-                      {"timings", {{"setup", 0.0}, {"flow", s.seconds}, {"rod", 0.0}, {"contact", 0.0},
-                                   {"coupling", 0.0}, {"output", std::max(0.0, total - s.seconds)}, {"total", total}}},
+                      {"svzerod",
+                       {{"vessels", s.vessels},
+                        {"junctions", s.junctions},
+                        {"boundary_conditions", s.boundary_conditions},
+                        {"unknowns", s.unknowns},
+                        {"cycles", s.cycles},
+                        {"period", s.period},
+                        {"dt", s.dt},
+                        {"rows", s.rows},
+                        {"newton_iterations_per_step", s.newton_iterations_per_step},
+                        {"factorizations", s.factorizations}}},
+                      {"timings",
+                       {{"setup", 0.0},
+                        {"flow", s.seconds},
+                        {"rod", 0.0},
+                        {"contact", 0.0},
+                        {"coupling", 0.0},
+                        {"output", std::max(0.0, total - s.seconds)},
+                        {"total", total}}},
                       {"warnings", flowire::take_warnings()}};
   flowire::write_text_atomically(dir / "summary.json", j.dump(2) + "\n");
   std::printf("flowire: %s: ok in %.3f s, %d steps; %s\n", model.c_str(), total, s.steps, s.result_file.c_str());

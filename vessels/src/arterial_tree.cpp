@@ -102,17 +102,17 @@ struct TerminalRow {
   double c_1e_10;
 };
 constexpr std::array<TerminalRow, 11> kTerminals{{
-    {8, 0.18, 38.7},   // thoracic aorta
-    {10, 5.43, 1.27},  // left external carotid
-    {13, 5.43, 1.27},  // right external carotid
-    {15, 2.68, 2.58},  // right brachial
-    {16, 2.68, 2.58},  // left brachial
-    {23, 5.97, 1.16},  // left middle cerebral
-    {24, 5.97, 1.16},  // right middle cerebral
-    {29, 8.48, 0.82},  // left anterior cerebral A2
-    {30, 8.48, 0.82},  // right anterior cerebral A2
-    {32, 11.08, 0.62}, // left posterior cerebral P2
-    {33, 11.08, 0.62}, // right posterior cerebral P2
+    {8, 0.18, 38.7},    // thoracic aorta
+    {10, 5.43, 1.27},   // left external carotid
+    {13, 5.43, 1.27},   // right external carotid
+    {15, 2.68, 2.58},   // right brachial
+    {16, 2.68, 2.58},   // left brachial
+    {23, 5.97, 1.16},   // left middle cerebral
+    {24, 5.97, 1.16},   // right middle cerebral
+    {29, 8.48, 0.82},   // left anterior cerebral A2
+    {30, 8.48, 0.82},   // right anterior cerebral A2
+    {32, 11.08, 0.62},  // left posterior cerebral P2
+    {33, 11.08, 0.62},  // right posterior cerebral P2
 }};
 
 constexpr int kNodes = 30;  // nodes 1..30
@@ -164,8 +164,8 @@ Layout layout() {
   n[13] = mirror_x(n[12]);
   n[21] = mirror_x(n[18]);
   n[26] = mirror_x(n[25]);
-  dir(31, Vec3(0.0, 1.0, 0.2));   // ACoA bows forward
-  dir(23, Vec3(1.0, 0.0, 0.8));   // MCA: lateral and up
+  dir(31, Vec3(0.0, 1.0, 0.2));  // ACoA bows forward
+  dir(23, Vec3(1.0, 0.0, 0.8));  // MCA: lateral and up
   dir(24, Vec3(-1.0, 0.0, 0.8));
   dir(29, Vec3(0.05, 1.0, 1.1));  // ACA A2: forward and up
   dir(30, Vec3(-0.05, 1.0, 1.1));
@@ -244,8 +244,8 @@ std::vector<ArterialTreeVessel> arterial_tree_vessels() {
   std::vector<ArterialTreeVessel> v;
   v.reserve(kRows.size());
   for (const Row& r : kRows)
-    v.push_back({r.id, r.name, r.sn, r.tn, r.l_cm * kCm, r.r_in_mm * kMm, r.r_out_mm * kMm, r.h_mm * kMm,
-                 r.e_mpa * 1e6});
+    v.push_back(
+        {r.id, r.name, r.sn, r.tn, r.l_cm * kCm, r.r_in_mm * kMm, r.r_out_mm * kMm, r.h_mm * kMm, r.e_mpa * 1e6});
   return v;
 }
 

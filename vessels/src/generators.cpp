@@ -76,8 +76,8 @@ struct Arch {
   int ppcm;
   // Arch: half circle in the y–z plane from the top of the ascending aorta, drifting to
   // the patient's left (+x) so the descending aorta lies left of the midline.
-  static constexpr double h_asc = 0.05;   // ascending aorta height
-  static constexpr double R_arch = 0.028; // arch radius of curvature
+  static constexpr double h_asc = 0.05;    // ascending aorta height
+  static constexpr double R_arch = 0.028;  // arch radius of curvature
   [[nodiscard]] Vec3 arch(double theta) const {
     return s * Vec3(0.025 * theta / kPi, -R_arch + R_arch * std::cos(theta), h_asc + R_arch * std::sin(theta));
   }
@@ -91,10 +91,13 @@ struct Arch {
     return s * Vec3(x, y, z);
   }
   [[nodiscard]] double descending_radius(double u) const { return s * (0.0115 - 0.0030 * u); }
-  [[nodiscard]] int pieces(double length) const { return std::max(2, static_cast<int>(std::ceil(length * 100 * ppcm))); }
+  [[nodiscard]] int pieces(double length) const {
+    return std::max(2, static_cast<int>(std::ceil(length * 100 * ppcm)));
+  }
 };
 
-Polyline sample(std::string name, int n, const std::function<Vec3(double)>& pos, const std::function<double(double)>& rad) {
+Polyline sample(std::string name, int n, const std::function<Vec3(double)>& pos,
+                const std::function<double(double)>& rad) {
   Polyline p;
   p.name = std::move(name);
   for (int i = 0; i <= n; ++i) {
@@ -155,9 +158,10 @@ Centerlines aortic_arch(const AorticArchParams& p) {
     c.branches.push_back(std::move(asc));
   }
   auto arch_piece = [&](std::string name, double t0, double t1) {
-    return sample(std::move(name), a.pieces(Arch::R_arch * (t1 - t0)),
-                  [&, t0, t1](double u) { return a.arch(t0 + u * (t1 - t0)); },
-                  [&, t0, t1](double u) { return a.arch_radius(t0 + u * (t1 - t0)); });
+    return sample(
+        std::move(name), a.pieces(Arch::R_arch * (t1 - t0)),
+        [&, t0, t1](double u) { return a.arch(t0 + u * (t1 - t0)); },
+        [&, t0, t1](double u) { return a.arch_radius(t0 + u * (t1 - t0)); });
   };
   c.branches.push_back(arch_piece("arch_1", th_bca, th_lcc));
   c.branches.push_back(arch_piece("arch_2", th_lcc, th_lsa));

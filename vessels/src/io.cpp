@@ -53,8 +53,8 @@ double length_factor(const ReadOptions& opt, const std::optional<std::string>& d
   if (declared) {
     const double f = units::length_unit_factor(*declared, where + ": length_unit");
     if (user && std::abs(*user - f) > 1e-12 * f)
-      warn(fmt::format("{}: the file declares length_unit {}; the length unit given ({}) is ignored", where,
-                       *declared, user_name));
+      warn(fmt::format("{}: the file declares length_unit {}; the length unit given ({}) is ignored", where, *declared,
+                       user_name));
     return f;
   }
   return user.value_or(1.0);
@@ -161,8 +161,9 @@ YamlFile load_yaml(const std::string& path) {
     const auto key = kv.first.Scalar();
     if (key != "branches" && key != "length_unit" && key != "nodes" && key != "segments" && key != "format" &&
         key != "version" && key != "name")
-      throw_input_error(at(path, kv.first),
-                        fmt::format("unknown key '{}' (a network file has branches, length_unit, nodes, segments)", key));
+      throw_input_error(
+          at(path, kv.first),
+          fmt::format("unknown key '{}' (a network file has branches, length_unit, nodes, segments)", key));
   }
   if (const auto u = f.root["length_unit"]) {
     if (!u.IsScalar()) throw_input_error(at(path, u), "length_unit: expected m, cm, mm or um");
@@ -190,7 +191,8 @@ Centerlines yaml_centerlines(const std::string& path, const YamlFile& f) {
     for (const auto& kv : br) {
       const auto key = kv.first.Scalar();
       if (key != "name" && key != "points" && key != "nodes" && key != "segments")
-        throw_input_error(at(path, kv.first), fmt::format("branch {}: unknown key '{}' (expected name, points)", b, key));
+        throw_input_error(at(path, kv.first),
+                          fmt::format("branch {}: unknown key '{}' (expected name, points)", b, key));
     }
     if (const auto name = br["name"]) {
       if (!name.IsScalar()) throw_input_error(at(path, name), fmt::format("branch {}: name must be text", b));
@@ -226,7 +228,8 @@ std::optional<Network> yaml_network(const std::string& path, const YamlFile& f, 
   const auto nodes_n = f.root["nodes"];
   const auto segs_n = f.root["segments"];
   if (!nodes_n && !segs_n) return std::nullopt;
-  if (!nodes_n || !segs_n) throw_input_error(at(path, nodes_n ? nodes_n : segs_n), "'nodes' and 'segments' go together");
+  if (!nodes_n || !segs_n)
+    throw_input_error(at(path, nodes_n ? nodes_n : segs_n), "'nodes' and 'segments' go together");
   if (!nodes_n.IsSequence() || !segs_n.IsSequence() || segs_n.size() == 0)
     throw_input_error(at(path, nodes_n), "nodes and segments: expected lists");
   std::vector<Vec3> nodes;
@@ -282,11 +285,13 @@ std::optional<Network> yaml_network(const std::string& path, const YamlFile& f, 
         std::vector<int> out;
         const auto l = bn[key];
         if (!l || !l.IsSequence())
-          throw_input_error(at(path, bn), fmt::format("{}: '{}' list needed with nodes/segments", branch_label(b, br.name), key));
+          throw_input_error(at(path, bn),
+                            fmt::format("{}: '{}' list needed with nodes/segments", branch_label(b, br.name), key));
         for (size_t k = 0; k < l.size(); ++k) {
           const long long v = integer(path, l[k], key);
           if (v < 0 || v >= limit)
-            throw_input_error(at(path, l[k]), fmt::format("{}: {} entry {} is out of range", branch_label(b, br.name), key, v));
+            throw_input_error(at(path, l[k]),
+                              fmt::format("{}: {} entry {} is out of range", branch_label(b, br.name), key, v));
           out.push_back(static_cast<int>(v));
         }
         return out;
@@ -426,7 +431,8 @@ OneDDeck parse_deck(const std::string& path) {
       throw_input_error(fmt::format("{}:{}", path, s.line), fmt::format("SEGMENT id {} is used twice", s.id));
     for (const long long n : {s.in, s.out})
       if (!deck.nodes.count(n))
-        throw_input_error(fmt::format("{}:{}", path, s.line), fmt::format("SEGMENT {}: node {} is not defined", s.name, n));
+        throw_input_error(fmt::format("{}:{}", path, s.line),
+                          fmt::format("SEGMENT {}: node {} is not defined", s.name, n));
   }
   std::map<long long, long long> moved;  // node -> node it is merged into
   auto find = [&](long long n) {
@@ -548,8 +554,9 @@ Network deck_network(const std::string& path, const OneDDeck& deck, double f, co
       if (opt.radius_change > 0.0)
         pieces = std::max(pieces, std::ceil(std::abs(r1 - r0) / (opt.radius_change * std::min(r0, r1)) - 1e-9));
       if (!(pieces <= 1e5))
-        throw_input_error(fmt::format("{}:{}", path, s.line),
-                          fmt::format("SEGMENT {} would be split into more than 1e5 pieces (length {} m)", s.name, len));
+        throw_input_error(
+            fmt::format("{}:{}", path, s.line),
+            fmt::format("SEGMENT {} would be split into more than 1e5 pieces (length {} m)", s.name, len));
       total_pieces += pieces;
       if (total_pieces > 2e7)
         throw_input_error(fmt::format("{}:{}", path, s.line),
@@ -597,9 +604,10 @@ Network finish(Network net, const ReadOptions& opt, double factor, const std::st
       int dropped_segments = 0;
       for (const auto& s : net.segments())
         if (comp[static_cast<size_t>(s.node_from)] != kept) ++dropped_segments;
-      warn(fmt::format("{}: the network has {} disconnected pieces; kept the piece with the widest end (node {}) and "
-                       "dropped {} segment(s) of the others",
-                       path, pieces, keep, dropped_segments));
+      warn(
+          fmt::format("{}: the network has {} disconnected pieces; kept the piece with the widest end (node {}) and "
+                      "dropped {} segment(s) of the others",
+                      path, pieces, keep, dropped_segments));
       net = net.keep_component(keep);
     } else {
       std::vector<std::vector<std::string>> names(static_cast<size_t>(pieces));
@@ -698,7 +706,8 @@ const NetworkReader& reader_for(const std::string& path) {
   for (const auto& r : network_readers())
     if (r.recognises(head)) return r;
   std::string known;
-  for (const auto& r : network_readers()) known += fmt::format("{}{} ({})", known.empty() ? "" : ", ", fmt::join(r.extensions, "/"), r.name);
+  for (const auto& r : network_readers())
+    known += fmt::format("{}{} ({})", known.empty() ? "" : ", ", fmt::join(r.extensions, "/"), r.name);
   throw_input_error(path, "unknown network format: expected " + known);
 }
 

@@ -14,9 +14,7 @@ struct NumericArray {
   std::string name;
   int components = 1;
   std::vector<double> values;  // tuples, row major
-  [[nodiscard]] size_t tuples() const {
-    return components > 0 ? values.size() / static_cast<size_t>(components) : 0;
-  }
+  [[nodiscard]] size_t tuples() const { return components > 0 ? values.size() / static_cast<size_t>(components) : 0; }
 };
 
 struct StringArray {

@@ -32,7 +32,8 @@ class Cursor {
     throw_input_error(fmt::format("{}:{}", path_, line_at(pos_)), what);
   }
   [[nodiscard]] int line_at(size_t pos) const {
-    return 1 + static_cast<int>(std::count(s_.begin(), s_.begin() + static_cast<std::ptrdiff_t>(std::min(pos, s_.size())), '\n'));
+    return 1 + static_cast<int>(
+                   std::count(s_.begin(), s_.begin() + static_cast<std::ptrdiff_t>(std::min(pos, s_.size())), '\n'));
   }
   [[nodiscard]] size_t remaining() const { return s_.size() - pos_; }
   [[nodiscard]] bool at_end() {
@@ -58,8 +59,7 @@ class Cursor {
     char* end = nullptr;
     errno = 0;
     const long long v = std::strtoll(t.c_str(), &end, 10);
-    if (end != t.c_str() + t.size() || errno != 0 || v < 0)
-      fail(fmt::format("{}: '{}' is not a count", what, t));
+    if (end != t.c_str() + t.size() || errno != 0 || v < 0) fail(fmt::format("{}: '{}' is not a count", what, t));
     if (static_cast<unsigned long long>(v) > s_.size())
       fail(fmt::format("{} {} does not fit in a file of {} bytes (corrupt or truncated file)", what, v, s_.size()));
     return v;
@@ -80,7 +80,8 @@ class Cursor {
   std::vector<double> binary(size_t n, const std::string& type) {
     const size_t size = type_size(type);
     if (size == 0) fail(fmt::format("data type '{}' is not supported in binary files", type));
-    if (n > remaining() / size) fail(fmt::format("{} values of {} do not fit in the rest of the file (truncated)", n, type));
+    if (n > remaining() / size)
+      fail(fmt::format("{} values of {} do not fit in the rest of the file (truncated)", n, type));
     std::vector<double> out(n);
     for (size_t i = 0; i < n; ++i) {
       unsigned char b[8];
@@ -160,7 +161,8 @@ struct Reader {
     const auto v = values(n, type);
     std::vector<long long> out(n);
     for (size_t i = 0; i < n; ++i) {
-      if (!(std::abs(v[i]) < 9e15) || std::floor(v[i]) != v[i]) cur.fail(fmt::format("cell entry {} is not an index", v[i]));
+      if (!(std::abs(v[i]) < 9e15) || std::floor(v[i]) != v[i])
+        cur.fail(fmt::format("cell entry {} is not an index", v[i]));
       out[i] = static_cast<long long>(v[i]);
     }
     return out;
@@ -253,7 +255,8 @@ PolyData read_legacy_polydata(const std::string& path, const std::string& text) 
       if (upper(t) != "LOOKUP_TABLE") {
         char* end = nullptr;
         const long c = std::strtol(t.c_str(), &end, 10);
-        if (end != t.c_str() + t.size() || c < 1 || c > 4) r.cur.fail(fmt::format("SCALARS {}: bad component count '{}'", a.name, t));
+        if (end != t.c_str() + t.size() || c < 1 || c > 4)
+          r.cur.fail(fmt::format("SCALARS {}: bad component count '{}'", a.name, t));
         a.components = static_cast<int>(c);
         t = r.cur.token();
       }
@@ -301,7 +304,8 @@ PolyData read_legacy_polydata(const std::string& path, const std::string& text) 
         const auto tuples = r.cur.count("FIELD array tuples");
         const auto type = r.cur.token();
         if (comps < 1 || comps > 1024) r.cur.fail(fmt::format("FIELD array {}: {} components", a.name, comps));
-        if (type == "string" || type == "utf8_string") r.cur.fail(fmt::format("FIELD array {}: string arrays are not supported", a.name));
+        if (type == "string" || type == "utf8_string")
+          r.cur.fail(fmt::format("FIELD array {}: string arrays are not supported", a.name));
         a.components = static_cast<int>(comps);
         if (static_cast<unsigned long long>(comps) * static_cast<unsigned long long>(tuples) > r.cur.remaining())
           r.cur.fail(fmt::format("FIELD array {} does not fit in the rest of the file (truncated)", a.name));

@@ -49,8 +49,8 @@ std::string array_names(const std::vector<NumericArray>& arrays) {
 
 void require_tuples(const PolyData& pd, const NumericArray& a, size_t n, const char* what) {
   if (a.components < 1 || a.tuples() != n || a.values.size() != n * static_cast<size_t>(a.components))
-    throw_input_error(pd.source, fmt::format("{} array '{}' has {} values for {} {}", what, a.name,
-                                             a.values.size(), n, what[0] == 'p' ? "points" : "cells"));
+    throw_input_error(pd.source, fmt::format("{} array '{}' has {} values for {} {}", what, a.name, a.values.size(), n,
+                                             what[0] == 'p' ? "points" : "cells"));
 }
 
 /// Radius at every point, from the first radius-like point array found.
@@ -72,10 +72,9 @@ std::vector<double> point_radii(const PolyData& pd) {
     }
     return r;
   }
-  throw_input_error(pd.source,
-                    fmt::format("no radius array: expected a point array 'radius', 'radii' or "
-                                "'MaximumInscribedSphereRadius' (point arrays in the file: {})",
-                                array_names(pd.point_data)));
+  throw_input_error(pd.source, fmt::format("no radius array: expected a point array 'radius', 'radii' or "
+                                           "'MaximumInscribedSphereRadius' (point arrays in the file: {})",
+                                           array_names(pd.point_data)));
 }
 
 bool is_vmtk(const PolyData& pd) { return find_array(pd.point_data, "MaximumInscribedSphereRadius") != nullptr; }
@@ -85,10 +84,10 @@ bool is_vmtk(const PolyData& pd) { return find_array(pd.point_data, "MaximumInsc
 void require_lines(const PolyData& pd) {
   if (!pd.lines.empty()) return;
   if (pd.points.empty()) throw_input_error(pd.source, "no points and no line cells: the file is empty");
-  throw_input_error(pd.source, fmt::format("no line cells (centerline polylines) among {} points{}", pd.points.size(),
-                                           pd.other_cells > 0 ? fmt::format(" and {} other cells (a surface?)",
-                                                                            pd.other_cells)
-                                                              : std::string{}));
+  throw_input_error(pd.source,
+                    fmt::format("no line cells (centerline polylines) among {} points{}", pd.points.size(),
+                                pd.other_cells > 0 ? fmt::format(" and {} other cells (a surface?)", pd.other_cells)
+                                                   : std::string{}));
 }
 
 void validate(const PolyData& pd, const std::vector<double>& radii) {
@@ -111,7 +110,8 @@ void validate(const PolyData& pd, const std::vector<double>& radii) {
       if (!std::isfinite(radii[i]))
         throw_input_error(pd.source, fmt::format("point {} (line cell {}): radius is not finite", id, c));
       if (radii[i] <= 0.0)
-        throw_input_error(pd.source, fmt::format("point {} (line cell {}): radius {} is not positive", id, c, radii[i]));
+        throw_input_error(pd.source,
+                          fmt::format("point {} (line cell {}): radius {} is not positive", id, c, radii[i]));
     }
   }
 }
@@ -170,8 +170,8 @@ void append_points(Polyline& p, const Polyline& q, size_t from = 0) {
 
 struct Location {
   size_t branch = 0;
-  size_t seg = 0;     // segment index within the branch
-  double t = 0.0;     // parameter on the segment
+  size_t seg = 0;  // segment index within the branch
+  double t = 0.0;  // parameter on the segment
   double dist = std::numeric_limits<double>::infinity();
 };
 
@@ -392,7 +392,8 @@ std::vector<std::vector<long long>> adjacency(const PolyData& pd, const std::vec
       if (a == b) continue;
       if (!seen.emplace(std::min(a, b), std::max(a, b)).second) continue;
       if (origins)
-        (*origins)[{std::min(a, b), std::max(a, b)}] = a < b ? EdgeOrigin{ids[k], ids[k + 1]} : EdgeOrigin{ids[k + 1], ids[k]};
+        (*origins)[{std::min(a, b), std::max(a, b)}] =
+            a < b ? EdgeOrigin{ids[k], ids[k + 1]} : EdgeOrigin{ids[k + 1], ids[k]};
       adj[static_cast<size_t>(a)].push_back(b);
       adj[static_cast<size_t>(b)].push_back(a);
     }
@@ -506,7 +507,8 @@ std::vector<Polyline> graph_chains(const PolyData& pd, const std::vector<double>
     std::vector<size_t> cuts{0};
     for (size_t k = 1; k + 1 < chain.size(); ++k)
       if (radii[origin(chain[k], chain[k - 1])] != radii[origin(chain[k], chain[k + 1])]) cuts.push_back(k);
-    if (cuts.size() == 1 && chain.size() >= 4 && chain.front() == chain.back()) cuts.push_back(chain.size() / 2);  // ring
+    if (cuts.size() == 1 && chain.size() >= 4 && chain.front() == chain.back())
+      cuts.push_back(chain.size() / 2);  // ring
     cuts.push_back(chain.size() - 1);
     for (size_t i = 0; i + 1 < cuts.size(); ++i) emit(chain, cuts[i], cuts[i + 1]);
   }
@@ -598,10 +600,11 @@ std::vector<Polyline> simvascular_rom(const PolyData& pd, const std::vector<doub
         }
     }
     if (chain.size() != pts.size())
-      throw_input_error(pd.source, fmt::format("BranchId {}: its {} points do not form one chain (point {} is "
-                                               "reached from neither end)",
-                                               b, pts.size(),
-                                               *std::find_if(pts.begin(), pts.end(), [&](size_t v) { return !seen[v]; })));
+      throw_input_error(
+          pd.source,
+          fmt::format("BranchId {}: its {} points do not form one chain (point {} is "
+                      "reached from neither end)",
+                      b, pts.size(), *std::find_if(pts.begin(), pts.end(), [&](size_t v) { return !seen[v]; })));
     if (path_arr && chain.size() > 1 &&
         path_arr->values[static_cast<size_t>(chain.back()) * static_cast<size_t>(path_arr->components)] <
             path_arr->values[static_cast<size_t>(chain.front()) * static_cast<size_t>(path_arr->components)])
@@ -646,11 +649,16 @@ const NumericArray* find_array(const std::vector<NumericArray>& arrays, std::str
 
 const char* kind_name(PolyKind k) {
   switch (k) {
-    case PolyKind::FlowireNetwork: return "flowire network";
-    case PolyKind::BranchSplitVmtk: return "VMTK branch-split centerlines";
-    case PolyKind::SimVascularRom: return "SimVascular ROM centerlines";
-    case PolyKind::OverlappingPaths: return "VMTK centerlines (overlapping paths)";
-    case PolyKind::Graph: return "polylines";
+    case PolyKind::FlowireNetwork:
+      return "flowire network";
+    case PolyKind::BranchSplitVmtk:
+      return "VMTK branch-split centerlines";
+    case PolyKind::SimVascularRom:
+      return "SimVascular ROM centerlines";
+    case PolyKind::OverlappingPaths:
+      return "VMTK centerlines (overlapping paths)";
+    case PolyKind::Graph:
+      return "polylines";
   }
   return "polylines";
 }
@@ -766,15 +774,21 @@ Centerlines polydata_to_centerlines(const PolyData& pd, double merge_tolerance) 
   validate(pd, radii);
   const bool vmtk = is_vmtk(pd);
   switch (kind) {
-    case PolyKind::BranchSplitVmtk: c.branches = branch_split_vmtk(pd, radii); break;
-    case PolyKind::SimVascularRom: c.branches = simvascular_rom(pd, radii); break;
+    case PolyKind::BranchSplitVmtk:
+      c.branches = branch_split_vmtk(pd, radii);
+      break;
+    case PolyKind::SimVascularRom:
+      c.branches = simvascular_rom(pd, radii);
+      break;
     case PolyKind::OverlappingPaths: {
       std::vector<Polyline> paths;
       for (size_t k = 0; k < pd.lines.size(); ++k) paths.push_back(make_polyline(pd, radii, cell_ids(pd, k, true), {}));
       c.branches = merge_paths(std::move(paths), merge_tolerance, pd.source);
       break;
     }
-    default: c.branches = graph_chains(pd, radii, vmtk); break;
+    default:
+      c.branches = graph_chains(pd, radii, vmtk);
+      break;
   }
   return c;
 }
@@ -805,14 +819,17 @@ std::optional<Network> polydata_to_network(const PolyData& pd) {
   for (size_t s = 0; s < ns; ++s) {
     const auto& ids = pd.lines[s];
     if (ids.size() != 2)
-      throw_input_error(src, fmt::format("line cell {}: a flowire network has 2 points per cell, not {}", s, ids.size()));
+      throw_input_error(src,
+                        fmt::format("line cell {}: a flowire network has 2 points per cell, not {}", s, ids.size()));
     for (const long long id : ids)
       if (id < 0 || static_cast<size_t>(id) >= nn)
-        throw_input_error(src, fmt::format("line cell {}: point id {} is out of range (the file has {} points)", s, id, nn));
+        throw_input_error(src,
+                          fmt::format("line cell {}: point id {} is out of range (the file has {} points)", s, id, nn));
     segs[s].node_from = static_cast<int>(ids[0]);
     segs[s].node_to = static_cast<int>(ids[1]);
     segs[s].radius = radius->values[s * static_cast<size_t>(radius->components)];
-    for (const auto& [arr, out] : {std::pair{radius_from, &segs[s].radius_from}, std::pair{radius_to, &segs[s].radius_to}}) {
+    for (const auto& [arr, out] :
+         {std::pair{radius_from, &segs[s].radius_from}, std::pair{radius_to, &segs[s].radius_to}}) {
       if (!arr) continue;
       *out = arr->values[s * static_cast<size_t>(arr->components)];
       if (!(*out > 0.0 && std::isfinite(*out)))
@@ -834,8 +851,9 @@ std::optional<Network> polydata_to_network(const PolyData& pd) {
   auto list = [&](const char* offsets_name, const char* values_name, size_t limit) {
     const auto* off = find_array(pd.field_data, offsets_name);
     const auto* val = find_array(pd.field_data, values_name);
-    if (!off || !val) throw_input_error(src, fmt::format("flowire network file without the field arrays {} and {}",
-                                                         offsets_name, values_name));
+    if (!off || !val)
+      throw_input_error(
+          src, fmt::format("flowire network file without the field arrays {} and {}", offsets_name, values_name));
     std::vector<std::vector<int>> out;
     for (size_t b = 0; b + 1 < off->values.size(); ++b) {
       const long long lo = int_at(*off, b), hi = int_at(*off, b + 1);

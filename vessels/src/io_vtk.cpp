@@ -4,13 +4,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <mutex>
-#include <cctype>
-#include <cstdlib>
 #include <string>
 
 #include "flowire/common/error.hpp"
@@ -86,8 +86,9 @@ namespace {
 class CaptureWindow : public vtkOutputWindow {
  public:
   static CaptureWindow* New();
-  vtkTypeMacro(CaptureWindow, vtkOutputWindow)
-  void DisplayText(const char* text) override { other.emplace_back(text ? text : ""); }
+  vtkTypeMacro(CaptureWindow, vtkOutputWindow) void DisplayText(const char* text) override {
+    other.emplace_back(text ? text : "");
+  }
   void DisplayErrorText(const char* text) override { errors.emplace_back(text ? text : ""); }
   void DisplayWarningText(const char* text) override { other.emplace_back(text ? text : ""); }
   void DisplayGenericWarningText(const char* text) override { other.emplace_back(text ? text : ""); }
@@ -96,12 +97,11 @@ class CaptureWindow : public vtkOutputWindow {
 };
 vtkStandardNewMacro(CaptureWindow)
 
-/// Installs a CaptureWindow and silences VTK's logger (which writes to stderr itself) for its
-/// lifetime.
-class CaptureGuard {
+    /// Installs a CaptureWindow and silences VTK's logger (which writes to stderr itself) for its
+    /// lifetime.
+    class CaptureGuard {
  public:
-  CaptureGuard()
-      : previous_(vtkOutputWindow::GetInstance()), verbosity_(vtkLogger::GetCurrentVerbosityCutoff()) {
+  CaptureGuard() : previous_(vtkOutputWindow::GetInstance()), verbosity_(vtkLogger::GetCurrentVerbosityCutoff()) {
     window_ = vtkSmartPointer<CaptureWindow>::New();
     vtkOutputWindow::SetInstance(window_);
     vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
@@ -249,8 +249,9 @@ PolyData read_vtk_polydata(const std::string& path) {
   vtkNew<vtkXMLPolyDataReader> reader;
   return run_reader(reader.GetPointer(), path, "VTK XML poly data");
 #else
-  throw_input_error(path, "this flowire was built without VTK (FLOWIRE_WITH_VTK=OFF): it cannot read .vtp "
-                          "files; convert the centerlines to legacy .vtk or flowire YAML");
+  throw_input_error(path,
+                    "this flowire was built without VTK (FLOWIRE_WITH_VTK=OFF): it cannot read .vtp "
+                    "files; convert the centerlines to legacy .vtk or flowire YAML");
 #endif
 }
 

@@ -21,12 +21,23 @@ std::string xml_escape(std::string_view s) {
   std::string out;
   for (const char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -64,7 +75,8 @@ std::string array_tag(const ArrayXml& a, bool field) {
                      field ? fmt::format(R"( NumberOfTuples="{}")", a.tuples) : std::string{}, a.offset);
 }
 
-void check_arrays(const std::vector<DataArray>& arrays, size_t n, const char* what, const std::set<std::string>& reserved) {
+void check_arrays(const std::vector<DataArray>& arrays, size_t n, const char* what,
+                  const std::set<std::string>& reserved) {
   std::set<std::string> names;
   for (const auto& a : arrays) {
     if (a.name.empty()) throw_usage_error(fmt::format("write_network_vtp: a {} array has no name", what));
@@ -178,7 +190,8 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
       R"(        <DataArray type="Float64" Name="Points" NumberOfComponents="3" format="appended" offset="{}"/>)",
       points_offset);
   x += "\n      </Points>\n      <Lines>\n";
-  x += fmt::format(R"(        <DataArray type="Int64" Name="connectivity" format="appended" offset="{}"/>)", conn_offset);
+  x += fmt::format(R"(        <DataArray type="Int64" Name="connectivity" format="appended" offset="{}"/>)",
+                   conn_offset);
   x += "\n";
   x += fmt::format(R"(        <DataArray type="Int64" Name="offsets" format="appended" offset="{}"/>)", offsets_offset);
   x += "\n      </Lines>\n    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
@@ -209,10 +222,18 @@ void write_network_yaml(const Network& net, const std::string& path) {
     std::string quoted = "\"";
     for (const char c : b.name) {
       switch (c) {
-        case '"': quoted += "\\\""; break;
-        case '\\': quoted += "\\\\"; break;
-        case '\n': quoted += "\\n"; break;
-        case '\t': quoted += "\\t"; break;
+        case '"':
+          quoted += "\\\"";
+          break;
+        case '\\':
+          quoted += "\\\\";
+          break;
+        case '\n':
+          quoted += "\\n";
+          break;
+        case '\t':
+          quoted += "\\t";
+          break;
         default:
           if (static_cast<unsigned char>(c) < 0x20) {
             quoted += fmt::format("\\x{:02x}", static_cast<int>(c));
@@ -225,8 +246,10 @@ void write_network_yaml(const Network& net, const std::string& path) {
     y += fmt::format("  - name: {}\n    points:\n", quoted);
     for (size_t k = 0; k < b.nodes.size(); ++k) {
       double r = 0.0;
-      if (k < b.segments.size()) r = net.segment(b.segments[k]).radius_from;
-      else if (k > 0 && k - 1 < b.segments.size()) r = net.segment(b.segments[k - 1]).radius_to;
+      if (k < b.segments.size())
+        r = net.segment(b.segments[k]).radius_from;
+      else if (k > 0 && k - 1 < b.segments.size())
+        r = net.segment(b.segments[k - 1]).radius_to;
       const auto& p = net.node(b.nodes[k]);
       y += fmt::format("      - [{}, {}, {}, {}]\n", p.x(), p.y(), p.z(), r);
     }
@@ -243,7 +266,8 @@ void write_network_yaml(const Network& net, const std::string& path) {
 
 void write_network(const Network& net, const std::string& path) {
   auto ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".vtp") return write_network_vtp(net, path);
   if (ext == ".yaml" || ext == ".yml") return write_network_yaml(net, path);
   throw_usage_error(fmt::format("{}: cannot write a network in this format (use .vtp or .yaml)", path));

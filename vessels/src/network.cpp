@@ -1,5 +1,5 @@
-#include "flowire/common/union_find.hpp"
 #include "flowire/vessels/network.hpp"
+#include "flowire/common/union_find.hpp"
 
 #include <fmt/format.h>
 
@@ -15,7 +15,6 @@
 namespace flowire::vessels {
 namespace {
 
-
 std::string branch_label(const Polyline& p, size_t index) {
   return p.name.empty() ? fmt::format("branch {}", index) : fmt::format("branch {} ('{}')", index, p.name);
 }
@@ -29,8 +28,7 @@ void validate_polyline(const Polyline& p, size_t bi, const std::string& src) {
   for (size_t i = 0; i < p.points.size(); ++i) {
     if (!p.points[i].allFinite())
       throw_input_error(src, fmt::format("{}, point {}: coordinate is not finite", label, i));
-    if (!std::isfinite(p.radii[i]))
-      throw_input_error(src, fmt::format("{}, point {}: radius is not finite", label, i));
+    if (!std::isfinite(p.radii[i])) throw_input_error(src, fmt::format("{}, point {}: radius is not finite", label, i));
     if (p.radii[i] <= 0.0)
       throw_input_error(src, fmt::format("{}, point {}: radius {} is not positive", label, i, p.radii[i]));
     if (i > 0 && (p.points[i] - p.points[i - 1]).norm() <= 1e-12 * std::max(1.0, p.points[i].norm()))
@@ -95,7 +93,8 @@ std::vector<double> cut_positions(const ArcLength& al, const BuildOptions& opt) 
     const double len = coarse[k + 1] - coarse[k];
     const double want = std::isfinite(hmax) ? std::ceil(len / hmax - 1e-9) : 1.0;
     if (want > 1e7)
-      throw_input_error(al.p.name, fmt::format("branch of length {} m would need {:.3g} segments of at most {} m", len, want, hmax));
+      throw_input_error(
+          al.p.name, fmt::format("branch of length {} m would need {:.3g} segments of at most {} m", len, want, hmax));
     const int pieces = std::max(1, static_cast<int>(want));
     for (int j = 1; j <= pieces; ++j) cuts.push_back(coarse[k] + len * j / pieces);
   }
@@ -272,12 +271,13 @@ void Network::finalize() {
     if (seg.radius_from <= 0.0) seg.radius_from = seg.radius;
     if (seg.radius_to <= 0.0) seg.radius_to = seg.radius;
     if (!std::isfinite(seg.radius_from) || !std::isfinite(seg.radius_to))
-      throw_input_error(source_, fmt::format("segment {}: end radius {} / {} is not finite", s, seg.radius_from,
-                                             seg.radius_to));
+      throw_input_error(source_,
+                        fmt::format("segment {}: end radius {} / {} is not finite", s, seg.radius_from, seg.radius_to));
     const double len = (nodes_[static_cast<size_t>(seg.node_to)] - nodes_[static_cast<size_t>(seg.node_from)]).norm();
     if (seg.length <= 0.0) seg.length = len;
     if (!(seg.length > 0.0) || !std::isfinite(seg.length))
-      throw_input_error(source_, fmt::format("segment {} (nodes {}-{}) has zero length", s, seg.node_from, seg.node_to));
+      throw_input_error(source_,
+                        fmt::format("segment {} (nodes {}-{}) has zero length", s, seg.node_from, seg.node_to));
     ++deg[static_cast<size_t>(seg.node_from)];
     ++deg[static_cast<size_t>(seg.node_to)];
   }

@@ -37,7 +37,8 @@ int SpatialIndex::build_bvh(int first, int count, int depth) {
   bvh_.emplace_back();
   Eigen::AlignedBox3d box;
   box.setEmpty();
-  for (int i = first; i < first + count; ++i) box.extend(seg_boxes_[static_cast<size_t>(order_[static_cast<size_t>(i)])]);
+  for (int i = first; i < first + count; ++i)
+    box.extend(seg_boxes_[static_cast<size_t>(order_[static_cast<size_t>(i)])]);
   bvh_[static_cast<size_t>(id)].box = box;
   constexpr int kLeaf = 4;
   if (count <= kLeaf || depth > 60) {
@@ -260,8 +261,8 @@ double SpatialIndex::wall_distance(const Vec3& p, const Location& loc, Neighbour
   return blended_distance(p, cand, loc, gradient, hessian);
 }
 
-double SpatialIndex::blended_distance(const Vec3& p, const std::vector<int>& cand, const Location& loc,
-                                      Vec3* gradient, Eigen::Matrix3d* hessian) const {
+double SpatialIndex::blended_distance(const Vec3& p, const std::vector<int>& cand, const Location& loc, Vec3* gradient,
+                                      Eigen::Matrix3d* hessian) const {
   using Mat3 = Eigen::Matrix3d;
   // Per candidate: the distance and axis first (cheap); the normal and curvature only for
   // the terms that enter the result (the minimum and those within the blend width of it).
@@ -301,8 +302,10 @@ double SpatialIndex::blended_distance(const Vec3& p, const std::vector<int>& can
   }
   auto finish = [&](const Term& tm, Vec3& g, Mat3* H) {
     g = tm.diff;
-    if (tm.n > 1e-300) g /= tm.n;
-    else g = tm.t.unitOrthogonal();
+    if (tm.n > 1e-300)
+      g /= tm.n;
+    else
+      g = tm.t.unitOrthogonal();
     if (!H) return;
     H->setZero();
     if (tm.n > 1e-300) {

@@ -55,8 +55,10 @@ int remove_end_caps(SurfaceMesh& mesh, const std::vector<VesselEnd>& ends) {
       }
       cap = near && std::abs(n.dot(e.direction)) >= cos_max * nn;
     }
-    if (cap) ++removed;
-    else kept.push_back(t);
+    if (cap)
+      ++removed;
+    else
+      kept.push_back(t);
   }
   if (removed > 0) {
     // A cap's rim triangles may be tilted beyond the normal test and be left as islands cut
@@ -76,8 +78,10 @@ int remove_end_caps(SurfaceMesh& mesh, const std::vector<VesselEnd>& ends) {
     for (const auto& t : kept) ++size[uf.find(vid[static_cast<size_t>(t[0])])];
     std::vector<std::array<int, 3>> big;
     for (const auto& t : kept) {
-      if (10 * size[uf.find(vid[static_cast<size_t>(t[0])])] >= kept.size()) big.push_back(t);
-      else ++removed;
+      if (10 * size[uf.find(vid[static_cast<size_t>(t[0])])] >= kept.size())
+        big.push_back(t);
+      else
+        ++removed;
     }
     kept = std::move(big);
   }
@@ -104,7 +108,8 @@ LumenSurface::LumenSurface(SurfaceMesh mesh, const std::vector<Vec3>& inside) : 
     for (int k : t)
       if (k < 0 || static_cast<size_t>(k) >= remap.size())
         throw_input_error(src, fmt::format("a triangle refers to vertex {} of {}", k, remap.size()));
-    std::array<int, 3> m{remap[static_cast<size_t>(t[0])], remap[static_cast<size_t>(t[1])], remap[static_cast<size_t>(t[2])]};
+    std::array<int, 3> m{remap[static_cast<size_t>(t[0])], remap[static_cast<size_t>(t[1])],
+                         remap[static_cast<size_t>(t[2])]};
     const Vec3 n = (v_[static_cast<size_t>(m[1])] - v_[static_cast<size_t>(m[0])])
                        .cross(v_[static_cast<size_t>(m[2])] - v_[static_cast<size_t>(m[0])]);
     if (m[0] == m[1] || m[1] == m[2] || m[0] == m[2] || !(n.norm() > 0.0)) {
@@ -113,7 +118,8 @@ LumenSurface::LumenSurface(SurfaceMesh mesh, const std::vector<Vec3>& inside) : 
     }
     tri_.push_back(m);
   }
-  if (tri_.empty()) throw_input_error(src, "the surface has no triangles (a lumen surface needs a closed or open tube of triangles)");
+  if (tri_.empty())
+    throw_input_error(src, "the surface has no triangles (a lumen surface needs a closed or open tube of triangles)");
   order_.resize(tri_.size());
   std::iota(order_.begin(), order_.end(), 0);
   bvh_.reserve(2 * tri_.size());
@@ -129,7 +135,9 @@ void LumenSurface::orient(const std::vector<Vec3>& inside) {
   std::unordered_map<std::uint64_t, std::vector<int>> edges;
   edges.reserve(3 * tri_.size());
   for (size_t f = 0; f < tri_.size(); ++f)
-    for (int k = 0; k < 3; ++k) edges[edge_key(tri_[f][static_cast<size_t>(k)], tri_[f][static_cast<size_t>((k + 1) % 3)])].push_back(static_cast<int>(f));
+    for (int k = 0; k < 3; ++k)
+      edges[edge_key(tri_[f][static_cast<size_t>(k)], tri_[f][static_cast<size_t>((k + 1) % 3)])].push_back(
+          static_cast<int>(f));
   // Does triangle f use the directed edge a → b?
   auto uses = [&](int f, int a, int b) {
     const auto& t = tri_[static_cast<size_t>(f)];
@@ -237,7 +245,8 @@ void LumenSurface::orient(const std::vector<Vec3>& inside) {
     for (const auto& r : rims) {
       const auto& c = centroid[uf.find(r[0])];
       const Vec3 m = c.first / c.second;
-      volume[static_cast<size_t>(r[2])] += m.dot(v_[static_cast<size_t>(r[1])].cross(v_[static_cast<size_t>(r[0])])) / 6.0;
+      volume[static_cast<size_t>(r[2])] +=
+          m.dot(v_[static_cast<size_t>(r[1])].cross(v_[static_cast<size_t>(r[0])])) / 6.0;
     }
     for (int p = 0; p < pieces; ++p)
       if (vote[static_cast<size_t>(p)] == 0.0) vote[static_cast<size_t>(p)] = volume[static_cast<size_t>(p)];
@@ -262,12 +271,14 @@ void LumenSurface::pseudonormals() {
     const Vec3 area_vector = 0.5 * (v_[static_cast<size_t>(t[1])] - v_[static_cast<size_t>(t[0])])
                                        .cross(v_[static_cast<size_t>(t[2])] - v_[static_cast<size_t>(t[0])]);
     const Vec3 n = area_vector.normalized();
-    const Vec3 centroid = (v_[static_cast<size_t>(t[0])] + v_[static_cast<size_t>(t[1])] + v_[static_cast<size_t>(t[2])]) / 3.0;
+    const Vec3 centroid =
+        (v_[static_cast<size_t>(t[0])] + v_[static_cast<size_t>(t[1])] + v_[static_cast<size_t>(t[2])]) / 3.0;
     face_normal_[f] = n;
     for (int k : t) max_vertex_reach_ = std::max(max_vertex_reach_, (v_[static_cast<size_t>(k)] - centroid).norm());
     plane_[f] = {centroid, n, area_vector.norm()};
     for (int k = 0; k < 3; ++k) {
-      const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)], c = t[static_cast<size_t>((k + 2) % 3)];
+      const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)],
+                c = t[static_cast<size_t>((k + 2) % 3)];
       const auto key = edge_key(a, b);
       auto [it, ins] = edge_sum.emplace(key, Vec3::Zero());
       it->second += n;
@@ -313,7 +324,8 @@ int LumenSurface::build(int first, int count) {
   centres.sizes().maxCoeff(&axis);
   auto centre = [&](int f) {
     const auto& t = tri_[static_cast<size_t>(f)];
-    return v_[static_cast<size_t>(t[0])][axis] + v_[static_cast<size_t>(t[1])][axis] + v_[static_cast<size_t>(t[2])][axis];
+    return v_[static_cast<size_t>(t[0])][axis] + v_[static_cast<size_t>(t[1])][axis] +
+           v_[static_cast<size_t>(t[2])][axis];
   };
   const int mid = first + count / 2;
   std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + first + count,
@@ -379,7 +391,9 @@ SurfaceDistance LumenSurface::finish(const Vec3& x, int f, const Vec3& c, Featur
   const auto& t = tri_[static_cast<size_t>(f)];
   Vec3 N = Vec3::Zero();
   switch (feat) {
-    case Feature::Face: N = face_normal_[static_cast<size_t>(f)]; break;
+    case Feature::Face:
+      N = face_normal_[static_cast<size_t>(f)];
+      break;
     case Feature::Edge:
       N = edge_normal_[static_cast<size_t>(f)][static_cast<size_t>(local)];
       r.open = edge_open_[static_cast<size_t>(f)][static_cast<size_t>(local)];

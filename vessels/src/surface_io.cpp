@@ -73,8 +73,8 @@ SurfaceMesh run(vtkAlgorithm* reader, vtkPolyData* (*output)(vtkAlgorithm*), con
     while (polys->GetNextCell(ids)) {
       // Polygons as fans (VTK polygons are convex by convention).
       for (vtkIdType k = 1; k + 1 < ids->GetNumberOfIds(); ++k)
-        m.triangles.push_back({static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(k)),
-                               static_cast<int>(ids->GetId(k + 1))});
+        m.triangles.push_back(
+            {static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(k)), static_cast<int>(ids->GetId(k + 1))});
     }
   }
   if (vtkCellArray* strips = pd->GetStrips()) {
@@ -112,7 +112,8 @@ SurfaceMesh read_surface(const std::string& path, double length_factor) {
   for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   if (ext != ".vtp" && ext != ".stl" && ext != ".obj")
     throw_input_error(path, fmt::format("unknown surface format '{}' (read: .vtp, .stl, .obj)", ext));
-  if (!(length_factor > 0.0) || !std::isfinite(length_factor)) throw_usage_error("read_surface: length_factor must be > 0");
+  if (!(length_factor > 0.0) || !std::isfinite(length_factor))
+    throw_usage_error("read_surface: length_factor must be > 0");
 #ifdef FLOWIRE_HAVE_VTK
   if (ext == ".vtp") {
     vtkNew<vtkXMLPolyDataReader> r;

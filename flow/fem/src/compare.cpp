@@ -126,7 +126,8 @@ double section_flow(const FieldSampler& fs, const Vec3& c, const Vec3& axis, dou
   return q;
 }
 
-double pressure_at_node(const TetMesh& mesh, const StokesSolution& sol, size_t n, const std::vector<std::array<int, 2>>& ev) {
+double pressure_at_node(const TetMesh& mesh, const StokesSolution& sol, size_t n,
+                        const std::vector<std::array<int, 2>>& ev) {
   const int v = mesh.vertex_index[n];
   if (v >= 0) return sol.pressure[static_cast<size_t>(v)];
   return 0.5 * (sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(ev[n][0])])] +
@@ -150,9 +151,8 @@ std::string sample_row(const Network& net, const SamplePoint& sp) {
   o.precision(10);
   o << csv_field(branch_label(net, sp.branch)) << ',' << sp.s << ',' << sp.x.x() << ',' << sp.x.y() << ',' << sp.x.z()
     << ',' << sp.pressure_network << ',' << sp.pressure_fem << ',' << sp.rel_diff << ',' << sp.pressure_fem_centre
-    << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ',' << (sp.near_junction ? 1 : 0) << ','
-    << sp.flow_network << ',' << sp.flow_fem << ',' << sp.rel_diff_flow << ',' << sp.radius_network << ','
-    << sp.radius_fem;
+    << ',' << sp.rel_diff_drop << ',' << sp.path_distance << ',' << (sp.near_junction ? 1 : 0) << ',' << sp.flow_network
+    << ',' << sp.flow_fem << ',' << sp.rel_diff_flow << ',' << sp.radius_network << ',' << sp.radius_fem;
   return o.str();
 }
 
@@ -168,7 +168,6 @@ std::string outlet_row(const OutletFlow& q) {
     << q.pressure_fem;
   return o.str();
 }
-
 
 std::string plot_script() {
   if (const char* env = std::getenv("FLOWIRE_FEM_PLOT_SCRIPT")) return env;
@@ -207,19 +206,22 @@ void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolutio
   // Edge nodes take the mean pressure of their two vertices (the P1 field).
   std::vector<std::array<int, 2>> ev(mesh.nodes.size(), {-1, -1});
   for (const auto& t : mesh.tets)
-    for (size_t e = 0; e < 6; ++e) ev[static_cast<size_t>(t[4 + e])] = {t[static_cast<size_t>(kTetEdges[e][0])], t[static_cast<size_t>(kTetEdges[e][1])]};
+    for (size_t e = 0; e < 6; ++e)
+      ev[static_cast<size_t>(t[4 + e])] = {t[static_cast<size_t>(kTetEdges[e][0])],
+                                           t[static_cast<size_t>(kTetEdges[e][1])]};
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream f(tmp);
     if (!f) throw_input_error(path, "cannot write");
     f.precision(10);
     f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.tets.size()
-      << "\">\n<PointData Scalars=\"pressure\" Vectors=\"velocity\">\n"
+      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\""
+      << mesh.tets.size() << "\">\n<PointData Scalars=\"pressure\" Vectors=\"velocity\">\n"
       << "<DataArray type=\"Float64\" Name=\"pressure\" format=\"ascii\">\n";
     for (size_t n = 0; n < mesh.nodes.size(); ++n) f << pressure_at_node(mesh, sol, n, ev) << '\n';
     f << "</DataArray>\n<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n";
     for (const Vec3& u : sol.velocity) f << u.x() << ' ' << u.y() << ' ' << u.z() << '\n';
-    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+         "format=\"ascii\">\n";
     for (const Vec3& x : mesh.nodes) f << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
     f << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
     // VTK_QUADRATIC_TETRA edge order: (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — the same as ours.
@@ -237,7 +239,8 @@ void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolutio
 
 BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, double t) {
   if (spec.inlets.size() != 1)
-    throw_input_error("fem", fmt::format("the comparison needs exactly one inlet; the flow has {}", spec.inlets.size()));
+    throw_input_error("fem",
+                      fmt::format("the comparison needs exactly one inlet; the flow has {}", spec.inlets.size()));
   BoundaryValues bv;
   const auto& in = spec.inlets.front();
   bv.inlet_node = in.node >= 0 ? in.node : net.widest_end();
@@ -270,7 +273,8 @@ BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, d
   for (int e : net.ends()) {
     if (e == bv.inlet_node) continue;
     if (std::none_of(bv.outlets.begin(), bv.outlets.end(), [&](const OutletValue& o) { return o.node == e; }))
-      throw_input_error("fem", fmt::format("network end node {} has no outlet condition (the FEM mesh opens every end)", e));
+      throw_input_error("fem",
+                        fmt::format("network end node {} has no outlet condition (the FEM mesh opens every end)", e));
   }
   bv.viscosity = spec.viscosity;
   bv.density = spec.density;
@@ -427,7 +431,8 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
         last = &sp;
       }
     if (first && last != first)
-      res.branches.push_back({b, first->pressure_network - last->pressure_network, first->pressure_fem - last->pressure_fem});
+      res.branches.push_back(
+          {b, first->pressure_network - last->pressure_network, first->pressure_fem - last->pressure_fem});
   }
   double qn_total = 0.0, qf_total = 0.0;
   for (int e : net.ends()) {
@@ -459,8 +464,10 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
   }
   for (const auto& o : res.outlets) {
     if (qn_total != 0.0 && qf_total != 0.0)
-      res.max_flow_split_error = std::max(res.max_flow_split_error, std::abs(o.flow_fem / qf_total - o.flow_network / qn_total));
-    if (o.flow_network != 0.0) res.max_flow_error = std::max(res.max_flow_error, std::abs(o.flow_fem / o.flow_network - 1.0));
+      res.max_flow_split_error =
+          std::max(res.max_flow_split_error, std::abs(o.flow_fem / qf_total - o.flow_network / qn_total));
+    if (o.flow_network != 0.0)
+      res.max_flow_error = std::max(res.max_flow_error, std::abs(o.flow_fem / o.flow_network - 1.0));
   }
   res.mesh_seconds = mesh.mesh_seconds;
   res.assemble_seconds = sol.assemble_seconds;
@@ -525,10 +532,10 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
       for (const auto* p : pts) o << fmt::format(" {:.2f} / {:.2f} |", p->radius_network * 1e3, p->radius_fem * 1e3);
       o << "\n\n";
     }
-    o << fmt::format("## Boundary\n\nInlet: network {:.5g} Pa, {:.5g} mL/s; FEM {:.5g} Pa, {:.5g} mL/s (the "
-                     "imposed one of pressure / flow is the same in both).\n\n",
-                     res.inlet_pressure_network, res.inlet_flow_network * 1e6, res.inlet_pressure_fem,
-                     res.inlet_flow_fem * 1e6);
+    o << fmt::format(
+        "## Boundary\n\nInlet: network {:.5g} Pa, {:.5g} mL/s; FEM {:.5g} Pa, {:.5g} mL/s (the "
+        "imposed one of pressure / flow is the same in both).\n\n",
+        res.inlet_pressure_network, res.inlet_flow_network * 1e6, res.inlet_pressure_fem, res.inlet_flow_fem * 1e6);
     o << "## Outlet flows\n\n| outlet node | network (mL/s) | FEM (mL/s) | difference | network p (Pa) | FEM p (Pa) "
          "|\n|---|---|---|---|---|---|\n";
     for (const auto& q : res.outlets)
@@ -539,11 +546,12 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
     for (const auto& d : res.branches)
       o << fmt::format("| {} | {:.5g} | {:.5g} | {:+.2f}% |\n", branch_label(net, d.branch), d.drop_network, d.drop_fem,
                        d.drop_network != 0.0 ? 100 * (d.drop_fem / d.drop_network - 1.0) : 0.0);
-    o << fmt::format("\nLargest difference away from junctions: {:.2f}% of the drop; near junctions: {:.2f}%. "
-                     "Largest flow-split difference: {:.3f}%.\n\nTimings: mesh {:.2f} s, assembly {:.2f} s, solve "
-                     "{:.2f} s.\n",
-                     100 * res.max_rel_diff_drop_away, 100 * res.max_rel_diff_drop_junction,
-                     100 * res.max_flow_split_error, res.mesh_seconds, res.assemble_seconds, res.solve_seconds);
+    o << fmt::format(
+        "\nLargest difference away from junctions: {:.2f}% of the drop; near junctions: {:.2f}%. "
+        "Largest flow-split difference: {:.3f}%.\n\nTimings: mesh {:.2f} s, assembly {:.2f} s, solve "
+        "{:.2f} s.\n",
+        100 * res.max_rel_diff_drop_away, 100 * res.max_rel_diff_drop_junction, 100 * res.max_flow_split_error,
+        res.mesh_seconds, res.assemble_seconds, res.solve_seconds);
     write_text_atomically(dir / "fem_compare.md", o.str());
   }
   if (opt.write_vtu) write_vtu((dir / "fem.vtu").string(), mesh, sol);
@@ -588,7 +596,8 @@ std::vector<StokesSolution> integrate_frames(const TetMesh& mesh, const StokesOp
                                              PulsatileResult& out) {
   if (!(dyn.period > 0.0)) throw_usage_error("fem: a dynamic series needs a period > 0");
   if (!dyn.values_at) throw_usage_error("fem: a dynamic series needs the boundary values at any time");
-  if (dyn.steps_per_period < 1 || dyn.max_periods < 1) throw_usage_error("fem: steps per period and periods must be >= 1");
+  if (dyn.steps_per_period < 1 || dyn.max_periods < 1)
+    throw_usage_error("fem: steps per period and periods must be >= 1");
   const auto n = static_cast<int>(nframes);
   const int m = (dyn.steps_per_period + n - 1) / n, steps = n * m;
   const double dt = dyn.period / steps;
@@ -657,9 +666,10 @@ std::vector<StokesSolution> integrate_frames(const TetMesh& mesh, const StokesOp
     }
     last_flows = flows;
   }
-  throw_numerical_error(fmt::format("fem: the dynamic series is not periodic after {} periods (change {:.3g} over "
-                                    "the last one, tolerance {:.3g})",
-                                    dyn.max_periods, out.periodic_change, dyn.periodic_tolerance));
+  throw_numerical_error(
+      fmt::format("fem: the dynamic series is not periodic after {} periods (change {:.3g} over "
+                  "the last one, tolerance {:.3g})",
+                  dyn.max_periods, out.periodic_change, dyn.periodic_tolerance));
 }
 
 void accumulate(PulsatileResult& p, const CompareResult& r) {

@@ -21,8 +21,7 @@ std::vector<QuadPoint> make_tet_rule() {
   // Orbit of (a, a, b, b) with b = 1/2 - a: 6 points (barycentric; xi = L1, L2, L3).
   auto orbit6 = [&q](double a, double w) {
     const double b = 0.5 - a;
-    const double l[6][4] = {{a, a, b, b}, {a, b, a, b}, {a, b, b, a},
-                            {b, a, a, b}, {b, a, b, a}, {b, b, a, a}};
+    const double l[6][4] = {{a, a, b, b}, {a, b, a, b}, {a, b, b, a}, {b, a, a, b}, {b, a, b, a}, {b, b, a, a}};
     for (const auto& p : l) q.push_back({{p[1], p[2], p[3]}, w});
   };
   orbit4(0.0927352503108912264, 0.01224884051939365826);

@@ -22,13 +22,13 @@
 #include "mesh_detail.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
+#include <vtkAlgorithm.h>
 #include <vtkCellArray.h>
 #include <vtkCleanPolyData.h>
 #include <vtkNew.h>
 #include <vtkOBJReader.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
-#include <vtkAlgorithm.h>
 #include <vtkPolyDataReader.h>
 #include <vtkSTLReader.h>
 #include <vtkSmartPointer.h>
@@ -39,7 +39,9 @@
 namespace flowire::fem {
 namespace {
 
-std::string mm(const Vec3& x) { return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z()); }
+std::string mm(const Vec3& x) {
+  return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z());
+}
 
 std::string lower_extension(const std::string& path) {
   std::string e = std::filesystem::path(path).extension().string();
@@ -57,7 +59,8 @@ double signed_volume(const SurfaceMesh& s) {
   double v = 0.0;
   for (const auto& t : s.triangles)
     v += s.points[static_cast<size_t>(t[0])].dot(
-             s.points[static_cast<size_t>(t[1])].cross(s.points[static_cast<size_t>(t[2])])) / 6.0;
+             s.points[static_cast<size_t>(t[1])].cross(s.points[static_cast<size_t>(t[2])])) /
+         6.0;
   return v;
 }
 
@@ -106,7 +109,8 @@ int clip_end(SurfaceMesh& s, const Vec3& origin, const Vec3& out, double reach, 
     if (fresh) {
       const double t = d[static_cast<size_t>(a)] / (d[static_cast<size_t>(a)] - d[static_cast<size_t>(b)]);
       it->second = static_cast<int>(s.points.size());
-      const Vec3 x = s.points[static_cast<size_t>(a)] + t * (s.points[static_cast<size_t>(b)] - s.points[static_cast<size_t>(a)]);
+      const Vec3 x =
+          s.points[static_cast<size_t>(a)] + t * (s.points[static_cast<size_t>(b)] - s.points[static_cast<size_t>(a)]);
       s.points.push_back(x);
     }
     return it->second;
@@ -331,7 +335,8 @@ LumenSurface prepare_lumen(const Network& net, SurfaceMesh s, const LumenOptions
     c.info.radius = std::sqrt(area.norm() / std::numbers::pi);
     c.info.normal = area.normalized();
     double dev = 0.0;
-    for (int v : loop) dev = std::max(dev, std::abs((out.points[static_cast<size_t>(v)] - centroid).dot(c.info.normal)));
+    for (int v : loop)
+      dev = std::max(dev, std::abs((out.points[static_cast<size_t>(v)] - centroid).dot(c.info.normal)));
     c.info.planarity = dev / c.info.radius;
     c.info.loop_points = static_cast<int>(n);
     c.info.was_capped = was_capped;
@@ -541,7 +546,8 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
 }  // namespace
 
 TetMesh build_mesh(const Network& net, const LumenSurface& lumen, const MeshOptions& opt) {
-  return detail::build_shared([&] { return detail::guarded(lumen.surface.source, [&] { return mesh_lumen(net, lumen, opt); }); });
+  return detail::build_shared(
+      [&] { return detail::guarded(lumen.surface.source, [&] { return mesh_lumen(net, lumen, opt); }); });
 }
 
 }  // namespace flowire::fem

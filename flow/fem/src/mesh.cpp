@@ -8,8 +8,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -140,7 +140,8 @@ Geometry make_geometry(const Network& net) {
       const double turn = std::acos(c);
       if (turn > 170.0 * std::numbers::pi / 180.0)
         throw_input_error(at, fmt::format("node {}: the centerline turns back by {:.0f} deg; a tube cannot "
-                                          "be built there", n, turn * 180.0 / std::numbers::pi));
+                                          "be built there",
+                                          n, turn * 180.0 / std::numbers::pi));
       const double reach = rmax * std::tan(0.5 * turn);
       const double lmin = std::min(piece_length(net, g.pieces[static_cast<size_t>(ps[0])]),
                                    piece_length(net, g.pieces[static_cast<size_t>(ps[1])]));
@@ -148,9 +149,9 @@ Geometry make_geometry(const Network& net) {
         throw_input_error(at, fmt::format("node {} of {}: radius {:.3g} mm too large for the bend of "
                                           "{:.0f} deg (the inner wall folds {:.3g} mm from the node, the "
                                           "adjacent straight part is {:.3g} mm); smooth the centerline or "
-                                          "use a smaller radius", n,
-                                          branch_name(net, g.pieces[static_cast<size_t>(ps[0])].branch),
-                                          rmax * 1e3, turn * 180.0 / std::numbers::pi, reach * 1e3, lmin * 1e3));
+                                          "use a smaller radius",
+                                          n, branch_name(net, g.pieces[static_cast<size_t>(ps[0])].branch), rmax * 1e3,
+                                          turn * 180.0 / std::numbers::pi, reach * 1e3, lmin * 1e3));
     }
     g.sphere_at[static_cast<size_t>(n)] = rmax;
     g.spheres.push_back({n, rmax});
@@ -166,8 +167,8 @@ Geometry make_geometry(const Network& net) {
     if (rs > 0.0 && len <= 1.05 * rs)
       throw_input_error(at, fmt::format("end node {} of {}: the end piece ({:.3g} mm) is not longer than the "
                                         "junction sphere at node {} ({:.3g} mm radius), which would cut the "
-                                        "end face; lengthen the vessel", n, branch_name(net, pc.branch),
-                                        len * 1e3, other, rs * 1e3));
+                                        "end face; lengthen the vessel",
+                                        n, branch_name(net, pc.branch), len * 1e3, other, rs * 1e3));
   }
   // Self-intersection: pieces without a common node that come closer than r1 + r2 while
   // the path between them along the network is long.
@@ -216,13 +217,12 @@ Geometry make_geometry(const Network& net) {
             path = std::min(path, dist[static_cast<size_t>(local[u]) * m + static_cast<size_t>(local[v])]);
         if (path > 2.0 * rr)
           throw_input_error(at, fmt::format("{} and {} intersect: their axes come {:.3g} mm close, less than "
-                                            "the sum of their radii ({:.3g} mm)", branch_name(net, p.branch),
-                                            branch_name(net, q.branch), d * 1e3, rr * 1e3));
+                                            "the sum of their radii ({:.3g} mm)",
+                                            branch_name(net, p.branch), branch_name(net, q.branch), d * 1e3, rr * 1e3));
       }
   }
   return g;
 }
-
 
 /// Reference coordinates of the nodes of a gmsh element type -> our local node order.
 std::vector<int> local_order(int gmsh_type, int dim) {
@@ -234,7 +234,8 @@ std::vector<int> local_order(int gmsh_type, int dim) {
   std::vector<std::array<double, 3>> ref(static_cast<size_t>(nn));
   std::vector<std::array<double, 3>> vert = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   for (int k = 0; k < nn; ++k)
-    for (int c = 0; c < 3; ++c) ref[static_cast<size_t>(k)][c] = c < dim ? coords[static_cast<size_t>(k * dim + c)] : 0.0;
+    for (int c = 0; c < 3; ++c)
+      ref[static_cast<size_t>(k)][c] = c < dim ? coords[static_cast<size_t>(k * dim + c)] : 0.0;
   std::vector<std::array<double, 3>> ours;
   for (int i = 0; i < nv; ++i) ours.push_back(vert[static_cast<size_t>(i)]);
   if (dim == 3) {
@@ -251,13 +252,13 @@ std::vector<int> local_order(int gmsh_type, int dim) {
     }
   }
   if (static_cast<size_t>(nn) != ours.size())
-    throw_numerical_error(fmt::format("fem mesh: gmsh element type {} has {} nodes, expected {}", gmsh_type, nn, ours.size()));
+    throw_numerical_error(
+        fmt::format("fem mesh: gmsh element type {} has {} nodes, expected {}", gmsh_type, nn, ours.size()));
   std::vector<int> perm(ours.size(), -1);  // perm[our k] = gmsh k
   for (size_t k = 0; k < ours.size(); ++k)
     for (int j = 0; j < nn; ++j) {
       const auto& r = ref[static_cast<size_t>(j)];
-      if (std::abs(r[0] - ours[k][0]) + std::abs(r[1] - ours[k][1]) + std::abs(r[2] - ours[k][2]) < 1e-9)
-        perm[k] = j;
+      if (std::abs(r[0] - ours[k][0]) + std::abs(r[1] - ours[k][1]) + std::abs(r[2] - ours[k][2]) < 1e-9) perm[k] = j;
     }
   for (int p : perm)
     if (p < 0) throw_numerical_error("fem mesh: unexpected gmsh reference element");
@@ -268,7 +269,8 @@ double tet_volume_linear(const TetMesh& m, const std::array<int, 10>& t) {
   const Vec3& x0 = m.nodes[static_cast<size_t>(t[0])];
   return (m.nodes[static_cast<size_t>(t[1])] - x0)
              .cross(m.nodes[static_cast<size_t>(t[2])] - x0)
-             .dot(m.nodes[static_cast<size_t>(t[3])] - x0) / 6.0;
+             .dot(m.nodes[static_cast<size_t>(t[3])] - x0) /
+         6.0;
 }
 
 }  // namespace
@@ -300,8 +302,6 @@ void tag_groups_and_set_options(int volume, const char* volume_name, const std::
   gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-3);
 }
 
-
-
 bool set_size_bounds(double mesh_size, double size_factor) {
   if (mesh_size > 0.0) {
     gmsh::option::setNumber("Mesh.MeshSizeMin", mesh_size);
@@ -319,8 +319,8 @@ namespace {
 
 using detail::extract_mesh;
 using detail::generate;
-using detail::tag_groups_and_set_options;
 using detail::GmshModel;
+using detail::tag_groups_and_set_options;
 
 TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& opt) {
   const auto start = std::chrono::steady_clock::now();
@@ -357,8 +357,8 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
   gmsh::vectorpair vols, surfs;
   gmsh::model::getEntities(vols, 3);
   if (vols.size() != 1)
-    throw_input_error(at, fmt::format("the fused lumen is {} separate volumes, not one; is the network connected?",
-                                      vols.size()));
+    throw_input_error(
+        at, fmt::format("the fused lumen is {} separate volumes, not one; is the network connected?", vols.size()));
   gmsh::model::getEntities(surfs, 2);
   // End faces: planar faces centred on the end nodes.
   std::vector<int> surf_group(surfs.size(), 0);
@@ -377,7 +377,8 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
     }
     if (found < 0)
       throw_input_error(at, fmt::format("end node {}: its end face was not found after fusing (another vessel "
-                                        "or a junction sphere covers it)", node));
+                                        "or a junction sphere covers it)",
+                                        node));
     surf_group[static_cast<size_t>(found)] = static_cast<int>(gi);
   }
   tag_groups_and_set_options(vols[0].second, "lumen", mesh.groups, surfs, surf_group, opt.algorithm3d);
@@ -447,7 +448,8 @@ void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vecto
   mesh.tets.resize(etags.size());
   for (size_t e = 0; e < etags.size(); ++e) {
     auto& t = mesh.tets[e];
-    for (int k = 0; k < 10; ++k) t[static_cast<size_t>(k)] = node_index(enodes[e * 10 + static_cast<size_t>(tet_perm[static_cast<size_t>(k)])]);
+    for (int k = 0; k < 10; ++k)
+      t[static_cast<size_t>(k)] = node_index(enodes[e * 10 + static_cast<size_t>(tet_perm[static_cast<size_t>(k)])]);
     if (tet_volume_linear(mesh, t) < 0.0) {
       // Swap vertices 1 and 2: edges (0,1)<->(0,2), (1,3)<->(2,3); (1,2) stays.
       std::swap(t[1], t[2]);
@@ -515,11 +517,9 @@ void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vecto
     if (!o) throw_numerical_error(fmt::format("{}: a boundary triangle has no tetrahedron", at));
 }
 
-
 }  // namespace detail
 
 namespace {
-
 
 /// Distance from x to the segment [a, b] and the axial parameter t of its projection
 /// (t in units of length from a, unclamped).
@@ -622,8 +622,8 @@ TetMesh mesh_domain(const ShapeDomain& dom, const MeshOptions& opt) {
   gmsh::vectorpair vols, surfs;
   gmsh::model::getEntities(vols, 3);
   if (vols.size() != 1)
-    throw_input_error(at, fmt::format("the fluid is {} separate volumes, not one (does a hole cut the domain in two?)",
-                                      vols.size()));
+    throw_input_error(
+        at, fmt::format("the fluid is {} separate volumes, not one (does a hole cut the domain in two?)", vols.size()));
   gmsh::model::getEntities(surfs, 2);
   // A point of each surface (the middle of its parameter range: on the underlying
   // plane or cylinder even where the face is trimmed) names the solid face it lies on.
@@ -644,8 +644,9 @@ TetMesh mesh_domain(const ShapeDomain& dom, const MeshOptions& opt) {
       if (f >= 0) group = std::max(0, sol.face_group[static_cast<size_t>(f)]);
     }
     if (group == -2)
-      throw_input_error(at, fmt::format("a face of the fluid (near {:.4g}, {:.4g}, {:.4g}) lies on no face of the solids",
-                                        x.x(), x.y(), x.z()));
+      throw_input_error(
+          at, fmt::format("a face of the fluid (near {:.4g}, {:.4g}, {:.4g}) lies on no face of the solids", x.x(),
+                          x.y(), x.z()));
     surf_group[k] = group;
     used[static_cast<size_t>(group)] = 1;
   }
@@ -754,13 +755,9 @@ TetMesh build_shared(const std::function<TetMesh()>& build) {
   return mesh;
 }
 
-
 }  // namespace detail
 
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 int TetMesh::group_named(const std::string& name) const {
   for (size_t g = 0; g < groups.size(); ++g)

@@ -65,8 +65,8 @@ std::vector<Vec3> inlet_shape(const TetMesh& mesh, int g, const std::function<Ve
 struct BoundarySystem {
   const TetMesh& mesh;
   std::span<const GroupCondition> cond;
-  int fixed = -1;              // group with a prescribed velocity shape, or -1
-  std::vector<int> unknown;    // groups, `fixed` (if any) first
+  int fixed = -1;            // group with a prescribed velocity shape, or -1
+  std::vector<int> unknown;  // groups, `fixed` (if any) first
 
   /// The pressure of group g in field x: its imposed pressure, or for the fixed group
   /// the mean of the pressure field over it.
@@ -78,9 +78,12 @@ struct BoundarySystem {
     const auto& c = cond[static_cast<size_t>(g)];
     const double q = x.group_flow[static_cast<size_t>(g)];
     switch (c.type) {
-      case GroupCondition::Type::Pressure: return pressure(x, g);
-      case GroupCondition::Type::Flow: return q;
-      case GroupCondition::Type::Resistance: return pressure(x, g) - c.resistance * q;
+      case GroupCondition::Type::Pressure:
+        return pressure(x, g);
+      case GroupCondition::Type::Flow:
+        return q;
+      case GroupCondition::Type::Resistance:
+        return pressure(x, g) - c.resistance * q;
     }
     return 0.0;
   }
@@ -198,12 +201,14 @@ double inlet_reynolds(const TetMesh& mesh, const StokesSolution& sol, double rho
 
 }  // namespace
 
-StokesSolution solve_navier_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond, const StokesOptions& opt) {
+StokesSolution solve_navier_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond,
+                                   const StokesOptions& opt) {
   if (!(opt.density >= 0.0) || !std::isfinite(opt.density)) throw_usage_error("fem: density must be >= 0");
   if (!(opt.backflow >= 0.0)) throw_usage_error("fem: the backflow coefficient must be >= 0");
   if (opt.solver != LinearSolver::Mumps)
-    throw_usage_error("fem: Navier–Stokes needs the direct solver (mumps): the fieldsplit preconditioner's Schur "
-                      "approximation (the pressure mass matrix) ignores convection");
+    throw_usage_error(
+        "fem: Navier–Stokes needs the direct solver (mumps): the fieldsplit preconditioner's Schur "
+        "approximation (the pressure mass matrix) ignores convection");
   BoundarySystem bs{mesh, cond, -1, {}};
   if (opt.inlet == InletCondition::Profile) {
     for (size_t g = 0; g < mesh.groups.size(); ++g)
@@ -239,7 +244,8 @@ StokesSolution solve_navier_stokes(const TetMesh& mesh, std::span<const GroupCon
     NsState start = state;
     start.x.velocity = guess->velocity;
     start.x.pressure = guess->pressure;
-    for (int g : bs.unknown) start.x.group_pressure[static_cast<size_t>(g)] = guess->group_pressure[static_cast<size_t>(g)];
+    for (int g : bs.unknown)
+      start.x.group_pressure[static_cast<size_t>(g)] = guess->group_pressure[static_cast<size_t>(g)];
     if (sh) {
       // The inlet velocity must be a multiple of the shape: the least-squares amplitude.
       double uw = 0.0, ww = 0.0;

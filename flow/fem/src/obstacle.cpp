@@ -30,12 +30,13 @@ using Kind = BoundaryGroup::Kind;
 ShapeDomain dfg_3d_1z_domain(const ObstacleMesh& sizes) {
   ShapeDomain d;
   d.name = "fem geometry dfg_3d_1z";
-  d.groups = {{Kind::Wall, -1, "wall"}, {Kind::Wall, -1, "obstacle"}, {Kind::Inlet, -1, "inlet"},
-              {Kind::Outlet, -1, "outlet"}};
+  d.groups = {
+      {Kind::Wall, -1, "wall"}, {Kind::Wall, -1, "obstacle"}, {Kind::Inlet, -1, "inlet"}, {Kind::Outlet, -1, "outlet"}};
   d.outer = Solid::box(Vec3(0, 0, 0), Vec3(kLength, kHeight, kHeight));
   d.outer.face_group = {2, 3, 0, 0, 0, 0};
   // The cylinder reaches past the floor and the ceiling: the cut leaves no coincident faces.
-  Solid cyl = Solid::cylinder(Vec3(kAxisX, kAxisY, -0.1 * kHeight), Vec3(kAxisX, kAxisY, 1.1 * kHeight), 0.5 * kDiameter);
+  Solid cyl =
+      Solid::cylinder(Vec3(kAxisX, kAxisY, -0.1 * kHeight), Vec3(kAxisX, kAxisY, 1.1 * kHeight), 0.5 * kDiameter);
   cyl.face_group = {1, -1, -1, -1, -1, -1};
   cyl.mesh_size = sizes.obstacle_mesh_size;
   d.holes.push_back(cyl);
@@ -48,12 +49,13 @@ ShapeDomain wire_in_tube_domain(double tube_radius, double length, double wire_r
                                 const ObstacleMesh& sizes) {
   ShapeDomain d;
   d.name = across ? "wire across a tube" : "wire along a tube";
-  d.groups = {{Kind::Wall, -1, "wall"}, {Kind::Wall, -1, "obstacle"}, {Kind::Inlet, -1, "inlet"},
-              {Kind::Outlet, -1, "outlet"}};
+  d.groups = {
+      {Kind::Wall, -1, "wall"}, {Kind::Wall, -1, "obstacle"}, {Kind::Inlet, -1, "inlet"}, {Kind::Outlet, -1, "outlet"}};
   d.outer = Solid::cylinder(Vec3(0, 0, 0), Vec3(length, 0, 0), tube_radius);
   d.outer.face_group = {0, 2, 3, -1, -1, -1};
-  Solid wire = across ? Solid::cylinder(Vec3(wire_x, -1.2 * tube_radius, 0), Vec3(wire_x, 1.2 * tube_radius, 0), wire_radius)
-                      : Solid::cylinder(Vec3(-0.1 * length, 0, 0), Vec3(1.1 * length, 0, 0), wire_radius);
+  Solid wire =
+      across ? Solid::cylinder(Vec3(wire_x, -1.2 * tube_radius, 0), Vec3(wire_x, 1.2 * tube_radius, 0), wire_radius)
+             : Solid::cylinder(Vec3(-0.1 * length, 0, 0), Vec3(1.1 * length, 0, 0), wire_radius);
   wire.face_group = {1, -1, -1, -1, -1, -1};
   wire.mesh_size = sizes.obstacle_mesh_size;
   d.holes.push_back(wire);
@@ -65,9 +67,10 @@ ShapeDomain wire_in_tube_domain(double tube_radius, double length, double wire_r
 ShapeDomain wire_along_tube_domain(double tube_radius, double length, double wire_radius, double offset,
                                    const ObstacleMesh& sizes) {
   if (!(wire_radius > 0.0) || !(offset >= 0.0) || !(offset + wire_radius < tube_radius))
-    throw_usage_error(fmt::format("wire_along_tube_domain: a wire of radius {} at offset {} does not fit in a tube of "
-                                  "radius {}",
-                                  wire_radius, offset, tube_radius));
+    throw_usage_error(
+        fmt::format("wire_along_tube_domain: a wire of radius {} at offset {} does not fit in a tube of "
+                    "radius {}",
+                    wire_radius, offset, tube_radius));
   ShapeDomain d = wire_in_tube_domain(tube_radius, length, wire_radius, false, 0.0, sizes);
   d.holes.front() = Solid::cylinder(Vec3(-0.1 * length, offset, 0), Vec3(1.1 * length, offset, 0), wire_radius);
   d.holes.front().face_group = {1, -1, -1, -1, -1, -1};

@@ -18,7 +18,8 @@ FieldSampler::FieldSampler(const TetMesh& mesh, const StokesSolution& solution) 
   // About two tetrahedra per bucket on average.
   const double vol = ext.prod();
   const double target = std::cbrt(vol / std::max(1.0, 0.5 * mesh.num_tets()));
-  for (int d = 0; d < 3; ++d) dims_[static_cast<size_t>(d)] = std::clamp(static_cast<int>(std::ceil(ext[d] / target)), 1, 512);
+  for (int d = 0; d < 3; ++d)
+    dims_[static_cast<size_t>(d)] = std::clamp(static_cast<int>(std::ceil(ext[d] / target)), 1, 512);
   lo_ = lo;
   cell_ = Vec3(ext[0] / dims_[0], ext[1] / dims_[1], ext[2] / dims_[2]);
   const size_t nb = static_cast<size_t>(dims_[0]) * static_cast<size_t>(dims_[1]) * static_cast<size_t>(dims_[2]);
@@ -29,8 +30,10 @@ FieldSampler::FieldSampler(const TetMesh& mesh, const StokesSolution& solution) 
       th = th.cwiseMax(mesh.nodes[static_cast<size_t>(n)]);
     }
     for (int d = 0; d < 3; ++d) {
-      a[static_cast<size_t>(d)] = std::clamp(static_cast<int>(std::floor((tl[d] - lo_[d]) / cell_[d])), 0, dims_[static_cast<size_t>(d)] - 1);
-      b[static_cast<size_t>(d)] = std::clamp(static_cast<int>(std::floor((th[d] - lo_[d]) / cell_[d])), 0, dims_[static_cast<size_t>(d)] - 1);
+      a[static_cast<size_t>(d)] =
+          std::clamp(static_cast<int>(std::floor((tl[d] - lo_[d]) / cell_[d])), 0, dims_[static_cast<size_t>(d)] - 1);
+      b[static_cast<size_t>(d)] =
+          std::clamp(static_cast<int>(std::floor((th[d] - lo_[d]) / cell_[d])), 0, dims_[static_cast<size_t>(d)] - 1);
     }
   };
   offset_.assign(nb + 1, 0);
@@ -49,7 +52,8 @@ FieldSampler::FieldSampler(const TetMesh& mesh, const StokesSolution& solution) 
     for (int i = a[0]; i <= b[0]; ++i)
       for (int j = a[1]; j <= b[1]; ++j)
         for (int k = a[2]; k <= b[2]; ++k)
-          items_[static_cast<size_t>(fill[static_cast<size_t>((i * dims_[1] + j) * dims_[2] + k)]++)] = static_cast<int>(e);
+          items_[static_cast<size_t>(fill[static_cast<size_t>((i * dims_[1] + j) * dims_[2] + k)]++)] =
+              static_cast<int>(e);
   }
 }
 
@@ -114,7 +118,8 @@ std::optional<PointValue> FieldSampler::at(const Vec3& x, double tolerance) cons
   const auto& t = mesh_.tets[static_cast<size_t>(e)];
   for (int i = 0; i < 10; ++i) v.velocity += phi[i] * sol_.velocity[static_cast<size_t>(t[static_cast<size_t>(i)])];
   for (int l = 0; l < 4; ++l)
-    v.pressure += psi[l] * sol_.pressure[static_cast<size_t>(mesh_.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
+    v.pressure +=
+        psi[l] * sol_.pressure[static_cast<size_t>(mesh_.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
   return v;
 }
 

@@ -22,22 +22,24 @@ void add_scaled(StokesSolution& sol, double c, const StokesSolution& other) {
 
 void check_conditions(const TetMesh& mesh, std::span<const GroupCondition> cond) {
   if (cond.size() != mesh.groups.size())
-    throw_usage_error(fmt::format("fem: {} boundary conditions given for {} boundary groups", cond.size(),
-                                  mesh.groups.size()));
+    throw_usage_error(
+        fmt::format("fem: {} boundary conditions given for {} boundary groups", cond.size(), mesh.groups.size()));
   bool level = false;
   for (size_t g = 0; g < cond.size(); ++g) {
     if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
     const auto& c = cond[g];
     const double vals[3] = {c.pressure, c.flow, c.resistance};
     for (double v : vals)
-      if (!std::isfinite(v)) throw_usage_error(fmt::format("fem: boundary value of {} is not finite", mesh.groups[g].name));
+      if (!std::isfinite(v))
+        throw_usage_error(fmt::format("fem: boundary value of {} is not finite", mesh.groups[g].name));
     if (c.type == GroupCondition::Type::Resistance && c.resistance < 0.0)
       throw_usage_error(fmt::format("fem: negative resistance {} on {}", c.resistance, mesh.groups[g].name));
     if (c.type != GroupCondition::Type::Flow) level = true;
   }
   if (!level)
-    throw_usage_error("fem: every open boundary has a prescribed flow, which leaves the pressure level undetermined; "
-                      "give at least one a pressure or a resistance");
+    throw_usage_error(
+        "fem: every open boundary has a prescribed flow, which leaves the pressure level undetermined; "
+        "give at least one a pressure or a resistance");
 }
 
 void split_conditions(const TetMesh& mesh, std::span<const GroupCondition> cond, std::vector<int>& unknown,
@@ -46,8 +48,10 @@ void split_conditions(const TetMesh& mesh, std::span<const GroupCondition> cond,
   known.assign(mesh.groups.size(), 0.0);
   for (size_t g = 0; g < mesh.groups.size(); ++g) {
     if (mesh.groups[g].kind == BoundaryGroup::Kind::Wall) continue;
-    if (cond[g].type == GroupCondition::Type::Pressure) known[g] = cond[g].pressure;
-    else unknown.push_back(static_cast<int>(g));
+    if (cond[g].type == GroupCondition::Type::Pressure)
+      known[g] = cond[g].pressure;
+    else
+      unknown.push_back(static_cast<int>(g));
   }
 }
 
@@ -69,7 +73,8 @@ double max_abs(const std::vector<Vec3>& v) {
   return m;
 }
 
-StokesSolution solve_linear_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond, const StokesOptions& opt) {
+StokesSolution solve_linear_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond,
+                                   const StokesOptions& opt) {
   System sys(mesh, opt, false);
   std::vector<int> unknown;
   std::vector<double> known;
@@ -349,12 +354,14 @@ std::vector<Vec3> surface_forces(const TetMesh& mesh, const StokesSolution& sol,
         const double lam[3] = {1.0 - q.xi[0] - q.xi[1], q.xi[0], q.xi[1]};
         std::array<double, 3> xi{};
         for (int a = 0; a < 3; ++a)
-          for (int c = 0; c < 3; ++c) xi[static_cast<size_t>(c)] += lam[a] * kVert[static_cast<size_t>(local[a])][static_cast<size_t>(c)];
+          for (int c = 0; c < 3; ++c)
+            xi[static_cast<size_t>(c)] += lam[a] * kVert[static_cast<size_t>(local[a])][static_cast<size_t>(c)];
         tet_p2_grad(xi, g10);
         tet_p1(xi, psi);
         Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
         for (int i = 0; i < 10; ++i)
-          j += mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(i)])] * Eigen::RowVector3d(g10[i][0], g10[i][1], g10[i][2]);
+          j += mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(i)])] *
+               Eigen::RowVector3d(g10[i][0], g10[i][1], g10[i][2]);
         const Eigen::Matrix3d jinv_t = j.inverse().transpose();
         Eigen::Matrix3d grad = Eigen::Matrix3d::Zero();
         for (int i = 0; i < 10; ++i)
@@ -362,7 +369,8 @@ std::vector<Vec3> surface_forces(const TetMesh& mesh, const StokesSolution& sol,
                   (jinv_t * Eigen::Vector3d(g10[i][0], g10[i][1], g10[i][2])).transpose();
         double p = 0.0;
         for (int l = 0; l < 4; ++l)
-          p += psi[l] * sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
+          p += psi[l] *
+               sol.pressure[static_cast<size_t>(mesh.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
         const Eigen::Matrix3d sigma = -p * Eigen::Matrix3d::Identity() + viscosity * (grad + grad.transpose());
         sum -= q.weight * (sigma * nds);
       }

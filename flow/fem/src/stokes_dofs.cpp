@@ -16,8 +16,6 @@ void default_option(const char* name, const char* value) {
   if (!set) FLOWIRE_PETSC(PetscOptionsSetValue(nullptr, name, value));
 }
 
-
-
 Numbering number(const TetMesh& mesh, int rank, int size, int fixed_group) {
   Numbering num;
   const size_t nn = mesh.nodes.size();

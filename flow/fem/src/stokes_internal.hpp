@@ -75,15 +75,15 @@ void default_option(const char* name, const char* value);
 /// Unknown numbering: wall nodes carry no velocity unknowns; rank r owns a contiguous
 /// block [velocities of its free nodes (x,y,z interleaved), its pressures].
 struct Numbering {
-  std::vector<PetscInt> vdof;           // (num_nodes) global dof of the x velocity, -1 on the wall
-  std::vector<PetscInt> pdof;           // (num_vertices) global dof of the pressure
-  std::vector<PetscInt> pindex;         // (num_vertices) index in the pressure-only layout
-  std::vector<int> vertex_node;         // (num_vertices) node of each vertex
-  PetscInt total = 0, local = 0, begin = 0;    // all unknowns / mine / my first
-  PetscInt p_local = 0, p_begin = 0;           // pressure-only layout
-  PetscInt v_local = 0;                        // my velocity unknowns
-  std::vector<int> my_nodes;            // free nodes whose velocity rows I own
-  std::vector<int> my_vertices;         // vertices whose pressure rows I own
+  std::vector<PetscInt> vdof;                // (num_nodes) global dof of the x velocity, -1 on the wall
+  std::vector<PetscInt> pdof;                // (num_vertices) global dof of the pressure
+  std::vector<PetscInt> pindex;              // (num_vertices) index in the pressure-only layout
+  std::vector<int> vertex_node;              // (num_vertices) node of each vertex
+  PetscInt total = 0, local = 0, begin = 0;  // all unknowns / mine / my first
+  PetscInt p_local = 0, p_begin = 0;         // pressure-only layout
+  PetscInt v_local = 0;                      // my velocity unknowns
+  std::vector<int> my_nodes;                 // free nodes whose velocity rows I own
+  std::vector<int> my_vertices;              // vertices whose pressure rows I own
 };
 
 /// `fixed_group` >= 0: the nodes of that group carry a prescribed velocity too.
@@ -125,10 +125,10 @@ struct Reference {
 
 /// Element matrices of one tetrahedron.
 struct ElementMatrices {
-  double k[10][10];   // viscous block, the same for every component
-  double m[10][10];   // velocity mass block (per component)
-  double bt[30][4];   // velocity (node i, component c -> row 3i+c) x pressure: -(q, div v)
-  double mp[4][4];    // pressure mass / viscosity
+  double k[10][10];  // viscous block, the same for every component
+  double m[10][10];  // velocity mass block (per component)
+  double bt[30][4];  // velocity (node i, component c -> row 3i+c) x pressure: -(q, div v)
+  double mp[4][4];   // pressure mass / viscosity
 };
 
 bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, ElementMatrices& em);
@@ -180,8 +180,8 @@ NsParams ns_params(const StokesOptions& opt);
 /// Residual (34: velocity rows 3i+c, then 4 pressure rows) and Jacobian (34 × 34, row
 /// major) of one tetrahedron for the Navier–Stokes weak form with SUPG + LSIC (see
 /// stokes.hpp). Returns false for a non-positive Jacobian determinant.
-bool ns_element(const TetMesh& mesh, const ReferenceNs& ref, int e, const NsParams& prm, const State& st,
-                double* res, double* jac);
+bool ns_element(const TetMesh& mesh, const ReferenceNs& ref, int e, const NsParams& prm, const State& st, double* res,
+                double* jac);
 
 /// Residual and Jacobian of one open-boundary triangle: the pressure and traction
 /// terms, and the backflow term on outlets (18 velocity rows 3k+c).

@@ -21,7 +21,8 @@ bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, Eleme
   std::fill(&em.mp[0][0], &em.mp[0][0] + 16, 0.0);
   for (int q = 0; q < ref.nq; ++q) {
     Eigen::Matrix3d j = Eigen::Matrix3d::Zero();  // dx/dxi
-    for (int i = 0; i < 10; ++i) j += x[i] * Eigen::RowVector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
+    for (int i = 0; i < 10; ++i)
+      j += x[i] * Eigen::RowVector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
     const double det = j.determinant();
     if (!(det > 0.0)) return false;
     const Eigen::Matrix3d jinv_t = j.inverse().transpose();
@@ -110,8 +111,10 @@ void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const S
   int any_bad = bad;
   MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
   if (any_bad >= 0)
-    throw_numerical_error(fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
-                                      "curved element); use a smaller mesh size", any_bad));
+    throw_numerical_error(
+        fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
+                    "curved element); use a smaller mesh size",
+                    any_bad));
 }
 
 void add_to_vector(Vec b, int count, const PetscInt* rows, const double* vals) {
@@ -137,8 +140,8 @@ NsParams ns_params(const StokesOptions& opt) {
   return prm;
 }
 
-bool ns_element(const TetMesh& mesh, const ReferenceNs& ref, int e, const NsParams& prm, const State& st,
-                double* res, double* jac) {
+bool ns_element(const TetMesh& mesh, const ReferenceNs& ref, int e, const NsParams& prm, const State& st, double* res,
+                double* jac) {
   constexpr int n = 34;
   const auto& t = mesh.tets[static_cast<size_t>(e)];
   Vec3 x[10], un[10];
@@ -158,7 +161,8 @@ bool ns_element(const TetMesh& mesh, const ReferenceNs& ref, int e, const NsPara
   const double h = 0.5 * std::cbrt(6.0 * std::sqrt(2.0) * vol);
   for (int q = 0; q < ref.nq; ++q) {
     Eigen::Matrix3d j = Eigen::Matrix3d::Zero();  // dx/dxi
-    for (int i = 0; i < 10; ++i) j += x[i] * Eigen::RowVector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
+    for (int i = 0; i < 10; ++i)
+      j += x[i] * Eigen::RowVector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
     const double det = j.determinant();
     if (!(det > 0.0)) return false;
     const Eigen::Matrix3d jinv = j.inverse();
@@ -166,7 +170,8 @@ bool ns_element(const TetMesh& mesh, const ReferenceNs& ref, int e, const NsPara
     const double* phi = ref.phi[q];
     const double* psi = ref.psi[q];
     Eigen::Vector3d g[10];
-    for (int i = 0; i < 10; ++i) g[i] = jinv_t * Eigen::Vector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
+    for (int i = 0; i < 10; ++i)
+      g[i] = jinv_t * Eigen::Vector3d(ref.dphi[q][i][0], ref.dphi[q][i][1], ref.dphi[q][i][2]);
     Eigen::Vector3d gp[4];
     for (int l = 0; l < 4; ++l) gp[l] = jinv_t * Eigen::Vector3d(ref.dpsi[l][0], ref.dpsi[l][1], ref.dpsi[l][2]);
     // Values at the point.
@@ -286,7 +291,7 @@ void ns_face(const TetMesh& mesh, size_t f, const NsParams& prm, const State& st
     }
     const Vec3 nds = ts.cross(tt);  // outward normal times the area element
     const double area = nds.norm();
-    Vec3 load = pk * nds;            // residual: + p_k ∫ n·v − ∫ g·v
+    Vec3 load = pk * nds;  // residual: + p_k ∫ n·v − ∫ g·v
     if (prm.traction && *prm.traction) load -= area * (*prm.traction)(xq, nds / area, grp);
     for (int k = 0; k < 6; ++k)
       for (int c = 0; c < 3; ++c) res[3 * k + c] += q.weight * phi[k] * load[c];
@@ -300,8 +305,7 @@ void ns_face(const TetMesh& mesh, size_t f, const NsParams& prm, const State& st
         for (int m = 0; m < 6; ++m)
           for (int a = 0; a < 3; ++a)
             for (int c = 0; c < 3; ++c)
-              jac[(3 * k + a) * 18 + 3 * m + c] +=
-                  c0 * phi[k] * phi[m] * (nds[c] * u[a] + (a == c ? un : 0.0));
+              jac[(3 * k + a) * 18 + 3 * m + c] += c0 * phi[k] * phi[m] * (nds[c] * u[a] + (a == c ? un : 0.0));
       }
     }
   }
@@ -380,8 +384,10 @@ void assemble_ns(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, cons
   int any_bad = bad;
   MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
   if (any_bad >= 0)
-    throw_numerical_error(fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
-                                      "curved element); use a smaller mesh size", any_bad));
+    throw_numerical_error(
+        fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
+                    "curved element); use a smaller mesh size",
+                    any_bad));
 }
 
 void assemble_rhs(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, std::span<const double> group_pressure,

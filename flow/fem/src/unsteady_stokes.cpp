@@ -22,8 +22,8 @@ struct UnsteadyStokes::Impl {
   double rho = 0.0, dt = 0.0, time = 0.0;
   int steps = 0;
   std::vector<int> open;
-  std::vector<Vec> units;                   // unit fields (pressure 1 on open[k])
-  std::vector<std::vector<double>> flux;    // their fluxes
+  std::vector<Vec> units;                              // unit fields (pressure 1 on open[k])
+  std::vector<std::vector<double>> flux;               // their fluxes
   Vec prev = nullptr, curr = nullptr, hist = nullptr;  // x^{n−1}, x^n, scratch
   StokesSolution current;
 };

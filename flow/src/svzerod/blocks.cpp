@@ -42,8 +42,8 @@ Param BlockInput::param(const std::string& key) {
     if (!(t[i] > t[i - 1])) fail("times 't' must increase");
   Param p(std::move(t), std::move(v));
   if (period_ > 0.0 && p.cycle() != period_)
-    throw_input_error(file_, fmt::format("inconsistent cardiac cycle period defined in parameters ({} and {})",
-                                         period_, p.cycle()));
+    throw_input_error(
+        file_, fmt::format("inconsistent cardiac cycle period defined in parameters ({} and {})", period_, p.cycle()));
   period_ = p.cycle();
   any_table_ = true;
   return p;
@@ -90,9 +90,12 @@ void BlockInput::finish() const {
 namespace {
 const char* section_name(Section s) {
   switch (s) {
-    case Section::Vessel: return "vessel";
-    case Section::BoundaryCondition: return "boundary condition";
-    case Section::Junction: return "junction";
+    case Section::Vessel:
+      return "vessel";
+    case Section::BoundaryCondition:
+      return "boundary condition";
+    case Section::Junction:
+      return "junction";
   }
   return "block";
 }
@@ -165,7 +168,8 @@ std::string Registry::supported(Section section) const {
 std::unique_ptr<Block> Registry::create(Section section, const std::string& type, BlockInput& in) const {
   for (const auto& e : entries_)
     if (e.section == section && e.type == type) return e.make(in);
-  in.fail(fmt::format("{} type '{}' is not supported (supported: {})", section_name(section), type, supported(section)));
+  in.fail(
+      fmt::format("{} type '{}' is not supported (supported: {})", section_name(section), type, supported(section)));
 }
 
 // ---------------------------------------------------------------- vessels
@@ -197,7 +201,8 @@ void BloodVessel::assemble(Assembler& a, double t) const {
   a.c(row0_ + 1, 0.0);
 }
 
-void BloodVessel::assemble_nonlinear(Assembler& a, double t, const Eigen::VectorXd& y, const Eigen::VectorXd& yd) const {
+void BloodVessel::assemble_nonlinear(Assembler& a, double t, const Eigen::VectorXd& y,
+                                     const Eigen::VectorXd& yd) const {
   const bool st = a.steady();
   const Node& i = inlets_[0];
   const double s = s_.get(t, st), c = c_.get(t, st);
@@ -400,8 +405,10 @@ double CoronaryBC::ram(double t, bool steady, double period) const {
   const double tvc = t_vc_.get(t, steady), tvr = t_vr_.get(t, steady);
   const double tc = std::fmod(t, period);
   double e = 0.0;
-  if (tc <= tvc) e = 0.5 * (1.0 - std::cos(std::numbers::pi * tc / tvc));
-  else if (tc <= tvc + tvr) e = 0.5 * (1.0 + std::cos(std::numbers::pi * (tc - tvc) / tvr));
+  if (tc <= tvc)
+    e = 0.5 * (1.0 - std::cos(std::numbers::pi * tc / tvc));
+  else if (tc <= tvc + tvr)
+    e = 0.5 * (1.0 + std::cos(std::numbers::pi * (tc - tvc) / tvr));
   const double r = lo + (hi - lo) * e;
   return r * r;
 }

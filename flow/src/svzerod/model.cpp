@@ -108,7 +108,8 @@ void read_blocks(Model& m, const json& cfg, const Options& options) {
         for (const auto& b2 : j.at("outlet_blocks")) connections.emplace_back(name, b2.get<std::string>());
       } else {
         throw_input_error(
-            m.file, fmt::format("junction '{}' needs inlet_vessels/outlet_vessels or inlet_blocks/outlet_blocks", name));
+            m.file,
+            fmt::format("junction '{}' needs inlet_vessels/outlet_vessels or inlet_blocks/outlet_blocks", name));
       }
     }
   }
@@ -150,8 +151,10 @@ void read_blocks(Model& m, const json& cfg, const Options& options) {
     for (size_t k = 0; k < connections.size(); ++k)
       for (const size_t blk : {ends[k].first, ends[k].second}) {
         if (!m.blocks[blk]->equal_pressures()) continue;
-        if (first[blk] == connections.size()) first[blk] = k;
-        else parent[root(k)] = root(first[blk]);
+        if (first[blk] == connections.size())
+          first[blk] = k;
+        else
+          parent[root(k)] = root(first[blk]);
       }
   }
   std::vector<int> pressure_of(connections.size(), -1);  // by root connection
@@ -185,8 +188,8 @@ void read_blocks(Model& m, const json& cfg, const Options& options) {
     }
   }
   if (row != m.unknowns)
-    throw_input_error(m.file,
-                      fmt::format("the model has {} equations for {} unknowns; check the connections", row, m.unknowns));
+    throw_input_error(
+        m.file, fmt::format("the model has {} equations for {} unknowns; check the connections", row, m.unknowns));
 }
 
 State read_initial(const Model& m, const json& cfg) {

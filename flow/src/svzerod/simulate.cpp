@@ -159,8 +159,10 @@ Result simulate(const std::string& json_path, Summary* summary, const Options& o
     // inlet vessels, outlet node of outlet vessels) change by less than the tolerance.
     std::vector<std::pair<int, int>> caps;
     for (const auto& v : m.vessels) {
-      if (v.cap == 1 || v.cap == 3) caps.emplace_back(v.block->inlets()[0].q, v.block->inlets()[0].p);
-      else if (v.cap == 2) caps.emplace_back(v.block->outlets()[0].q, v.block->outlets()[0].p);
+      if (v.cap == 1 || v.cap == 3)
+        caps.emplace_back(v.block->inlets()[0].q, v.block->inlets()[0].p);
+      else if (v.cap == 2)
+        caps.emplace_back(v.block->outlets()[0].q, v.block->outlets()[0].p);
     }
     const auto two = static_cast<size_t>(2 * (sp.pts - 1) + 1);
     auto converged = [&]() {

@@ -177,7 +177,8 @@ void System::residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, Eigen
   residual(y, yd, 1.0, f);
 }
 
-double System::residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, double yd_scale, Eigen::VectorXd& f) const {
+double System::residual(const Eigen::VectorXd& y, const Eigen::VectorXd& yd, double yd_scale,
+                        Eigen::VectorXd& f) const {
   assert(!compact_stale_);
   double* out = f.data();
   const double* c = c_.data();
@@ -258,8 +259,10 @@ void System::extract_factors() {
     for (size_t j = 0; j < n; ++j)
       for (int k = x.cp[j]; k < x.cp[j + 1]; ++k) {
         const auto i = static_cast<size_t>(x.ci[static_cast<size_t>(k)]);
-        if (i != j) ++m.ptr[i + 1];
-        else if (diag_inv) (*diag_inv)[i] = 1.0 / x.cx[static_cast<size_t>(k)];
+        if (i != j)
+          ++m.ptr[i + 1];
+        else if (diag_inv)
+          (*diag_inv)[i] = 1.0 / x.cx[static_cast<size_t>(k)];
       }
     for (size_t i = 0; i < n; ++i) m.ptr[i + 1] += m.ptr[i];
     m.cols.resize(static_cast<size_t>(m.ptr[n]));

@@ -36,14 +36,14 @@
 namespace flowire::cmaes {
 
 struct Options {
-  int lambda = 0;               ///< population size; 0: 4 + ⌊3 ln n⌋
-  double sigma0 = 0.3;          ///< initial step size (in the coordinates of `x0`)
-  std::uint64_t seed = 1;       ///< std::mt19937_64 seed: equal seeds give equal runs
-  long max_evaluations = 0;     ///< stop after this many evaluations; 0: 1000·n²+ 1000
+  int lambda = 0;                                            ///< population size; 0: 4 + ⌊3 ln n⌋
+  double sigma0 = 0.3;                                       ///< initial step size (in the coordinates of `x0`)
+  std::uint64_t seed = 1;                                    ///< std::mt19937_64 seed: equal seeds give equal runs
+  long max_evaluations = 0;                                  ///< stop after this many evaluations; 0: 1000·n²+ 1000
   double target = -std::numeric_limits<double>::infinity();  ///< stop when f ≤ target
-  double tol_x = 1e-12;         ///< stop when σ·max(√diag C, ‖p_c‖) < tol_x
-  double tol_fun = 1e-12;       ///< stop when the generation's value range (and the recent best values) < tol_fun
-  bool unit_box = false;        ///< restrict the search to [0, 1]^n (repair and penalty, see the file comment)
+  double tol_x = 1e-12;                                      ///< stop when σ·max(√diag C, ‖p_c‖) < tol_x
+  double tol_fun = 1e-12;  ///< stop when the generation's value range (and the recent best values) < tol_fun
+  bool unit_box = false;   ///< restrict the search to [0, 1]^n (repair and penalty, see the file comment)
 };
 
 /// @brief Why a run stopped.
@@ -51,19 +51,19 @@ enum class Stop { Target, MaxEvaluations, TolX, TolFun, ConditionCov };
 std::string to_string(Stop s);
 
 struct Result {
-  Eigen::VectorXd x_best;       ///< best point evaluated (repaired into the box if unit_box)
+  Eigen::VectorXd x_best;  ///< best point evaluated (repaired into the box if unit_box)
   double f_best = std::numeric_limits<double>::infinity();
   long evaluations = 0;
   int generations = 0;
   Stop stop = Stop::MaxEvaluations;
-  Eigen::VectorXd mean;         ///< final distribution mean
-  double sigma = 0;             ///< final step size
+  Eigen::VectorXd mean;  ///< final distribution mean
+  double sigma = 0;      ///< final step size
 };
 
 /// @brief One evaluated point, in the order evaluated (for a history table).
 struct Evaluation {
   int generation = 0;
-  Eigen::VectorXd x;            ///< the point handed to the evaluator (repaired if unit_box)
+  Eigen::VectorXd x;  ///< the point handed to the evaluator (repaired if unit_box)
   double f = 0;
 };
 

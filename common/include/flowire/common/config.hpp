@@ -17,23 +17,23 @@
 namespace flowire::config {
 
 enum class Type {
-  Number,      ///< real, optionally "<number> <unit>"
-  Integer,     ///< whole number
-  Bool,        ///< true / false
-  String,      ///< free text (file names, node names)
-  Enum,        ///< one of `choices`
-  Vector3,     ///< [x, y, z], each optionally with a unit
-  NumberList,  ///< [a, b, ...]
-  Section,     ///< a map whose children are declared keys
-  List,        ///< a list of maps; item keys are declared as "<path>[].<key>"
+  Number,           ///< real, optionally "<number> <unit>"
+  Integer,          ///< whole number
+  Bool,             ///< true / false
+  String,           ///< free text (file names, node names)
+  Enum,             ///< one of `choices`
+  Vector3,          ///< [x, y, z], each optionally with a unit
+  NumberList,       ///< [a, b, ...]
+  Section,          ///< a map whose children are declared keys
+  List,             ///< a list of maps; item keys are declared as "<path>[].<key>"
   NumberOrSection,  ///< either a number (with unit) or a map with declared children
   StringOrInteger,  ///< a name or an index (e.g. a node)
 };
 
 struct Key {
-  std::string path;         ///< dotted path, e.g. "flow.inlet.pressure"; list items "loads[].type"
+  std::string path;  ///< dotted path, e.g. "flow.inlet.pressure"; list items "loads[].type"
   Type type = Type::Number;
-  std::string default_text; ///< YAML text of the default; empty: no default (absent unless given)
+  std::string default_text;  ///< YAML text of the default; empty: no default (absent unless given)
   units::Dimension dim = units::Dimension::None;
   std::string doc;
   std::vector<std::string> choices;  ///< for Enum
@@ -102,8 +102,7 @@ class Config {
 
 /// @brief Read a YAML scene file, apply `--set KEY=VALUE` overrides, validate against `schema`.
 /// @throws flowire::Error (input) naming file, line and key.
-Config load_config(const std::string& file, const Schema& schema,
-                   const std::vector<std::string>& overrides = {});
+Config load_config(const std::string& file, const Schema& schema, const std::vector<std::string>& overrides = {});
 /// @brief The values of a scene that gives @p section empty: the defaults its keys declare
 /// (their place "default"). For a section whose keys act even where a scene leaves it out
 /// (a wire in vessels touches the walls without a contact: section), so that the code reading

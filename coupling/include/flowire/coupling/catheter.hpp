@@ -36,11 +36,11 @@ struct CatheterSpec {
   double inner_radius = 0.55e-3;  ///< [m]
   double youngs_modulus = 2e9;    ///< [Pa]
   double poisson_ratio = 0.4;
-  double density = 1200.0;        ///< [kg/m³]
-  double initial_length = 0.02;   ///< [m] inside at t = 0
-  double stiffness = 3e4;         ///< [N/m] lumen penalty per wire vertex
-  double speed = 0.0;             ///< [m/s] insertion speed
-  double rotation_speed = 0.0;    ///< [rad/s]
+  double density = 1200.0;       ///< [kg/m³]
+  double initial_length = 0.02;  ///< [m] inside at t = 0
+  double stiffness = 3e4;        ///< [N/m] lumen penalty per wire vertex
+  double speed = 0.0;            ///< [m/s] insertion speed
+  double rotation_speed = 0.0;   ///< [rad/s]
 };
 
 /// @brief The rod of a tube with the catheter's section, on the wire's feeding grid and at
@@ -69,11 +69,11 @@ inline constexpr double lumen_onset_fraction = 0.3;
 struct LumenPenalty {
   double energy = 0.0;
   double distance = 0.0;
-  double alpha = 0.0;                                 ///< nearest point a + α (b − a)
-  double weight = 1.0;                                ///< w(α) at the open tip end, else 1
-  Eigen::Vector3d grad_x, grad_a, grad_b;             ///< ∂E/∂x, ∂E/∂a, ∂E/∂b
-  Eigen::Matrix3d hess_xx, hess_aa, hess_bb;          ///< ∂²E/∂x², ∂²E/∂a², ∂²E/∂b²
-  Eigen::Matrix3d hess_ab;                            ///< ∂²E/∂a∂b
+  double alpha = 0.0;                         ///< nearest point a + α (b − a)
+  double weight = 1.0;                        ///< w(α) at the open tip end, else 1
+  Eigen::Vector3d grad_x, grad_a, grad_b;     ///< ∂E/∂x, ∂E/∂a, ∂E/∂b
+  Eigen::Matrix3d hess_xx, hess_aa, hess_bb;  ///< ∂²E/∂x², ∂²E/∂a², ∂²E/∂b²
+  Eigen::Matrix3d hess_ab;                    ///< ∂²E/∂a∂b
 };
 /// @brief The penalty of x against edge [a, b] with clearance @p c, stiffness @p k and onset
 /// width @p onset (δ of onset_quadratic; zero when d ≤ c − δ/2). Exact derivatives of the
@@ -84,9 +84,8 @@ struct LumenPenalty {
 /// the lumen: full half an edge inside the tip, none half an edge beyond it, where the vertex
 /// leaves the lumen (LumenContact::nearest_edge). The wire's exit is then C² in the weight and
 /// the energy at least C¹ as a whole, with no force switched off.
-[[nodiscard]] LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a,
-                                         const Eigen::Vector3d& b, double c, double k, bool open_before_a = false,
-                                         double onset = 0.0);
+[[nodiscard]] LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                         double c, double k, bool open_before_a = false, double onset = 0.0);
 
 /// @brief The weight of the lumen penalty at the catheter's open tip end for a wire vertex at
 /// α along the tip edge (α = 0 at the tip end, < 0 beyond it): the quintic smoothstep of
@@ -110,8 +109,8 @@ class LumenContact {
 
   /// @brief The nearest catheter edge to wire point @p x with arc length @p s, or −1 when it
   /// is out of the catheter (beyond its tip, or not inserted).
-  [[nodiscard]] int nearest_edge(const Eigen::Vector3d& x, double s,
-                                 const std::vector<Eigen::Vector3d>& cath, const std::vector<double>& arc) const;
+  [[nodiscard]] int nearest_edge(const Eigen::Vector3d& x, double s, const std::vector<Eigen::Vector3d>& cath,
+                                 const std::vector<double>& arc) const;
   /// @brief The penalty on the wire at @p rod (catheter held).
   void evaluate_wire(const rod::RodView& rod, rod::ForceAccumulator& out) const;
   /// @brief The reaction on the catheter at @p rod (wire held).

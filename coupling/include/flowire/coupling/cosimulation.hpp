@@ -23,8 +23,8 @@
 #include "flowire/common/config.hpp"
 #include "flowire/coupling/catheter.hpp"
 #include "flowire/coupling/schedule.hpp"
-#include "flowire/rod/simulator.hpp"
 #include "flowire/coupling/wire_output.hpp"
+#include "flowire/rod/simulator.hpp"
 #include "flowire/vessels/network.hpp"
 #include "flowire/vessels/spatial.hpp"
 
@@ -132,8 +132,8 @@ class CoSimulation {
   /// Wall contact and blood drag (contact:, coupling:, vessels.surface), on the catheter too.
   void add_wall_forces(const rod::WireSpec& wire, int entry, nlohmann::json& facts);
   void couple_catheter(nlohmann::json& facts);  ///< the wire in the catheter's lumen
-  void plan_steps();        ///< solve:, coupling.flow_every, insertion: speeds, limit, schedule
-  void couple_occlusion();  ///< coupling.occlusion
+  void plan_steps();                            ///< solve:, coupling.flow_every, insertion: speeds, limit, schedule
+  void couple_occlusion();                      ///< coupling.occlusion
   /// Sets the flow's segment occlusion from the wire of the last accepted step.
   void occlude();
   config::Config scene_;

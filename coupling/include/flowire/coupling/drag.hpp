@@ -50,9 +50,10 @@ using Mat3 = Eigen::Matrix3d;
 /// @brief Which law turns the blood velocity into a force on the wire.
 enum class DragLaw {
   None,
-  Cylinder,        ///< Reynolds-aware cross-flow drag + annular Poiseuille shear (this file)
-  SlenderBody,     ///< resistive-force (Stokes) drag, valid for Re ≪ 1 (slender_body_drag: Gazzola et al. 2018, eq. 4.13)
-  VelocityOffset,  ///< the published form: the blood velocity added to the velocity update (eq. 10 of the published method)
+  Cylinder,     ///< Reynolds-aware cross-flow drag + annular Poiseuille shear (this file)
+  SlenderBody,  ///< resistive-force (Stokes) drag, valid for Re ≪ 1 (slender_body_drag: Gazzola et al. 2018, eq. 4.13)
+  VelocityOffset,  ///< the published form: the blood velocity added to the velocity update (eq. 10 of the published
+                   ///< method)
 };
 
 /// @brief Largest Reynolds number of the drag curve's published range (Sucker & Brauer 1975).
@@ -84,22 +85,22 @@ double cylinder_drag_coefficient(double reynolds);
 /// @brief Constant parameters of a drag law for one wire in one blood.
 struct DragModel {
   DragLaw law = DragLaw::Cylinder;
-  double viscosity = 3.5e-3;    ///< η [Pa s]
-  double density = 1060.0;      ///< ρ [kg/m³]
-  double wire_radius = 0.0;     ///< a [m]
-  double scale = 1.0;           ///< multiplies the force (sensitivity studies)
-  double wire_length = 1.0;     ///< slender_body: L in c⊥ = 4πη/ln(L/a) [m]
-  double mass_per_length = 0.0; ///< velocity_offset: ρ_wire·A [kg/m]
+  double viscosity = 3.5e-3;     ///< η [Pa s]
+  double density = 1060.0;       ///< ρ [kg/m³]
+  double wire_radius = 0.0;      ///< a [m]
+  double scale = 1.0;            ///< multiplies the force (sensitivity studies)
+  double wire_length = 1.0;      ///< slender_body: L in c⊥ = 4πη/ln(L/a) [m]
+  double mass_per_length = 0.0;  ///< velocity_offset: ρ_wire·A [kg/m]
 };
 
 /// @brief What one vertex sees: blood and wire velocity, tangent, the length it stands for.
 struct DragInput {
-  Vec3 u = Vec3::Zero();      ///< undisturbed blood velocity at the vertex [m/s]
-  Vec3 v = Vec3::Zero();      ///< wire velocity [m/s]
-  Vec3 t = Vec3::UnitX();     ///< unit tangent of the wire
-  double ell = 0.0;           ///< length of wire the vertex represents [m]
-  double vessel_radius = 0.0; ///< R of the segment the vertex lies in [m] (Cylinder)
-  double dt = 0.0;            ///< time step [s] (VelocityOffset)
+  Vec3 u = Vec3::Zero();       ///< undisturbed blood velocity at the vertex [m/s]
+  Vec3 v = Vec3::Zero();       ///< wire velocity [m/s]
+  Vec3 t = Vec3::UnitX();      ///< unit tangent of the wire
+  double ell = 0.0;            ///< length of wire the vertex represents [m]
+  double vessel_radius = 0.0;  ///< R of the segment the vertex lies in [m] (Cylinder)
+  double dt = 0.0;             ///< time step [s] (VelocityOffset)
 };
 
 /// @brief Force on the vertex (per vertex, i.e. per unit length times ell) and its exact

@@ -41,9 +41,9 @@ inline constexpr double kMaxOcclusionRadiusRatio = 0.9;
 
 /// @brief What a run's occlusion did, for summary.json.
 struct OcclusionStats {
-  int occupied_segments = 0;          ///< at the last update
-  double max_resistance_factor = 1.0; ///< over the run
-  long radius_ratio_clamped = 0;      ///< segment updates with a/r above the model's range
+  int occupied_segments = 0;           ///< at the last update
+  double max_resistance_factor = 1.0;  ///< over the run
+  long radius_ratio_clamped = 0;       ///< segment updates with a/r above the model's range
 };
 
 /// @brief Computes every segment's occlusion from a wire; allocation-free after the first
@@ -64,19 +64,19 @@ class WireOcclusion {
 
  private:
   struct Sum {
-    double length = 0.0;     // Σ ℓ
-    double offset = 0.0;     // Σ ℓ d
-    double wire = 0.0;       // Σ ℓ a
-    double radius = 0.0;     // Σ ℓ r
-    double resistance = 0.0; // Σ 8ηℓ/(π r⁴)
-    double inertance = 0.0;  // Σ ρℓ [1/(π(r² − a²)) − 1/(πr²)]
+    double length = 0.0;      // Σ ℓ
+    double offset = 0.0;      // Σ ℓ d
+    double wire = 0.0;        // Σ ℓ a
+    double radius = 0.0;      // Σ ℓ r
+    double resistance = 0.0;  // Σ 8ηℓ/(π r⁴)
+    double inertance = 0.0;   // Σ ρℓ [1/(π(r² − a²)) − 1/(πr²)]
   };
   const flow::FlowSolver& flow_;
-  std::vector<Eigen::Vector3d> axis_;  // (num_segments) unit axis
-  std::vector<double> inertance_;      // (num_segments) ρ l/(π r_from r_to)
-  std::vector<Sum> sum_;               // (num_segments)
+  std::vector<Eigen::Vector3d> axis_;        // (num_segments) unit axis
+  std::vector<double> inertance_;            // (num_segments) ρ l/(π r_from r_to)
+  std::vector<Sum> sum_;                     // (num_segments)
   std::vector<flow::SegmentOcclusion> occ_;  // (num_segments)
-  std::vector<int> touched_;           // segments with a nonzero sum
+  std::vector<int> touched_;                 // segments with a nonzero sum
   OcclusionStats stats_;
 };
 

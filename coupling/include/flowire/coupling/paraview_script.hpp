@@ -13,9 +13,9 @@ namespace flowire::coupling {
 
 /// @brief What the script shows (file names relative to the output folder; empty: none).
 struct ParaViewScene {
-  std::string network;      ///< network.vtp or network.pvd
-  std::string wire;         ///< wire.pvd
-  double wire_radius = 0.0; ///< [m]; drawn at max(3 × radius, 1.2 mm) to be seen, as network.png does
+  std::string network;       ///< network.vtp or network.pvd
+  std::string wire;          ///< wire.pvd
+  double wire_radius = 0.0;  ///< [m]; drawn at max(3 × radius, 1.2 mm) to be seen, as network.png does
   std::string title;
 };
 

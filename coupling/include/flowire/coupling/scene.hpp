@@ -57,10 +57,10 @@ struct RunResult {
 
 /// @brief Where a run stands, reported after every time step.
 struct Progress {
-  long step = 0;            ///< steps done
-  long steps = 0;           ///< steps in the run
-  double time = 0.0;        ///< simulated time reached [s]
-  double duration = 0.0;    ///< simulated time of the whole run [s]
+  long step = 0;              ///< steps done
+  long steps = 0;             ///< steps in the run
+  double time = 0.0;          ///< simulated time reached [s]
+  double duration = 0.0;      ///< simulated time of the whole run [s]
   double wall_seconds = 0.0;  ///< since the run started
 };
 

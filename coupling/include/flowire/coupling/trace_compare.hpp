@@ -25,9 +25,9 @@ std::vector<TracePoint> read_tip_trace(const std::string& path);
 struct CompareRow {
   double inserted_length = 0;  ///< end of the window (m)
   int samples = 0;
-  double rms_published = 0;    ///< (½·Σ|X−Y|²)^½ over the window (m)
-  double rms = 0;              ///< (1/n·Σ|X−Y|²)^½ over the window (m)
-  double max_distance = 0;     ///< m
+  double rms_published = 0;  ///< (½·Σ|X−Y|²)^½ over the window (m)
+  double rms = 0;            ///< (1/n·Σ|X−Y|²)^½ over the window (m)
+  double max_distance = 0;   ///< m
 };
 
 struct CompareResult {
@@ -38,8 +38,8 @@ struct CompareResult {
 };
 
 /// @brief Compare two traces; only the inserted lengths both cover are compared.
-CompareResult compare_traces(const std::vector<TracePoint>& a, const std::vector<TracePoint>& b,
-                             double spacing = 5e-3, double row_spacing = 50e-3);
+CompareResult compare_traces(const std::vector<TracePoint>& a, const std::vector<TracePoint>& b, double spacing = 5e-3,
+                             double row_spacing = 50e-3);
 
 /// @brief The result as a CSV table (lengths and distances in m).
 std::string compare_csv(const CompareResult& r);

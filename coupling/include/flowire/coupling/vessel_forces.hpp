@@ -24,12 +24,12 @@ namespace flowire::coupling {
 
 struct ContactParams {
   bool enabled = true;
-  double stiffness = 0.0;        ///< penalty stiffness per vertex [N/m]
-  double friction = 0.1;         ///< Coulomb coefficient, shaft (wire on vessel wall: 0.1–1.0, Tang et al. 2010, §3.3)
-  double tip_friction = 0.1;     ///< Coulomb coefficient, tip region
-  double tip_length = 0.03;      ///< [m] distal length using tip_friction
-  double slip_speed = 1e-4;      ///< [m/s] smooth stick/slip transition width ε
-  double viscous_friction = 0.0; ///< [N s/m²] tangential viscous wall friction per unit length
+  double stiffness = 0.0;     ///< penalty stiffness per vertex [N/m]
+  double friction = 0.1;      ///< Coulomb coefficient, shaft (wire on vessel wall: 0.1–1.0, Tang et al. 2010, §3.3)
+  double tip_friction = 0.1;  ///< Coulomb coefficient, tip region
+  double tip_length = 0.03;   ///< [m] distal length using tip_friction
+  double slip_speed = 1e-4;   ///< [m/s] smooth stick/slip transition width ε
+  double viscous_friction = 0.0;  ///< [N s/m²] tangential viscous wall friction per unit length
 };
 
 /// @brief Blood velocity at a point located in a segment (e.g. FlowSolver::velocity_at).
@@ -38,17 +38,17 @@ using VelocityField = std::function<vessels::Vec3(int segment, const vessels::Ve
 struct InteractionStats {
   std::uint64_t evaluations = 0;
   std::uint64_t lookups = 0;
-  std::uint64_t contacts = 0;          ///< vertex evaluations in contact
-  double max_penetration = 0.0;        ///< over accepted steps [m]
-  double max_outside = 0.0;            ///< max over accepted steps of (wall distance of a vertex centre) [m]
+  std::uint64_t contacts = 0;    ///< vertex evaluations in contact
+  double max_penetration = 0.0;  ///< over accepted steps [m]
+  double max_outside = 0.0;      ///< max over accepted steps of (wall distance of a vertex centre) [m]
   /// Where and when a vertex centre was first more than a wire radius outside the lumen
   /// (outside_time < 0: never).
-  double outside_time = -1.0;          ///< [s]
-  double outside_arc_length = 0.0;     ///< of that vertex, from the entry [m]
-  double outside_distance = 0.0;       ///< its distance outside the wall [m]
+  double outside_time = -1.0;       ///< [s]
+  double outside_arc_length = 0.0;  ///< of that vertex, from the entry [m]
+  double outside_distance = 0.0;    ///< its distance outside the wall [m]
   Eigen::Vector3d outside_position = Eigen::Vector3d::Zero();
   double seconds_lookup = 0.0, seconds_contact = 0.0, seconds_drag = 0.0;
-  double max_reynolds = 0.0;           ///< largest normal Reynolds number of the drag law over accepted steps [-]
+  double max_reynolds = 0.0;  ///< largest normal Reynolds number of the drag law over accepted steps [-]
 };
 
 /// @brief How deep inside (exact distance) a wire vertex of radius @p a may be before the
@@ -123,8 +123,8 @@ class VesselForces : public rod::ExternalForce {
   void ensure_size(int n);
   std::vector<int> remap_segments_;
   std::vector<vessels::Neighbourhood> remap_near_;
-  std::vector<vessels::Location> location_;     ///< (vertices) at the last evaluation
-  std::vector<vessels::Neighbourhood> near_;    ///< (vertices) segments near each vertex, kept across steps
+  std::vector<vessels::Location> location_;   ///< (vertices) at the last evaluation
+  std::vector<vessels::Neighbourhood> near_;  ///< (vertices) segments near each vertex, kept across steps
   const vessels::SpatialIndex& index_;
   double wire_radius_;
   ContactParams contact_;
@@ -133,7 +133,7 @@ class VesselForces : public rod::ExternalForce {
   std::vector<int> segment_;
   std::vector<vessels::Vec3> fluid_, force_, drag_force_, contact_force_;
   std::vector<double> reynolds_;  ///< (vertices) normal Reynolds number at the last evaluation
-  int free_ = 0;  ///< free vertices at the last evaluation
+  int free_ = 0;                  ///< free vertices at the last evaluation
   std::vector<double> cur_normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;
   bool lagged_ = false;
@@ -143,12 +143,12 @@ class VesselForces : public rod::ExternalForce {
   const vessels::LumenSurface* surface_ = nullptr;
   double entry_margin_ = 0.0;
   double smoothing_ = 0.0;
-  double surf_margin_ = 0.0;            ///< margin of the vertices' surface neighbourhoods [m]
-  double surf_skip_ = 0.0;              ///< vertices deeper inside than this have no wall contact [m]
+  double surf_margin_ = 0.0;                              ///< margin of the vertices' surface neighbourhoods [m]
+  double surf_skip_ = 0.0;                                ///< vertices deeper inside than this have no wall contact [m]
   std::vector<vessels::SurfaceNeighbourhood> surf_near_;  ///< (vertices) triangles near each vertex, kept across steps
   std::vector<vessels::SurfaceNeighbourhood> remap_surf_near_;
   vessels::Vec3 intro_point_ = vessels::Vec3::Zero(), intro_dir_ = vessels::Vec3::Zero();
-  double intro_reach_ = 0.0;            ///< 0: no introducer
+  double intro_reach_ = 0.0;  ///< 0: no introducer
   std::uint64_t intro_contacts_ = 0;
 };
 

@@ -3,8 +3,8 @@
 /// @brief Wire outputs: wire.csv (time,vertex,s,x,y,z,drag_x,drag_y,drag_z,contact_x,
 /// contact_y,contact_z), tip_trace.csv (time,inserted_length,x,y,z), base_force.csv
 /// (time,fx,fy,fz,tx,ty,tz: the clamp's force and torque every step), and a ParaView series
-/// wire.pvd + wire_NNNNN.vtp with point data s, force, drag, contact and flow_velocity. Rows are buffered in memory and every file is written
-/// atomically, so a failed run leaves no half-written file.
+/// wire.pvd + wire_NNNNN.vtp with point data s, force, drag, contact and flow_velocity. Rows are buffered in memory and
+/// every file is written atomically, so a failed run leaves no half-written file.
 #include <filesystem>
 #include <string>
 #include <vector>

@@ -42,8 +42,7 @@ void write_nodes_csv(const Network& net, std::span<const FlowFrame> frames, cons
 /// frame (solver gives R, η, ρ). `resistance` is the empty segment's; with a wire in it the
 /// segment's resistance is resistance × resistance_factor. Mean velocity, wall shear stress
 /// and Reynolds number are those of the flow in the empty tube.
-void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> frames,
-                        const std::filesystem::path& path);
+void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> frames, const std::filesystem::path& path);
 
 /// @brief One frame as VTK poly data: point data `pressure`; cell data `flow_rate`,
 /// `mean_velocity`, `wall_shear_stress`, `reynolds`, `occupied_fraction`, `resistance_factor`
@@ -53,24 +52,24 @@ void write_network_vtp(const FlowSolver& solver, const FlowFrame& frame, const s
 /// @brief A time series in `dir`: `<stem>_NNNNNN.vtp` per frame, `<stem>.pvd` listing them
 /// with their times (opens in ParaView as one animated dataset), and `<stem>.vtp` holding the
 /// last frame.
-void write_network_series(const FlowSolver& solver, std::span<const FlowFrame> frames,
-                          const std::filesystem::path& dir, const std::string& stem = "network");
+void write_network_series(const FlowSolver& solver, std::span<const FlowFrame> frames, const std::filesystem::path& dir,
+                          const std::string& stem = "network");
 
 /// @brief A polyline drawn over the network (e.g. the guidewire), as a tube.
 struct RenderOverlay {
   std::vector<Vec3> points;
-  double radius = 0.4e-3;                     ///< m
+  double radius = 0.4e-3;                         ///< m
   std::array<double, 3> color = {0.1, 0.1, 0.1};  ///< RGB in [0, 1]
 };
 
 /// @brief How `render_network_png` draws.
 struct RenderOptions {
   int width = 1024, height = 768;
-  std::string title;                        ///< text at the top-left
+  std::string title;  ///< text at the top-left
   std::string scalar_name = "pressure (mmHg)";
-  double scalar_scale = 1.0 / 133.322387415;  ///< multiplies node values for display (Pa → mmHg)
-  double range_min = 0.0, range_max = 0.0;    ///< colour range (display units); equal: data range
-  std::vector<RenderOverlay> overlays;        ///< drawn over the vessels
+  double scalar_scale = 1.0 / 133.322387415;   ///< multiplies node values for display (Pa → mmHg)
+  double range_min = 0.0, range_max = 0.0;     ///< colour range (display units); equal: data range
+  std::vector<RenderOverlay> overlays;         ///< drawn over the vessels
   Vec3 view_direction = Vec3(0.0, -1.0, 0.0);  ///< camera looks along this direction
   Vec3 view_up = Vec3(0.0, 0.0, 1.0);
 };

@@ -27,9 +27,9 @@ namespace flowire::flow {
 [[nodiscard]] double womersley_number(double radius, double omega, double density, double viscosity);
 
 /// @brief Flow of the Womersley solution relative to the quasi-steady Poiseuille flow for
-/// the same sinusoidal pressure gradient: \f$ \frac{-8i}{\alpha^2}\left(1 - \frac{2J_1(\Lambda)}{\Lambda J_0(\Lambda)}\right) \f$,
-/// \f$ \Lambda = i^{3/2}\alpha \f$. |ratio| and arg(ratio) are the amplitude and phase of
-/// the reference table (e.g. α = 2: 0.825, −33°).
+/// the same sinusoidal pressure gradient: \f$ \frac{-8i}{\alpha^2}\left(1 - \frac{2J_1(\Lambda)}{\Lambda
+/// J_0(\Lambda)}\right) \f$, \f$ \Lambda = i^{3/2}\alpha \f$. |ratio| and arg(ratio) are the amplitude and phase of the
+/// reference table (e.g. α = 2: 0.825, −33°).
 [[nodiscard]] std::complex<double> womersley_flow_ratio(double alpha);
 
 /// @brief Womersley velocity at relative radius ρ = d/r of the oscillating flow
@@ -37,8 +37,8 @@ namespace flowire::flow {
 /// \f$ u = \mathrm{Re}\left[\frac{\hat Q}{\pi r^2}
 /// \frac{1 - J_0(\Lambda\rho)/J_0(\Lambda)}{1 - 2J_1(\Lambda)/(\Lambda J_0(\Lambda))} e^{i\omega t}\right] \f$.
 /// Tends to the laminar profile as α → 0. Allocation-free.
-[[nodiscard]] double womersley_velocity(std::complex<double> flow_amplitude, double radius, double alpha,
-                                        double rho, double omega_t);
+[[nodiscard]] double womersley_velocity(std::complex<double> flow_amplitude, double radius, double alpha, double rho,
+                                        double omega_t);
 
 /// @brief The Womersley profile shape of one α as a function of ρ = d/r, tabulated once:
 /// \f$ S(\rho) = \frac{1 - J_0(\Lambda\rho)/J_0(\Lambda)}{1 - 2J_1(\Lambda)/(\Lambda J_0(\Lambda))} \f$,

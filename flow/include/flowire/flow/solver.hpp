@@ -60,11 +60,11 @@ struct SegmentOcclusion {
 
 /// @brief Seconds spent per phase of a solver's life.
 struct SolverTimings {
-  double assemble = 0.0;   ///< building the matrices
-  double factor = 0.0;     ///< factorization / inverse / per-source solves / periodic search
-  double frames = 0.0;     ///< accumulated time in advance()
+  double assemble = 0.0;  ///< building the matrices
+  double factor = 0.0;    ///< factorization / inverse / per-source solves / periodic search
+  double frames = 0.0;    ///< accumulated time in advance()
   long frame_count = 0;
-  double occlusion = 0.0;  ///< refactorizations and re-solves after set_occlusion
+  double occlusion = 0.0;      ///< refactorizations and re-solves after set_occlusion
   long occlusion_updates = 0;  ///< set_occlusion calls that changed a resistance or inertance
 };
 
@@ -144,12 +144,12 @@ class FlowSolver {
   /// Womersley profile: the first harmonics of every segment's flow over one period
   /// (quasi-steady model with periodic sources of one period); otherwise the laminar profile.
   void prepare_profile();
-  static constexpr int kHarmonics = 10;         ///< harmonics with their own Womersley profile
-  static constexpr int kSamplesPerPeriod = 128; ///< samples of Q(t) for the harmonics
+  static constexpr int kHarmonics = 10;          ///< harmonics with their own Womersley profile
+  static constexpr int kSamplesPerPeriod = 128;  ///< samples of Q(t) for the harmonics
 
   const Network& net_;
   FlowSpec spec_;
-  std::vector<Vec3> axis_;          // (num_segments) unit axis node_from -> node_to
+  std::vector<Vec3> axis_;  // (num_segments) unit axis node_from -> node_to
   /// (num_segments × kHarmonics) Q̂_n of each segment, Q(t) ≈ Q̄ + Σ Re[Q̂_n e^{inωt}];
   /// empty unless the Womersley profile is on
   std::vector<std::complex<double>> harmonic_;
@@ -157,10 +157,10 @@ class FlowSolver {
   /// velocity in that segment is asked for; null until then and for a negligible harmonic
   mutable std::vector<std::shared_ptr<const WomersleyShape>> shape_;
   mutable std::map<double, std::shared_ptr<const WomersleyShape>> shape_by_alpha_;  ///< shared by equal α
-  std::vector<double> resistance_;  // (num_segments) without occlusion
+  std::vector<double> resistance_;                                                  // (num_segments) without occlusion
   std::vector<SegmentOcclusion> occlusion_;  // (num_segments) or empty: no occlusion set
   double time_ = 0.0;
-  double omega_ = 0.0;              // angular frequency of the spec's cycle
+  double omega_ = 0.0;  // angular frequency of the spec's cycle
   SolverTimings timings_;
 };
 

@@ -19,7 +19,7 @@
 namespace flowire::config {
 class Config;
 class Schema;
-}
+}  // namespace flowire::config
 
 namespace flowire::flow {
 
@@ -35,10 +35,10 @@ using vessels::Vec3;
 struct Waveform {
   enum class Kind { Constant, Sine, Table };
   Kind kind = Kind::Constant;
-  double value = 0.0;      ///< Constant
-  double systolic = 0.0;   ///< Sine: P1
-  double diastolic = 0.0;  ///< Sine: P2
-  double period = 0.8;     ///< Sine: T (s)
+  double value = 0.0;                 ///< Constant
+  double systolic = 0.0;              ///< Sine: P1
+  double diastolic = 0.0;             ///< Sine: P2
+  double period = 0.8;                ///< Sine: T (s)
   std::vector<double> times, values;  ///< Table
   bool periodic = true;               ///< Table
 
@@ -61,18 +61,18 @@ Waveform read_waveform_csv(const std::string& path);
 
 struct InletBC {
   enum class Type { Pressure, Flow };
-  int node = -1;            ///< network node (default: Network::widest_end())
+  int node = -1;  ///< network node (default: Network::widest_end())
   Type type = Type::Pressure;
-  Waveform waveform;        ///< Pa or m³/s into the network
+  Waveform waveform;  ///< Pa or m³/s into the network
 };
 
 struct OutletBC {
   enum class Type { Pressure, Resistance, Rcr };
   int node = -1;
   Type type = Type::Pressure;
-  double pressure = 0.0;         ///< Pressure: Pa
-  double resistance = 0.0;       ///< Resistance: Pa·s/m³
-  double distal_pressure = 0.0;  ///< Resistance and Rcr: Pa
+  double pressure = 0.0;               ///< Pressure: Pa
+  double resistance = 0.0;             ///< Resistance: Pa·s/m³
+  double distal_pressure = 0.0;        ///< Resistance and Rcr: Pa
   double rp = 0.0, c = 0.0, rd = 0.0;  ///< Rcr: proximal resistance, compliance (m³/Pa), distal resistance
 };
 

@@ -48,8 +48,8 @@ struct Result {
 
 /// @brief What a run did, for the CLI's summary.json.
 struct Summary {
-  std::string model;           ///< input file
-  std::string result_file;     ///< path of svzerod_result.csv
+  std::string model;        ///< input file
+  std::string result_file;  ///< path of svzerod_result.csv
   int vessels = 0, junctions = 0, boundary_conditions = 0, unknowns = 0;
   int cycles = 0, steps = 0, rows = 0;
   double period = 0.0, dt = 0.0;

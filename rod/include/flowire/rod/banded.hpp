@@ -19,7 +19,10 @@ namespace flowire::rod {
 class BandedMatrix {
  public:
   BandedMatrix() = default;
-  BandedMatrix(int n, int bandwidth) { reserve(n, bandwidth); resize(n); }
+  BandedMatrix(int n, int bandwidth) {
+    reserve(n, bandwidth);
+    resize(n);
+  }
   /// @brief Allocate room for up to @p max_n rows with half-bandwidth @p bandwidth.
   void reserve(int max_n, int bandwidth);
   /// @brief Set the size (≤ reserved) and zero the entries.

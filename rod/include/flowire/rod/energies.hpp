@@ -65,8 +65,8 @@ using Mat11 = Eigen::Matrix<double, 11, 11>;
 /// @brief Reference twist at the vertex between edges e and f: the signed angle about
 /// t_f from the space-parallel transport of d1_e to d1_f. The result is taken on the
 /// branch closest to @p previous (2π jumps removed).
-[[nodiscard]] inline double reference_twist(const Vec3& d1e, const Vec3& te, const Vec3& d1f,
-                                            const Vec3& tf, double previous) {
+[[nodiscard]] inline double reference_twist(const Vec3& d1e, const Vec3& te, const Vec3& d1f, const Vec3& tf,
+                                            double previous) {
   const double a = signed_angle(parallel_transport(d1e, te, tf), d1f, tf);
   constexpr double two_pi = 2.0 * std::numbers::pi;
   return a + two_pi * std::round((previous - a) / two_pi);
@@ -154,34 +154,32 @@ struct VertexParams {
 /// With @p gauss_newton the Hessian keeps only the first-derivative products
 /// \f$ \sum_k c_k \nabla\kappa_k \nabla\kappa_k^T + c_t \nabla m \nabla m^T \f$ — positive
 /// semi-definite by construction, used by Newton when the exact Hessian is indefinite.
-double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient,
-                  Mat11* hessian, bool gauss_newton = false);
+double bend_twist(const VertexStencil& s, const VertexParams& p, Vec11* gradient, Mat11* hessian,
+                  bool gauss_newton = false);
 
 /// @brief Geometry of one edge at the base point, shared by the two stencils around it.
 struct EdgeGeometry {
-  Vec3 t = Vec3::UnitX();  ///< unit tangent
-  double length = 1.0;     ///< |e|
+  Vec3 t = Vec3::UnitX();                       ///< unit tangent
+  double length = 1.0;                          ///< |e|
   Vec3 m1 = Vec3::UnitY(), m2 = Vec3::UnitZ();  ///< material directors
 };
 
 /// @brief Edge geometry from its end points, reference frame (at this tangent) and angle.
-[[nodiscard]] EdgeGeometry edge_geometry(const Vec3& x0, const Vec3& x1, const EdgeFrame& frame,
-                                         double theta);
+[[nodiscard]] EdgeGeometry edge_geometry(const Vec3& x0, const Vec3& x1, const EdgeFrame& frame, double theta);
 
 /// @brief bend_twist at the base point from precomputed edge geometry (the simulator's
 /// path: frames are up to date, each edge's tangent and material frame computed once).
 /// Same results as bend_twist(VertexStencil) when the stencil's frames are at the base.
-double bend_twist(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f,
-                  double ref_twist, const VertexParams& p, Vec11* gradient, Mat11* hessian,
-                  bool gauss_newton = false);
+double bend_twist(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f, double ref_twist,
+                  const VertexParams& p, Vec11* gradient, Mat11* hessian, bool gauss_newton = false);
 
 namespace detail {
 /// @brief The same function as bend_twist(EdgeGeometry, …), evaluated the straightforward
 /// way: dense 8×8 Hessian in y = (t_e, t_f, θ_e, θ_f), then the chain rule with dense
 /// projector products. Kept as the reference for tests and benchmarks of the fast kernel.
-double bend_twist_reference(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e,
-                            double theta_f, double ref_twist, const VertexParams& p,
-                            Vec11* gradient, Mat11* hessian, bool gauss_newton = false);
+double bend_twist_reference(const EdgeGeometry& e, const EdgeGeometry& f, double theta_e, double theta_f,
+                            double ref_twist, const VertexParams& p, Vec11* gradient, Mat11* hessian,
+                            bool gauss_newton = false);
 }  // namespace detail
 
 }  // namespace flowire::rod

@@ -48,9 +48,9 @@ struct TipSpec {
   double radius = 0.0;             ///< [m] 0: same as the shaft
   double transition_length = 0.0;  ///< [m] linear blend of E and r across the tip/shaft joint
   TipShape shape = TipShape::Straight;
-  double angle = -1.0;             ///< [rad] bend angle; < 0: default (45° angled, 180° j)
-  double bend_radius = 0.005;      ///< [m] radius of the pre-shaped arc
-  double bend_offset = -1.0;       ///< [m] distance from the tip to the arc; < 0: default
+  double angle = -1.0;         ///< [rad] bend angle; < 0: default (45° angled, 180° j)
+  double bend_radius = 0.005;  ///< [m] radius of the pre-shaped arc
+  double bend_offset = -1.0;   ///< [m] distance from the tip to the arc; < 0: default
 };
 
 /// @brief Curvature-adaptive resampling of the free part of the wire (off by default).
@@ -75,27 +75,27 @@ struct AdaptSpec {
 
 /// @brief A guidewire and where it enters (the clamp/introducer).
 struct WireSpec {
-  double length = 1.7;              ///< [m] total wire length
-  double radius = 4.45e-4;          ///< [m] shaft radius (0.035")
-  double youngs_modulus = 67e9;     ///< [Pa] flexural modulus of the shaft
-  double shear_modulus = 0.0;       ///< [Pa] 0: E / (2(1 + ν))
+  double length = 1.7;           ///< [m] total wire length
+  double radius = 4.45e-4;       ///< [m] shaft radius (0.035")
+  double youngs_modulus = 67e9;  ///< [Pa] flexural modulus of the shaft
+  double shear_modulus = 0.0;    ///< [Pa] 0: E / (2(1 + ν))
   double poisson_ratio = 0.3;
-  double density = 6450.0;          ///< [kg/m³]
-  int segments = 0;                 ///< > 0: segment length = length / segments
-  double segment_length = 1e-3;     ///< [m] used when segments == 0
+  double density = 6450.0;       ///< [kg/m³]
+  int segments = 0;              ///< > 0: segment length = length / segments
+  double segment_length = 1e-3;  ///< [m] used when segments == 0
   TipSpec tip;
-  Eigen::Vector3d base_position = Eigen::Vector3d::Zero();  ///< entry point [m]
-  Eigen::Vector3d base_direction = Eigen::Vector3d::UnitX(); ///< insertion direction
+  Eigen::Vector3d base_position = Eigen::Vector3d::Zero();    ///< entry point [m]
+  Eigen::Vector3d base_direction = Eigen::Vector3d::UnitX();  ///< insertion direction
   /// Direction ⊥ base_direction fixing the material frame at zero rotation (the plane of
   /// a pre-shaped tip); zero: any perpendicular.
   Eigen::Vector3d base_normal = Eigen::Vector3d::Zero();
-  double inserted_length = -1.0;    ///< [m] initially inserted; < 0: the whole length
-  double damping = 0.0;             ///< [N s/m²] viscous damping per unit length
+  double inserted_length = -1.0;  ///< [m] initially inserted; < 0: the whole length
+  double damping = 0.0;           ///< [N s/m²] viscous damping per unit length
   // Overrides (0: derived from E, r, G, ρ) for benchmark cases given in stiffnesses.
-  double bending_stiffness = 0.0;   ///< EI [N m²]
-  double twist_stiffness = 0.0;     ///< GJ [N m²]
-  double stretch_stiffness = 0.0;   ///< EA [N]
-  double mass_per_length = 0.0;     ///< ρA [kg/m]
+  double bending_stiffness = 0.0;  ///< EI [N m²]
+  double twist_stiffness = 0.0;    ///< GJ [N m²]
+  double stretch_stiffness = 0.0;  ///< EA [N]
+  double mass_per_length = 0.0;    ///< ρA [kg/m]
   AdaptSpec adapt;
 };
 
@@ -121,11 +121,11 @@ struct Discretization {
   std::vector<double> twist_inertia;      ///< ρ J ℓ̄: rotational inertia of the edge [kg m²]
   std::vector<double> edge_radius;        ///< [m]
   // per vertex k (bending/twisting quantities live on interior vertices)
-  std::vector<double> mass;               ///< lumped mass [kg] (the vertex's cell)
-  std::vector<double> cell_length;        ///< (ℓ̄_{k−1} + ℓ̄_k)/2, one-sided at the ends [m]
-  std::vector<double> bend_stiffness;     ///< EI [N m²]
-  std::vector<double> twist_stiffness;    ///< GJ [N m²]
-  std::vector<double> rest_kappa1;        ///< integrated rest curvature (material frame)
+  std::vector<double> mass;             ///< lumped mass [kg] (the vertex's cell)
+  std::vector<double> cell_length;      ///< (ℓ̄_{k−1} + ℓ̄_k)/2, one-sided at the ends [m]
+  std::vector<double> bend_stiffness;   ///< EI [N m²]
+  std::vector<double> twist_stiffness;  ///< GJ [N m²]
+  std::vector<double> rest_kappa1;      ///< integrated rest curvature (material frame)
   std::vector<double> rest_kappa2;
   /// @brief Reserve room for @p vertices vertices (no allocation in later `discretize`).
   void reserve(int vertices);
@@ -140,7 +140,7 @@ struct RodModel : Discretization {
   int grid_vertices = 0;  ///< capacity: grid points that may ever be simulated
   Eigen::Vector3d base_position, base_direction, base_normal;
   double damping = 0.0;
-  AdaptSpec adapt;        ///< with defaults resolved (min/max lengths, merge angle)
+  AdaptSpec adapt;  ///< with defaults resolved (min/max lengths, merge angle)
 
   /// @brief Build from a spec. @throws flowire::Error (usage) on invalid values.
   static RodModel from_spec(const WireSpec& spec);

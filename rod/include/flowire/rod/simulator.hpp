@@ -20,17 +20,15 @@
 /// potential plus the potential energy external forces report (`add_energy`, e.g. penalty
 /// contact); the other loads (dead loads, friction, drag) enter through the trapezoidal
 /// work along the search ray. The full step is evaluated with its gradient; shorter trials
-/// for the merit only. Loads and external forces are evaluated once per configuration. The matrix is the exact Hessian; where it is indefinite (strong bends
-/// far from rest, compressed edges) that iteration uses the Gauss–Newton matrix of the
-/// same residual, which is positive semi-definite. Position updates follow the rotation of
-/// each edge (`curvilinear_update`) so stiff stretching does not throttle large rotations.
-/// Converged when the scaled residual (forces, torques / h) is below
-/// `force_tolerance`·F + a round-off floor of the stretching forces (F: a force scale from
-/// stiffness and loads), when a full Newton step is below `step_tolerance`·h, or when
-/// progress stops within 100× that tolerance (round-off plateau). Anything else is reported
-/// in the returned `StepReport` *and* through `flowire::warn` — never silently. Reference
-/// frames are re-transported after every accepted update so gradients and Hessians are
-/// exact in the time-parallel chart.
+/// for the merit only. Loads and external forces are evaluated once per configuration. The matrix is the exact Hessian;
+/// where it is indefinite (strong bends far from rest, compressed edges) that iteration uses the Gauss–Newton matrix of
+/// the same residual, which is positive semi-definite. Position updates follow the rotation of each edge
+/// (`curvilinear_update`) so stiff stretching does not throttle large rotations. Converged when the scaled residual
+/// (forces, torques / h) is below `force_tolerance`·F + a round-off floor of the stretching forces (F: a force scale
+/// from stiffness and loads), when a full Newton step is below `step_tolerance`·h, or when progress stops within 100×
+/// that tolerance (round-off plateau). Anything else is reported in the returned `StepReport` *and* through
+/// `flowire::warn` — never silently. Reference frames are re-transported after every accepted update so gradients and
+/// Hessians are exact in the time-parallel chart.
 ///
 /// **Clamps.** The base clamp holds the last two vertices on the insertion line and the
 /// angle of the edge between them; the clamp vertex owns only the half cell in front of
@@ -102,13 +100,13 @@ enum class SolveStatus {
 /// @brief Outcome of one step or static solve.
 struct StepReport {
   SolveStatus status = SolveStatus::Converged;
-  int newton_iterations = 0;    ///< iterations, chord iterations included
-  int chord_iterations = 0;     ///< iterations that reused the previous factorization
-  int line_search_cuts = 0;     ///< halvings summed over the iterations
-  int regularizations = 0;      ///< diagonal shifts added to indefinite matrices
-  int subdivisions = 0;         ///< levels of step halving a failed solve needed (0: none)
-  double residual = 0.0;        ///< final scaled residual [N]
-  double tolerance = 0.0;       ///< the force tolerance it was compared with [N]
+  int newton_iterations = 0;  ///< iterations, chord iterations included
+  int chord_iterations = 0;   ///< iterations that reused the previous factorization
+  int line_search_cuts = 0;   ///< halvings summed over the iterations
+  int regularizations = 0;    ///< diagonal shifts added to indefinite matrices
+  int subdivisions = 0;       ///< levels of step halving a failed solve needed (0: none)
+  double residual = 0.0;      ///< final scaled residual [N]
+  double tolerance = 0.0;     ///< the force tolerance it was compared with [N]
   [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
   /// @brief Continue this report with a later solve's: its counts added, its status,
   /// residual and tolerance taken (the last solve decides), the deeper subdivision kept.
@@ -142,7 +140,7 @@ struct SolverSettings {
   int max_line_search_cuts = 30;
   LinearSolver linear_solver = LinearSolver::Banded;
   Integrator integrator = Integrator::ImplicitEuler;
-  int static_load_steps = 1;        ///< loads ramped in this many increments
+  int static_load_steps = 1;  ///< loads ramped in this many increments
   /// Newton updates of positions follow the rotation of each edge (lengths changed only to
   /// first order): large rotations are taken in few iterations despite stiff stretching.
   bool curvilinear_update = true;
@@ -176,16 +174,16 @@ struct RodEnergy {
 
 /// @brief The changing state (sizes in comments; vertex 0 = distal tip).
 struct RodState {
-  std::vector<Eigen::Vector3d> x;      ///< (n_vertices) positions [m]
-  std::vector<Eigen::Vector3d> v;      ///< (n_vertices) velocities [m/s]
-  std::vector<double> theta;           ///< (n_edges) material angle w.r.t. reference frame [rad]
-  std::vector<double> omega;           ///< (n_edges) dθ/dt [rad/s]
-  std::vector<EdgeFrame> frame;        ///< (n_edges) reference frames (time-parallel)
-  std::vector<double> ref_twist;       ///< (n_vertices) reference twist (interior vertices)
-  std::vector<double> u;               ///< (n_vertices) material coordinate from the tip [m]
-  double time = 0.0;                   ///< [s]
-  double inserted_length = 0.0;        ///< [m] wire length in front of the entry point
-  double base_angle = 0.0;             ///< [rad] rotation of the clamp
+  std::vector<Eigen::Vector3d> x;  ///< (n_vertices) positions [m]
+  std::vector<Eigen::Vector3d> v;  ///< (n_vertices) velocities [m/s]
+  std::vector<double> theta;       ///< (n_edges) material angle w.r.t. reference frame [rad]
+  std::vector<double> omega;       ///< (n_edges) dθ/dt [rad/s]
+  std::vector<EdgeFrame> frame;    ///< (n_edges) reference frames (time-parallel)
+  std::vector<double> ref_twist;   ///< (n_vertices) reference twist (interior vertices)
+  std::vector<double> u;           ///< (n_vertices) material coordinate from the tip [m]
+  double time = 0.0;               ///< [s]
+  double inserted_length = 0.0;    ///< [m] wire length in front of the entry point
+  double base_angle = 0.0;         ///< [rad] rotation of the clamp
   [[nodiscard]] int vertex_count() const { return static_cast<int>(x.size()); }
   [[nodiscard]] int edge_count() const { return static_cast<int>(x.size()) - 1; }
 };
@@ -328,8 +326,7 @@ class RodSimulator {
   /// base angle @p angle, @p fed fed since the step start: the feed predictor, the
   /// prescribed unknowns, the frames carried from the step start, time and arc lengths.
   void start_stage(double L, double angle, double fed, double h);
-  void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x,
-                      std::vector<double>& theta) const;
+  void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x, std::vector<double>& theta) const;
   void refresh_arc_lengths();
   /// Replace the vertex set by the one at material coordinates @p u_new (a dyadic
   /// refinement/coarsening of the current one), carrying the state over.
@@ -365,8 +362,7 @@ class RodSimulator {
   void restore_state(int depth);
   StepReport step_midpoint(double dt);
   void gather(Eigen::Ref<Eigen::VectorXd> q) const;
-  void transport_frames_to(const std::vector<Eigen::Vector3d>& x_new,
-                           const std::vector<EdgeFrame>& frame_from,
+  void transport_frames_to(const std::vector<Eigen::Vector3d>& x_new, const std::vector<EdgeFrame>& frame_from,
                            const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
                            std::vector<double>& twist_to) const;
   /// What an assembly computes: the incremental potential only (line-search trials), its
@@ -375,8 +371,7 @@ class RodSimulator {
   /// Incremental potential (elastic + inertial + external potential energy) at the
   /// current state; @p reuse_loads keeps the loads and external forces of the previous
   /// assembly (same configuration), so externals are evaluated once per configuration.
-  double assemble(Mode mode, double h, double load_scale, Need need, bool psd = false,
-                  bool reuse_loads = false);
+  double assemble(Mode mode, double h, double load_scale, Need need, bool psd = false, bool reuse_loads = false);
   void evaluate_loads(Mode mode, double h, double load_scale);
   void compute_base_reaction();
   [[nodiscard]] double force_scale(double load_scale) const;
@@ -408,10 +403,10 @@ class RodSimulator {
   double feed_speed_ = 0.0;  // this step's feeding speed (insertion_speed_ unless held)
   double max_insertion_force_ = 0.0;
   static constexpr int kMaxForceFeedIterations = 12;
-  double push_force_ = 0.0;              // force-driven feeding [N] (0: kinematic)
-  double force_feed_speed_ = 0.0;        // the last force-driven step's feed speed
-  double force_feed_slope_ = 0.0;        // d(axial clamp force)/d(feed speed), last secant
-  double force_feed_tolerance_ = 1e-4;   // relative to push_force_
+  double push_force_ = 0.0;             // force-driven feeding [N] (0: kinematic)
+  double force_feed_speed_ = 0.0;       // the last force-driven step's feed speed
+  double force_feed_slope_ = 0.0;       // d(axial clamp force)/d(feed speed), last secant
+  double force_feed_tolerance_ = 1e-4;  // relative to push_force_
   long force_feed_iterations_ = 0, force_feed_unbalanced_ = 0;
   long held_steps_ = 0;
   double rotation_speed_ = 0.0;

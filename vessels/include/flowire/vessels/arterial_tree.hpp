@@ -20,13 +20,13 @@ namespace flowire::vessels {
 
 /// @brief One vessel of the network as published (Table 1 of Alastruey et al. 2007).
 struct ArterialTreeVessel {
-  int id = 0;                ///< the paper's vessel number, 1..33
-  std::string name;          ///< branch name used by `arterial_tree()`
-  int from_node = 0;         ///< proximal junction (paper numbering, 1 = aortic root)
-  int to_node = 0;           ///< distal junction or terminal
-  double length = 0.0;       ///< m
-  double radius_in = 0.0;    ///< proximal lumen radius (m)
-  double radius_out = 0.0;   ///< distal lumen radius (m); the paper's vessels are uniform
+  int id = 0;                   ///< the paper's vessel number, 1..33
+  std::string name;             ///< branch name used by `arterial_tree()`
+  int from_node = 0;            ///< proximal junction (paper numbering, 1 = aortic root)
+  int to_node = 0;              ///< distal junction or terminal
+  double length = 0.0;          ///< m
+  double radius_in = 0.0;       ///< proximal lumen radius (m)
+  double radius_out = 0.0;      ///< distal lumen radius (m); the paper's vessels are uniform
   double wall_thickness = 0.0;  ///< m
   double young_modulus = 0.0;   ///< Pa
 };

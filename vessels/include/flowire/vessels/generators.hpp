@@ -8,8 +8,8 @@
 namespace flowire::vessels {
 
 struct StraightTubeParams {
-  double length = 0.1;     ///< m
-  double radius = 2e-3;    ///< m
+  double length = 0.1;   ///< m
+  double radius = 2e-3;  ///< m
   Vec3 origin = Vec3::Zero();
   Vec3 direction = Vec3::UnitX();
 };
@@ -29,7 +29,7 @@ struct YBifurcationParams {
 Centerlines y_bifurcation(const YBifurcationParams& p);
 
 struct AorticArchParams {
-  double scale = 1.0;  ///< multiplies every length and radius (1: adult)
+  double scale = 1.0;     ///< multiplies every length and radius (1: adult)
   int points_per_cm = 4;  ///< centerline sampling of the curved parts
 };
 /// @brief Adult aorta from the aortic root: ascending aorta, arch with brachiocephalic,
@@ -45,12 +45,12 @@ Centerlines aortic_arch(const AorticArchParams& p = {});
 Vec3 aortic_arch_entry(const AorticArchParams& p = {});
 
 struct BinaryTreeParams {
-  int depth = 5;                 ///< generations 0..depth, 2^(depth+1) − 1 vessels
-  double root_radius = 2e-3;     ///< m
-  double root_length = 20e-3;    ///< m
+  int depth = 5;                             ///< generations 0..depth, 2^(depth+1) − 1 vessels
+  double root_radius = 2e-3;                 ///< m
+  double root_length = 20e-3;                ///< m
   double radius_ratio = 0.7937005259840998;  ///< r_{k+1}/r_k (Murray 1926 for equal daughters: 2^(−1/3))
   double length_ratio = 0.7937005259840998;  ///< L_{k+1}/L_k
-  double angle = 0.5;            ///< branching half-angle (rad)
+  double angle = 0.5;                        ///< branching half-angle (rad)
 };
 /// @brief Binary tree, one segment per vessel, built directly as a graph (10⁶ vessels in
 /// about a second). Node 0 is the root inlet; vessels are numbered breadth-first.

@@ -78,9 +78,9 @@ Network read_network(const std::string& path, const ReadOptions& options = {});
 /// @brief One network format: what read_centerlines() and read_network() dispatch on, and
 /// what every list of formats (error messages, the CLI's help, the fuzz target) is made from.
 struct NetworkReader {
-  std::string_view name;                         ///< what writes it, for messages
-  std::vector<std::string_view> extensions;      ///< lower case, with the dot
-  bool (*recognises)(std::string_view head);     ///< by the first 4 KiB, for other extensions
+  std::string_view name;                      ///< what writes it, for messages
+  std::vector<std::string_view> extensions;   ///< lower case, with the dot
+  bool (*recognises)(std::string_view head);  ///< by the first 4 KiB, for other extensions
   Centerlines (*centerlines)(const std::string& path, const ReadOptions& options);
   Network (*network)(const std::string& path, const ReadOptions& options);
 };
@@ -103,11 +103,11 @@ struct DataArray {
 /// `radius`, `radius_from`, `radius_to`, `length`, `branch_id`, `segment_id`, point data
 /// `radius` (for display: mean of the radii the segments at the node have there), then the
 /// caller's arrays; field data `flowire_network`, `branch_names` and the branch node /
-/// segment lists, from which `read_network` rebuilds the identical network. Written atomically (no partial file on failure).
+/// segment lists, from which `read_network` rebuilds the identical network. Written atomically (no partial file on
+/// failure).
 /// @throws flowire::Error (usage) if an array has the wrong size, (input) if the file cannot
 /// be written.
-void write_network_vtp(const Network& net, const std::string& path,
-                       const std::vector<DataArray>& point_data = {},
+void write_network_vtp(const Network& net, const std::string& path, const std::vector<DataArray>& point_data = {},
                        const std::vector<DataArray>& cell_data = {});
 
 /// @brief Write a network as flowire YAML: `length_unit: m`, `branches` with points

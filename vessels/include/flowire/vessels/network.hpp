@@ -5,9 +5,9 @@
 /// A network is built once from centerlines (`Centerlines`: one polyline with radii per
 /// branch, SI units) and is constant afterwards (constant model, changing state).
 /// Nodes are points of the graph; segments are straight tubes between two nodes whose
-/// radius runs linearly between the two end radii of their own branch (see `Segment`). Branch ends that meet within a tolerance share a node (junctions);
-/// nodes of degree one are ends (inlets/outlets). Loops are allowed and counted as the
-/// cyclomatic number E − V + C.
+/// radius runs linearly between the two end radii of their own branch (see `Segment`). Branch ends that meet within a
+/// tolerance share a node (junctions); nodes of degree one are ends (inlets/outlets). Loops are allowed and counted as
+/// the cyclomatic number E − V + C.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <string>
@@ -85,8 +85,8 @@ class Network {
 
   /// @brief Build directly from nodes and segments (generators, svZeroDSolver models).
   /// Each segment becomes its own branch unless `branches` is given.
-  static Network from_graph(std::vector<Vec3> nodes, std::vector<Segment> segments,
-                            std::vector<Branch> branches = {}, std::string source = {});
+  static Network from_graph(std::vector<Vec3> nodes, std::vector<Segment> segments, std::vector<Branch> branches = {},
+                            std::string source = {});
 
   [[nodiscard]] int num_nodes() const { return static_cast<int>(nodes_.size()); }
   [[nodiscard]] int num_segments() const { return static_cast<int>(segments_.size()); }

@@ -50,7 +50,10 @@ struct Neighbourhood {
   Vec3 centre = Vec3::Zero();
   double reach = -1.0;        ///< < 0: empty
   std::vector<int> segments;  ///< (segments near centre) in traversal order
-  void clear() { reach = -1.0; segments.clear(); }
+  void clear() {
+    reach = -1.0;
+    segments.clear();
+  }
 };
 
 class SpatialIndex {

@@ -71,7 +71,7 @@ struct SurfaceDistance {
   Vec3 closest = Vec3::Zero();    ///< closest surface point
   int triangle = -1;              ///< triangle holding it
   Feature feature = Feature::Face;
-  bool open = false;              ///< beyond an open end (closest feature on a boundary edge)
+  bool open = false;  ///< beyond an open end (closest feature on a boundary edge)
 };
 
 /// @brief The smooth signed distance of a contact (LumenSurface::smooth_distance).
@@ -91,14 +91,14 @@ struct SmoothDistance {
 /// triangles and walks no hierarchy; its answer is the one a fresh query gives.
 struct SurfaceNeighbourhood {
   Vec3 centre = Vec3::Zero();
-  double margin = -1.0;    ///< m [m]; < 0: empty, rebuilt at the next query
-  double sigma = 0.0;      ///< the smoothing width it was built for
-  double u_centre = 0.0;   ///< u_c: exact (unsigned) distance from c to the surface [m]
-  bool inside = true;      ///< c lies inside the lumen (or beyond an open end)
-  int nearest = -1;        ///< nearest triangle at c (a hint for the next rebuild)
-  bool gathered = false;   ///< the triangles below are listed
-  double radius = 0.0;     ///< R [m]
-  std::vector<int> triangles;   ///< centroids within R of c
+  double margin = -1.0;        ///< m [m]; < 0: empty, rebuilt at the next query
+  double sigma = 0.0;          ///< the smoothing width it was built for
+  double u_centre = 0.0;       ///< u_c: exact (unsigned) distance from c to the surface [m]
+  bool inside = true;          ///< c lies inside the lumen (or beyond an open end)
+  int nearest = -1;            ///< nearest triangle at c (a hint for the next rebuild)
+  bool gathered = false;       ///< the triangles below are listed
+  double radius = 0.0;         ///< R [m]
+  std::vector<int> triangles;  ///< centroids within R of c
   void clear() { margin = -1.0; }
 };
 
@@ -195,8 +195,8 @@ class LumenSurface {
     Vec3 centroid, normal;
     double area;
   };
-  std::vector<Plane> plane_;  ///< (triangles) what d_σ weighs, packed for its loop
-  double max_vertex_reach_ = 0.0;  ///< the largest distance from a triangle's centroid to its vertices
+  std::vector<Plane> plane_;                      ///< (triangles) what d_σ weighs, packed for its loop
+  double max_vertex_reach_ = 0.0;                 ///< the largest distance from a triangle's centroid to its vertices
   std::vector<std::array<Vec3, 3>> edge_normal_;  ///< (triangles x 3) edge k = (v[k], v[k+1]), pseudonormal
   std::vector<std::array<bool, 3>> edge_open_;    ///< boundary edge
   std::vector<Vec3> vertex_normal_;

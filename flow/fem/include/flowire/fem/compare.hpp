@@ -43,7 +43,7 @@
 namespace flowire::fem {
 
 struct FemOptions {
-  double mesh_size = 0.0;      ///< m; <= 0: size_factor × local radius
+  double mesh_size = 0.0;  ///< m; <= 0: size_factor × local radius
   double size_factor = 0.3;
   Equations equations = Equations::Stokes;
   LinearSolver solver = LinearSolver::Mumps;
@@ -63,10 +63,10 @@ struct FemOptions {
 /// @brief Condition at one outlet end of the network.
 struct OutletValue {
   enum class Type { Pressure, Resistance };
-  int node = -1;                 ///< network end node
+  int node = -1;  ///< network end node
   Type type = Type::Pressure;
-  double pressure = 0.0;         ///< Pressure: Pa; Resistance: the distal pressure P_d (Pa)
-  double resistance = 0.0;       ///< Resistance: p = P_d + R·Q, Q the flow out (Pa·s/m³)
+  double pressure = 0.0;    ///< Pressure: Pa; Resistance: the distal pressure P_d (Pa)
+  double resistance = 0.0;  ///< Resistance: p = P_d + R·Q, Q the flow out (Pa·s/m³)
 };
 
 /// @brief The network's boundary conditions at one instant, imposed on both models.
@@ -77,15 +77,15 @@ struct OutletValue {
 /// Poiseuille model.
 struct BoundaryValues {
   enum class Inlet { Pressure, Flow };
-  int inlet_node = -1;           ///< -1: Network::widest_end()
+  int inlet_node = -1;  ///< -1: Network::widest_end()
   Inlet inlet_type = Inlet::Pressure;
-  double inlet_pressure = 0.0;   ///< Pa (Inlet::Pressure)
-  double inlet_flow = 0.0;       ///< m³/s into the network (Inlet::Flow)
-  double outlet_pressure = 0.0;  ///< Pa, every outlet not listed below
+  double inlet_pressure = 0.0;                           ///< Pa (Inlet::Pressure)
+  double inlet_flow = 0.0;                               ///< m³/s into the network (Inlet::Flow)
+  double outlet_pressure = 0.0;                          ///< Pa, every outlet not listed below
   std::vector<std::pair<int, double>> outlet_pressures;  ///< (end node, Pa)
   std::vector<OutletValue> outlets;                      ///< take precedence over the two above
-  double viscosity = 3.5e-3;     ///< Pa·s
-  double density = 1060.0;       ///< kg/m³
+  double viscosity = 3.5e-3;                             ///< Pa·s
+  double density = 1060.0;                               ///< kg/m³
 };
 
 /// @brief Network solution the FEM is compared with (any network solver can supply it).
@@ -96,23 +96,23 @@ struct NetworkFlow {
 
 struct SamplePoint {
   int branch = -1;
-  double s = 0.0;                  ///< arc length from the branch's first node (m)
+  double s = 0.0;  ///< arc length from the branch's first node (m)
   Vec3 x = Vec3::Zero();
-  double path_distance = 0.0;      ///< along the network from the inlet (m)
+  double path_distance = 0.0;  ///< along the network from the inlet (m)
   double pressure_network = 0.0;
-  double pressure_fem = 0.0;       ///< cross-section mean
+  double pressure_fem = 0.0;  ///< cross-section mean
   double pressure_fem_centre = 0.0;
-  double rel_diff = 0.0;           ///< (fem − network) / |network|
-  double rel_diff_drop = 0.0;      ///< (fem − network) / driving pressure drop
+  double rel_diff = 0.0;       ///< (fem − network) / |network|
+  double rel_diff_drop = 0.0;  ///< (fem − network) / driving pressure drop
   /// Flow along the branch direction: the network segment's, and the FEM flux through the
   /// lumen's cross-section (the plane normal to the centerline, out to where each ray from
   /// the centre first leaves the mesh, at most 2 radii; NaN when the centre is outside it).
   double flow_network = 0.0, flow_fem = 0.0;
-  double rel_diff_flow = 0.0;      ///< (fem − network) / |network|
-  double radius_network = 0.0;     ///< the segment's radius (m)
-  double radius_fem = 0.0;         ///< sqrt(A/π) of that cross-section's area A (m); NaN as flow_fem
+  double rel_diff_flow = 0.0;   ///< (fem − network) / |network|
+  double radius_network = 0.0;  ///< the segment's radius (m)
+  double radius_fem = 0.0;      ///< sqrt(A/π) of that cross-section's area A (m); NaN as flow_fem
   bool near_junction = false;
-  bool found = false;              ///< false if the point is outside the mesh
+  bool found = false;  ///< false if the point is outside the mesh
 };
 
 struct OutletFlow {
@@ -127,7 +127,7 @@ struct BranchDrop {
 };
 
 struct CompareResult {
-  double time = 0.0;                        ///< s: the instant of the boundary values
+  double time = 0.0;  ///< s: the instant of the boundary values
   std::vector<SamplePoint> samples;
   std::vector<OutletFlow> outlets;
   /// Inlet: flow into the network and pressure, network and FEM (one of them imposed).
@@ -141,8 +141,8 @@ struct CompareResult {
   int tets = 0, unknowns = 0;
   /// Force of the fluid on each no-slip group (boundary_forces; `compare` only), N.
   std::vector<std::pair<std::string, Vec3>> forces;
-  double reynolds = 0.0;       ///< inlet Reynolds number of the FEM flow (ρ ū D / η)
-  int newton_iterations = 0;   ///< Navier–Stokes: Newton steps (0 for Stokes)
+  double reynolds = 0.0;      ///< inlet Reynolds number of the FEM flow (ρ ū D / η)
+  int newton_iterations = 0;  ///< Navier–Stokes: Newton steps (0 for Stokes)
   double mesh_seconds = 0.0, assemble_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
 };
 
@@ -192,25 +192,25 @@ struct DynamicOptions {
   /// frame's boundary values.
   std::function<NetworkFlow(double)> network_at;
   std::vector<Windkessel> windkessels;
-  double period = 0.0;             ///< s, > 0; the frame times are k·period/N
-  bool time_dependent = false;     ///< time-dependent Stokes (UnsteadyStokes) instead of quasi-steady frames
-  int steps_per_period = 200;      ///< at least; rounded up to a multiple of the frames
+  double period = 0.0;          ///< s, > 0; the frame times are k·period/N
+  bool time_dependent = false;  ///< time-dependent Stokes (UnsteadyStokes) instead of quasi-steady frames
+  int steps_per_period = 200;   ///< at least; rounded up to a multiple of the frames
   int max_periods = 40;
   double periodic_tolerance = 1e-5;  ///< max change of the frames' outlet flows over a period / max flow
 };
 
 /// @brief A pulsatile series of quasi-steady comparisons.
 struct PulsatileResult {
-  CompareResult steady;                ///< the comparison at `steady_time` (the fem_compare.* files)
-  std::vector<CompareResult> frames;   ///< one per time
+  CompareResult steady;               ///< the comparison at `steady_time` (the fem_compare.* files)
+  std::vector<CompareResult> frames;  ///< one per time
   double max_rel_diff_drop_away = 0.0, max_rel_diff_drop_junction = 0.0;  ///< over all frames
-  double max_flow_split_error = 0.0, max_flow_error = 0.0;               ///< over all frames
-  int factorizations = 0;              ///< FEM matrix factorizations (1 for Stokes)
-  double basis_seconds = 0.0;          ///< assembly, factorization and unit solves
-  double frames_seconds = 0.0;         ///< combining the frames and comparing them
-  int periods = 0;                     ///< dynamic: periods integrated until periodic
-  int steps_per_period = 0;            ///< dynamic: time steps per period
-  double periodic_change = 0.0;        ///< dynamic: the last period's change (see DynamicOptions)
+  double max_flow_split_error = 0.0, max_flow_error = 0.0;                ///< over all frames
+  int factorizations = 0;                                                 ///< FEM matrix factorizations (1 for Stokes)
+  double basis_seconds = 0.0;                                             ///< assembly, factorization and unit solves
+  double frames_seconds = 0.0;                                            ///< combining the frames and comparing them
+  int periods = 0;               ///< dynamic: periods integrated until periodic
+  int steps_per_period = 0;      ///< dynamic: time steps per period
+  double periodic_change = 0.0;  ///< dynamic: the last period's change (see DynamicOptions)
 };
 
 /// @brief Quasi-steady FEM frames at `times` with the boundary values `frames[i]`, and the

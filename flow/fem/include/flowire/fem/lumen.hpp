@@ -39,9 +39,9 @@ namespace flowire::fem {
 
 /// @brief A triangulated surface in metres.
 struct SurfaceMesh {
-  std::string source;                          ///< file it was read from (for messages)
-  std::vector<Vec3> points;                    ///< (num_points)
-  std::vector<std::array<int, 3>> triangles;   ///< (num_triangles) indices into points
+  std::string source;                         ///< file it was read from (for messages)
+  std::vector<Vec3> points;                   ///< (num_points)
+  std::vector<std::array<int, 3>> triangles;  ///< (num_triangles) indices into points
 };
 
 /// @brief Read a surface file and scale it to metres (`length_factor`: metres per file unit).
@@ -49,30 +49,30 @@ struct SurfaceMesh {
 SurfaceMesh read_surface(const std::string& path, double length_factor = 1.0);
 
 struct LumenOptions {
-  double match_factor = 2.0;    ///< a cap may lie this many radii from its centerline end
+  double match_factor = 2.0;  ///< a cap may lie this many radii from its centerline end
   /// Closed surfaces: each vessel is cut this many end radii before its centerline end.
   double clip_back = 0.5;
 };
 
 /// @brief One open end of the lumen and the network end it belongs to.
 struct LumenCap {
-  int node = -1;                ///< network end node
-  Vec3 centroid = Vec3::Zero(); ///< of the boundary loop (length weighted)
-  Vec3 normal = Vec3::Zero();   ///< unit, out of the lumen
-  double radius = 0.0;          ///< equivalent radius sqrt(area / π) of the cap (m)
-  double distance = 0.0;        ///< from the centroid to the network end node (m)
-  double planarity = 0.0;       ///< max distance of the loop from its mean plane / radius
-  int loop_points = 0;          ///< points of the boundary loop
-  bool was_capped = false;      ///< the surface was closed: this end was cut (clip_back)
+  int node = -1;                 ///< network end node
+  Vec3 centroid = Vec3::Zero();  ///< of the boundary loop (length weighted)
+  Vec3 normal = Vec3::Zero();    ///< unit, out of the lumen
+  double radius = 0.0;           ///< equivalent radius sqrt(area / π) of the cap (m)
+  double distance = 0.0;         ///< from the centroid to the network end node (m)
+  double planarity = 0.0;        ///< max distance of the loop from its mean plane / radius
+  int loop_points = 0;           ///< points of the boundary loop
+  bool was_capped = false;       ///< the surface was closed: this end was cut (clip_back)
 };
 
 /// @brief A closed lumen ready to mesh: the wall triangles followed by the fan caps.
 struct LumenSurface {
-  SurfaceMesh surface;                        ///< closed: wall, then the caps' fans
-  int wall_triangles = 0;                     ///< the first ones are wall
-  std::vector<LumenCap> caps;                 ///< one per network end, in the order of Network::ends()
-  std::vector<int> cap_centre;                ///< (caps) index of the fan's centre point
-  double enclosed_volume = 0.0;               ///< of the closed triangulation (divergence theorem), m³
+  SurfaceMesh surface;           ///< closed: wall, then the caps' fans
+  int wall_triangles = 0;        ///< the first ones are wall
+  std::vector<LumenCap> caps;    ///< one per network end, in the order of Network::ends()
+  std::vector<int> cap_centre;   ///< (caps) index of the fan's centre point
+  double enclosed_volume = 0.0;  ///< of the closed triangulation (divergence theorem), m³
 };
 
 /// @brief Find the open ends of `surface`, cap them and match them to the ends of `net`.

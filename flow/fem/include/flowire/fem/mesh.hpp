@@ -40,12 +40,12 @@ using vessels::Network;
 using vessels::Vec3;
 
 struct MeshOptions {
-  double mesh_size = 0.0;     ///< target tet size (m); <= 0: size_factor × local radius
-  double size_factor = 0.3;   ///< h = size_factor · r of the nearest piece when mesh_size <= 0
-  int algorithm3d = 1;        ///< gmsh Mesh.Algorithm3D: 1 Delaunay, 10 HXT
-  int inlet_node = -1;        ///< network end taken as inlet; -1: Network::widest_end()
-  bool verbose = false;       ///< let gmsh print its log
-  std::string save_msh;       ///< if not empty: also write the gmsh mesh (.msh) here
+  double mesh_size = 0.0;    ///< target tet size (m); <= 0: size_factor × local radius
+  double size_factor = 0.3;  ///< h = size_factor · r of the nearest piece when mesh_size <= 0
+  int algorithm3d = 1;       ///< gmsh Mesh.Algorithm3D: 1 Delaunay, 10 HXT
+  int inlet_node = -1;       ///< network end taken as inlet; -1: Network::widest_end()
+  bool verbose = false;      ///< let gmsh print its log
+  std::string save_msh;      ///< if not empty: also write the gmsh mesh (.msh) here
 };
 
 /// @brief A boundary part: a no-slip wall, the inlet, or one outlet. A network mesh has
@@ -65,14 +65,14 @@ struct BoundaryGroup {
 /// tetrahedron has positive volume. A boundary triangle: vertices 0–2, then the edge
 /// nodes of (0,1), (1,2), (0,2), ordered so that the normal (x1−x0)×(x2−x0) points out.
 struct TetMesh {
-  std::vector<Vec3> nodes;                 ///< (num_nodes) all nodes, vertices and edge nodes
-  std::vector<std::array<int, 10>> tets;   ///< (num_tets)
-  std::vector<std::array<int, 6>> faces;   ///< (num_faces) boundary triangles
-  std::vector<int> face_group;             ///< (num_faces) index into `groups`
-  std::vector<BoundaryGroup> groups;       ///< network: 0 wall, 1 inlet, then the outlets in end-node order
-  std::vector<int> vertex_index;           ///< (num_nodes) pressure unknown of a vertex, -1 for edge nodes
+  std::vector<Vec3> nodes;                ///< (num_nodes) all nodes, vertices and edge nodes
+  std::vector<std::array<int, 10>> tets;  ///< (num_tets)
+  std::vector<std::array<int, 6>> faces;  ///< (num_faces) boundary triangles
+  std::vector<int> face_group;            ///< (num_faces) index into `groups`
+  std::vector<BoundaryGroup> groups;      ///< network: 0 wall, 1 inlet, then the outlets in end-node order
+  std::vector<int> vertex_index;          ///< (num_nodes) pressure unknown of a vertex, -1 for edge nodes
   int num_vertices = 0;
-  double mesh_seconds = 0.0;               ///< geometry + meshing wall time
+  double mesh_seconds = 0.0;  ///< geometry + meshing wall time
 
   [[nodiscard]] int num_nodes() const { return static_cast<int>(nodes.size()); }
   [[nodiscard]] int num_tets() const { return static_cast<int>(tets.size()); }

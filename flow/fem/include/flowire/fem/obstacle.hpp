@@ -24,16 +24,16 @@ namespace flowire::fem {
 
 /// @brief Mesh sizes of an obstacle domain.
 struct ObstacleMesh {
-  double mesh_size = 0.0;          ///< far field (m)
-  double obstacle_mesh_size = 0.0; ///< on the obstacle's surface (m)
-  double growth = 0.3;             ///< size increase per unit distance from the obstacle
+  double mesh_size = 0.0;           ///< far field (m)
+  double obstacle_mesh_size = 0.0;  ///< on the obstacle's surface (m)
+  double growth = 0.3;              ///< size increase per unit distance from the obstacle
 };
 
 /// @brief The fluid domain of DFG 3D-1Z with groups wall, obstacle, inlet, outlet.
 ShapeDomain dfg_3d_1z_domain(const ObstacleMesh& sizes);
 
 struct ObstacleResult {
-  std::vector<std::pair<std::string, Vec3>> forces;  ///< (no-slip group, force on it, N)
+  std::vector<std::pair<std::string, Vec3>> forces;       ///< (no-slip group, force on it, N)
   double drag_coefficient = 0.0, lift_coefficient = 0.0;  ///< DFG only
   double pressure_difference = 0.0;                       ///< DFG only: Δp (Pa)
   int tets = 0, unknowns = 0, newton_iterations = 0;

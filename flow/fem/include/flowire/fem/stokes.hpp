@@ -17,9 +17,9 @@
 /// the exact Jacobian of the convection, continuation in the density from the Stokes
 /// solution (Re ∝ ρ) with an adaptive step, and three consistent stabilization terms:
 /// - SUPG (streamline-upwind Petrov–Galerkin, Brooks & Hughes 1982, Comput. Methods Appl.
-///   Mech. Engrg. 32, 199–259): \f$ \sum_e (\tau_M\,\rho\,u\cdot\nabla v,\ \rho(u\cdot\nabla)u - \eta\Delta u + \nabla p - f)_e \f$
-///   with \f$ \tau_M = [(2\rho|u|/h)^2 + (12\eta/h^2)^2]^{-1/2} \f$, h half the element
-///   size (P2); the second derivatives of the curved (isoparametric) element are exact;
+///   Mech. Engrg. 32, 199–259): \f$ \sum_e (\tau_M\,\rho\,u\cdot\nabla v,\ \rho(u\cdot\nabla)u - \eta\Delta u + \nabla
+///   p - f)_e \f$ with \f$ \tau_M = [(2\rho|u|/h)^2 + (12\eta/h^2)^2]^{-1/2} \f$, h half the element size (P2); the
+///   second derivatives of the curved (isoparametric) element are exact;
 /// - LSIC (grad-div): \f$ \sum_e (\tau_C \nabla\cdot u, \nabla\cdot v)_e \f$ with
 ///   \f$ \tau_C = \rho|u|h/2\cdot\min(1, Re_h/3) \f$, \f$ Re_h = \rho|u|h/(2\eta) \f$;
 /// - backflow on outlets: \f$ -\tfrac{\beta\rho}{2}\int_{\Gamma_{out}} \min(u\cdot n, 0)\, u\cdot v \f$,
@@ -78,12 +78,12 @@ enum class Stabilization { Supg, None };
 enum class InletCondition { Profile, Traction };
 
 struct StokesOptions {
-  double viscosity = 3.5e-3;   ///< Pa·s
-  double density = 1060.0;     ///< kg/m³ (Navier–Stokes only)
+  double viscosity = 3.5e-3;  ///< Pa·s
+  double density = 1060.0;    ///< kg/m³ (Navier–Stokes only)
   Equations equations = Equations::Stokes;
   Stabilization stabilization = Stabilization::Supg;  ///< Navier–Stokes only
-  double backflow = 1.0;       ///< β of the outlet backflow term (Navier–Stokes; 0: none)
-  InletCondition inlet = InletCondition::Profile;  ///< Navier–Stokes only
+  double backflow = 1.0;                              ///< β of the outlet backflow term (Navier–Stokes; 0: none)
+  InletCondition inlet = InletCondition::Profile;     ///< Navier–Stokes only
   /// Shape of the inlet velocity profile (Navier–Stokes, `Profile`); empty: Poiseuille,
   /// −n(1 − r²/R²) over the inlet disk.
   std::function<Vec3(const Vec3&)> inlet_velocity;
@@ -119,18 +119,18 @@ struct GroupCondition {
 };
 
 struct StokesSolution {
-  std::vector<Vec3> velocity;     ///< (num_nodes) m/s, zero on the wall
-  std::vector<double> pressure;   ///< (num_vertices) Pa, indexed by TetMesh::vertex_index
-  std::vector<double> group_flow; ///< (groups) m³/s out of the domain through each group
+  std::vector<Vec3> velocity;          ///< (num_nodes) m/s, zero on the wall
+  std::vector<double> pressure;        ///< (num_vertices) Pa, indexed by TetMesh::vertex_index
+  std::vector<double> group_flow;      ///< (groups) m³/s out of the domain through each group
   std::vector<double> group_pressure;  ///< (groups) Pa: the pressure imposed on each open group (wall: 0)
-  int unknowns = 0;               ///< size of the linear system
-  int krylov_iterations = 0;      ///< fieldsplit: total over all linear solves (0 for MUMPS)
-  int factorizations = 0;         ///< matrix factorizations (Stokes: 1; Navier–Stokes: Newton steps)
-  int newton_iterations = 0;      ///< Navier–Stokes: Newton steps over all continuation steps
-  int continuation_steps = 0;     ///< Navier–Stokes: accepted density steps (1: no continuation needed)
-  double reynolds = 0.0;          ///< inlet Reynolds number ρ·ū·D/η (ū = |Q|/A, D = 2√(A/π))
-  double assemble_seconds = 0.0;  ///< preallocation and element assembly
-  double solve_seconds = 0.0;     ///< factorization / Krylov solve
+  int unknowns = 0;                    ///< size of the linear system
+  int krylov_iterations = 0;           ///< fieldsplit: total over all linear solves (0 for MUMPS)
+  int factorizations = 0;              ///< matrix factorizations (Stokes: 1; Navier–Stokes: Newton steps)
+  int newton_iterations = 0;           ///< Navier–Stokes: Newton steps over all continuation steps
+  int continuation_steps = 0;          ///< Navier–Stokes: accepted density steps (1: no continuation needed)
+  double reynolds = 0.0;               ///< inlet Reynolds number ρ·ū·D/η (ū = |Q|/A, D = 2√(A/π))
+  double assemble_seconds = 0.0;       ///< preallocation and element assembly
+  double solve_seconds = 0.0;          ///< factorization / Krylov solve
 };
 
 /// @brief Solve with a prescribed pressure on every non-wall group:

@@ -168,8 +168,8 @@ class CoronaryBC : public Block {
  private:
   bool varres_;
   Param ra_, rv_, ca_, cim_, pim_, pv_;
-  Param ram_;                                  // CORONARY
-  Param ram_min_, ram_max_, t_vc_, t_vr_;      // CORONARY_VAR_RES
+  Param ram_;                              // CORONARY
+  Param ram_min_, ram_max_, t_vc_, t_vr_;  // CORONARY_VAR_RES
   double pim0_ = 0.0, pcim0_ = 0.0;
 };
 

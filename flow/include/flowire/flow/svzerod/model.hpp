@@ -43,10 +43,10 @@ struct Model {
   /// The peer's variables in its order: flow:A:B, pressure:A:B per connection, then the blocks'
   /// own (pressure_c:X, ...); with shared junction pressures several name one unknown.
   std::vector<std::string> dofs;
-  std::vector<int> dof_unknown;                ///< (dofs) the unknown each variable is
-  std::vector<Vessel> vessels;                 ///< in input order
+  std::vector<int> dof_unknown;  ///< (dofs) the unknown each variable is
+  std::vector<Vessel> vessels;   ///< in input order
   int unknowns = 0, junctions = 0, boundary_conditions = 0;
-  double period = 1.0;   ///< cardiac period
+  double period = 1.0;  ///< cardiac period
   bool has_rcr = false;
   double max_tau = 0.0;  ///< largest RCR time constant Rd·C
   SimulationParameters sim;

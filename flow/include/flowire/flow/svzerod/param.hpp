@@ -32,8 +32,10 @@ class Param {
     if (steady) return mean_;
     const double rt = std::fmod(time, cycle_);
     auto k = static_cast<size_t>(std::lower_bound(t_.begin(), t_.end(), rt) - t_.begin());
-    if (k == t_.size()) k = t_.size() - 1;
-    else if (t_[k] == rt) return v_[k];
+    if (k == t_.size())
+      k = t_.size() - 1;
+    else if (t_[k] == rt)
+      return v_[k];
     const size_t m = k ? k - 1 : 1;
     return v_[m] + (v_[k] - v_[m]) / (t_[k] - t_[m]) * (rt - t_[m]);
   }

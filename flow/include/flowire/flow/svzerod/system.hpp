@@ -125,9 +125,9 @@ class System {
   /// Copy KLU's factors into `factors_` after a factorization.
   void extract_factors();
   struct Factors {
-    Rows l, u, off;          ///< strict lower L, strict upper U, off-diagonal blocks; permuted indices
-    std::vector<double> u_inv;  ///< 1/U_kk
-    std::vector<double> r_inv;  ///< 1/(row scale) of permuted row k
+    Rows l, u, off;                 ///< strict lower L, strict upper U, off-diagonal blocks; permuted indices
+    std::vector<double> u_inv;      ///< 1/U_kk
+    std::vector<double> r_inv;      ///< 1/(row scale) of permuted row k
     std::vector<int> p, q, blocks;  ///< row and column permutations, block boundaries
     std::vector<int> cp, ci;        ///< extraction scratch
     std::vector<double> cx;
