@@ -14,7 +14,7 @@ PKGS=(
   xvfb xauth
   python3 python3-matplotlib python3-numpy
   python3-dev pybind11-dev python3-pytest
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev clang-format
 )
 
 missing=()
