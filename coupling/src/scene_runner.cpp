@@ -64,6 +64,8 @@ nlohmann::json resolved_scene(const config::Config& c) {
   return j;
 }
 
+}  // namespace
+
 nlohmann::json counts_json(const vessels::NetworkCounts& n) {
   return {{"branches", n.branches},
           {"nodes", n.nodes},
@@ -76,8 +78,6 @@ nlohmann::json counts_json(const vessels::NetworkCounts& n) {
           {"radius_min", n.radius_min},
           {"radius_max", n.radius_max}};
 }
-
-}  // namespace
 
 config::Config load_scene(const std::string& file, const std::vector<std::string>& overrides,
                           const std::string& out_dir) {

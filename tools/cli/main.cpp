@@ -98,18 +98,9 @@ int cmd_info(const std::string& file, const std::string& unit, double max_seg, b
   const auto n = net.counts();
   print_warnings();
   if (json) {
-    nlohmann::json j = {{"file", file},
-                        {"branches", n.branches},
-                        {"nodes", n.nodes},
-                        {"segments", n.segments},
-                        {"junctions", n.junctions},
-                        {"ends", n.ends},
-                        {"loops", n.loops},
-                        {"components", n.components},
-                        {"total_length", n.total_length},
-                        {"radius_min", n.radius_min},
-                        {"radius_max", n.radius_max},
-                        {"inlet_node", net.widest_end()}};
+    nlohmann::json j = flowire::coupling::counts_json(n);
+    j["file"] = file;
+    j["inlet_node"] = net.widest_end();
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("file:          %s\n", file.c_str());

@@ -74,4 +74,7 @@ struct RunOptions {
 /// @throws flowire::Error; a numerical error still leaves summary.json with status "error".
 RunResult run_scene(const config::Config& scene, const RunOptions& options = {});
 
+/// @brief A network's counts as summary.json and `flowire info --json` write them.
+nlohmann::json counts_json(const vessels::NetworkCounts& counts);
+
 }  // namespace flowire::coupling
