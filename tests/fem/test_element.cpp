@@ -39,17 +39,19 @@ TEST(FemElement, TriQuadratureIsExactToDegreeFour) {
     }
 }
 
+const std::array<std::array<double, 3>, 10> kTetNodes{{{0, 0, 0},
+                                                       {1, 0, 0},
+                                                       {0, 1, 0},
+                                                       {0, 0, 1},
+                                                       {.5, 0, 0},
+                                                       {.5, .5, 0},
+                                                       {0, .5, 0},
+                                                       {0, 0, .5},
+                                                       {.5, 0, .5},
+                                                       {0, .5, .5}}};
+
 TEST(FemElement, P2BasisIsNodalAndGradientsMatchDifferences) {
-  const std::array<std::array<double, 3>, 10> nodes{{{0, 0, 0},
-                                                     {1, 0, 0},
-                                                     {0, 1, 0},
-                                                     {0, 0, 1},
-                                                     {.5, 0, 0},
-                                                     {.5, .5, 0},
-                                                     {0, .5, 0},
-                                                     {0, 0, .5},
-                                                     {.5, 0, .5},
-                                                     {0, .5, .5}}};
+  const auto& nodes = kTetNodes;
   double v[10];
   for (int i = 0; i < 10; ++i) {
     tet_p2(nodes[static_cast<size_t>(i)], v);
@@ -80,17 +82,6 @@ struct Quadratic {
             c[3] + 2 * c[6] * x[2] + c[8] * x[1] + c[9] * x[0]};
   }
 };
-
-const std::array<std::array<double, 3>, 10> kTetNodes{{{0, 0, 0},
-                                                       {1, 0, 0},
-                                                       {0, 1, 0},
-                                                       {0, 0, 1},
-                                                       {.5, 0, 0},
-                                                       {.5, .5, 0},
-                                                       {0, .5, 0},
-                                                       {0, 0, .5},
-                                                       {.5, 0, .5},
-                                                       {0, .5, .5}}};
 
 TEST(FemElement, P2InterpolationReproducesEveryQuadraticAndItsGradient) {
   std::mt19937 rng(5);
