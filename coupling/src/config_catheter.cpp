@@ -22,7 +22,8 @@ void declare_catheter_keys(config::Schema& s) {
   s.add("catheter.density", Type::Number, "1200", D::Density, "density of the catheter wall");
   s.add("catheter.initial_length", Type::Number, "2 cm", D::Length, "catheter length inside at t = 0");
   s.add("catheter.stiffness", Type::Number, "3e4", D::None,
-        "lumen penalty per wire vertex (N/m): a wire vertex pushing on the lumen with force F sinks F/k into it");
+        "lumen penalty per wire vertex (N/m): a wire vertex pushing on the lumen with force F above k*delta/2 sinks "
+        "F/k into it (its onset is smoothed over delta = 0.3 of the clearance, docs/catheter.md)");
   s.add("catheter.insertion", Type::Section, "", D::None, "pushing and turning the catheter at the entry");
   s.add("catheter.insertion.speed", Type::Number, "0", D::Velocity, "catheter insertion speed (negative: pull back)");
   s.add("catheter.insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "catheter rotation speed");
