@@ -43,9 +43,13 @@ inline std::filesystem::path shared_dir() {
 }
 
 /// A scratch directory for a test, emptied first. It lives in the build tree, so two builds
-/// (two clones, two worktrees) running their tests at once never share one.
+/// (two clones, two worktrees) running their tests at once never share one, and under the
+/// running test's own name, so two tests of one file that CTest runs at once (each test is its
+/// own process) never empty each other's.
 inline std::filesystem::path scratch_dir(std::string_view name) {
   auto p = std::filesystem::path(FLOWIRE_BINARY_DIR) / "test-scratch" / std::string(name);
+  if (const auto* test = ::testing::UnitTest::GetInstance()->current_test_info())
+    p /= std::string(test->test_suite_name()) + "." + test->name();
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   return p;
