@@ -484,11 +484,15 @@ SurfaceDistance LumenSurface::distance(const Vec3& x, const SurfaceNeighbourhood
   const double delta = (x - near.centre).norm();
   if (!near.gathered || near.margin < 0.0 || near.u_centre + 2.0 * delta + max_vertex_reach_ > near.radius)
     return distance(x, near.nearest);
+  return closest_among(x, near.triangles);
+}
+
+SurfaceDistance LumenSurface::closest_among(const Vec3& x, std::span<const int> candidates) const {
   double best = std::numeric_limits<double>::infinity();
   int bf = -1, bl = 0;
   Vec3 bc = Vec3::Zero();
   Feature bfeat = Feature::Face;
-  for (int f : near.triangles) {
+  for (int f : candidates) {
     Vec3 c;
     Feature feat;
     int local;
@@ -629,18 +633,9 @@ SmoothDistance LumenSurface::implicit_over(const Vec3& x, double sigma, const st
 }
 
 SurfaceDistance LumenSurface::distance_brute_force(const Vec3& x) const {
-  double best = std::numeric_limits<double>::infinity();
-  int bf = -1, bl = 0;
-  Vec3 bc = Vec3::Zero();
-  Feature bfeat = Feature::Face;
-  for (int f = 0; f < static_cast<int>(tri_.size()); ++f) {
-    Vec3 c;
-    Feature feat;
-    int local;
-    const double d2 = closest_on(f, x, c, feat, local);
-    if (d2 < best) best = d2, bf = f, bc = c, bfeat = feat, bl = local;
-  }
-  return finish(x, bf, bc, bfeat, bl, nullptr);
+  std::vector<int> all(tri_.size());
+  std::iota(all.begin(), all.end(), 0);
+  return closest_among(x, all);
 }
 
 }  // namespace flowire::vessels

@@ -11,6 +11,19 @@
 
 namespace flowire::fem::internal {
 
+namespace {
+/// @p bad: the first inverted tetrahedron this rank met, or −1. Every rank throws if any met one.
+void throw_if_any_inverted(int bad) {
+  int any_bad = bad;
+  MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
+  if (any_bad >= 0)
+    throw_numerical_error(
+        fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
+                    "curved element); use a smaller mesh size",
+                    any_bad));
+}
+}  // namespace
+
 bool element(const TetMesh& mesh, const Reference& ref, int e, double eta, ElementMatrices& em) {
   const auto& t = mesh.tets[static_cast<size_t>(e)];
   Vec3 x[10];
@@ -108,13 +121,7 @@ void assemble(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, const S
       FLOWIRE_PETSC(MatAssemblyBegin(extra, MAT_FINAL_ASSEMBLY));
       FLOWIRE_PETSC(MatAssemblyEnd(extra, MAT_FINAL_ASSEMBLY));
     }
-  int any_bad = bad;
-  MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
-  if (any_bad >= 0)
-    throw_numerical_error(
-        fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
-                    "curved element); use a smaller mesh size",
-                    any_bad));
+  throw_if_any_inverted(bad);
 }
 
 void add_to_vector(Vec b, int count, const PetscInt* rows, const double* vals) {
@@ -381,13 +388,7 @@ void assemble_ns(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, cons
     FLOWIRE_PETSC(VecAssemblyBegin(lift));
     FLOWIRE_PETSC(VecAssemblyEnd(lift));
   }
-  int any_bad = bad;
-  MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
-  if (any_bad >= 0)
-    throw_numerical_error(
-        fmt::format("fem: tetrahedron {} is inverted or degenerate (non-positive Jacobian of the "
-                    "curved element); use a smaller mesh size",
-                    any_bad));
+  throw_if_any_inverted(bad);
 }
 
 void assemble_rhs(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, std::span<const double> group_pressure,

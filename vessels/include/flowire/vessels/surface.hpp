@@ -25,6 +25,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -184,6 +185,8 @@ class LumenSurface {
   int nearest(const Vec3& x, int hint, Vec3& c, Feature& feat, int& local) const;
   double closest_on(int f, const Vec3& x, Vec3& c, Feature& feat, int& local) const;
   SurfaceDistance finish(const Vec3& x, int f, const Vec3& c, Feature feat, int local, Eigen::Matrix3d* hessian) const;
+  /// The exact signed distance over @p candidates (which must hold the nearest triangle).
+  SurfaceDistance closest_among(const Vec3& x, std::span<const int> candidates) const;
   /// d_σ over the triangles of a gathered neighbourhood (those that weigh at x among them).
   SmoothDistance implicit_over(const Vec3& x, double sigma, const std::vector<int>& listed,
                                Eigen::Matrix3d* hessian) const;
