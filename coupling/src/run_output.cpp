@@ -44,6 +44,18 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+/// A rod's Newton work over its dynamic steps, totals and per step.
+nlohmann::json solver_totals_json(const rod::SolverTotals& t) {
+  const double n = t.steps > 0 ? static_cast<double>(t.steps) : 1.0;
+  return {{"steps", t.steps},
+          {"newton_iterations", t.newton_iterations},
+          {"newton_iterations_per_step", static_cast<double>(t.newton_iterations) / n},
+          {"factorizations_per_step", static_cast<double>(t.factorizations) / n},
+          {"chord_iterations", t.chord_iterations},
+          {"line_search_cuts", t.line_search_cuts},
+          {"subdivided_steps", t.subdivided_steps}};
+}
+
 /// output.png: the network coloured by pressure (or plain, without flow) with the wire over
 /// it. network.png looks along the network's thinnest direction (its shape in the plane it
 /// spreads in: the arch of an aorta, the fork of a Y), network_side.png across it. With a
@@ -217,6 +229,18 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
     }
   }
   RunSeconds split;
+  {
+    // How often each phase ran: a scene that does not use a phase makes none of its calls.
+    nlohmann::json& calls = s["calls"];
+    calls["flow_frames"] = fsolver ? fsolver->timings().frame_count : 0;
+    calls["occlusion_updates"] = fsolver && occlusion ? fsolver->timings().occlusion_updates : 0;
+    const auto& fst = forces ? forces->stats() : InteractionStats{};
+    calls["vertex_lookups"] = fst.lookups;
+    calls["wall_queries"] = fst.wall_queries;
+    calls["drag_evaluations"] = fst.drag_evaluations;
+    calls["rod_steps"] = sim ? sim->solver_totals().steps : 0;
+    calls["catheter_steps"] = cosim.catheter() ? cosim.catheter()->solver_totals().steps : 0;
+  }
   if (sim) {
     s["wire"] = {{"vertices", sim->vertex_count()},
                  {"inserted_length", sim->inserted_length()},
@@ -226,6 +250,7 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
                  {"length_drift", sim->length_drift()},
                  {"unconverged_steps", cosim.unconverged_steps()}};
     if (!cosim.settle().is_null()) s["wire"]["settle"] = cosim.settle();
+    s["wire"]["solver"] = solver_totals_json(sim->solver_totals());
     s["wire"]["initial_layout"] = cosim.initial_layout();
     if (c.has("insertion.max_force")) s["wire"]["held_steps"] = sim->held_steps();
     if (c.has("insertion.force"))
@@ -249,6 +274,7 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
       k["base_force"] = {cath->base_force().x(), cath->base_force().y(), cath->base_force().z()};
       k["length_drift"] = cath->length_drift();
       k["unconverged_steps"] = cosim.catheter_unconverged_steps();
+      k["solver"] = solver_totals_json(cath->solver_totals());
       k["bending_stiffness"] = cath->model().bend_stiffness.empty() ? 0.0 : cath->model().bend_stiffness.back();
       if (const VesselForces* cf = cosim.catheter_forces())
         k["contact"] = {{"max_penetration", cf->stats().max_penetration}, {"max_outside", cf->stats().max_outside}};

@@ -57,6 +57,20 @@ bool VesselForces::surface_wall(int i, const Vec3& x, double* d, Vec3* n, Mat3* 
   return true;
 }
 
+bool VesselForces::wall_at(int i, const Vec3& x, double* d, Vec3* n, Mat3* H) {
+  ++stats_.wall_queries;
+  if (surface_) return surface_wall(i, x, d, n, H);
+  const auto k = static_cast<size_t>(i);
+  const auto& net = index_.network();
+  const auto& seg = net.segment(segment_[k]);
+  // The union's distance is at most the located capsule's: deep inside it, no wall is near.
+  if (capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + wire_radius_ <
+      0.0)
+    return false;
+  *d = index_.wall_distance(x, location_[k], near_[k], n, H);
+  return true;
+}
+
 void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) {
   const int n = rod.vertex_count();
   const int free = std::min(rod.first_clamped_vertex, n);
@@ -114,18 +128,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     double d = 0.0;
     Vec3 n_wall;
     Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
-    if (surface_) {
-      if (!surface_wall(i, x, &d, &n_wall, &H_wall)) continue;
-    } else {
-      const int s = segment_[static_cast<size_t>(i)];
-      const auto& seg = net.segment(s);
-      const Vec3& A = net.node(seg.node_from);
-      const Vec3& B = net.node(seg.node_to);
-      const double d_cap = capsule_distance(x, A, B, seg.radius, nullptr, nullptr);
-      // The union's distance is at most this capsule's: deep inside it, no wall is near.
-      if (d_cap + a < 0.0) continue;
-      d = index_.wall_distance(x, location_[static_cast<size_t>(i)], near_[static_cast<size_t>(i)], &n_wall, &H_wall);
-    }
+    if (!wall_at(i, x, &d, &n_wall, &H_wall)) continue;
     const auto pen = wall_penalty(d, n_wall, H_wall, a, k_wall);
     if (pen.penetration <= 0.0) continue;
     ++stats_.contacts;
@@ -201,6 +204,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       in.v = rod.velocity(i);
       in.vessel_radius = s >= 0 ? net.segment(s).radius : 0.0;
       const auto d = blood_drag(drag_, in);
+      ++stats_.drag_evaluations;
       reynolds_[k] = d.reynolds_normal;
       out.add_force(i, d.force);
       out.add_velocity_jacobian(i, d.dfdv);

@@ -191,6 +191,7 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
   const int nd = dof_count();
   auto dq = w.dq.head(nd);
   const double slope = w.grad.head(nd).dot(dq);
+  const double residual_before = residual_norm(first_free, first_fixed);
   // Backtracking line search on φ + E_ext − W: φ the incremental potential, E_ext the
   // potential of conservative external forces (penalty contact), W the trapezoidal work
   // of the remaining loads (dead loads, friction, drag) along the ray.
@@ -202,7 +203,24 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
   w.fcons_accepted.head(nd) = w.fcons.head(nd);
   const double ext_energy_b = w.ext_energy;
   const Eigen::VectorXd& qb = w.q;  // unchanged until accepted
-  double alpha = 1.0;
+  // Trust region on the motion: no vertex moves more than half its shortest edge and no edge
+  // turns about its tangent more than 0.5 rad in one iteration. The discrete rod's energy is
+  // far from quadratic beyond that (edges rotate by O(step/ℓ)), so a longer Newton step,
+  // which a nearly singular matrix gives (a snapping pre-shaped tip, a wire free between
+  // walls), is only cut back by the line search after costly trials.
+  double alpha_max = 1.0;
+  {
+    double lmin = model_.h;
+    for (int j = 0; j < nv - 1; ++j) lmin = std::min(lmin, disc_.rest_length[j]);
+    double sx = 0.0, st = 0.0;
+    for (int k = first_free / 4; 4 * k < first_fixed; ++k) {
+      sx = std::max(sx, dq.segment<3>(4 * k).norm());
+      if (4 * k + 3 < first_fixed) st = std::max(st, std::abs(dq(4 * k + 3)));
+    }
+    if (sx > 0.5 * lmin) alpha_max = 0.5 * lmin / sx;
+    if (st > 0.5) alpha_max = std::min(alpha_max, 0.5 / st);
+  }
+  double alpha = alpha_max;
   bool accepted = false;
   // Pass 0 measures conservative external forces by their potential. A potential that
   // is not consistent with its forces (e.g. a contact whose wall changes where a vertex
@@ -210,7 +228,7 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
   // treats every external force as a load (trapezoidal work), as without potentials.
   const int passes = externals_.empty() ? 1 : 2;
   for (int pass = 0; pass < passes && !accepted; ++pass) {
-    alpha = 1.0;
+    alpha = alpha_max;
     for (int cut = 0; cut <= settings_.max_line_search_cuts; ++cut) {
       for (int k = 0; k < nv; ++k) {
         s.x[k] = w.x_accepted[k] + alpha * dq.segment<3>(4 * k);
@@ -259,6 +277,14 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
       }
       merit_t -= work;
       bool good = std::isfinite(phi_t) && merit_t <= merit0 + 1e-4 * alpha * slope + 1e-14 * std::abs(merit0);
+      if (!good && with_gradient && std::isfinite(phi_t) && -slope <= 1e-10 * std::abs(merit0)) {
+        // Near convergence the decrease a full step promises (−slope) is below what the merit
+        // can resolve (its round-off, ~1e-16·|merit| per term summed over the wire), so the
+        // energy test can no longer tell a good step from a bad one: there the full step is
+        // judged by the residual it leaves (the gradient norm, a merit of its own that
+        // round-off does not hide), and accepted if that at least halves.
+        good = finite(w.grad.head(nd)) && residual_norm(first_free, first_fixed) <= 0.5 * residual_before;
+      }
       if (good && !with_gradient) assemble(mode, h, load_scale, Need::Gradient, false, /*reuse_loads=*/true);
       good = good && finite(w.grad.head(nd));
       if (good) {

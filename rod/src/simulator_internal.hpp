@@ -63,6 +63,7 @@ struct RodSimulator::Work {
   Eigen::VectorXd qhat;                        ///< (nd) inertial target q₀ + h q̇₀
   std::vector<Vec3> x_end;                     ///< (nv) where the last implicit Euler step ended …
   double h_end = 0.0;                          ///< … and its step, for the next step's predictor
+  double feed_end = 0.0;                       ///< … and its feed speed [m/s]
   std::vector<Vec3> v_guess;                   ///< (nv) velocity of Newton's initial guess
   std::vector<double> omega_guess;             ///< (ne)
   std::vector<Vec3> x_mid;                     ///< (nv) implicit midpoint: positions at the midpoint

@@ -21,6 +21,7 @@ using detail::finite;
 StepReport RodSimulator::step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
   const StepReport rep = step_subdivided(dt, 0);
+  totals_.add(rep);
   report(rep, settings_.integrator == Integrator::ImplicitMidpoint ? "implicit midpoint step" : "implicit Euler step");
   return rep;
 }
@@ -162,9 +163,15 @@ StepReport RodSimulator::step_euler(double dt) {
   const double angle_new = target_angle_ + rotation_speed_ * dt;
 
   // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
+  // While the wire is fed at the speed of the last step, the second-order inertial guess
+  // already carries the feed (every free vertex moved with it then): it is O(h³) from the
+  // solution, where the feed predictor (the wire slid along its own polyline) is O(h²) off
+  // in every bend and far off at a pre-shaped tip. The feed predictor starts a feed, or a
+  // change of its speed, where the inertial guess has nothing to go on.
+  const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feed_speed_ == w.feed_end;
   begin_step(dt, settings_.second_order_guess);
   const int nv = s.vertex_count();
-  start_stage(L_new, angle_new, L_new - s.inserted_length, dt);
+  start_stage(L_new, angle_new, steady_feed ? 0.0 : L_new - s.inserted_length, dt);
 
   StepReport rep = newton(Mode::Dynamic, dt, 1.0);
   if (rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix) {
@@ -186,6 +193,7 @@ StepReport RodSimulator::step_euler(double dt) {
   // Where this step left the vertices, for the next step's predictor.
   w.x_end = s.x;
   w.h_end = dt;
+  w.feed_end = feed_speed_;
   compute_base_reaction();
   return rep;
 }

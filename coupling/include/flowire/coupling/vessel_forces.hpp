@@ -38,9 +38,11 @@ using VelocityField = std::function<vessels::Vec3(int segment, const vessels::Ve
 struct InteractionStats {
   std::uint64_t evaluations = 0;
   std::uint64_t lookups = 0;
-  std::uint64_t contacts = 0;    ///< vertex evaluations in contact
-  double max_penetration = 0.0;  ///< over accepted steps [m]
-  double max_outside = 0.0;      ///< max over accepted steps of (wall distance of a vertex centre) [m]
+  std::uint64_t contacts = 0;          ///< vertex evaluations in contact
+  std::uint64_t wall_queries = 0;      ///< wall distances asked of the network or the lumen surface
+  std::uint64_t drag_evaluations = 0;  ///< vertex evaluations of the blood drag
+  double max_penetration = 0.0;        ///< over accepted steps [m]
+  double max_outside = 0.0;            ///< max over accepted steps of (wall distance of a vertex centre) [m]
   /// Where and when a vertex centre was first more than a wire radius outside the lumen
   /// (outside_time < 0: never).
   double outside_time = -1.0;       ///< [s]
@@ -138,6 +140,9 @@ class VesselForces : public rod::ExternalForce {
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;
   bool lagged_ = false;
   InteractionStats stats_;
+  /// Wall distance and normal of vertex i at @p x (the lumen surface's smooth distance, or the
+  /// network's blended capsules); false where the vertex is deep inside (no wall near).
+  bool wall_at(int i, const Vec3& x, double* d, Vec3* n, Mat3* H);
   /// Smooth wall distance of vertex i from the surface; false if it is deeper than surf_skip_.
   bool surface_wall(int i, const vessels::Vec3& x, double* d, vessels::Vec3* n, Mat3* H);
   const vessels::LumenSurface* surface_ = nullptr;

@@ -122,6 +122,28 @@ struct StepReport {
   }
 };
 
+/// @brief What the dynamic steps have cost so far, summed over every step taken with step()
+/// (step halvings and force-feed retakes included): the per-step figures a benchmark or a
+/// summary reports beside the time.
+struct SolverTotals {
+  long steps = 0;              ///< calls of step()
+  long newton_iterations = 0;  ///< chord iterations included
+  long chord_iterations = 0;   ///< iterations that reused a factorization
+  long factorizations = 0;     ///< matrix factorizations (Newton iterations that were not chord steps, plus fallbacks)
+  long line_search_cuts = 0;
+  long subdivided_steps = 0;  ///< steps retaken as halves
+  long unconverged_steps = 0;
+  void add(const StepReport& r) {
+    ++steps;
+    newton_iterations += r.newton_iterations;
+    chord_iterations += r.chord_iterations;
+    factorizations += r.newton_iterations - r.chord_iterations + r.regularizations;
+    line_search_cuts += r.line_search_cuts;
+    subdivided_steps += r.subdivisions > 0 ? 1 : 0;
+    unconverged_steps += r.converged() ? 0 : 1;
+  }
+};
+
 /// @brief Wall-clock seconds spent by the Newton solves, by phase, summed since construction
 /// (a benchmark's per-phase breakdown). External forces are evaluated inside the first
 /// and third (their own timers split them further).
@@ -288,6 +310,8 @@ class RodSimulator {
   [[nodiscard]] const Eigen::Vector3d& base_torque() const { return base_torque_; }
   [[nodiscard]] const StepReport& last_report() const { return last_report_; }
   [[nodiscard]] const NewtonPhaseSeconds& phase_seconds() const { return phase_seconds_; }
+  /// @brief Newton work of the dynamic steps so far (step() calls).
+  [[nodiscard]] const SolverTotals& solver_totals() const { return totals_; }
   [[nodiscard]] const std::vector<TipSample>& tip_trace() const { return trace_; }
   [[nodiscard]] RodEnergy energy() const;
   /// @brief max over free edges of |ℓ/ℓ̄ − 1|.
@@ -418,6 +442,7 @@ class RodSimulator {
   double tip_clamp_theta_ = 0.0;
   StepReport last_report_;
   NewtonPhaseSeconds phase_seconds_;
+  SolverTotals totals_;
   std::vector<TipSample> trace_;
 };
 
