@@ -26,6 +26,7 @@ rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wi
   s.inserted_length = cat.initial_length;
   s.tip.length = 0.0;  // one section over the whole tube (and contact.friction all along it)
   s.damping = wire.damping;
+  s.mass_damping = wire.mass_damping;
   // The tube's section (thick-walled, exact).
   const double ro = cat.outer_radius, ri = cat.inner_radius, pi = std::numbers::pi;
   const double i4 = pi * (std::pow(ro, 4) - std::pow(ri, 4)) / 4.0;

@@ -1,6 +1,7 @@
 // The scene's wire: and loads: sections: their keys, the wire they describe, where it
 // enters the network, and the loads on it.
 #include <fmt/format.h>
+#include <cmath>
 
 #include <exception>
 #include <string>
@@ -72,7 +73,10 @@ rod::WireSpec scene_wire_spec(const config::Config& c) {
   } else {
     w.segments = c.integer("wire.segments");
   }
-  w.damping = c.number("wire.damping");
+  // Declared in 1/s, mass-proportional: the rod's mass damping (not its per-length one).
+  w.mass_damping = c.number("wire.damping");
+  if (!(w.mass_damping >= 0.0) || !std::isfinite(w.mass_damping))
+    throw_input_error(c.where("wire.damping"), "must be a finite number >= 0 (1/s)");
   w.tip.length = 0.0;
   if (c.has_section("wire.tip")) {
     w.tip.length = c.number("wire.tip.length");

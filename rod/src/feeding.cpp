@@ -166,7 +166,7 @@ StepReport RodSimulator::step_force_fed(double dt) {
   if (!(force_feed_slope_ > 0.0)) {
     double m = 0.0;
     for (double mk : disc_.mass) m += mk;
-    force_feed_slope_ = std::max(m / dt + model_.damping * state_.inserted_length, 1e-12);
+    force_feed_slope_ = std::max(m / dt + model_.damping * state_.inserted_length + model_.mass_damping * m, 1e-12);
   }
   save_state(slot);
   double v = std::clamp(force_feed_speed_, -vmax, vmax);

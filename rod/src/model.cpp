@@ -47,6 +47,7 @@ RodModel RodModel::from_spec(const WireSpec& s) {
   require(s.segments > 0 || s.segment_length > 0.0, "give segments or a segment_length > 0");
   require(s.base_direction.norm() > 0.0, "base_direction must be nonzero");
   require(s.damping >= 0.0, "damping must be >= 0");
+  require(s.mass_damping >= 0.0 && std::isfinite(s.mass_damping), "mass_damping must be >= 0");
   require(s.tip.length >= 0.0 && s.tip.bend_radius > 0.0, "tip length >= 0 and bend_radius > 0");
 
   RodModel m;
@@ -64,6 +65,7 @@ RodModel RodModel::from_spec(const WireSpec& s) {
   }
   m.base_normal = n.normalized();
   m.damping = s.damping;
+  m.mass_damping = s.mass_damping;
 
   m.G_shaft_ = s.shear_modulus > 0.0 ? s.shear_modulus : s.youngs_modulus / (2.0 * (1.0 + s.poisson_ratio));
   m.E_shaft_ = s.youngs_modulus;

@@ -118,7 +118,7 @@ void RodSimulator::begin_step(double h, bool extrapolate) {
   for (int k = 0; k < nv; ++k) {
     w.q0.segment<3>(4 * k) = s.x[k];
     w.mass.segment<3>(4 * k).setConstant(disc_.mass[k]);
-    w.damp.segment<3>(4 * k).setConstant(model_.damping * disc_.cell_length[k]);
+    w.damp.segment<3>(4 * k).setConstant(model_.damping * disc_.cell_length[k] + model_.mass_damping * disc_.mass[k]);
     if (k < nv - 1) {
       w.q0(4 * k + 3) = s.theta[k];
       w.qhat(4 * k + 3) = s.theta[k] + h * s.omega[k];

@@ -91,6 +91,9 @@ struct WireSpec {
   Eigen::Vector3d base_normal = Eigen::Vector3d::Zero();
   double inserted_length = -1.0;  ///< [m] initially inserted; < 0: the whole length
   double damping = 0.0;           ///< [N s/m²] viscous damping per unit length
+  /// [1/s] mass-proportional damping ζ: each vertex feels −ζ m v (each mode's amplitude then
+  /// decays as e^(−ζt/2)); adds to `damping`
+  double mass_damping = 0.0;
   // Overrides (0: derived from E, r, G, ρ) for benchmark cases given in stiffnesses.
   double bending_stiffness = 0.0;  ///< EI [N m²]
   double twist_stiffness = 0.0;    ///< GJ [N m²]
@@ -139,8 +142,9 @@ struct RodModel : Discretization {
   double length = 0.0;    ///< total wire length [m]
   int grid_vertices = 0;  ///< capacity: grid points that may ever be simulated
   Eigen::Vector3d base_position, base_direction, base_normal;
-  double damping = 0.0;
-  AdaptSpec adapt;  ///< with defaults resolved (min/max lengths, merge angle)
+  double damping = 0.0;       ///< [N s/m²] per unit length
+  double mass_damping = 0.0;  ///< [1/s]
+  AdaptSpec adapt;            ///< with defaults resolved (min/max lengths, merge angle)
 
   /// @brief Build from a spec. @throws flowire::Error (usage) on invalid values.
   static RodModel from_spec(const WireSpec& spec);
