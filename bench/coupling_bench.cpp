@@ -108,7 +108,7 @@ struct ArchExample {
   std::unique_ptr<coupling::WireOcclusion> occlusion;
   double t = 0;
 
-  ArchExample(double network_h, double inserted, bool two_way = false) {
+  ArchExample(double network_h, double inserted, bool two_way = false, double segment = 2e-3) {
     net = vessels::Network::build(vessels::aortic_arch(), {.max_segment_length = network_h});
     index = std::make_unique<vessels::SpatialIndex>(net, 4);
     // The example's flow: 120/80 mmHg at 72 bpm, 1 mmHg·s/mL split over the outlets by r³.
@@ -125,7 +125,7 @@ flow:
     w.radius = 0.445e-3;
     w.youngs_modulus = 60e9;
     w.density = 6450;
-    w.segment_length = 2e-3;
+    w.segment_length = segment;
     w.tip.length = 0.03;
     w.tip.youngs_modulus = 10e9;
     w.tip.shape = rod::TipShape::J;
@@ -207,6 +207,40 @@ void BM_ArchExample78cm_5mmNetwork_TwoWay(benchmark::State& st) { run_arch(st, 5
 void BM_ArchExample78cm_1mmNetwork_TwoWay(benchmark::State& st) { run_arch(st, 1e-3, true); }
 BENCHMARK(BM_ArchExample78cm_5mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_ArchExample78cm_1mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->Iterations(200);
+
+/// The wire as every study moves it: held, pushed or pulled at 2 cm/s, or pushed while
+/// turned at π rad/s, with `inserted` metres in the arch at `segment` metres a vertex
+/// (about inserted/segment vertices in contact), everything on (friction, cylinder drag,
+/// pulsatile flow, 5 mm network). Counters: Newton iterations and unconverged steps.
+enum class Drive { Held, Pushed, Pulled, Turned };
+void run_driven(benchmark::State& state, Drive drive) {
+  const double inserted = 1e-3 * static_cast<double>(state.range(0));
+  const double segment = 1e-6 * static_cast<double>(state.range(1));
+  ArchExample s(5e-3, inserted, false, segment);
+  if (drive == Drive::Pushed || drive == Drive::Turned) s.rod->set_insertion_speed(0.02);
+  if (drive == Drive::Pulled) s.rod->set_insertion_speed(-0.02);
+  if (drive == Drive::Turned) s.rod->set_rotation_speed(std::numbers::pi);
+  for (int i = 0; i < 5; ++i) s.step(0.01);  // past the start of the feed
+  const auto before = s.rod->solver_totals();
+  for (auto _ : state) s.step(0.01);
+  const auto& after = s.rod->solver_totals();
+  const double n = static_cast<double>(state.iterations());
+  state.counters["vertices"] = s.rod->vertex_count();
+  state.counters["newton_per_step"] = static_cast<double>(after.newton_iterations - before.newton_iterations) / n;
+  state.counters["factorizations_per_step"] = static_cast<double>(after.factorizations - before.factorizations) / n;
+  state.counters["unconverged"] = static_cast<double>(after.unconverged_steps - before.unconverged_steps);
+}
+void BM_ArchHeld(benchmark::State& st) { run_driven(st, Drive::Held); }
+void BM_ArchPushed(benchmark::State& st) { run_driven(st, Drive::Pushed); }
+void BM_ArchPulled(benchmark::State& st) { run_driven(st, Drive::Pulled); }
+void BM_ArchTurned(benchmark::State& st) { run_driven(st, Drive::Turned); }
+#define FLOWIRE_DRIVEN_ARGS                                                                            \
+  ArgNames({"inserted_mm", "segment_um"})->Args({200, 1000})->Args({400, 1000})->Args({425, 250})      \
+      ->Unit(benchmark::kMillisecond)->Iterations(100)
+BENCHMARK(BM_ArchHeld)->FLOWIRE_DRIVEN_ARGS;
+BENCHMARK(BM_ArchPushed)->FLOWIRE_DRIVEN_ARGS;
+BENCHMARK(BM_ArchPulled)->FLOWIRE_DRIVEN_ARGS;
+BENCHMARK(BM_ArchTurned)->FLOWIRE_DRIVEN_ARGS;
 
 // Scaling of each phase: against the inserted length (args: cm inserted, network 5 mm) and
 // against the network's sampling (args: 78 cm, network in tenths of a mm).
