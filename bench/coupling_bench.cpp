@@ -234,9 +234,13 @@ void BM_ArchHeld(benchmark::State& st) { run_driven(st, Drive::Held); }
 void BM_ArchPushed(benchmark::State& st) { run_driven(st, Drive::Pushed); }
 void BM_ArchPulled(benchmark::State& st) { run_driven(st, Drive::Pulled); }
 void BM_ArchTurned(benchmark::State& st) { run_driven(st, Drive::Turned); }
-#define FLOWIRE_DRIVEN_ARGS                                                                            \
-  ArgNames({"inserted_mm", "segment_um"})->Args({200, 1000})->Args({400, 1000})->Args({425, 250})      \
-      ->Unit(benchmark::kMillisecond)->Iterations(100)
+#define FLOWIRE_DRIVEN_ARGS               \
+  ArgNames({"inserted_mm", "segment_um"}) \
+      ->Args({200, 1000})                 \
+      ->Args({400, 1000})                 \
+      ->Args({425, 250})                  \
+      ->Unit(benchmark::kMillisecond)     \
+      ->Iterations(100)
 BENCHMARK(BM_ArchHeld)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchPushed)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchPulled)->FLOWIRE_DRIVEN_ARGS;
