@@ -270,7 +270,17 @@ StepReport RodSimulator::solve_static_once() {
   const int steps = std::max(1, settings_.static_load_steps);
   StepReport total;
   for (int i = 1; i <= steps; ++i) {
-    const StepReport r = newton(Mode::Static, 1.0, static_cast<double>(i) / steps);
+    const double load = static_cast<double>(i) / steps;
+    const int start_slot = std::max(settings_.max_subdivisions, 0) + 1;
+    save_state(start_slot);  // the load step's start, for the continuation below
+    StepReport r = newton(Mode::Static, 1.0, load);
+    if (!r.converged()) {
+      // Newton from the start could not find the equilibrium (a wire free between walls has
+      // nearly singular static modes; a pre-shaped tip squeezed into a tight lumen snaps):
+      // walk to it in pseudo-time from the load step's start instead.
+      restore_state(start_slot);
+      r.then(relax_to_static(load, settings_.max_static_iterations - r.newton_iterations));
+    }
     total.then(r);
     if (!r.converged()) break;
   }
@@ -281,6 +291,72 @@ StepReport RodSimulator::solve_static_once() {
     const RodView view = current_view(0.0);
     for (auto& e : externals_) e->start(view);
   }
+  return total;
+}
+
+StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
+  // Pseudo-transient continuation (Kelley & Keyes 1998): implicit Euler steps of pseudo-time
+  // τ from rest, each from the last one's end with the velocity reset to zero, so the inertia
+  // M/τ² regularizes the matrix that alone is nearly singular; τ grows while the steps come
+  // easily, and once the wire has stopped moving, Newton on the static equations finishes
+  // from there. The fixed point of the pseudo-steps (x = x₀, so every velocity-dependent
+  // force, friction and drag, is that of a wire at rest) is the static equilibrium itself.
+  Work& w = *work_;
+  RodState& s = state_;
+  StepReport total;
+  total.status = SolveStatus::MaxIterations;
+  const int max_static = settings_.max_static_iterations;
+  double tau = 1e-3;
+  for (int k = 0; k < 200 && tau > 1e-9 && total.newton_iterations < budget; ++k) {
+    for (auto& v : s.v) v.setZero();
+    for (auto& o : s.omega) o = 0.0;
+    begin_step(tau, /*extrapolate=*/false);
+    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+    const StepReport r = newton(Mode::Dynamic, tau, load_scale);
+    total.newton_iterations += r.newton_iterations;
+    total.chord_iterations += r.chord_iterations;
+    total.line_search_cuts += r.line_search_cuts;
+    total.regularizations += r.regularizations;
+    auto back_to_step_start = [&] {
+      s.x = w.x0;
+      s.theta = w.theta0;
+      s.frame = w.frame0;
+      s.ref_twist = w.twist0;
+    };
+    if (!r.converged()) {
+      back_to_step_start();
+      tau *= 0.25;
+      continue;
+    }
+    double moved = 0.0;
+    for (int i = 0; i < first_clamped_; ++i) moved = std::max(moved, (s.x[i] - w.x0[i]).norm());
+    if (r.newton_iterations <= 4) tau *= 4.0;
+    if (moved > 1e-3 * model_.h && k % 8 != 7) continue;
+    // Nearly at rest (or every eighth step): try to finish with static Newton, keeping the
+    // pseudo-step's end if it cannot.
+    const int try_slot = std::max(settings_.max_subdivisions, 0) + 3;
+    save_state(try_slot);
+    settings_.max_static_iterations = std::min(40, budget - total.newton_iterations);
+    if (settings_.max_static_iterations <= 0) {
+      settings_.max_static_iterations = max_static;
+      break;
+    }
+    const StepReport st = newton(Mode::Static, 1.0, load_scale);
+    settings_.max_static_iterations = max_static;
+    total.newton_iterations += st.newton_iterations;
+    total.chord_iterations += st.chord_iterations;
+    total.line_search_cuts += st.line_search_cuts;
+    total.regularizations += st.regularizations;
+    total.residual = st.residual;
+    total.tolerance = st.tolerance;
+    if (st.converged()) {
+      total.status = SolveStatus::Converged;
+      break;
+    }
+    restore_state(try_slot);
+  }
+  for (auto& v : s.v) v.setZero();
+  for (auto& o : s.omega) o = 0.0;
   return total;
 }
 

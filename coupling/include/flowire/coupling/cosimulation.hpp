@@ -127,8 +127,8 @@ class CoSimulation {
   /// wire: (placed at its entry), catheter:, loads:, insertion:, and what acts on them.
   void build_wire(nlohmann::json& facts);
   void build_catheter(const rod::WireSpec& wire);
-  /// Lays the wire (and catheter) along the vessel path if laid straight it would leave the lumen.
-  void lay_along_vessels(const rod::WireSpec& wire, int entry);
+  /// Lays the inserted wire (and catheter) along the vessel path from the entry.
+  void lay_along_vessels(int entry);
   /// Wall contact and blood drag (contact:, coupling:, vessels.surface), on the catheter too.
   void add_wall_forces(const rod::WireSpec& wire, int entry, nlohmann::json& facts);
   void couple_catheter(nlohmann::json& facts);  ///< the wire in the catheter's lumen

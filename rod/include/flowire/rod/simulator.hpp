@@ -155,10 +155,11 @@ struct NewtonPhaseSeconds {
 
 /// @brief Newton and linear-solver settings.
 struct SolverSettings {
-  int max_iterations = 30;          ///< per dynamic step
-  int max_static_iterations = 400;  ///< per static load step
-  double force_tolerance = 1e-8;    ///< relative to the force scale
-  double step_tolerance = 1e-10;    ///< relative to the segment length
+  int max_iterations = 30;  ///< per dynamic step
+  int max_static_iterations =
+      400;                        ///< per static load step (a pseudo-time continuation after a failed Newton included)
+  double force_tolerance = 1e-8;  ///< relative to the force scale
+  double step_tolerance = 1e-10;  ///< relative to the segment length
   int max_line_search_cuts = 30;
   LinearSolver linear_solver = LinearSolver::Banded;
   Integrator integrator = Integrator::ImplicitEuler;
@@ -374,6 +375,10 @@ class RodSimulator {
   double line_search(Mode mode, double h, double load_scale, int first_free, int first_fixed, double& phi,
                      double& max_step, StepReport& rep);
   StepReport solve_static_once();
+  /// Pseudo-transient continuation to the static equilibrium at @p load_scale from the
+  /// current state (stepping.cpp): the fallback of a static Newton solve that failed, within
+  /// @p budget Newton iterations (pseudo-steps and static ones together).
+  StepReport relax_to_static(double load_scale, int budget);
   /// adapt() with the grid kept over the length a pull-back of @p pull_back moves into the clamp.
   bool adapt_for(double pull_back);
   /// Snapshot the step start (x, v, θ, ω, frames; q0, mass, damping) and move the state to
