@@ -9,9 +9,17 @@
 
 namespace flowire {
 
+namespace {
+bool g_writes_outputs = true;
+}  // namespace
+
+bool writes_outputs() { return g_writes_outputs; }
+void set_writes_outputs(bool writes) { g_writes_outputs = writes; }
+
 void write_atomically(const std::filesystem::path& target,
                       const std::function<void(const std::filesystem::path& tmp)>& writer) {
   namespace fs = std::filesystem;
+  if (!g_writes_outputs) return;
   const fs::path tmp = target.parent_path() / (target.filename().string() + ".partial");
   // A folder that cannot be made or a file that cannot be moved into place is bad input
   // (an output path under a regular file, a read-only folder): one error naming the file.

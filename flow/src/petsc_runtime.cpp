@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
 #include "flowire/flow/solver.hpp"
 
 namespace flowire::flow {
@@ -37,6 +38,7 @@ void ensure_petsc(std::string_view who) {
   MPI_Finalized(&mpi_done);
   if (mpi_done) throw_usage_error(fmt::format("{}: PETSc used after MPI_Finalize", who));
   check_petsc(PetscInitializeNoArguments(), "PetscInitializeNoArguments()", who);
+  set_writes_outputs(mpi_rank() == 0);  // one rank writes a run's files
   if (!g_we_initialized) std::atexit([] { finalize_petsc(); });
   g_we_initialized = true;
 }

@@ -87,6 +87,7 @@ int cmd_run(const std::string& scene, const std::string& out, const std::vector<
   line.clear();
   print_warnings();
   const auto& s = res.summary;
+  if (!flowire::writes_outputs()) return 0;  // an MPI rank other than 0: rank 0 reports
   std::printf("flowire: %s: %s in %.3f s, %d steps; outputs in %s\n", scene.c_str(),
               s.value("status", std::string("ok")).c_str(), s["timings"].value("total", 0.0), s.value("steps", 0),
               res.out_dir.c_str());

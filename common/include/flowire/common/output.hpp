@@ -16,4 +16,11 @@ void write_atomically(const std::filesystem::path& target,
 /// @brief Write `text` to `target` atomically.
 void write_text_atomically(const std::filesystem::path& target, const std::string& text);
 
+/// @brief Whether this process writes the outputs: true unless told otherwise. In a run
+/// under MPI every rank computes the same results and only rank 0 writes them (PETSc's
+/// start-up sets this, flow/petsc_runtime.cpp); on the other ranks write_atomically and
+/// write_text_atomically do nothing.
+[[nodiscard]] bool writes_outputs();
+void set_writes_outputs(bool writes);
+
 }  // namespace flowire
