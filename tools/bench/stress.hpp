@@ -44,7 +44,12 @@ struct StressResult {
   double max_energy_ratio = 0.0;  ///< max over steps of energy / its cap (kinetic or elastic)
   double max_rms_speed = 0.0;     ///< [m/s] max over steps of √(2 KE / m)
   double inserted_length = 0.0;   ///< [m] at the end
-  double seconds = 0.0;           ///< wall-clock time of the run
+  double planned_feed = 0.0;      ///< [m] what the drive asked for: speed × duration, up to insertion.max_length
+  double fed = 0.0;               ///< [m] what went in: the inserted length's change
+  /// The force limit held the feed to under half of what was asked: the point tests a held
+  /// wire, not a fed one (reported as such, not counted as a feeding run).
+  [[nodiscard]] bool stalled() const { return planned_feed > 0.0 && fed < 0.5 * planned_feed; }
+  double seconds = 0.0;  ///< wall-clock time of the run
 };
 
 /// @brief Run one point of the matrix on the scene file `scene`.
