@@ -275,7 +275,10 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
       k["length_drift"] = cath->length_drift();
       k["unconverged_steps"] = cosim.catheter_unconverged_steps();
       k["solver"] = solver_totals_json(cath->solver_totals());
-      k["bending_stiffness"] = cath->model().bend_stiffness.empty() ? 0.0 : cath->model().bend_stiffness.back();
+      // The shaft's EI: the largest over the vertices (the end vertices carry none, a tapered
+      // tip less).
+      const auto& ei = cath->model().bend_stiffness;
+      k["bending_stiffness"] = ei.empty() ? 0.0 : *std::max_element(ei.begin(), ei.end());
       if (const VesselForces* cf = cosim.catheter_forces())
         k["contact"] = {{"max_penetration", cf->stats().max_penetration}, {"max_outside", cf->stats().max_outside}};
       // The wire's farthest excursion from the catheter's axis inside the lumen.

@@ -18,4 +18,8 @@ assert w["inserted_length"] > c["inserted_length"] + 0.005, "the wire must be ou
 tip_gap = sum((a - b) ** 2 for a, b in zip(w["tip"], c["tip"])) ** 0.5
 assert tip_gap > 0.005, f"the wire's tip must be away from the catheter's ({tip_gap:.4f} m)"
 assert c["max_wire_offset_over_clearance"] < 1.2, "the wire must stay in the lumen"
+# The tube's bending stiffness E·π(ro⁴ − ri⁴)/4 of the scene's 2 GPa, 1 mm / 0.55 mm section.
+import math
+ei = 2e9 * math.pi * (1e-3 ** 4 - 0.55e-3 ** 4) / 4
+assert abs(c["bending_stiffness"] - ei) <= 1e-9 * ei, f"catheter EI {c['bending_stiffness']} != {ei}"
 PY
