@@ -119,6 +119,11 @@ const Value& Config::get(std::string_view path) const {
 
 bool Config::has(std::string_view path) const { return values_.find(path) != values_.end(); }
 
+bool Config::given(std::string_view path) const {
+  const auto it = values_.find(path);
+  return it != values_.end() && it->second.where != "default";
+}
+
 bool Config::has_section(std::string_view path) const {
   if (has(path)) return true;
   const std::string prefix = std::string(path) + ".";

@@ -121,8 +121,7 @@ CouplingSettings coupling_settings(const config::Config& scene) {
   k.occlusion = c.string("coupling.occlusion") == "annulus";
   // Given by the scene (or --set), not filled in from the declared default: only a requested
   // annulus is an error where the flow solver cannot take it; the default quietly falls back.
-  const auto given = scene.values().find(std::string_view("coupling.occlusion"));
-  k.occlusion_given = given != scene.values().end() && given->second.where != "default";
+  k.occlusion_given = scene.given("coupling.occlusion");
   k.flow_every = std::max(1, c.integer("coupling.flow_every"));
   return k;
 }

@@ -28,11 +28,6 @@ void declare_insertion_keys(config::Schema& s) {
         "clamp's axial force equals it (replaces speed; docs/insertion.md)");
 }
 
-namespace {
-/// Whether @p key was written in the scene (not only defaulted).
-bool written(const config::Config& c, const char* key) { return c.has(key) && c.values().at(key).where != "default"; }
-}  // namespace
-
 void drive_wire(const config::Config& c, rod::RodSimulator& sim) {
   if (!c.has_section("insertion")) return;
   sim.set_insertion_speed(c.number("insertion.speed"));
@@ -47,7 +42,7 @@ void drive_wire(const config::Config& c, rod::RodSimulator& sim) {
     const double f = c.number("insertion.force");
     if (!(f > 0.0)) throw_input_error(c.where("insertion.force"), "insertion.force must be > 0 N");
     for (const char* key : {"insertion.speed", "insertion.schedule", "insertion.max_force"})
-      if (written(c, key))
+      if (c.given(key))
         throw_input_error(
             c.where(key),
             fmt::format("give either insertion.force (the feed follows from the force) or {}, not both", key));
@@ -64,7 +59,7 @@ InsertionPlan insertion_plan(const config::Config& c, bool has_wire) {
   }
   if (c.has("insertion.schedule")) {
     for (const char* key : {"insertion.speed", "insertion.rotation_speed"})
-      if (written(c, key))
+      if (c.given(key))
         throw_input_error(c.where(key),
                           "give either insertion.schedule or insertion.speed and rotation_speed, not both");
     if (!has_wire) throw_input_error(c.where("insertion.schedule"), "a schedule drives the wire: the scene has none");

@@ -35,7 +35,7 @@ double RodSimulator::residual_norm(int first_free, int first_fixed) const {
   return r;
 }
 
-StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
+StepReport RodSimulator::newton(Mode mode, double h, double load_scale, int max_iterations) {
   Work& w = *work_;
   RodState& s = state_;
   const int nd = dof_count();
@@ -43,7 +43,9 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale) {
   const int first_free = tip_clamped_ ? 7 : 0;  // x0, θ0, x1 held by a tip clamp
   StepReport rep;
   rep.tolerance = force_scale(load_scale);
-  const int max_it = mode == Mode::Static ? settings_.max_static_iterations : settings_.max_iterations;
+  const int max_it = max_iterations >= 0    ? max_iterations
+                     : mode == Mode::Static ? settings_.max_static_iterations
+                                            : settings_.max_iterations;
 
   auto t_phase = Clock::now();
   gather(w.q);

@@ -175,12 +175,9 @@ StepReport RodSimulator::step_euler(double dt) {
 
   StepReport rep = newton(Mode::Dynamic, dt, 1.0);
   if (rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix) {
-    s.x = w.x0;
+    rewind_to_step_start();
     s.v = w.v0;
-    s.theta = w.theta0;
     s.omega = w.omega0;
-    s.frame = w.frame0;
-    s.ref_twist = w.twist0;
     set_prescribed(L_new, angle_new, s.x, s.theta);
     transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
   }
@@ -216,10 +213,7 @@ StepReport RodSimulator::step_midpoint(double dt) {
   const bool failed = rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix;
   compute_base_reaction();
   if (failed) {
-    s.x = w.x0;
-    s.theta = w.theta0;
-    s.frame = w.frame0;
-    s.ref_twist = w.twist0;
+    rewind_to_step_start();
     for (auto& v : s.v) v.setZero();
     for (auto& o : s.omega) o = 0.0;
     set_prescribed(L_new, angle_new, s.x, s.theta);
@@ -305,7 +299,6 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
   RodState& s = state_;
   StepReport total;
   total.status = SolveStatus::MaxIterations;
-  const int max_static = settings_.max_static_iterations;
   double tau = 1e-3;
   for (int k = 0; k < 200 && tau > 1e-9 && total.newton_iterations < budget; ++k) {
     for (auto& v : s.v) v.setZero();
@@ -313,18 +306,9 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
     begin_step(tau, /*extrapolate=*/false);
     transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
     const StepReport r = newton(Mode::Dynamic, tau, load_scale);
-    total.newton_iterations += r.newton_iterations;
-    total.chord_iterations += r.chord_iterations;
-    total.line_search_cuts += r.line_search_cuts;
-    total.regularizations += r.regularizations;
-    auto back_to_step_start = [&] {
-      s.x = w.x0;
-      s.theta = w.theta0;
-      s.frame = w.frame0;
-      s.ref_twist = w.twist0;
-    };
+    total.add_work(r);
     if (!r.converged()) {
-      back_to_step_start();
+      rewind_to_step_start();
       tau *= 0.25;
       continue;
     }
@@ -334,19 +318,12 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
     if (moved > 1e-3 * model_.h && k % 8 != 7) continue;
     // Nearly at rest (or every eighth step): try to finish with static Newton, keeping the
     // pseudo-step's end if it cannot.
+    const int try_budget = std::min(40, budget - total.newton_iterations);
+    if (try_budget <= 0) break;
     const int try_slot = std::max(settings_.max_subdivisions, 0) + 3;
     save_state(try_slot);
-    settings_.max_static_iterations = std::min(40, budget - total.newton_iterations);
-    if (settings_.max_static_iterations <= 0) {
-      settings_.max_static_iterations = max_static;
-      break;
-    }
-    const StepReport st = newton(Mode::Static, 1.0, load_scale);
-    settings_.max_static_iterations = max_static;
-    total.newton_iterations += st.newton_iterations;
-    total.chord_iterations += st.chord_iterations;
-    total.line_search_cuts += st.line_search_cuts;
-    total.regularizations += st.regularizations;
+    const StepReport st = newton(Mode::Static, 1.0, load_scale, try_budget);
+    total.add_work(st);
     total.residual = st.residual;
     total.tolerance = st.tolerance;
     if (st.converged()) {
@@ -358,6 +335,14 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
   for (auto& v : s.v) v.setZero();
   for (auto& o : s.omega) o = 0.0;
   return total;
+}
+
+void RodSimulator::rewind_to_step_start() {
+  const Work& w = *work_;
+  state_.x = w.x0;
+  state_.theta = w.theta0;
+  state_.frame = w.frame0;
+  state_.ref_twist = w.twist0;
 }
 
 int RodSimulator::static_hessian_negative_eigenvalues() {

@@ -71,6 +71,9 @@ struct Value {
 class Config {
  public:
   [[nodiscard]] bool has(std::string_view path) const;
+  /// @brief True if the key was given (in the scene or by --set), not only filled in from its
+  /// declared default.
+  [[nodiscard]] bool given(std::string_view path) const;
   /// @brief True if a section (or any key below it) was given or defaulted.
   [[nodiscard]] bool has_section(std::string_view path) const;
   [[nodiscard]] double number(std::string_view path) const;

@@ -111,14 +111,18 @@ struct StepReport {
   /// @brief Continue this report with a later solve's: its counts added, its status,
   /// residual and tolerance taken (the last solve decides), the deeper subdivision kept.
   void then(const StepReport& later) {
+    add_work(later);
     status = later.status;
-    newton_iterations += later.newton_iterations;
-    chord_iterations += later.chord_iterations;
-    line_search_cuts += later.line_search_cuts;
-    regularizations += later.regularizations;
     subdivisions = subdivisions > later.subdivisions ? subdivisions : later.subdivisions;
     residual = later.residual;
     tolerance = later.tolerance;
+  }
+  /// @brief Add another solve's iteration counts to this report's (its status aside).
+  void add_work(const StepReport& other) {
+    newton_iterations += other.newton_iterations;
+    chord_iterations += other.chord_iterations;
+    line_search_cuts += other.line_search_cuts;
+    regularizations += other.regularizations;
   }
 };
 
@@ -362,7 +366,10 @@ class RodSimulator {
   void vertex_params(int k, VertexParams& p) const;
   /// Newton's method on the incremental potential (newton.cpp): from the current state to
   /// a residual within force_scale(), or the status that stopped it.
-  StepReport newton(Mode mode, double h, double load_scale);
+  /// @p max_iterations: the limit (< 0: the settings' limit for the mode).
+  StepReport newton(Mode mode, double h, double load_scale, int max_iterations = -1);
+  /// Back to the step start begin_step() kept: positions, angles, frames, reference twist.
+  void rewind_to_step_start();
   /// Max over the free unknowns [first_free, first_fixed) of |force| and |torque| / rest length.
   [[nodiscard]] double residual_norm(int first_free, int first_fixed) const;
   /// Newton's direction into work dq: with the kept factorization (a chord step), or by
