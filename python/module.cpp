@@ -10,16 +10,23 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <fmt/format.h>
+
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <unordered_set>
 #include <vector>
 
 #include "flowire/common/config.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 #include "flowire/coupling/cosimulation.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/flow/output.hpp"
@@ -84,19 +91,81 @@ py::dict counts_dict(const vessels::NetworkCounts& n) {
 }
 
 /// A network owned by Python, or one borrowed from a flow / co-simulation that it keeps alive.
+/// Marks a binding object as constructed. `Class.__new__(Class)` gives Python an instance whose
+/// memory was allocated but never constructed (pybind11 runs no constructor there); the
+/// registry of live objects tells such an instance from a real one (live() below).
+class Constructed {
+ public:
+  Constructed() { enter(); }
+  Constructed(const Constructed&) { enter(); }
+  Constructed& operator=(const Constructed&) { return *this; }
+  ~Constructed() {
+    const std::lock_guard<std::mutex> lock(mutex());
+    registry().erase(this);
+  }
+  [[nodiscard]] static bool is_live(const Constructed* c) {
+    const std::lock_guard<std::mutex> lock(mutex());
+    return registry().count(c) > 0;
+  }
+
+ private:
+  void enter() {
+    const std::lock_guard<std::mutex> lock(mutex());
+    registry().insert(this);
+  }
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static std::unordered_set<const Constructed*>& registry() {
+    static std::unordered_set<const Constructed*> r;
+    return r;
+  }
+};
+
 struct PyNetwork {
   std::shared_ptr<const vessels::Network> net;
   py::object keep;  ///< the owner of a borrowed network
+  Constructed constructed;
 };
 
 /// A flow frame: the state of the network flow at one time.
 struct PyFlowFrame {
   flow::FlowFrame frame;
+  Constructed constructed;
 };
 
+/// The object behind a Python handle. `Class.__new__(Class)` makes an instance that was never
+/// constructed: its methods raise flowire.Error instead of reading a null object.
+template <class T>
+T& live(T* p) {
+  // The address of the member is computed, not read: an unconstructed p is never dereferenced.
+  if (!p || !Constructed::is_live(&p->constructed))
+    throw Error(ErrorKind::Usage, "the object was not constructed: create it with its class, e.g. CoSimulation(scene)");
+  return *p;
+}
+
+/// Between pieces of long work with the GIL released: Ctrl-C (Python's SIGINT handler) ends
+/// the call with KeyboardInterrupt.
+void check_python_signals(std::string_view what) {
+  py::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() != 0) {
+    PyErr_Clear();
+    throw Error(ErrorKind::Interrupted, fmt::format("{} was interrupted", what));
+  }
+}
+
 PyFlowFrame frame_at(flow::FlowSolver& fs, const vessels::Network& net, double t) {
-  if (fs.spec().model == flow::Model::Rlc && t < fs.time())
-    throw_usage_error("the rlc flow model integrates forward in time only: ask for t >= the current time");
+  if (!std::isfinite(t)) throw_usage_error(fmt::format("Flow.at: t = {} is not a finite time", t));
+  if (fs.spec().model == flow::Model::Rlc) {
+    if (t < fs.time())
+      throw_usage_error("the rlc flow model integrates forward in time only: ask for t >= the current time");
+    // The rlc model steps there: in pieces of 0.1 s of flow, with Ctrl-C heard between them.
+    while (fs.time() < t - 0.1) {
+      fs.advance(fs.time() + 0.1);
+      check_python_signals("Flow.at");
+    }
+  }
   PyFlowFrame f;
   f.frame.time = t;
   f.frame.pressure.resize(static_cast<size_t>(net.num_nodes()));
@@ -111,7 +180,7 @@ std::vector<std::string> overrides(const std::optional<std::vector<std::string>>
 
 /// A scene file as the command line loads it (same checks, same messages).
 config::Config load(const std::string& scene, const std::vector<std::string>& sets, const std::string& out) {
-  if (!std::filesystem::exists(scene)) throw Error(ErrorKind::Input, scene + ": no such file");
+  check_input_file(scene, input_limit::kScene, "a scene (YAML)");
   if (std::filesystem::path(scene).extension() == ".json")
     throw Error(ErrorKind::Usage, scene + ": svZeroDSolver models run with the command line (flowire run MODEL.json)");
   return coupling::load_scene(scene, sets, out);
@@ -127,6 +196,7 @@ struct PyFlow {
   config::Config config;
   std::shared_ptr<const vessels::Network> net;
   std::unique_ptr<flow::FlowSolver> solver;
+  Constructed constructed;
 };
 
 /// A co-simulation stepped from Python.
@@ -137,6 +207,7 @@ struct PyCoSimulation {
   }
   config::Config config;
   std::unique_ptr<coupling::CoSimulation> sim;
+  Constructed constructed;
   [[nodiscard]] rod::RodSimulator& rod() const {
     if (!sim->rod()) throw_usage_error("the scene has no wire: section");
     return *sim->rod();
@@ -157,7 +228,9 @@ PYBIND11_MODULE(_flowire, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const Error& e) {
-      if (e.kind() == ErrorKind::Numerical)
+      if (e.kind() == ErrorKind::Interrupted)
+        PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
+      else if (e.kind() == ErrorKind::Numerical)
         numerical_error(e.what());
       else
         input_error(e.what());
@@ -168,12 +241,12 @@ PYBIND11_MODULE(_flowire, m) {
 
   py::class_<PyNetwork>(m, "Network", "A vessel network: nodes joined by cylindrical (or tapered) segments.")
       .def_property_readonly(
-          "nodes", [](py::object self) { return vec3_view(self.cast<PyNetwork&>().net->nodes(), self); },
+          "nodes", [](py::object self) { return vec3_view(live(self.cast<PyNetwork*>()).net->nodes(), self); },
           "(N x 3) node positions [m], a read-only view")
       .def_property_readonly(
           "segments",
           [](py::object self) {
-            const auto& s = self.cast<PyNetwork&>().net->segments();
+            const auto& s = live(self.cast<PyNetwork*>()).net->segments();
             static_assert(offsetof(vessels::Segment, node_to) == offsetof(vessels::Segment, node_from) + sizeof(int));
             return view(py::dtype::of<int>(), {static_cast<py::ssize_t>(s.size()), 2},
                         {static_cast<py::ssize_t>(sizeof(vessels::Segment)), sizeof(int)},
@@ -183,7 +256,7 @@ PYBIND11_MODULE(_flowire, m) {
       .def_property_readonly(
           "radius",
           [](py::object self) {
-            const auto& s = self.cast<PyNetwork&>().net->segments();
+            const auto& s = live(self.cast<PyNetwork*>()).net->segments();
             return view(py::dtype::of<double>(), {static_cast<py::ssize_t>(s.size())},
                         {static_cast<py::ssize_t>(sizeof(vessels::Segment))}, s.empty() ? nullptr : &s.front().radius,
                         self);
@@ -192,25 +265,36 @@ PYBIND11_MODULE(_flowire, m) {
       .def_property_readonly(
           "length",
           [](py::object self) {
-            const auto& s = self.cast<PyNetwork&>().net->segments();
+            const auto& s = live(self.cast<PyNetwork*>()).net->segments();
             return view(py::dtype::of<double>(), {static_cast<py::ssize_t>(s.size())},
                         {static_cast<py::ssize_t>(sizeof(vessels::Segment))}, s.empty() ? nullptr : &s.front().length,
                         self);
           },
           "(M) length of each segment [m], a read-only view")
       .def_property_readonly("branch_names",
-                             [](const PyNetwork& n) {
+                             [](const PyNetwork* n_ptr) {
+                               auto& n = live(n_ptr);
                                std::vector<std::string> names;
                                for (const auto& b : n.net->branches()) names.push_back(b.name);
                                return names;
                              })
       .def(
-          "counts", [](const PyNetwork& n) { return counts_dict(n.net->counts()); },
+          "counts",
+          [](const PyNetwork* n_ptr) {
+            auto& n = live(n_ptr);
+            return counts_dict(n.net->counts());
+          },
           "branches, nodes, segments, junctions, ends, loops, components, total_length, radius_min, radius_max "
           "(as `flowire network info --json`)")
       .def(
-          "widest_end", [](const PyNetwork& n) { return n.net->widest_end(); }, "the default flow inlet node")
-      .def("__repr__", [](const PyNetwork& n) {
+          "widest_end",
+          [](const PyNetwork* n_ptr) {
+            auto& n = live(n_ptr);
+            return n.net->widest_end();
+          },
+          "the default flow inlet node")
+      .def("__repr__", [](const PyNetwork* n_ptr) {
+        auto& n = live(n_ptr);
         const auto c = n.net->counts();
         return "<flowire.Network: " + std::to_string(c.nodes) + " nodes, " + std::to_string(c.segments) + " segments>";
       });
@@ -222,18 +306,23 @@ PYBIND11_MODULE(_flowire, m) {
         if (length_unit) ro.length_unit = *length_unit;
         if (max_segment_length > 0) ro.build.max_segment_length = max_segment_length;
         py::gil_scoped_release nogil;
-        return PyNetwork{std::make_shared<vessels::Network>(vessels::read_network(path, ro)), {}};
+        return PyNetwork{std::make_shared<vessels::Network>(vessels::read_network(path, ro)), {}, {}};
       },
       py::arg("path"), py::arg("length_unit") = py::none(), py::arg("max_segment_length") = 0.0,
       "Read a vessel network file (.vtp, .vtk, .yaml, svZeroDSolver .json, svOneDSolver .in).");
 
   py::class_<PyFlowFrame>(m, "FlowFrame", "The network flow at one time.")
-      .def_property_readonly("time", [](const PyFlowFrame& f) { return f.frame.time; })
+      .def_property_readonly("time",
+                             [](const PyFlowFrame* f_ptr) {
+                               auto& f = live(f_ptr);
+                               return f.frame.time;
+                             })
       .def_property_readonly(
-          "pressure", [](py::object self) { return doubles_view(self.cast<PyFlowFrame&>().frame.pressure, self); },
+          "pressure",
+          [](py::object self) { return doubles_view(live(self.cast<PyFlowFrame*>()).frame.pressure, self); },
           "(N) pressure at each node [Pa], a read-only view")
       .def_property_readonly(
-          "flow", [](py::object self) { return doubles_view(self.cast<PyFlowFrame&>().frame.flow, self); },
+          "flow", [](py::object self) { return doubles_view(live(self.cast<PyFlowFrame*>()).frame.flow, self); },
           "(M) volume flow through each segment, from its node_from to its node_to [m^3/s], a read-only view");
 
   py::class_<PyFlow>(m, "Flow", "The network flow of a scene (its vessels: and flow: sections).")
@@ -243,13 +332,22 @@ PYBIND11_MODULE(_flowire, m) {
            py::arg("scene"), py::arg("set") = py::none())
       .def_property_readonly("network",
                              [](py::object self) {
-                               return PyNetwork{self.cast<PyFlow&>().net, self};
+                               return PyNetwork{live(self.cast<PyFlow*>()).net, self, {}};
                              })
-      .def_property_readonly("solver", [](const PyFlow& f) { return std::string(f.solver->name()); })
-      .def_property_readonly("time", [](const PyFlow& f) { return f.solver->time(); })
+      .def_property_readonly("solver",
+                             [](const PyFlow* f_ptr) {
+                               auto& f = live(f_ptr);
+                               return std::string(f.solver->name());
+                             })
+      .def_property_readonly("time",
+                             [](const PyFlow* f_ptr) {
+                               auto& f = live(f_ptr);
+                               return f.solver->time();
+                             })
       .def(
           "at",
-          [](PyFlow& f, double t) {
+          [](PyFlow* f_ptr, double t) {
+            auto& f = live(f_ptr);
             py::gil_scoped_release nogil;
             return frame_at(*f.solver, *f.net, t);
           },
@@ -265,44 +363,94 @@ PYBIND11_MODULE(_flowire, m) {
            py::arg("scene"), py::arg("set") = py::none())
       .def(
           "step",
-          [](PyCoSimulation& s, long n) {
+          [](PyCoSimulation* s_ptr, long n) {
+            auto& s = live(s_ptr);
             py::gil_scoped_release nogil;
-            for (long i = 0; i < n; ++i) s.sim->step();
+            for (long i = 0; i < n; ++i) {
+              s.sim->step();
+              check_python_signals("CoSimulation.step");
+            }
           },
           py::arg("n") = 1, "Advance n steps of solve.dt.")
-      .def_property_readonly("dt", [](const PyCoSimulation& s) { return s.sim->dt(); })
-      .def_property_readonly("time", [](const PyCoSimulation& s) { return s.sim->time(); })
-      .def_property_readonly("step_count", [](const PyCoSimulation& s) { return s.sim->step_count(); })
+      .def_property_readonly("dt",
+                             [](const PyCoSimulation* s_ptr) {
+                               auto& s = live(s_ptr);
+                               return s.sim->dt();
+                             })
+      .def_property_readonly("time",
+                             [](const PyCoSimulation* s_ptr) {
+                               auto& s = live(s_ptr);
+                               return s.sim->time();
+                             })
+      .def_property_readonly("step_count",
+                             [](const PyCoSimulation* s_ptr) {
+                               auto& s = live(s_ptr);
+                               return s.sim->step_count();
+                             })
       .def_property_readonly(
-          "planned_steps", [](const PyCoSimulation& s) { return s.sim->planned_steps(); }, "steps of solve.duration")
-      .def_property_readonly("unconverged_steps", [](const PyCoSimulation& s) { return s.sim->unconverged_steps(); })
+          "planned_steps",
+          [](const PyCoSimulation* s_ptr) {
+            auto& s = live(s_ptr);
+            return s.sim->planned_steps();
+          },
+          "steps of solve.duration")
+      .def_property_readonly("unconverged_steps",
+                             [](const PyCoSimulation* s_ptr) {
+                               auto& s = live(s_ptr);
+                               return s.sim->unconverged_steps();
+                             })
       .def_property(
           "insertion_speed",
-          [](const PyCoSimulation& s) {
+          [](const PyCoSimulation* s_ptr) {
+            auto& s = live(s_ptr);
             (void)s.rod();
             return s.sim->insertion_speed();
           },
-          [](PyCoSimulation& s, double v) { s.sim->set_insertion_speed(v); },
+          [](PyCoSimulation* s_ptr, double v) {
+            auto& s = live(s_ptr);
+            s.sim->set_insertion_speed(v);
+          },
           "feeding speed at the clamp [m/s] for the next steps (> 0 pushes in)")
       .def_property(
           "rotation_speed",
-          [](const PyCoSimulation& s) {
+          [](const PyCoSimulation* s_ptr) {
+            auto& s = live(s_ptr);
             (void)s.rod();
             return s.sim->rotation_speed();
           },
-          [](PyCoSimulation& s, double w) { s.sim->set_rotation_speed(w); },
+          [](PyCoSimulation* s_ptr, double w) {
+            auto& s = live(s_ptr);
+            s.sim->set_rotation_speed(w);
+          },
           "clamp rotation speed about the insertion direction [rad/s]")
-      .def_property_readonly("inserted_length", [](const PyCoSimulation& s) { return s.rod().inserted_length(); })
-      .def_property_readonly("tip", [](const PyCoSimulation& s) { return vec3_array(s.rod().tip_position()); })
+      .def_property_readonly("inserted_length",
+                             [](const PyCoSimulation* s_ptr) {
+                               auto& s = live(s_ptr);
+                               return s.rod().inserted_length();
+                             })
+      .def_property_readonly("tip",
+                             [](const PyCoSimulation* s_ptr) {
+                               auto& s = live(s_ptr);
+                               return vec3_array(s.rod().tip_position());
+                             })
       .def_property_readonly(
-          "base_force", [](const PyCoSimulation& s) { return vec3_array(s.rod().base_force()); },
+          "base_force",
+          [](const PyCoSimulation* s_ptr) {
+            auto& s = live(s_ptr);
+            return vec3_array(s.rod().base_force());
+          },
           "force the clamp exerts on the wire in the last step [N]")
       .def_property_readonly(
-          "base_torque", [](const PyCoSimulation& s) { return vec3_array(s.rod().base_torque()); },
+          "base_torque",
+          [](const PyCoSimulation* s_ptr) {
+            auto& s = live(s_ptr);
+            return vec3_array(s.rod().base_torque());
+          },
           "torque the clamp exerts on the wire about the entry point [N m]")
       .def(
           "wire",
-          [](const PyCoSimulation& s) {
+          [](const PyCoSimulation* s_ptr) {
+            auto& s = live(s_ptr);
             (void)s.rod();
             const coupling::WireFrame f = s.sim->wire_frame();
             py::dict d;
@@ -319,20 +467,25 @@ PYBIND11_MODULE(_flowire, m) {
           "The inserted wire from the base (s = 0) to the tip: s (n), x (n x 3) [m], force, drag, contact "
           "(n x 3) [N], flow_velocity (n x 3) [m/s] (as wire.csv)")
       .def_property_readonly(
-          "vertices", [](const PyCoSimulation& s) { return vec3_copy(s.sim->wire_frame().x); },
+          "vertices",
+          [](const PyCoSimulation* s_ptr) {
+            auto& s = live(s_ptr);
+            return vec3_copy(s.sim->wire_frame().x);
+          },
           "(n x 3) inserted wire vertices from the base to the tip [m]")
       .def_property_readonly("network",
                              [](py::object self) -> py::object {
-                               auto& s = self.cast<PyCoSimulation&>();
+                               auto& s = live(self.cast<PyCoSimulation*>());
                                if (!s.sim->network()) return py::none();
                                // Borrowed: the co-simulation object owns it and is kept alive.
                                std::shared_ptr<const vessels::Network> net(s.sim->network(),
                                                                            [](const vessels::Network*) {});
-                               return py::cast(PyNetwork{net, self});
+                               return py::cast(PyNetwork{net, self, {}});
                              })
       .def(
           "flow",
-          [](const PyCoSimulation& s) -> py::object {
+          [](const PyCoSimulation* s_ptr) -> py::object {
+            auto& s = live(s_ptr);
             if (!s.sim->flow()) return py::none();
             PyFlowFrame f;
             f.frame = flow::capture_frame(*s.sim->flow());
@@ -347,7 +500,9 @@ PYBIND11_MODULE(_flowire, m) {
         std::string summary;
         {
           py::gil_scoped_release nogil;
-          summary = coupling::run_scene(cfg).summary.dump();
+          coupling::RunOptions options;  // Ctrl-C between steps ends the run, its summary "interrupted"
+          options.progress = [](const coupling::Progress&) { check_python_signals("the run"); };
+          summary = coupling::run_scene(cfg, options).summary.dump();
         }
         return summary;
       },

@@ -10,12 +10,14 @@ void declare_contact_keys(config::Schema& s) {
   s.add("contact", Type::Section, "", D::None, "wall contact (present by default when a wire moves in vessels)");
   s.add("contact.enabled", Type::Bool, "true", D::None,
         "false: no wall contact at all (no lookup or wall distance unless the blood drag needs them)");
-  s.add("contact.friction", Type::Number, "0.1", D::None, "Coulomb friction coefficient (shaft)");
+  s.add("contact.friction", Type::Number, "0.1", D::None, "Coulomb friction coefficient (shaft)").non_negative();
   s.add("contact.tip_friction", Type::Number, "", D::None,
-        "Coulomb friction coefficient of the tip (default: friction)");
+        "Coulomb friction coefficient of the tip (default: friction)")
+      .non_negative();
   s.add("contact.stiffness", Type::Number, "3e4", D::None,
         "penalty stiffness per vertex of the segment_length grid (N/m): a vertex pressed with force F sinks F/k into "
-        "the wall (scaled with the edge length where wire.adapt refines)");
+        "the wall (scaled with the edge length where wire.adapt refines)")
+      .positive();
   s.add("contact.settle", Type::Bool, "true", D::None,
         "start a dynamic run from the static equilibrium of the initial wire against the walls (a pre-shaped tip "
         "squeezed into the lumen) instead of from its free shape");
@@ -25,7 +27,8 @@ void declare_contact_keys(config::Schema& s) {
   s.add("contact.introducer", Type::Bool, "true", D::None,
         "the entry is an introducer sheath: the wire cannot come back out behind the entry plane (within twice the "
         "entry vessel's radius of its axis)");
-  s.add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)");
+  s.add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)")
+      .non_negative();
 }
 
 ContactSettings contact_settings(const config::Config& scene) {

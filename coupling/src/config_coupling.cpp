@@ -4,7 +4,6 @@
 // coupling: section: then the declared defaults apply.
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -22,8 +21,9 @@ void declare_obstacle_keys(config::Schema& s) {
   using D = units::Dimension;
   s.add("obstacles", Type::List, "", D::None, "regions that resist the tip (a clot, a tight lesion)");
   s.add("obstacles[].center", Type::Vector3, "", D::Length, "centre of the spherical region");
-  s.add("obstacles[].radius", Type::Number, "", D::Length, "radius of the region");
-  s.add("obstacles[].force", Type::Number, "", D::Force, "resistance opposing the tip's advance while it is inside");
+  s.add("obstacles[].radius", Type::Number, "", D::Length, "radius of the region").positive();
+  s.add("obstacles[].force", Type::Number, "", D::Force, "resistance opposing the tip's advance while it is inside")
+      .non_negative();
 }
 
 void declare_coupling_keys(config::Schema& s) {
@@ -35,19 +35,20 @@ void declare_coupling_keys(config::Schema& s) {
         "annular Poiseuille shear along the wire | slender_body: resistive-force (Stokes) drag, Re << 1 only | "
         "velocity_offset: the published form (blood velocity added to the velocity update) | none",
         {"cylinder", "slender_body", "velocity_offset", "none"});
-  s.add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force");
+  s.add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force (0: no drag)").non_negative();
   s.add("coupling.occlusion", Type::Enum, "annulus", D::None,
         "annulus: the wire raises the resistance of the segments it lies in (concentric to eccentric annular "
         "Poiseuille flow at its offset; updated every flow evaluation; needs flow.solver superposition, sparse or "
         "flow.model rlc) | none: the flow ignores the wire",
         {"annulus", "none"});
-  s.add("coupling.flow_every", Type::Integer, "1", D::None, "evaluate the flow every this many rod steps");
+  s.add("coupling.flow_every", Type::Integer, "1", D::None, "evaluate the flow every this many rod steps").at_least(1);
   s.add("coupling.steering", Type::Section, "", D::None, "a lateral force on the tip towards a chosen branch");
   s.add("coupling.steering.branch", Type::String, "", D::None, "name of the branch to steer into");
-  s.add("coupling.steering.force", Type::Number, "5 mN", D::Force, "steering force");
-  s.add("coupling.steering.range", Type::Number, "2 cm", D::Length, "active while the tip is this close to the target");
-  s.add("coupling.steering.offset", Type::Number, "1 cm", D::Length,
-        "target: this far along the branch from its start");
+  s.add("coupling.steering.force", Type::Number, "5 mN", D::Force, "steering force").non_negative();
+  s.add("coupling.steering.range", Type::Number, "2 cm", D::Length, "active while the tip is this close to the target")
+      .positive();
+  s.add("coupling.steering.offset", Type::Number, "1 cm", D::Length, "target: this far along the branch from its start")
+      .non_negative();
 }
 
 DragModel drag_model(const config::Config& scene, const rod::WireSpec& spec, bool has_flow) {
@@ -122,7 +123,7 @@ CouplingSettings coupling_settings(const config::Config& scene) {
   // Given by the scene (or --set), not filled in from the declared default: only a requested
   // annulus is an error where the flow solver cannot take it; the default quietly falls back.
   k.occlusion_given = scene.given("coupling.occlusion");
-  k.flow_every = std::max(1, c.integer("coupling.flow_every"));
+  k.flow_every = c.integer("coupling.flow_every");  // at least 1, declared
   return k;
 }
 

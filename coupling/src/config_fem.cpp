@@ -32,14 +32,18 @@ void declare_fem_keys(config::Schema& s) {
         "tagged by the nearest centerline ends, compared with the flow as network is",
         {"network", "dfg_3d_1z", "lumen"});
   s.add("fem.mesh_size", Type::Number, "", D::Length,
-        "target tetrahedron size (network: default from the smallest radius; dfg_3d_1z: far field, default 0.08 m)");
+        "target tetrahedron size (network: default from the smallest radius; dfg_3d_1z: far field, default 0.08 m)")
+      .positive();
   s.add("fem.size_factor", Type::Number, "0.3", D::None,
-        "network / lumen without fem.mesh_size: tetrahedron size = this times the radius of the nearest vessel");
+        "network / lumen without fem.mesh_size: tetrahedron size = this times the radius of the nearest vessel")
+      .positive();
   s.add("fem.obstacle_mesh_size", Type::Number, "", D::Length,
         "dfg_3d_1z: tetrahedron size on the cylinder (default a quarter of fem.mesh_size), growing with the distance "
-        "from it by fem.mesh_growth");
+        "from it by fem.mesh_growth")
+      .positive();
   s.add("fem.mesh_growth", Type::Number, "0.3", D::None,
-        "dfg_3d_1z: increase of the tetrahedron size per unit distance from the obstacle");
+        "dfg_3d_1z: increase of the tetrahedron size per unit distance from the obstacle")
+      .positive();
   s.add("fem.equations", Type::Enum, "stokes", D::None, "stokes | navier_stokes", {"stokes", "navier_stokes"});
   s.add("fem.solver", Type::Enum, "mumps", D::None, "direct (mumps) or iterative (fieldsplit, Stokes only)",
         {"mumps", "fieldsplit"});
@@ -48,16 +52,20 @@ void declare_fem_keys(config::Schema& s) {
   s.add("fem.inlet", Type::Enum, "profile", D::None,
         "navier_stokes: profile (a Poiseuille velocity profile scaled to the inlet pressure or flow) or traction",
         {"profile", "traction"});
-  s.add("fem.backflow", Type::Number, "1", D::None,
-        "navier_stokes: outlet backflow stabilization coefficient (0: off)");
+  s.add("fem.backflow", Type::Number, "1", D::None, "navier_stokes: outlet backflow stabilization coefficient (0: off)")
+      .non_negative();
   s.add("fem.time_dependent", Type::Bool, "false", D::None,
         "frames from time-dependent Stokes (BDF2, inertia included) instead of quasi-steady solves; needs fem.frames");
   s.add("fem.steps_per_period", Type::Integer, "200", D::None,
         "time steps per period of a time-dependent series or of windkessel outlets (rounded up to a multiple of "
-        "fem.frames)");
-  s.add("fem.samples_per_branch", Type::Integer, "10", D::None, "comparison points per branch");
+        "fem.frames)")
+      .at_least(1)
+      .at_most(1e6);
+  s.add("fem.samples_per_branch", Type::Integer, "10", D::None, "comparison points per branch").at_least(2);
   s.add("fem.frames", Type::Integer, "0", D::None,
-        "0: steady comparison only; N: also N quasi-steady frames over one inlet period (fem_pulsatile*.csv, fem.pvd)");
+        "0: steady comparison only; N: also N quasi-steady frames over one inlet period (fem_pulsatile*.csv, fem.pvd)")
+      .at_least(0)
+      .at_most(1e5);
 }
 
 bool fem_on_network(const config::Config& c) {
@@ -87,11 +95,9 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
 }
 #endif
 
-/// Input checks of a fem: section on a built-in geometry (no network), done at setup.
+/// Input checks of a fem: section on a built-in geometry (no network), done at setup. The
+/// values' own ranges are declared with their keys.
 void check_fem_geometry(const config::Config& c) {
-  for (const char* key : {"fem.mesh_size", "fem.obstacle_mesh_size"})
-    if (c.has(key) && !(c.number(key) > 0.0)) throw_input_error(c.where(key), "must be > 0");
-  if (!(c.number("fem.mesh_growth") > 0.0)) throw_input_error(c.where("fem.mesh_growth"), "must be > 0");
   if (c.integer("fem.frames") != 0) throw_input_error(c.where("fem.frames"), "is for fem.geometry: network");
   if (c.string("fem.solver") == "fieldsplit")
     throw_input_error(c.where("fem.solver"),
@@ -133,7 +139,6 @@ nlohmann::json run_fem_geometry(const config::Config& c, const std::filesystem::
 void check_fem(const config::Config& c, const flow::FlowSolver* fs, const vessels::Network* net) {
   if (!fem_on_network(c)) return check_fem_geometry(c);
   if (!fs) throw_input_error(c.where("fem"), "fem: compares the flow, so the scene needs a flow: section");
-  if (!(c.number("fem.size_factor") > 0.0)) throw_input_error(c.where("fem.size_factor"), "must be > 0");
   if (c.string("fem.geometry") == "lumen") {
     if (!c.has("vessels.surface")) throw_input_error(c.where("fem.geometry"), "lumen needs vessels.surface");
     const std::string surface = c.resolve_path(c.string("vessels.surface"));
@@ -148,12 +153,8 @@ void check_fem(const config::Config& c, const flow::FlowSolver* fs, const vessel
                                                                      c.where("vessels.length_unit"))));
 #endif
   }
+  // frames, backflow, steps_per_period and size_factor have declared ranges.
   const int frames = c.integer("fem.frames");
-  if (frames < 0) throw_input_error(c.where("fem.frames"), "must be 0 (steady only) or a number of frames");
-  if (frames > 100000) throw_input_error(c.where("fem.frames"), "too many frames (at most 100000)");
-  if (!(c.number("fem.backflow") >= 0.0)) throw_input_error(c.where("fem.backflow"), "must be >= 0");
-  if (c.integer("fem.steps_per_period") < 1 || c.integer("fem.steps_per_period") > 1000000)
-    throw_input_error(c.where("fem.steps_per_period"), "must be between 1 and 1000000");
   if (c.boolean("fem.time_dependent") && frames == 0)
     throw_input_error(c.where("fem.time_dependent"), "needs fem.frames > 0 (a pulsatile series)");
   if (c.boolean("fem.time_dependent") && c.string("fem.equations") == "navier_stokes")

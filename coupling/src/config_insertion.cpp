@@ -15,17 +15,21 @@ void declare_insertion_keys(config::Schema& s) {
   s.add("insertion.speed", Type::Number, "0", D::Velocity, "insertion speed (negative: pull back)");
   s.add("insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "base rotation speed");
   s.add("insertion.rotation_angle", Type::Number, "0", D::Angle, "base rotation at the start (turns a pre-shaped tip)");
-  s.add("insertion.initial_length", Type::Number, "2 cm", D::Length, "length inside at t = 0");
+  s.add("insertion.initial_length", Type::Number, "2 cm", D::Length,
+        "length inside at t = 0 (at least two rod segments, at most wire.length)")
+      .positive();
   s.add("insertion.schedule", Type::String, "", D::None,
         "CSV with columns time,speed,rotation_speed (SI): from each row's time on, push (> 0), pull (< 0) or hold, "
         "and turn; replaces speed and rotation_speed (docs/insertion.md)");
-  s.add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length");
+  s.add("insertion.max_length", Type::Number, "", D::Length, "stop pushing at this inserted length").non_negative();
   s.add("insertion.max_force", Type::Number, "", D::Force,
         "force-limited feeding: hold the feed in steps that start with the wire pushed in harder than this "
-        "(a drive's or a hand's limit); default unlimited (the feed is kinematic)");
+        "(a drive's or a hand's limit); default unlimited (the feed is kinematic)")
+      .positive();
   s.add("insertion.force", Type::Number, "", D::Force,
         "force-driven feeding: push the base with this constant force; each step's feed is the one for which the "
-        "clamp's axial force equals it (replaces speed; docs/insertion.md)");
+        "clamp's axial force equals it (replaces speed; docs/insertion.md)")
+      .positive();
 }
 
 void drive_wire(const config::Config& c, rod::RodSimulator& sim) {
@@ -33,14 +37,9 @@ void drive_wire(const config::Config& c, rod::RodSimulator& sim) {
   sim.set_insertion_speed(c.number("insertion.speed"));
   sim.set_rotation_speed(c.number("insertion.rotation_speed"));
   sim.set_base_angle(c.number("insertion.rotation_angle"));
-  if (c.has("insertion.max_force")) {
-    const double f = c.number("insertion.max_force");
-    if (!(f > 0.0)) throw_input_error(c.where("insertion.max_force"), "max_force must be > 0 N");
-    sim.set_max_insertion_force(f);
-  }
+  if (c.has("insertion.max_force")) sim.set_max_insertion_force(c.number("insertion.max_force"));  // > 0, declared
   if (c.has("insertion.force")) {
-    const double f = c.number("insertion.force");
-    if (!(f > 0.0)) throw_input_error(c.where("insertion.force"), "insertion.force must be > 0 N");
+    const double f = c.number("insertion.force");  // > 0, declared
     for (const char* key : {"insertion.speed", "insertion.schedule", "insertion.max_force"})
       if (c.given(key))
         throw_input_error(

@@ -1,7 +1,5 @@
 // The scene's solve: section: its keys and the time stepping they describe.
-#include <cmath>
-
-#include "flowire/common/error.hpp"
+#include "flowire/common/steps.hpp"
 #include "scene_sections.hpp"
 
 namespace flowire::coupling {
@@ -12,21 +10,22 @@ void declare_solve_keys(config::Schema& s) {
   s.add("solve", Type::Section, "{}", D::None, "time stepping (also drives flow-only scenes: one flow frame per step)");
   s.add("solve.mode", Type::Enum, "dynamic", D::None, "static: equilibrium; dynamic: time stepping",
         {"static", "dynamic"});
-  s.add("solve.dt", Type::Number, "1 ms", D::Time, "time step");
-  s.add("solve.duration", Type::Number, "0", D::Time, "simulated time (0: one frame / the steady state)");
+  s.add("solve.dt", Type::Number, "1 ms", D::Time, "time step").positive();
+  s.add("solve.duration", Type::Number, "0", D::Time,
+        "simulated time (0: one frame / the steady state; at most 1e9 steps of solve.dt)")
+      .non_negative();
   s.add("solve.integrator", Type::Enum, "implicit_euler", D::None, "rod time integrator",
         {"implicit_euler", "implicit_midpoint"});
 }
 
 SolveSettings solve_settings(const config::Config& c) {
-  const double dt = c.number("solve.dt");
-  const double duration = c.number("solve.duration");
-  if (!(dt > 0)) throw_input_error(c.where("solve.dt"), "must be positive");
-  if (duration < 0) throw_input_error(c.where("solve.duration"), "must not be negative");
+  // dt > 0 and duration >= 0 are declared; their quotient is checked here.
   SolveSettings s;
   s.is_static = c.string("solve.mode") == "static";
-  s.dt = dt;
-  s.steps = s.is_static ? 0 : static_cast<long>(std::llround(duration / dt));
+  s.dt = c.number("solve.dt");
+  s.steps = s.is_static
+                ? 0
+                : step_count(c.number("solve.duration"), s.dt, c.where("solve.duration"), "solve.duration / solve.dt");
   return s;
 }
 

@@ -1,8 +1,8 @@
 // The scene's vessels: section: its keys and the network they describe.
 #include <fmt/format.h>
 
+#include <numbers>
 #include <string>
-#include <string_view>
 
 #include "flowire/common/error.hpp"
 #include "flowire/coupling/scene.hpp"
@@ -26,32 +26,46 @@ void declare_vessel_keys(config::Schema& s) {
         "network still carries the flow; fem.geometry: lumen meshes it for the FEM comparison");
   s.add("vessels.surface_smoothing", Type::Number, "", D::Length,
         "width of the Gaussian weights of the smooth implicit surface (a weighted mean of the nearby triangles' "
-        "planes) whose distance the contact uses (default 0.4 of the mean edge length; 0: the exact distance)");
+        "planes) whose distance the contact uses (default 0.4 of the mean edge length; 0: the exact distance)")
+      .non_negative();
   s.add("vessels.max_segment_length", Type::Number, "5 mm", D::Length,
-        "branches are split into cylinders no longer than this");
+        "branches are split into cylinders no longer than this")
+      .positive();
   s.add("vessels.radius_change", Type::Number, "0.1", D::None,
-        "also split where the radius changes by more than this fraction");
+        "also split where the radius changes by more than this fraction (0: by length only)")
+      .non_negative();
   s.add("vessels.keep_inlet_piece", Type::Bool, "false", D::None,
         "if the network is in several pieces keep the one holding the inlet (with a warning) instead of failing");
   s.add("vessels.generator", Type::Section, "", D::None, "a built-in anatomy instead of a file");
   s.add("vessels.generator.type", Type::Enum, "", D::None, "which anatomy",
         {"straight_tube", "y_bifurcation", "aortic_arch", "binary_tree", "arterial_tree"});
-  s.add("vessels.generator.length", Type::Number, "0.1", D::Length, "straight_tube: length");
-  s.add("vessels.generator.radius", Type::Number, "2 mm", D::Length, "straight_tube: radius");
+  s.add("vessels.generator.length", Type::Number, "0.1", D::Length, "straight_tube: length").positive();
+  s.add("vessels.generator.radius", Type::Number, "2 mm", D::Length, "straight_tube: radius").positive();
   s.add("vessels.generator.parent_radius", Type::Number, "5 mm", D::Length,
-        "y_bifurcation: parent radius (daughters by Murray's law)");
-  s.add("vessels.generator.parent_length", Type::Number, "40 mm", D::Length, "y_bifurcation: parent length");
-  s.add("vessels.generator.child_length", Type::Number, "40 mm", D::Length, "y_bifurcation: daughter length");
+        "y_bifurcation: parent radius (daughters by Murray's law)")
+      .positive();
+  s.add("vessels.generator.parent_length", Type::Number, "40 mm", D::Length, "y_bifurcation: parent length").positive();
+  s.add("vessels.generator.child_length", Type::Number, "40 mm", D::Length, "y_bifurcation: daughter length")
+      .positive();
   s.add("vessels.generator.angle", Type::Number, "0.6 rad", D::Angle,
-        "y_bifurcation / binary_tree: branching half-angle");
-  s.add("vessels.generator.asymmetry", Type::Number, "0", D::None, "y_bifurcation: flow-split asymmetry in (-1, 1)");
-  s.add("vessels.generator.scale", Type::Number, "1", D::None, "aortic_arch / arterial_tree: size factor (1 = adult)");
-  s.add("vessels.generator.depth", Type::Integer, "5", D::None, "binary_tree: generations (2^(depth+1) - 1 vessels)");
-  s.add("vessels.generator.root_radius", Type::Number, "2 mm", D::Length, "binary_tree: root radius");
-  s.add("vessels.generator.root_length", Type::Number, "20 mm", D::Length, "binary_tree: root length");
+        "y_bifurcation / binary_tree: branching half-angle")
+      .above(0.0)
+      .below(std::numbers::pi / 2);
+  s.add("vessels.generator.asymmetry", Type::Number, "0", D::None, "y_bifurcation: flow-split asymmetry")
+      .above(-1.0)
+      .below(1.0);
+  s.add("vessels.generator.scale", Type::Number, "1", D::None, "aortic_arch / arterial_tree: size factor (1 = adult)")
+      .positive();
+  s.add("vessels.generator.depth", Type::Integer, "5", D::None, "binary_tree: generations (2^(depth+1) - 1 vessels)")
+      .at_least(0)
+      .at_most(24);
+  s.add("vessels.generator.root_radius", Type::Number, "2 mm", D::Length, "binary_tree: root radius").positive();
+  s.add("vessels.generator.root_length", Type::Number, "20 mm", D::Length, "binary_tree: root length").positive();
   s.add("vessels.generator.radius_ratio", Type::Number, "0.7937005259840998", D::None,
-        "binary_tree: r(k+1)/r(k) (Murray 2^-1/3)");
-  s.add("vessels.generator.length_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: L(k+1)/L(k)");
+        "binary_tree: r(k+1)/r(k) (Murray 2^-1/3)")
+      .positive();
+  s.add("vessels.generator.length_ratio", Type::Number, "0.7937005259840998", D::None, "binary_tree: L(k+1)/L(k)")
+      .positive();
 }
 
 vessels::Network build_scene_network(const config::Config& c) {
@@ -71,12 +85,7 @@ vessels::Network build_scene_network(const config::Config& c) {
   }
   if (!c.has("vessels.generator.type")) throw_input_error(c.where("vessels.generator"), "generator.type is required");
   const std::string type = c.string("vessels.generator.type");
-  auto g = [&](const char* key) {
-    const std::string path = std::string("vessels.generator.") + key;
-    const double v = c.number(path);
-    if (!(v > 0.0) && std::string_view(key) != "asymmetry") throw_input_error(c.where(path), "must be positive");
-    return v;
-  };
+  auto g = [&](const char* key) { return c.number(std::string("vessels.generator.") + key); };  // ranges declared
   try {
     if (type == "straight_tube")
       return vessels::Network::build(vessels::straight_tube({.length = g("length"), .radius = g("radius")}), build);

@@ -12,6 +12,7 @@
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
+#include "flowire/common/steps.hpp"
 #include "flowire/coupling/catheter.hpp"
 #include "flowire/coupling/drag.hpp"
 #include "flowire/coupling/occlusion.hpp"
@@ -33,10 +34,17 @@ void declare_output_keys(config::Schema& s) {
   using D = units::Dimension;
   s.add("output", Type::Section, "{}", D::None, "what is written and where");
   s.add("output.dir", Type::String, "out", D::None, "output folder (relative to the working directory)");
-  s.add("output.every", Type::Number, "0", D::Time, "output interval of simulated time (0: only the final state)");
+  s.add("output.every", Type::Number, "0", D::Time, "output interval of simulated time (0: only the final state)")
+      .non_negative();
   s.add("output.vtk", Type::Bool, "true", D::None, "write .vtp/.pvd files");
   s.add("output.csv", Type::Bool, "true", D::None, "write .csv files");
   s.add("output.png", Type::Bool, "false", D::None, "render PNG pictures (needs an X server, e.g. xvfb-run)");
+}
+
+long output_every_steps(const config::Config& c, double dt) {
+  const double every = c.number("output.every");
+  if (!(every > 0.0)) return 0;
+  return std::max(1L, step_count(every, dt, c.where("output.every"), "output.every / solve.dt"));
 }
 
 namespace {

@@ -2,6 +2,7 @@
 // section's keys are read where they are declared (scene_sections.hpp); the set-up here
 // puts the parts together.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -374,15 +375,29 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
   (void)take_warnings();
   RunResult result;
   result.out_dir = c.string("output.dir");
+  const std::filesystem::path out(result.out_dir);
+  // What could only fail after the run (pictures without a display) fails before it.
+  if (c.boolean("output.png")) flow::check_can_render(c.where("output.png"));
   nlohmann::json& s = result.summary;
-  s["status"] = "ok";
+  s["status"] = "running";
   s["steps"] = 0;
   s["scene"] = resolved_scene(c);
   if (c.has("name")) s["name"] = c.string("name");
+  // The folder is taken once the scene has been set up (bad input found in the set-up leaves
+  // it as it was) and is this run's until it ends; its summary says "running" from then on,
+  // so a run that crashes or is killed never leaves an earlier run's "ok" beside its frames.
+  std::optional<OutputFolder> folder;
+  auto take_folder = [&] {
+    if (folder) return;
+    folder.emplace(out);
+    nlohmann::json running = s;
+    running["pid"] = static_cast<long>(::getpid());
+    write_text_atomically(out / "summary.json", running.dump(2) + "\n");
+  };
   nlohmann::json timings = {{"setup", 0.0},    {"flow", 0.0},   {"rod", 0.0},  {"contact", 0.0},
                             {"coupling", 0.0}, {"output", 0.0}, {"total", 0.0}};
-  const std::filesystem::path out(result.out_dir);
   auto finish = [&](const std::string& status) {
+    take_folder();
     s["status"] = status;
     timings["total"] = seconds_since(t_start);
     s["timings"] = timings;
@@ -403,29 +418,36 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     const vessels::Network* net = cosim.network();
     flow::FlowSolver* fsolver = cosim.flow();
     timings["setup"] = seconds_since(t0);
+    take_folder();
 
     // ---------------- stepping
     const double dt = cosim.dt();
-    const double every = c.number("output.every");
     const long steps = cosim.planned_steps();
-    const long out_every = every > 0 ? std::max(1L, static_cast<long>(std::llround(every / dt))) : 0;
+    const long out_every = output_every_steps(c, dt);
     const bool series = out_every > 0;
 
     RunRecorder recorder(c, cosim, out);
     cosim.start();
     if (series || steps == 0) recorder.record(0.0);
-    for (long step = 0; step < steps; ++step) {
-      const double t1 = (static_cast<double>(step) + 1.0) * dt;
-      cosim.step();
-      recorder.after_step();
-      if (series && (step + 1) % out_every == 0) recorder.record(t1);
-      if (options.progress)
-        options.progress({step + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
+    long done = 0;
+    {
+      // SIGINT/SIGTERM end the stepping after the current step: the frames so far are
+      // written below and the summary says "interrupted".
+      const InterruptibleSection interruptible;
+      for (; done < steps && interrupt_signal() == 0; ++done) {
+        const double t1 = (static_cast<double>(done) + 1.0) * dt;
+        cosim.step();
+        recorder.after_step();
+        if (series && (done + 1) % out_every == 0) recorder.record(t1);
+        if (options.progress)
+          options.progress({done + 1, steps, t1, static_cast<double>(steps) * dt, seconds_since(t_start)});
+      }
     }
-    if (!series && steps > 0) recorder.record(static_cast<double>(steps) * dt);
-    s["steps"] = steps;
+    if (!series && done > 0) recorder.record(static_cast<double>(done) * dt);
+    s["steps"] = done;
     recorder.finish(series);
     const double t_out = recorder.seconds();
+    throw_if_interrupted(fmt::format("the run at t = {:.6g} s", static_cast<double>(done) * dt));
 
     // ---------------- finite-element comparison of the flow (fem:)
     if (c.has_section("fem") && !fem_on_network(c)) {
@@ -447,9 +469,14 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     timings["coupling"] = split.coupling;
     timings["output"] = t_out;
   } catch (const Error& e) {
-    if (e.kind() == ErrorKind::Numerical) {
-      s["error"] = e.what();
-      finish("error");
+    // Whatever ended the run, the summary says so; if even that cannot be written (a full
+    // disk), the "running" one stays and the first error is the one reported.
+    // Bad input found before the folder was taken leaves no summary (nothing was written).
+    s["error"] = e.what();
+    try {
+      if (folder || e.kind() == ErrorKind::Numerical)
+        finish(e.kind() == ErrorKind::Interrupted ? "interrupted" : "error");
+    } catch (const Error&) {
     }
     throw;
   }

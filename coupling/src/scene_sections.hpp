@@ -112,7 +112,8 @@ struct SolveSettings {
   double dt = 0.0;         ///< solve.dt [s]
   long steps = 0;          ///< solve.duration / dt (0 for a static scene)
 };
-/// @throws flowire::Error (input) naming solve.dt or solve.duration if out of range.
+/// @throws flowire::Error (input) naming solve.duration and solve.dt if their quotient is more
+/// steps than a run may plan (kMaxSteps, steps.hpp).
 [[nodiscard]] SolveSettings solve_settings(const config::Config& scene);
 /// @brief solve.integrator, the rods' time integrator.
 [[nodiscard]] rod::Integrator scene_integrator(const config::Config& scene);
@@ -132,5 +133,9 @@ void check_fem(const config::Config& scene, const flow::FlowSolver* flow, const 
 
 // ---- output: (run_output.cpp)
 void declare_output_keys(config::Schema& schema);
+/// @brief output.every in steps of @p dt: 0 for only the final state, else at least 1.
+/// @throws flowire::Error (input) naming output.every and solve.dt if their quotient is more
+/// steps than a run may plan (kMaxSteps, steps.hpp).
+[[nodiscard]] long output_every_steps(const config::Config& scene, double dt);
 
 }  // namespace flowire::coupling

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 
 namespace flowire::coupling {
 
@@ -34,8 +35,7 @@ std::vector<std::string> split(const std::string& line) {
 DriveSchedule::DriveSchedule(std::vector<Row> rows) : rows_(std::move(rows)) {}
 
 DriveSchedule DriveSchedule::read_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw_input_error(path, "cannot open the insertion schedule (does it exist?)");
+  std::ifstream in = open_input(path, input_limit::kTable, "an insertion schedule (CSV)");
   std::string line;
   int lineno = 0;
   // Header: the three columns, any order, nothing else.

@@ -8,12 +8,12 @@
 #include <sstream>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 
 namespace flowire::coupling {
 
 std::vector<TracePoint> read_tip_trace(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw_input_error(path, "cannot open the tip trace");
+  std::ifstream in = open_input(path, input_limit::kTable, "a tip trace (CSV)");
   std::string line;
   if (!std::getline(in, line)) throw_input_error(path, "empty file (expected a header time,inserted_length,x,y,z)");
   if (line.rfind("time,inserted_length,x,y,z", 0) != 0)

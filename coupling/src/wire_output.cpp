@@ -93,7 +93,12 @@ void WireOutput::add_frame(const WireFrame& f) {
     w->SetFileName(tmp.string().c_str());
     w->SetInputData(poly);
     w->SetDataModeToAppended();
-    if (w->Write() != 1) throw_input_error((dir_ / name).string(), "VTK could not write the file");
+    // A failed write is reported once, here, not also as VTK's multi-line log.
+    const int shown = vtkObject::GetGlobalWarningDisplay();
+    vtkObject::GlobalWarningDisplayOff();
+    const bool written = w->Write() == 1 && w->GetErrorCode() == 0;
+    vtkObject::SetGlobalWarningDisplay(shown);
+    if (!written) throw_input_error((dir_ / name).string(), "VTK could not write the file (disk full?)");
   });
   vtk_files_.emplace_back(f.time, name);
 #endif

@@ -14,12 +14,6 @@ namespace flowire::flow {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-std::ofstream open_out(const std::filesystem::path& p) {
-  std::ofstream out(p, std::ios::binary);
-  if (!out) throw_input_error(p.string(), "cannot open the file for writing");
-  return out;
-}
-
 void check_frame(const Network& net, const FlowFrame& f) {
   const auto ne = static_cast<size_t>(net.num_segments());
   if (f.pressure.size() != static_cast<size_t>(net.num_nodes()) || f.flow.size() != ne ||
@@ -57,8 +51,7 @@ std::vector<FlowFrame> sample_frames(FlowSolver& solver, double t0, double durat
 
 void write_nodes_csv(const Network& net, std::span<const FlowFrame> frames, const std::filesystem::path& path) {
   for (const auto& f : frames) check_frame(net, f);
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    auto out = open_out(tmp);
+  write_stream_atomically(path, [&](std::ostream& out) {
     out << "time,node,x,y,z,pressure\n";
     std::string buf;
     for (const auto& f : frames) {
@@ -70,7 +63,6 @@ void write_nodes_csv(const Network& net, std::span<const FlowFrame> frames, cons
         out << buf;
       }
     }
-    if (!out) throw_input_error(path.string(), "write failed");
   });
 }
 
@@ -79,8 +71,7 @@ void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> fra
   const auto& net = solver.network();
   const double eta = solver.spec().viscosity, rho = solver.spec().density;
   for (const auto& f : frames) check_frame(net, f);
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    auto out = open_out(tmp);
+  write_stream_atomically(path, [&](std::ostream& out) {
     out << "time,segment,node_from,node_to,length,radius,resistance,flow_rate,mean_velocity,wall_shear_stress,reynolds,"
            "occupied_fraction,resistance_factor\n";
     std::string buf;
@@ -99,7 +90,6 @@ void write_segments_csv(const FlowSolver& solver, std::span<const FlowFrame> fra
         out << buf;
       }
     }
-    if (!out) throw_input_error(path.string(), "write failed");
   });
 }
 

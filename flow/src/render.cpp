@@ -55,8 +55,46 @@ vtkNew<vtkActor> tube_actor(vtkPolyData* poly, double radius_scale, int sides) {
   return actor;
 }
 
+/// The X connection a render needs. VTK aborts the process when it cannot open the display:
+/// it is opened here and handed to the render window (which then opens none of its own; a
+/// second connection per render occasionally failed under a busy Xvfb), and closed after
+/// the window is gone.
+struct XConnection {
+  Display* d = nullptr;
+  XConnection() = default;
+  XConnection(const XConnection&) = delete;
+  XConnection& operator=(const XConnection&) = delete;
+  XConnection(XConnection&& o) noexcept : d(o.d) { o.d = nullptr; }
+  XConnection& operator=(XConnection&&) = delete;
+  ~XConnection() {
+    if (d) XCloseDisplay(d);
+  }
+};
+
+XConnection connect_display(const std::string& where) {
+  const char* display = std::getenv("DISPLAY");
+  if (!display || !*display)
+    throw_input_error(where, "rendering a PNG needs an X display; run under xvfb-run -a -s \"-screen 0 1024x768x24\"");
+  XConnection x;
+  for (int attempt = 0; attempt < 5 && !x.d; ++attempt) {
+    x.d = XOpenDisplay(nullptr);
+    if (!x.d) std::this_thread::sleep_for(std::chrono::milliseconds(100 << attempt));
+  }
+  if (!x.d)
+    throw_input_error(where, fmt::format("cannot connect to the X display '{}'; run under xvfb-run -a", display));
+  return x;
+}
+
 }  // namespace
 #endif
+
+void check_can_render(const std::string& where) {
+#ifndef FLOWIRE_FLOW_HAVE_VTK
+  throw_input_error(where, "PNG rendering needs VTK (this build has FLOWIRE_WITH_VTK=OFF)");
+#else
+  (void)connect_display(where);
+#endif
+}
 
 void render_network_png(const Network& net, std::span<const double> node_values, const std::filesystem::path& path,
                         const RenderOptions& opt) {
@@ -66,26 +104,7 @@ void render_network_png(const Network& net, std::span<const double> node_values,
 #else
   if (node_values.size() != static_cast<size_t>(net.num_nodes()))
     throw_usage_error("render_network_png: node_values must have one value per node");
-  const char* display = std::getenv("DISPLAY");
-  if (!display || !*display)
-    throw_input_error(path.string(),
-                      "rendering a PNG needs an X display; run under xvfb-run -a -s \"-screen 0 1024x768x24\"");
-  // VTK aborts the process when it cannot open the display: open it here and hand the
-  // connection to the render window (which then opens none of its own; a second connection
-  // per render occasionally failed under a busy Xvfb). Closed after the window is gone.
-  struct XConnection {
-    Display* d = nullptr;
-    ~XConnection() {
-      if (d) XCloseDisplay(d);
-    }
-  } x;
-  for (int attempt = 0; attempt < 5 && !x.d; ++attempt) {
-    x.d = XOpenDisplay(nullptr);
-    if (!x.d) std::this_thread::sleep_for(std::chrono::milliseconds(100 << attempt));
-  }
-  if (!x.d)
-    throw_input_error(path.string(),
-                      fmt::format("cannot connect to the X display '{}'; run under xvfb-run -a", display));
+  const XConnection x = connect_display(path.string());
 
   // Vessels: one polydata, tubes of radius varying with the node radius.
   vtkNew<vtkPoints> pts;

@@ -10,6 +10,7 @@
 #include "assembly.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/steps.hpp"
 #include "flowire/flow/svzerod/block.hpp"
 #include "flowire/flow/svzerod/integrator.hpp"
 #include "flowire/flow/svzerod/system.hpp"
@@ -275,7 +276,7 @@ class RlcSolver final : public FlowSolver {
   void settle() {
     const double period = spec_.cycle();
     if (!(period > 0.0)) return;
-    const long steps = std::lround(period / spec_.dt);
+    const long steps = step_count(period, spec_.dt, "flow (rlc)", "the inlet period / solve.dt");
     if (std::abs(steps * spec_.dt - period) > 1e-9 * period)
       warn(fmt::format("flow (rlc): the step {} s does not divide the period {} s; periodic detection is approximate",
                        spec_.dt, period));

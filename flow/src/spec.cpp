@@ -10,6 +10,7 @@
 #include "flowire/common/config.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 
 namespace flowire::flow {
 namespace {
@@ -102,8 +103,7 @@ double Waveform::cycle() const {
 }
 
 Waveform read_waveform_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw_input_error(path, "cannot open the waveform table");
+  std::ifstream in = open_input(path, input_limit::kTable, "a waveform table (CSV)");
   std::string line;
   std::vector<double> t, v;
   int lineno = 0;
@@ -256,14 +256,15 @@ void declare_scene_keys(config::Schema& s) {
         "superposition (factor once, affine in the sources) | dense_inverse (the published precomputed K^-1) | sparse "
         "(a direct solve per frame) | petsc (distributed)",
         {"superposition", "dense_inverse", "sparse", "petsc"});
-  s.add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity, "blood dynamic viscosity");
-  s.add("flow.density", Type::Number, "1060", D::Density, "blood density");
+  s.add("flow.viscosity", Type::Number, "3.5e-3", D::Viscosity, "blood dynamic viscosity").positive();
+  s.add("flow.density", Type::Number, "1060", D::Density, "blood density").positive();
   s.add("flow.inertance", Type::Enum, "poiseuille", D::None,
         "rlc: inertance per segment, poiseuille = rho*l/(pi*r^2), womersley = 4*rho*l/(3*pi*r^2)",
         {"poiseuille", "womersley"});
   s.add("flow.wall", Type::Section, "", D::None, "rlc: the vessel wall (compliance C = 3 pi r^3 l / (2 E h))");
-  s.add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus");
-  s.add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius");
+  s.add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus")
+      .positive();
+  s.add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius").positive();
   s.add("flow.profile", Type::Enum, "laminar", D::None,
         "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
         "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
@@ -293,23 +294,24 @@ void declare_scene_keys(config::Schema& s) {
           p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
     s.add(base + ".diastolic", Type::Number, p ? "80 mmHg" : "", dim,
           p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
-    s.add(base + ".period", Type::Number, "0.8 s", D::Time, "sine: period T");
+    s.add(base + ".period", Type::Number, "0.8 s", D::Time, "sine: period T").positive();
     s.add(base + ".value", Type::Number, "", dim, "constant: the value");
     s.add(base + ".file", Type::String, "", D::None, "table: CSV with a header and columns time,value (SI), periodic");
   }
   s.add("flow.outlets", Type::Section, "{}", D::None, "boundary condition at every other network end");
   s.add("flow.outlets.pressure", Type::Number, "", D::Pressure,
         "fixed outlet pressure (default 0 when nothing else is given)");
-  s.add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure");
+  s.add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure")
+      .positive();
   s.add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
   s.add("flow.outlets.scaling", Type::Enum, "none", D::None,
         "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so "
         "each outlet flow is proportional to r^3",
         {"none", "murray"});
   s.add("flow.outlets.rcr", Type::Section, "", D::None, "RCR windkessel at every outlet");
-  s.add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance");
-  s.add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance");
-  s.add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance");
+  s.add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance").non_negative();
+  s.add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance").non_negative();
+  s.add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance").non_negative();
   s.add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure, "distal pressure");
 }
 

@@ -1,5 +1,7 @@
 #include "flowire/rod/model.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -54,6 +56,9 @@ RodModel RodModel::from_spec(const WireSpec& s) {
   m.length = s.length;
   m.h = s.segments > 0 ? s.length / s.segments : s.segment_length;
   require(m.h <= s.length, "segment_length longer than the wire");
+  require(s.length / m.h <= kMaxRodSegments,
+          fmt::format("length / segment_length = {:.3g} segments; a rod has at most {:.0e}", s.length / m.h,
+                      kMaxRodSegments));
   m.grid_vertices = static_cast<int>(std::ceil(s.length / m.h - 1e-9)) + 3;
   m.base_position = s.base_position;
   m.base_direction = s.base_direction.normalized();

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "flowire/common/error.hpp"
 #include "flowire_test.hpp"
 
@@ -12,26 +15,27 @@ namespace {
 
 Schema test_schema() {
   Schema s;
-  s.add({"flow", Type::Section, "", Dimension::None, "flow section", {}});
+  s.add({"flow", Type::Section, "", Dimension::None, "flow section", {}, {}});
   s.add({"flow.solver",
          Type::Enum,
          "superposition",
          Dimension::None,
          "solver",
-         {"superposition", "sparse", "dense_inverse"}});
-  s.add({"flow.viscosity", Type::Number, "3.5e-3", Dimension::Viscosity, "viscosity", {}});
-  s.add({"flow.inlet", Type::Section, "{}", Dimension::None, "inlet", {}});
-  s.add({"flow.inlet.pressure", Type::NumberOrSection, "13000", Dimension::Pressure, "inlet pressure", {}});
-  s.add({"flow.inlet.pressure.systolic", Type::Number, "", Dimension::Pressure, "", {}});
-  s.add({"wire", Type::Section, "", Dimension::None, "wire", {}});
-  s.add({"wire.radius", Type::Number, "0.45 mm", Dimension::Length, "radius", {}});
-  s.add({"wire.segments", Type::Integer, "100", Dimension::None, "segments", {}});
-  s.add({"wire.base", Type::Section, "", Dimension::None, "", {}});
-  s.add({"wire.base.direction", Type::Vector3, "", Dimension::None, "", {}});
-  s.add({"loads", Type::List, "", Dimension::None, "", {}});
-  s.add({"loads[].type", Type::Enum, "", Dimension::None, "", {"tip_force", "gravity"}});
-  s.add({"loads[].value", Type::Vector3, "", Dimension::Force, "", {}});
-  s.add({"loads[].scale", Type::Number, "1", Dimension::None, "", {}});
+         {"superposition", "sparse", "dense_inverse"},
+         {}});
+  s.add({"flow.viscosity", Type::Number, "3.5e-3", Dimension::Viscosity, "viscosity", {}, {}});
+  s.add({"flow.inlet", Type::Section, "{}", Dimension::None, "inlet", {}, {}});
+  s.add({"flow.inlet.pressure", Type::NumberOrSection, "13000", Dimension::Pressure, "inlet pressure", {}, {}});
+  s.add({"flow.inlet.pressure.systolic", Type::Number, "", Dimension::Pressure, "", {}, {}});
+  s.add({"wire", Type::Section, "", Dimension::None, "wire", {}, {}});
+  s.add({"wire.radius", Type::Number, "0.45 mm", Dimension::Length, "radius", {}, {}});
+  s.add({"wire.segments", Type::Integer, "100", Dimension::None, "segments", {}, {}});
+  s.add({"wire.base", Type::Section, "", Dimension::None, "", {}, {}});
+  s.add({"wire.base.direction", Type::Vector3, "", Dimension::None, "", {}, {}});
+  s.add({"loads", Type::List, "", Dimension::None, "", {}, {}});
+  s.add({"loads[].type", Type::Enum, "", Dimension::None, "", {"tip_force", "gravity"}, {}});
+  s.add({"loads[].value", Type::Vector3, "", Dimension::Force, "", {}, {}});
+  s.add({"loads[].scale", Type::Number, "1", Dimension::None, "", {}, {}});
   return s;
 }
 
@@ -143,4 +147,189 @@ TEST(Config, KeysDeclaredByFieldsEqualKeysDeclaredWhole) {
   EXPECT_EQ(k->doc, "tip shape");
   EXPECT_EQ(k->choices, (std::vector<std::string>{"straight", "j"}));
   EXPECT_THROW(s.add("wire.tip", Type::Number, "", Dimension::None, "again"), flowire::Error);
+}
+
+namespace {
+
+/// A schema with one key of each kind of range.
+Schema ranged_schema() {
+  Schema s;
+  s.add("wire", Type::Section, "", Dimension::None, "wire");
+  s.add("wire.length", Type::Number, "1", Dimension::Length, "length").positive();
+  s.add("wire.damping", Type::Number, "0", Dimension::None, "damping").non_negative();
+  s.add("wire.share", Type::Number, "", Dimension::None, "a fraction").fraction();
+  s.add("wire.ratio", Type::Number, "", Dimension::None, "ratio").above(-1.0).below(0.5);
+  s.add("wire.segments", Type::Integer, "10", Dimension::None, "segments").at_least(1).at_most(1000);
+  s.add("wire.base", Type::Vector3, "", Dimension::Length, "base position");
+  s.add("loads", Type::List, "", Dimension::None, "loads");
+  s.add("loads[].s", Type::Number, "", Dimension::Length, "arc length").non_negative();
+  return s;
+}
+
+std::string ranged_error(const std::string& text, const std::vector<std::string>& sets = {}) {
+  try {
+    (void)load_config_text(text, "scene.yaml", ranged_schema(), sets);
+  } catch (const flowire::Error& e) {
+    EXPECT_EQ(e.kind(), flowire::ErrorKind::Input) << e.what();
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(ConfigRange, ChainedDeclarationsSetTheBoundsOfTheKeyJustAdded) {
+  const Schema s = ranged_schema();
+  const Range& length = s.find("wire.length")->range;
+  EXPECT_EQ(length.lower, 0.0);
+  EXPECT_TRUE(length.lower_open);
+  EXPECT_FALSE(std::isfinite(length.upper));
+  const Range& segments = s.find("wire.segments")->range;
+  EXPECT_EQ(segments.lower, 1.0);
+  EXPECT_EQ(segments.upper, 1000.0);
+  EXPECT_FALSE(segments.lower_open || segments.upper_open);
+  EXPECT_FALSE(s.find("wire.base")->range.bounded());  // finite is the default, no bound
+  EXPECT_TRUE(s.find("wire.share")->range.bounded());
+  // How the reference page writes them.
+  EXPECT_EQ(length.text(), "> 0");
+  EXPECT_EQ(s.find("wire.damping")->range.text(), ">= 0");
+  EXPECT_EQ(s.find("wire.share")->range.text(), "[0, 1]");
+  EXPECT_EQ(s.find("wire.ratio")->range.text(), "(-1, 0.5)");
+  EXPECT_EQ(segments.text(), "[1, 1000]");
+  EXPECT_EQ(s.find("wire.base")->range.text(), "");
+  Schema upper;
+  upper.add("depth", Type::Integer, "", Dimension::None, "").at_most(24);
+  EXPECT_EQ(upper.find("depth")->range.text(), "<= 24");
+  EXPECT_FALSE(upper.find("depth")->range.contains(25));
+  EXPECT_TRUE(upper.find("depth")->range.contains(-3));
+}
+
+TEST(ConfigRange, ContainsHonoursOpenAndClosedBoundsAndRefusesNonFiniteValues) {
+  const Schema s = ranged_schema();
+  const Range& ratio = s.find("wire.ratio")->range;
+  EXPECT_FALSE(ratio.contains(-1.0));
+  EXPECT_TRUE(ratio.contains(std::nextafter(-1.0, 0.0)));
+  EXPECT_TRUE(ratio.contains(std::nextafter(0.5, 0.0)));
+  EXPECT_FALSE(ratio.contains(0.5));
+  const Range& share = s.find("wire.share")->range;
+  EXPECT_TRUE(share.contains(0.0));
+  EXPECT_TRUE(share.contains(1.0));
+  EXPECT_FALSE(share.contains(std::nextafter(1.0, 2.0)));
+  EXPECT_FALSE(share.contains(-std::numeric_limits<double>::denorm_min()));
+  const Range any;
+  EXPECT_TRUE(any.contains(-1e300));
+  EXPECT_FALSE(any.contains(std::numeric_limits<double>::infinity()));
+  EXPECT_FALSE(any.contains(std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_FALSE(share.contains(std::numeric_limits<double>::quiet_NaN()));
+}
+
+TEST(ConfigRange, ARangeOnAKeyThatIsNoNumberOrThatHoldsNoValueIsAUsageError) {
+  Schema s;
+  EXPECT_THROW(s.positive(), flowire::Error);  // no key yet
+  s.add("wire", Type::Section, "", Dimension::None, "wire");
+  EXPECT_THROW(s.positive(), flowire::Error);
+  s.add("wire.shape", Type::Enum, "j", Dimension::None, "shape", {"j"});
+  EXPECT_THROW(s.non_negative(), flowire::Error);
+  s.add("wire.length", Type::Number, "", Dimension::Length, "length");
+  EXPECT_THROW(s.at_least(2.0).at_most(1.0), flowire::Error);
+  Schema t;
+  t.add("x", Type::Number, "", Dimension::None, "");
+  EXPECT_THROW(t.above(1.0).at_most(1.0), flowire::Error);  // (1, 1] is empty
+  Schema u;
+  u.add("x", Type::Number, "", Dimension::None, "");
+  EXPECT_NO_THROW(u.at_least(1.0).at_most(1.0));  // [1, 1] holds 1
+  try {
+    Schema v;
+    v.add("wire", Type::Section, "", Dimension::None, "wire");
+    v.positive();
+  } catch (const flowire::Error& e) {
+    EXPECT_EQ(e.kind(), flowire::ErrorKind::Usage);
+    EXPECT_NE(std::string(e.what()).find("'wire'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ConfigRange, AValueOutsideItsRangeNamesFileLineKeyValueUnitAndLimit) {
+  const std::string e = ranged_error("wire:\n  damping: 0.5\n  length: -0.5 mm\n");
+  EXPECT_EQ(e.rfind("scene.yaml:3: wire.length = -0.0005 m: ", 0), 0u) << e;
+  EXPECT_NE(e.find("must be positive (> 0)"), std::string::npos) << e;
+  EXPECT_NE(
+      ranged_error("wire:\n  damping: -0.1\n").find("scene.yaml:2: wire.damping = -0.1: must not be negative (>= 0)"),
+      std::string::npos);
+  EXPECT_NE(ranged_error("wire:\n  share: 1.5\n").find("wire.share = 1.5: must be in [0, 1]"), std::string::npos);
+  EXPECT_NE(ranged_error("wire:\n  ratio: 0.5\n").find("wire.ratio = 0.5: must be in (-1, 0.5)"), std::string::npos);
+  EXPECT_NE(ranged_error("wire:\n  segments: 0\n").find("wire.segments = 0: must be in [1, 1000]"), std::string::npos);
+  EXPECT_NE(ranged_error("wire:\n  segments: 1001\n").find("[1, 1000]"), std::string::npos);
+  // At a closed limit and just inside an open one: accepted.
+  EXPECT_EQ(ranged_error("wire:\n  damping: 0\n  share: 1\n  segments: 1000\n  ratio: -0.999999\n  length: 1e-300\n"),
+            "");
+}
+
+TEST(ConfigRange, OverridesListItemsAndDefaultsAreCheckedToo) {
+  // --set names itself as the place.
+  EXPECT_NE(ranged_error("wire: {}\n", {"wire.length=0"}).find("--set: wire.length = 0 m: must be positive (> 0)"),
+            std::string::npos);
+  EXPECT_EQ(ranged_error("wire: {length: -1}\n", {"wire.length=2 cm"}), "");  // the override replaces the bad value
+  // A list item by its index and line.
+  const std::string e = ranged_error("loads:\n  - s: 1 cm\n  - s: -2 cm\n");
+  EXPECT_EQ(e.rfind("scene.yaml:3: loads[1].s = -0.02 m: ", 0), 0u) << e;
+  // A default outside its own range is a declaration error, named as the default.
+  Schema bad;
+  bad.add("wire", Type::Section, "", Dimension::None, "wire");
+  bad.add("wire.length", Type::Number, "-1", Dimension::Length, "length").positive();
+  try {
+    (void)load_config_text("wire: {}\n", "scene.yaml", bad);
+    ADD_FAILURE() << "a default outside its range was filled in";
+  } catch (const flowire::Error& err) {
+    EXPECT_NE(std::string(err.what()).find("default: wire.length = -1 m"), std::string::npos) << err.what();
+  }
+}
+
+TEST(ConfigRange, EveryNumberMustBeFiniteAfterItsUnitIsApplied) {
+  // 1e308 min is a finite number as written and infinite in s, the SI unit it is converted to.
+  Schema s;
+  s.add("solve", Type::Section, "", Dimension::None, "");
+  s.add("solve.duration", Type::Number, "", Dimension::Time, "");
+  s.add("solve.position", Type::Vector3, "", Dimension::Time, "");
+  s.add("solve.list", Type::NumberList, "", Dimension::Time, "");
+  s.add("solve.count", Type::NumberOrSection, "", Dimension::Time, "");
+  for (const std::string text : {"solve: {duration: 1e308 min}\n", "solve: {position: [0, 1e308 min, 0]}\n",
+                                 "solve: {list: [1, 2, 1e308 min]}\n", "solve: {count: 1e308 min}\n"}) {
+    try {
+      (void)load_config_text(text, "scene.yaml", s);
+      ADD_FAILURE() << text << ": an infinite value was accepted";
+    } catch (const flowire::Error& e) {
+      EXPECT_EQ(e.kind(), flowire::ErrorKind::Input);
+      EXPECT_NE(std::string(e.what()).find("must be a finite number"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("scene.yaml:1: solve."), std::string::npos) << e.what();
+    }
+  }
+  // The component of a vector out of range is named by its index.
+  Schema d;
+  d.add("dir", Type::Vector3, "", Dimension::None, "").at_least(-1.0).at_most(1.0);
+  try {
+    (void)load_config_text("dir: [0, 2, 0]\n", "scene.yaml", d);
+    ADD_FAILURE() << "a component outside [-1, 1] was accepted";
+  } catch (const flowire::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("scene.yaml:1: dir[1] = 2: must be in [-1, 1]"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ConfigRange, TheReferencePageShowsTheRangeColumn) {
+  const std::string md = ranged_schema().markdown();
+  EXPECT_NE(md.find("| key | type | default | unit | range | description |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `wire.length` | number | `1` | m | `> 0` | length |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `wire.base` | [x, y, z] |  | m |  | base position |"), std::string::npos) << md;
+}
+
+TEST(ConfigRange, CheckRangeIsTheLoadersCheck) {
+  const Key* k = ranged_schema().find("wire.length");
+  ASSERT_NE(k, nullptr);
+  EXPECT_NO_THROW(check_range(*k, 0.1, "--param", "wire.length"));
+  try {
+    check_range(*k, -2.0, "--param", "wire.length");
+    ADD_FAILURE() << "a negative length passed";
+  } catch (const flowire::Error& e) {
+    EXPECT_EQ(std::string(e.what()), "--param: wire.length = -2 m: " + k->range.requirement());
+  }
 }

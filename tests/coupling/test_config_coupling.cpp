@@ -48,7 +48,9 @@ TEST(ConfigCoupling, OcclusionAndFlowEveryFollowTheScene) {
   EXPECT_FALSE(given.occlusion);
   EXPECT_TRUE(given.occlusion_given);
   EXPECT_EQ(given.flow_every, 5);
-  EXPECT_EQ(coupling_settings(test::scene("coupling: {flow_every: 0}\n")).flow_every, 1);  // at least every step
+  // At least every step: 0 is refused where it is written, not quietly taken as 1.
+  const std::string e = test::input_error([] { (void)test::scene("coupling:\n  flow_every: 0\n"); });
+  EXPECT_NE(e.find("scene.yaml:2: coupling.flow_every = 0"), std::string::npos) << e;
 }
 
 TEST(ConfigCoupling, WallForcesAreNullOnlyWithoutContactAndDrag) {

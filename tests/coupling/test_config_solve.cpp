@@ -29,11 +29,18 @@ TEST(ConfigSolve, StepsFollowFromDurationAndDtAndAStaticSceneHasNone) {
 }
 
 TEST(ConfigSolve, ANonPositiveDtOrNegativeDurationIsRejectedNamingFileLineAndKey) {
-  const auto dt = test::scene("solve:\n  dt: 0\n");
-  EXPECT_NE(test::input_error([&] { (void)solve_settings(dt); }).find("scene.yaml:2: solve.dt"), std::string::npos);
-  const auto duration = test::scene("solve:\n  dt: 1 ms\n  duration: -1 s\n");
-  EXPECT_NE(test::input_error([&] { (void)solve_settings(duration); }).find("scene.yaml:3: solve.duration"),
+  // Refused as the scene is read (the declared ranges).
+  EXPECT_NE(test::input_error([] { (void)test::scene("solve:\n  dt: 0\n"); }).find("scene.yaml:2: solve.dt"),
             std::string::npos);
+  EXPECT_NE(test::input_error([] {
+              (void)test::scene("solve:\n  dt: 1 ms\n  duration: -1 s\n");
+            }).find("scene.yaml:3: solve.duration"),
+            std::string::npos);
+  // Their quotient, more steps than a run may plan, when the steps are planned.
+  const auto long_run = test::scene("solve:\n  dt: 1 us\n  duration: 2000 s\n");
+  const std::string e = test::input_error([&] { (void)solve_settings(long_run); });
+  EXPECT_NE(e.find("scene.yaml:3: solve.duration"), std::string::npos) << e;
+  EXPECT_NE(e.find("solve.duration / solve.dt = 2e+09 steps"), std::string::npos) << e;
 }
 
 }  // namespace

@@ -31,11 +31,17 @@ TEST(ConfigWire, ValuesGivenInTheSceneAreRead) {
 }
 
 TEST(ConfigWire, BadWireValuesAreRejectedNamingFileLineAndKey) {
-  const auto angle = test::scene("wire:\n  adapt:\n    split_angle: 2 rad\n");
-  EXPECT_NE(test::input_error([&] { (void)scene_wire_spec(angle); }).find("scene.yaml:3: wire.adapt.split_angle"),
+  // Out of their declared ranges: refused as the scene is read.
+  EXPECT_NE(test::input_error([] {
+              (void)test::scene("wire:\n  adapt:\n    split_angle: 2 rad\n");
+            }).find("scene.yaml:3: wire.adapt.split_angle"),
             std::string::npos);
-  const auto radius = test::scene("wire:\n  radius: 0\n");
-  EXPECT_NE(test::input_error([&] { (void)scene_wire_spec(radius); }).find("must be positive"), std::string::npos);
+  EXPECT_NE(test::input_error([] { (void)test::scene("wire:\n  radius: 0\n"); }).find("must be positive"),
+            std::string::npos);
+  // Relative to another value: refused by the reader.
+  const auto merge = test::scene("wire:\n  adapt:\n    split_angle: 0.2 rad\n    merge_angle: 0.15 rad\n");
+  EXPECT_NE(test::input_error([&] { (void)scene_wire_spec(merge); }).find("scene.yaml:4: wire.adapt.merge_angle"),
+            std::string::npos);
 }
 
 TEST(ConfigWire, TheWireEntersAtTheFarthestEndOrTheNodeGiven) {
@@ -62,6 +68,10 @@ TEST(ConfigWire, ALoadWithoutItsValueOrArcLengthIsRejectedNamingFileLineAndKey) 
             std::string::npos);
   const auto ok = test::scene("wire: {}\nloads:\n  - {type: point_force, value: [0, 0, 1e-3], s: 0.5}\n");
   apply_loads(ok, sim, nullptr);
+  // Beyond the wire's end (wire.length 1 m, declared) a point force would act nowhere.
+  const auto beyond = test::scene("wire: {}\nloads:\n  - {type: point_force, value: [0, 0, 1e-3], s: 1.5}\n");
+  EXPECT_NE(test::input_error([&] { apply_loads(beyond, sim, nullptr); }).find("scene.yaml:3: loads[0].s"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -199,7 +199,7 @@ void expect_input_error(F&& f, const std::string& fragment, const std::string& a
 TEST(FemLumen, MissingOrEmptySurfaceNamesTheFile) {
   const fs::path dir = testing::scratch_dir("fem_lumen_bad");
   const std::string missing = (dir / "nowhere.stl").string();
-  expect_input_error([&] { (void)read_surface(missing); }, missing, "does not exist");
+  expect_input_error([&] { (void)read_surface(missing); }, missing, "no such file");
   // A VTP with points and no polygons.
   const std::string empty = (dir / "empty.vtp").string();
   {

@@ -9,38 +9,18 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_run.hpp"
 #include "flowire_test.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int status = -1;
-  std::string out, err;
-};
+using Result = flowire::testing::CliResult;
 
-Result run(const std::string& args) {
-  // One capture folder per test and call: CTest runs the tests of this file in parallel.
-  static int calls = 0;
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto dir =
-      flowire::testing::scratch_dir(std::string("cli-capture-") + info->name() + "-" + std::to_string(calls++));
-  const std::string cmd = std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire " + args + " >" + (dir / "o").string() +
-                          " 2>" + (dir / "e").string();
-  const int raw = std::system(cmd.c_str());
-  Result r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
-  std::ifstream o(dir / "o"), e(dir / "e");
-  std::stringstream so, se;
-  so << o.rdbuf();
-  se << e.rdbuf();
-  r.out = so.str();
-  r.err = se.str();
-  return r;
-}
+Result run(const std::string& args) { return flowire::testing::run_cli(args); }
 
-void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+void write(const fs::path& p, const std::string& text) { flowire::testing::write_file(p, text); }
 
 /// A vmtkcenterlines-style file: one polyline per inlet→outlet path, overlapping along the
 /// shared trunk, radius in MaximumInscribedSphereRadius, coordinates in mm.

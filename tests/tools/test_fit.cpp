@@ -160,9 +160,12 @@ TEST(Fit, BadArgumentsExitTwoNamingThemAndWriteNothing) {
   expect_bad(" --trace " + (dir / "missing.csv").string() + " --param insertion.speed=1cm/s..3cm/s", "missing.csv");
   expect_bad(" --trace " + (dir / "bad.csv").string() + " --param insertion.speed=1cm/s..3cm/s", "bad.csv:3");
   expect_bad(good + " --param insertion.speed=1cm/s..3cm/s --param insertion.speed=1cm/s..2cm/s", "given twice");
-  // A value the scene rejects only when it runs: the first generation fails, the fit stops
-  // with the run's message and writes nothing.
-  expect_bad(good + " --param wire.length=-1..-0.5 --jobs 2", "every run of the first generation failed");
+  // A bound outside the key's declared range is refused naming the key and the range.
+  expect_bad(good + " --param wire.length=-1..0.5", "wire.length = -1 m: must be positive (> 0)");
+  expect_bad(good + " --param contact.friction=0..2 --param wire.tip.angle=0..7", "wire.tip.angle = 7 rad");
+  // A value the scene rejects only when it runs (an initial length longer than the 0.1 m
+  // wire): the first generation fails, the fit stops with the run's message and writes nothing.
+  expect_bad(good + " --param insertion.initial_length=0.2..0.3 --jobs 2", "every run of the first generation failed");
 }
 #endif
 

@@ -230,7 +230,7 @@ void expect_input_error(const std::string& path, const std::string& what) {
 
 TEST(Surface, BadFilesAreInputErrorsNamingTheFile) {
   const auto dir = flowire::testing::scratch_dir("surface_bad");
-  expect_input_error((dir / "missing.stl").string(), "cannot open");
+  expect_input_error((dir / "missing.stl").string(), "no such file");
   {
     std::ofstream f(dir / "points.obj");
     f << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";

@@ -71,6 +71,9 @@ Param parse_param(const std::string& text) {
   p.lo = units::parse_quantity(lo, key->dim, where);
   p.hi = units::parse_quantity(hi, key->dim, where);
   if (!(p.lo < p.hi)) throw_input_error(where, fmt::format("LO ({}) must be less than HI ({})", lo, hi));
+  // Every value tried lies between the bounds: both must be in the key's declared range.
+  config::check_range(*key, p.lo, "--param", p.key);
+  config::check_range(*key, p.hi, "--param", p.key);
   return p;
 }
 

@@ -14,6 +14,7 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
 #include "svzerod_command.hpp"
 
 namespace {
@@ -53,10 +54,11 @@ int error_exit(const std::string& message, int status) {
 int main(int argc, char** argv) {
   std::string model, out;
   if (svzerod_run(argc, argv, model, out)) {
+    flowire::install_interrupt_handlers();
     try {
       return flowire::cli::run_svzerod(model, out, {});
     } catch (const flowire::Error& e) {
-      return error_exit(e.what(), e.kind() == flowire::ErrorKind::Numerical ? 3 : 2);
+      return error_exit(e.what(), flowire::exit_status(e));
     } catch (const std::bad_alloc&) {
       return error_exit("out of memory", 3);
     } catch (const std::exception& e) {

@@ -15,6 +15,7 @@
 #include "fit_command.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/common/units.hpp"
 #include "flowire/coupling/scene.hpp"
@@ -75,10 +76,23 @@ class ProgressLine {
   double last_ = -1.0;
 };
 
+/// The rank of this process in an MPI job started by mpirun (0 otherwise), from the variables
+/// the launchers set (Open MPI, PMIx, MPICH's Hydra): known before MPI itself is started.
+int launcher_rank() {
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"})
+    if (const char* v = std::getenv(name); v && *v) return std::atoi(v);
+  return 0;
+}
+
 int cmd_run(const std::string& scene, const std::string& out, const std::vector<std::string>& sets) {
   namespace fs = std::filesystem;
-  if (!fs::exists(scene)) throw flowire::Error(ErrorKind::Input, fmt::format("{}: no such file", scene));
-  if (fs::path(scene).extension() == ".json") return flowire::cli::run_svzerod(scene, out, sets);
+  // Under mpirun every rank runs the scene and rank 0 alone writes it (and holds its folder),
+  // from the start: PETSc, which also says so, may start only late in the run (the FEM).
+  if (launcher_rank() != 0) flowire::set_writes_outputs(false);
+  const bool model = fs::path(scene).extension() == ".json";
+  flowire::check_input_file(scene, model ? flowire::input_limit::kTable : flowire::input_limit::kScene,
+                            model ? "an svZeroDSolver model (JSON)" : "a scene (YAML)");
+  if (model) return flowire::cli::run_svzerod(scene, out, sets);
   const auto cfg = flowire::coupling::load_scene(scene, sets, out);
   flowire::coupling::RunOptions options;
   ProgressLine line;
@@ -136,16 +150,14 @@ void plot_compare(const std::string& a, const std::string& b, const std::string&
   const auto script = plot_script();
   if (!std::filesystem::exists(script))
     throw flowire::Error(ErrorKind::Input, fmt::format("--plot: the plotting script {} is missing", script.string()));
-  const std::string tmp = png + ".partial.png";
-  const std::string cmd = fmt::format("/usr/bin/python3 '{}' '{}' 'A={}' 'B={}' --compare '{}' >/dev/null 2>&1",
-                                      script.string(), tmp, a, b, csv_path);
-  if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(tmp)) {
-    std::filesystem::remove(tmp);
-    throw flowire::Error(
-        ErrorKind::Input,
-        fmt::format("--plot {}: plotting failed (needs /usr/bin/python3 with python3-matplotlib)", png));
-  }
-  std::filesystem::rename(tmp, png);
+  flowire::write_atomically(png, [&](const std::filesystem::path& tmp) {
+    const std::string cmd = fmt::format("/usr/bin/python3 '{}' '{}' 'A={}' 'B={}' --compare '{}' >/dev/null 2>&1",
+                                        script.string(), tmp.string(), a, b, csv_path);
+    if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(tmp))
+      throw flowire::Error(
+          ErrorKind::Input,
+          fmt::format("--plot {}: plotting failed (needs /usr/bin/python3 with python3-matplotlib)", png));
+  });
 }
 
 int cmd_compare(const std::string& a, const std::string& b, const std::string& out, const std::string& spacing,
@@ -176,6 +188,7 @@ int cmd_compare(const std::string& a, const std::string& b, const std::string& o
 }  // namespace
 
 int main(int argc, char** argv) {
+  flowire::install_interrupt_handlers();
   CLI::App app{"flowire: guidewire and blood-flow co-simulation in vessel networks", "flowire"};
   app.set_version_flag("--version", std::string("flowire ") + FLOWIRE_VERSION);
   app.require_subcommand(0, 1);
@@ -278,7 +291,7 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const Error& e) {
     print_warnings();
-    return error_exit(e.what(), e.kind() == ErrorKind::Numerical ? 3 : 2);
+    return error_exit(e.what(), flowire::exit_status(e));
   } catch (const std::bad_alloc&) {
     return error_exit("out of memory", 3);
   } catch (const std::exception& e) {

@@ -3,11 +3,14 @@
 
 #include <fmt/format.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
@@ -26,12 +29,27 @@ int run_svzerod(const std::string& model, const std::string& out, const std::vec
   const std::filesystem::path dir = out.empty() ? std::filesystem::path("out") : std::filesystem::path(out);
   const auto t0 = std::chrono::steady_clock::now();
   flowire::flow::svzerod::Summary s;
+  flowire::flow::svzerod::Result result;
+  std::optional<flowire::OutputFolder> folder;
   try {
-    s = flowire::flow::svzerod::run(model, dir);
+    // The model is read and simulated before anything is written: bad input leaves the
+    // folder as it was. Then, as a scene run, the folder is held and the summary says
+    // "running" until the result is in place.
+    result = flowire::flow::svzerod::simulate(model, &s);
+    folder.emplace(dir);
+    flowire::write_text_atomically(
+        dir / "summary.json",
+        nlohmann::json{{"status", "running"}, {"pid", static_cast<long>(::getpid())}, {"model", model}}.dump(2) + "\n");
+    s.result_file = (dir / "svzerod_result.csv").string();
+    flowire::flow::svzerod::write_result_csv(result, s.result_file);
   } catch (const flowire::Error& e) {
-    if (e.kind() == ErrorKind::Numerical) {
-      nlohmann::json j = {{"status", "error"}, {"error", e.what()}, {"model", model}};
-      flowire::write_text_atomically(dir / "summary.json", j.dump(2) + "\n");
+    if (folder || e.kind() == ErrorKind::Numerical) {
+      try {
+        if (!folder) folder.emplace(dir);
+        nlohmann::json j = {{"status", "error"}, {"error", e.what()}, {"model", model}};
+        flowire::write_text_atomically(dir / "summary.json", j.dump(2) + "\n");
+      } catch (const flowire::Error&) {  // a full disk, a held folder: the first error is the one reported
+      }
     }
     throw;
   }

@@ -79,7 +79,7 @@ def main(argv):
         axes[2].grid(True, alpha=0.3)
         axes[2].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=110, format="png")
     return 0
 
 

@@ -18,6 +18,7 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 #include "flowire/common/units.hpp"
 #include "io_internal.hpp"
 
@@ -29,15 +30,7 @@ std::string lower(std::string s) {
   return s;
 }
 
-std::string read_all(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw_input_error(path, "is a directory, not a network file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw_input_error(path, "cannot open the file for reading (does it exist?)");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string read_all(const std::string& path) { return read_input(path, input_limit::kGeometry, "a network file"); }
 
 /// Factor from file units to metres. `declared`: the unit the file itself states, if any.
 double length_factor(const ReadOptions& opt, const std::optional<std::string>& declared, const std::string& where) {
@@ -698,8 +691,7 @@ const NetworkReader& reader_for(const std::string& path) {
   for (const auto& r : network_readers())
     for (const auto e : r.extensions)
       if (ext == e) return r;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw_input_error(path, "cannot open the file for reading (does it exist?)");
+  std::ifstream in = open_input(path, input_limit::kGeometry, "a network file");
   std::string head(4096, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<size_t>(in.gcount()));

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 #include "io_internal.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
@@ -43,8 +44,7 @@ namespace {
 
 /// The file's bytes (at most `limit`), for checks made before VTK sees the file.
 std::string head_of(const std::string& path, size_t limit) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw_input_error(path, "cannot open the file for reading");
+  std::ifstream in = open_input(path, input_limit::kGeometry, "a VTK file");
   std::string s(limit, '\0');
   in.read(s.data(), static_cast<std::streamsize>(limit));
   s.resize(static_cast<size_t>(in.gcount()));

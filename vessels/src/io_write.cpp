@@ -196,14 +196,10 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
   x += fmt::format(R"(        <DataArray type="Int64" Name="offsets" format="appended" offset="{}"/>)", offsets_offset);
   x += "\n      </Lines>\n    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
 
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw_input_error(path, "cannot open for writing");
+  write_stream_atomically(path, [&](std::ostream& out) {
     out << x;
     out.write(data.bytes().data(), static_cast<std::streamsize>(data.bytes().size()));
     out << "\n  </AppendedData>\n</VTKFile>\n";
-    out.flush();
-    if (!out) throw_input_error(path, "write failed (disk full?)");
   });
 }
 

@@ -10,6 +10,7 @@
 #include <mutex>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 #include "flowire/vessels/surface.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
@@ -104,9 +105,9 @@ vtkPolyData* output_of(vtkAlgorithm* a) {
 #endif
 
 SurfaceMesh read_surface(const std::string& path, double length_factor) {
+  check_input_file(path, input_limit::kGeometry, "a lumen surface");
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
-  if (ec) throw_input_error(path, "cannot open the surface file for reading");
   if (size == 0) throw_input_error(path, "the surface file is empty");
   std::string ext = std::filesystem::path(path).extension().string();
   for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));

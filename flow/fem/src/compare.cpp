@@ -209,9 +209,7 @@ void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolutio
     for (size_t e = 0; e < 6; ++e)
       ev[static_cast<size_t>(t[4 + e])] = {t[static_cast<size_t>(kTetEdges[e][0])],
                                            t[static_cast<size_t>(kTetEdges[e][1])]};
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    std::ofstream f(tmp);
-    if (!f) throw_input_error(path, "cannot write");
+  write_stream_atomically(path, [&](std::ostream& f) {
     f.precision(10);
     f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
       << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\""
@@ -233,7 +231,6 @@ void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolutio
     f << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
     for (size_t e = 0; e < mesh.tets.size(); ++e) f << "24\n";
     f << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-    if (!f) throw_input_error(path, "write failed");
   });
 }
 

@@ -18,6 +18,7 @@
 #include <unordered_map>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
 #include "flowire/fem/element.hpp"
 #include "mesh_detail.hpp"
 
@@ -203,9 +204,7 @@ double end_radius(const Network& net, int e) { return net.segment(*net.node_segm
 
 SurfaceMesh read_surface(const std::string& path, double length_factor) {
   if (!(length_factor > 0.0)) throw_usage_error("read_surface: the length factor must be > 0");
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw_input_error(path, "the lumen surface file does not exist (or is not a file)");
+  check_input_file(path, input_limit::kGeometry, "a lumen surface");
   SurfaceMesh s;
   s.source = path;
 #ifdef FLOWIRE_HAVE_VTK

@@ -70,6 +70,32 @@ std::vector<double> BlockInput::numbers(const std::string& key) {
   return out;
 }
 
+void BlockInput::require_nonnegative(const std::string& key) const {
+  if (!values_.contains(key)) return;
+  const json& x = values_.at(key);
+  for (const json& e : x.is_array() ? x : json::array({x}))
+    if (const double v = e.get<double>(); !(v >= 0.0))
+      fail(fmt::format("parameter '{}' = {}: must not be negative (>= 0)", key, v));
+}
+
+Param BlockInput::nonnegative(const std::string& key) {
+  Param p = param(key);
+  require_nonnegative(key);
+  return p;
+}
+
+Param BlockInput::nonnegative(const std::string& key, double fallback) {
+  Param p = param(key, fallback);
+  require_nonnegative(key);
+  return p;
+}
+
+std::vector<double> BlockInput::nonnegative_numbers(const std::string& key) {
+  auto v = numbers(key);
+  require_nonnegative(key);
+  return v;
+}
+
 bool BlockInput::flag(const std::string& key, bool fallback) {
   asked_.push_back(key);
   if (!values_.contains(key)) return fallback;
@@ -176,10 +202,10 @@ std::unique_ptr<Block> Registry::create(Section section, const std::string& type
 
 BloodVessel::BloodVessel(BlockInput& in)
     : Block(in.name()),
-      r_(in.param("R_poiseuille")),
-      c_(in.param("C", 0.0)),
-      l_(in.param("L", 0.0)),
-      s_(in.param("stenosis_coefficient", 0.0)) {
+      r_(in.nonnegative("R_poiseuille")),
+      c_(in.nonnegative("C", 0.0)),
+      l_(in.nonnegative("L", 0.0)),
+      s_(in.nonnegative("stenosis_coefficient", 0.0)) {
   time_dependent_ = in.any_table();
 }
 
@@ -218,10 +244,10 @@ void BloodVessel::assemble_nonlinear(Assembler& a, double t, const Eigen::Vector
 
 BloodVesselCRL::BloodVesselCRL(BlockInput& in)
     : Block(in.name()),
-      r_(in.param("R_poiseuille")),
-      c_(in.param("C", 0.0)),
-      l_(in.param("L", 0.0)),
-      s_(in.param("stenosis_coefficient", 0.0)) {
+      r_(in.nonnegative("R_poiseuille")),
+      c_(in.nonnegative("C", 0.0)),
+      l_(in.nonnegative("L", 0.0)),
+      s_(in.nonnegative("stenosis_coefficient", 0.0)) {
   time_dependent_ = in.any_table();
 }
 
@@ -287,7 +313,10 @@ void Junction::assemble(Assembler& a, double /*t*/) const {
 }
 
 BloodVesselJunction::BloodVesselJunction(BlockInput& in)
-    : Block(in.name()), r_(in.numbers("R_poiseuille")), l_(in.numbers("L")), s_(in.numbers("stenosis_coefficient")) {}
+    : Block(in.name()),
+      r_(in.nonnegative_numbers("R_poiseuille")),
+      l_(in.nonnegative_numbers("L")),
+      s_(in.nonnegative_numbers("stenosis_coefficient")) {}
 
 std::string BloodVesselJunction::check_connections() const {
   if (inlets_.size() != 1) return fmt::format("junction '{}': a BloodVesselJunction has exactly one inlet", name_);
@@ -346,7 +375,7 @@ void PressureBC::assemble(Assembler& a, double t) const {
   a.c(row0_, -p_.get(t, a.steady()));
 }
 
-ResistanceBC::ResistanceBC(BlockInput& in) : Block(in.name()), r_(in.param("R")), pd_(in.param("Pd", 0.0)) {
+ResistanceBC::ResistanceBC(BlockInput& in) : Block(in.name()), r_(in.nonnegative("R")), pd_(in.param("Pd", 0.0)) {
   time_dependent_ = in.any_table();
 }
 std::string ResistanceBC::check_connections() const { return one_connection(*this); }
@@ -357,7 +386,11 @@ void ResistanceBC::assemble(Assembler& a, double t) const {
 }
 
 RcrBC::RcrBC(BlockInput& in)
-    : Block(in.name()), rp_(in.param("Rp")), c_(in.param("C")), rd_(in.param("Rd")), pd_(in.param("Pd", 0.0)) {
+    : Block(in.name()),
+      rp_(in.nonnegative("Rp")),
+      c_(in.nonnegative("C")),
+      rd_(in.nonnegative("Rd")),
+      pd_(in.param("Pd", 0.0)) {
   time_dependent_ = in.any_table();
 }
 std::string RcrBC::check_connections() const { return one_connection(*this); }
@@ -379,19 +412,19 @@ void RcrBC::assemble(Assembler& a, double t) const {
 CoronaryBC::CoronaryBC(BlockInput& in, bool variable_resistance)
     : Block(in.name()),
       varres_(variable_resistance),
-      ra_(in.param("Ra1")),
-      rv_(in.param("Rv1")),
-      ca_(in.param("Ca")),
-      cim_(in.param("Cc")),
+      ra_(in.nonnegative("Ra1")),
+      rv_(in.nonnegative("Rv1")),
+      ca_(in.nonnegative("Ca")),
+      cim_(in.nonnegative("Cc")),
       pim_(in.param("Pim")),
       pv_(in.param("P_v")) {
   if (varres_) {
-    ram_min_ = in.param("Ra2_min");
-    ram_max_ = in.param("Ra2_max");
-    t_vc_ = in.param("T_vc");
-    t_vr_ = in.param("T_vr");
+    ram_min_ = in.nonnegative("Ra2_min");
+    ram_max_ = in.nonnegative("Ra2_max");
+    t_vc_ = in.nonnegative("T_vc");
+    t_vr_ = in.nonnegative("T_vr");
   } else {
-    ram_ = in.param("Ra2");
+    ram_ = in.nonnegative("Ra2");
   }
   if (in.flag("closed_loop_outlet", false)) in.fail("closed-loop coronary outlets are not supported");
   time_dependent_ = varres_ || in.any_table();

@@ -2,12 +2,15 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/input.hpp"
+#include "flowire/common/steps.hpp"
 
 namespace flowire::flow::svzerod {
 namespace {
@@ -22,21 +25,44 @@ SimulationParameters read_sim(const std::string& file, const json& cfg) {
   if (!s.contains("number_of_cardiac_cycles") || !s.contains("number_of_time_pts_per_cardiac_cycle"))
     throw_input_error(file,
                       "simulation_parameters needs number_of_cardiac_cycles and number_of_time_pts_per_cardiac_cycle");
-  p.cycles = s.at("number_of_cardiac_cycles").get<int>();
-  p.pts = s.at("number_of_time_pts_per_cardiac_cycle").get<int>();
-  if (p.cycles < 1 || p.pts < 2) throw_input_error(file, "need at least 1 cycle and 2 time points per cycle");
+  // Numbers read as doubles and checked before they become ints: a value no int holds, or
+  // out of its range, is refused naming the key, never wrapped or clamped.
+  auto number = [&](const char* key, double fallback, bool ok(double), const char* requirement) {
+    if (!s.contains(key)) return fallback;
+    if (!s.at(key).is_number()) throw_input_error(file, fmt::format("simulation_parameters.{} must be a number", key));
+    const double v = s.at(key).get<double>();
+    if (!ok(v)) throw_input_error(file, fmt::format("simulation_parameters.{} = {}: {}", key, v, requirement));
+    return v;
+  };
+  auto whole = [&](const char* key, double fallback, bool ok(double), const char* requirement) {
+    const double v = number(key, fallback, ok, requirement);
+    if (v != std::floor(v))
+      throw_input_error(file, fmt::format("simulation_parameters.{} = {}: {}", key, v, requirement));
+    return static_cast<int>(v);
+  };
+  constexpr auto positive = [](double v) { return v > 0.0; };
+  constexpr auto at_least_one = [](double v) { return v >= 1.0 && v <= 1e9; };
+  constexpr auto unit_interval = [](double v) { return v >= 0.0 && v <= 1.0; };
+  constexpr auto cycles_ok = [](double v) { return v >= 1.0 && v == std::floor(v); };
+  constexpr auto pts_ok = [](double v) { return v >= 2.0 && v == std::floor(v); };
+  // Each at least its minimum, and their product at most kMaxSteps (so that both fit an int).
+  const double cycles = number("number_of_cardiac_cycles", 1, cycles_ok, "must be a whole number >= 1");
+  const double pts = number("number_of_time_pts_per_cardiac_cycle", 2, pts_ok, "must be a whole number >= 2");
+  check_time_steps(file, pts, cycles, "number_of_cardiac_cycles");
+  p.cycles = static_cast<int>(cycles);
+  p.pts = static_cast<int>(pts);
   p.cycle_error = s.value("use_cycle_to_cycle_error", false);
-  p.cycle_error_value = s.value("sim_cycle_to_cycle_percent_error", 1.0) / 100.0;
-  p.atol = s.value("absolute_tolerance", 1e-8);
-  p.max_iter = s.value("maximum_nonlinear_iterations", 30);
+  p.cycle_error_value = number("sim_cycle_to_cycle_percent_error", 1.0, positive, "must be positive (> 0)") / 100.0;
+  p.atol = number("absolute_tolerance", 1e-8, positive, "must be positive (> 0)");
+  p.max_iter = whole("maximum_nonlinear_iterations", 30, at_least_one, "must be a whole number in [1, 1e9]");
   p.steady_initial = s.value("steady_initial", true);
-  p.rho = s.value("rho_infty", 0.5);
+  p.rho = number("rho_infty", 0.5, unit_interval, "must be in [0, 1]");
   p.variable_based = s.value("output_variable_based", false);
-  p.output_interval = std::max(1, s.value("output_interval", 1));
+  p.output_interval = whole("output_interval", 1, at_least_one, "must be a whole number in [1, 1e9]");
   p.mean_only = s.value("output_mean_only", false);
   p.derivative = s.value("output_derivative", false);
   p.all_cycles = s.value("output_all_cycles", false);
-  p.period = s.value("cardiac_period", -1.0);
+  p.period = s.contains("cardiac_period") ? number("cardiac_period", 1.0, positive, "must be positive (> 0)") : -1.0;
   return p;
 }
 
@@ -213,6 +239,14 @@ State read_initial(const Model& m, const json& cfg) {
 
 }  // namespace
 
+void check_time_steps(const std::string& file, double pts, double cycles, std::string_view cycles_from) {
+  const double steps = (pts - 1.0) * cycles;
+  if (!(steps <= kMaxSteps))
+    throw_input_error(file, fmt::format("simulation_parameters: (number_of_time_pts_per_cardiac_cycle - 1) x {} = "
+                                        "({} - 1) x {} = {:.3g} time steps, more than the {:.0e} a run may plan",
+                                        cycles_from, pts, cycles, steps, kMaxSteps));
+}
+
 std::vector<Block*> Model::block_pointers() const {
   std::vector<Block*> out;
   out.reserve(blocks.size());
@@ -223,12 +257,10 @@ std::vector<Block*> Model::block_pointers() const {
 Model read_model(const std::string& json_path, const Options& options) {
   json cfg;
   {
-    std::ifstream in(json_path, std::ios::binary);
-    if (!in) throw_input_error(json_path, "cannot open the svZeroDSolver model");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string text = read_input(json_path, input_limit::kTable, "an svZeroDSolver model (JSON)");
     try {
       cfg = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // syntax, or a number no double holds (1e400)
       throw_input_error(json_path, fmt::format("not valid JSON: {}", e.what()));
     }
   }

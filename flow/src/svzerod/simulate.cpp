@@ -1,6 +1,7 @@
 // The svZeroDSolver run: steady initial phase, pulsatile cycles, output as the peer writes it.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -115,8 +116,13 @@ Result simulate(const std::string& json_path, Summary* summary, const Options& o
   Stopwatch sw;
   Model m = read_model(json_path, options);
   auto& sp = m.sim;
-  if (sp.cycle_error && m.has_rcr)
-    sp.cycles = static_cast<int>(std::ceil(-m.max_tau / m.period * std::log(sp.cycle_error_value)));
+  if (sp.cycle_error && m.has_rcr) {
+    // Enough cycles for the slowest RCR to settle within the error: checked before it is an int.
+    const double cycles = std::max(1.0, std::ceil(-m.max_tau / m.period * std::log(sp.cycle_error_value)));
+    check_time_steps(m.file, sp.pts, cycles,
+                     "the cycles sim_cycle_to_cycle_percent_error asks for (RCR time constant / period)");
+    sp.cycles = static_cast<int>(cycles);
+  }
   const int num_steps = (sp.pts - 1) * sp.cycles + 1;
   const double dt = m.period / (static_cast<double>(sp.pts) - 1.0);
 

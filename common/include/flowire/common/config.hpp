@@ -2,11 +2,13 @@
 /// @file config.hpp
 /// @brief Declared, validated configuration trees (the scene file).
 ///
-/// Every key is declared once in a `Schema` (type, default, unit, doc). `load_config`
+/// Every key is declared once in a `Schema` (type, default, unit, range, doc). `load_config`
 /// reads YAML, applies `--set` overrides, rejects unknown keys naming file and line,
-/// converts "<number> <unit>" strings to SI, and fills defaults for every section that is
-/// present. A section that is absent stays absent: nothing of it is run.
+/// converts "<number> <unit>" strings to SI, refuses numbers outside their key's range, and
+/// fills defaults for every section that is present. A section that is absent stays absent:
+/// nothing of it is run.
 #include <Eigen/Core>
+#include <limits>
 #include <map>
 #include <string>
 #include <string_view>
@@ -30,6 +32,31 @@ enum class Type {
   StringOrInteger,  ///< a name or an index (e.g. a node)
 };
 
+/// @brief The values a number accepts (in SI): a lower and an upper bound, each closed (the
+/// bound itself is allowed) or open; a side without a bound is infinite. Whatever the bounds,
+/// a number must be finite.
+struct Range {
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+  bool lower_open = false;  ///< true: > lower; false: >= lower
+  bool upper_open = false;  ///< true: < upper; false: <= upper
+
+  /// @brief True if either side has a bound.
+  [[nodiscard]] bool bounded() const;
+  /// @brief True if @p v is finite and within the bounds.
+  [[nodiscard]] bool contains(double v) const;
+  /// @brief The bounds as the reference page shows them: "> 0", ">= 0", "[0, 1]", "(0, 1.5)",
+  /// "<= 24"; empty without bounds.
+  [[nodiscard]] std::string text() const;
+  /// @brief What a value outside says: "must be positive (> 0)", "must not be negative (>= 0)",
+  /// "must be in [0, 1]", "must be a finite number".
+  [[nodiscard]] std::string requirement() const;
+};
+
+/// @brief True for the types whose values are numbers (Number, Integer, Vector3, NumberList,
+/// NumberOrSection): those a Range applies to (a vector's or list's every component).
+[[nodiscard]] bool is_numeric(Type type);
+
 struct Key {
   std::string path;  ///< dotted path, e.g. "flow.inlet.pressure"; list items "loads[].type"
   Type type = Type::Number;
@@ -37,7 +64,13 @@ struct Key {
   units::Dimension dim = units::Dimension::None;
   std::string doc;
   std::vector<std::string> choices;  ///< for Enum
+  Range range;                       ///< numeric types: the values accepted (default: any finite number)
 };
+
+/// @brief Refuse a value of @p key outside its range: an input error at @p where (a file and
+/// line, "--set", ...) naming @p path (the concrete key, "loads[0].s"), the value with its SI
+/// unit and the range: "scene.yaml:12: wire.length = -0.5 m: must be positive (> 0)".
+void check_range(const Key& key, double value, std::string_view where, std::string_view path);
 
 class Schema {
  public:
@@ -45,11 +78,25 @@ class Schema {
   /// @brief Declare a key: add(Key{path, type, default_text, dim, doc, choices}).
   Schema& add(std::string path, Type type, std::string default_text, units::Dimension dim, std::string doc,
               std::vector<std::string> choices = {});
+
+  /// @name The range of the key declared last, chained after add():
+  /// `s.add("wire.length", ...).positive();`, `s.add("fem.frames", ...).at_least(0).at_most(1e5);`.
+  /// Each sets one side (a later call on the same side replaces it).
+  /// @throws flowire::Error (usage) if that key is not numeric or the bounds leave no value.
+  ///@{
+  Schema& positive();          ///< > 0
+  Schema& non_negative();      ///< >= 0
+  Schema& fraction();          ///< [0, 1]
+  Schema& at_least(double v);  ///< >= v
+  Schema& above(double v);     ///< > v
+  Schema& at_most(double v);   ///< <= v
+  Schema& below(double v);     ///< < v
+  ///@}
   [[nodiscard]] const Key* find(std::string_view path) const;
   [[nodiscard]] const std::vector<Key>& keys() const { return keys_; }
   /// @brief Children declared directly under `path` ("" for the top level).
   [[nodiscard]] std::vector<const Key*> children(std::string_view path) const;
-  /// @brief The reference page: one table row per key (path, type, default, unit, doc).
+  /// @brief The reference page: one table row per key (path, type, default, unit, range, doc).
   [[nodiscard]] std::string markdown() const;
 
  private:

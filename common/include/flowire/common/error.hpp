@@ -11,8 +11,9 @@
 
 namespace flowire {
 
-/// @brief What kind of failure; selects the CLI exit status (usage/input: 2, numerical: 3).
-enum class ErrorKind { Input, Usage, Numerical };
+/// @brief What kind of failure; selects the CLI exit status (usage/input: 2, numerical: 3,
+/// interrupted: 128 + the signal, as a shell reports a process the signal ended).
+enum class ErrorKind { Input, Usage, Numerical, Interrupted };
 
 /// @brief The one exception type thrown by flowire libraries.
 class Error : public std::runtime_error {
@@ -31,5 +32,9 @@ class Error : public std::runtime_error {
 [[noreturn]] void throw_usage_error(std::string_view what);
 /// @brief Numerical failure: singular system, divergence, NaN.
 [[noreturn]] void throw_numerical_error(std::string_view what);
+
+/// @brief The CLI exit status of an error: 2 for input and usage, 3 for a numerical failure,
+/// 128 + the signal for an interrupted run (130 after SIGINT, 143 after SIGTERM).
+[[nodiscard]] int exit_status(const Error& e);
 
 }  // namespace flowire

@@ -22,7 +22,7 @@ class SpatialIndex;
 
 namespace flowire::coupling {
 
-/// @brief The one declaration of every scene key (type, default, unit, doc).
+/// @brief The one declaration of every scene key (type, default, unit, range, doc).
 const config::Schema& scene_schema();
 
 /// @brief Load a scene file with `--set` overrides (and `--out` as output.dir).

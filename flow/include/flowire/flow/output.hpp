@@ -78,6 +78,10 @@ struct RenderOptions {
 /// red high) with a colour bar, offscreen, to a PNG. Needs VTK and an X display (run under
 /// `xvfb-run -a -s "-screen 0 1024x768x24"`).
 /// @throws flowire::Error (input) without VTK or without a display.
+/// @brief Check, before a run, that PNGs can be drawn here (VTK built in, an X display that
+/// answers); @p where names the key that asks for them. @throws flowire::Error (input).
+void check_can_render(const std::string& where);
+
 void render_network_png(const Network& net, std::span<const double> node_values, const std::filesystem::path& path,
                         const RenderOptions& options = {});
 

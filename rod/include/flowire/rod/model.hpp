@@ -73,6 +73,10 @@ struct AdaptSpec {
   double merge_angle = -1.0;        ///< [rad] below which siblings merge; < 0: split_angle/4
 };
 
+/// @brief The most segments a rod may have (a 2 m wire at 2 µm): beyond it the arrays alone
+/// would take gigabytes, so a larger count is refused as an input error, not attempted.
+inline constexpr double kMaxRodSegments = 1e6;
+
 /// @brief A guidewire and where it enters (the clamp/introducer).
 struct WireSpec {
   double length = 1.7;           ///< [m] total wire length

@@ -35,6 +35,12 @@ class BlockInput {
   Param param(const std::string& key, double fallback);
   /// @brief A required list of numbers (one per outlet, ...).
   std::vector<double> numbers(const std::string& key);
+  /// @brief param() and numbers() of a quantity that cannot be negative (a resistance, a
+  /// capacitance, an inductance, a stenosis coefficient): a value below 0, in a table too, is
+  /// refused by fail() naming the parameter.
+  Param nonnegative(const std::string& key);
+  Param nonnegative(const std::string& key, double fallback);
+  std::vector<double> nonnegative_numbers(const std::string& key);
   /// @brief An optional flag.
   bool flag(const std::string& key, bool fallback);
   /// @brief True when a parameter read so far is a table over time.
@@ -46,6 +52,8 @@ class BlockInput {
   [[noreturn]] void fail(const std::string& what) const;
 
  private:
+  void require_nonnegative(const std::string& key) const;
+
   const nlohmann::json& values_;
   std::string file_, block_;
   double& period_;

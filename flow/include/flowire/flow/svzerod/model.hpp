@@ -4,6 +4,7 @@
 /// nodes, unknowns and simulation parameters.
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "flowire/flow/svzerod.hpp"
@@ -55,7 +56,13 @@ struct Model {
   [[nodiscard]] std::vector<Block*> block_pointers() const;
 };
 
-/// @brief Read a model file. @throws flowire::Error (input) naming the file and the block.
+/// @brief Read a model file. @throws flowire::Error (input) naming the file and the block, or
+/// the key of simulation_parameters out of its range.
 Model read_model(const std::string& json_path, const Options& options = {});
+
+/// @brief Refuse a run of more time steps than a run may plan (kMaxSteps, steps.hpp):
+/// (@p pts - 1) x @p cycles, the cycles from @p cycles_from (a key, or what set them).
+/// @throws flowire::Error (input) naming @p file and the keys.
+void check_time_steps(const std::string& file, double pts, double cycles, std::string_view cycles_from);
 
 }  // namespace flowire::flow::svzerod
