@@ -267,7 +267,13 @@ PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& c
     }
     const Eigen::VectorXd r = h - c;
     rep.correction = r.size() ? r.cwiseAbs().maxCoeff() : 0.0;
-    if (rep.correction < tol) {
+    // Converged when both rods balance together: the catheter was just solved against this
+    // wire, and the wire must balance against the catheter as it now is. A small change of
+    // the catheter alone says nothing: under a stiff lumen penalty a sweep moves it by little
+    // however far the pair is from equilibrium (the wire bent alone, pressing on the lumen).
+    contact.hold_catheter(catheter);
+    rep.imbalance = wire.static_imbalance();
+    if (rep.correction < tol && rep.imbalance <= 1.0) {
       rep.converged = true;
       break;
     }

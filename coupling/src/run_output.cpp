@@ -283,6 +283,8 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
       k["length_drift"] = cath->length_drift();
       k["unconverged_steps"] = cosim.catheter_unconverged_steps();
       k["solver"] = solver_totals_json(cath->solver_totals());
+      if (const PairStaticReport& p = cosim.pair_static_report(); p.sweeps > 0)
+        k["static_pair"] = {{"converged", p.converged}, {"sweeps", p.sweeps}, {"imbalance", p.imbalance}};
       // The shaft's EI: the largest over the vertices (the end vertices carry none, a tapered
       // tip less).
       const auto& ei = cath->model().bend_stiffness;

@@ -332,9 +332,15 @@ void CoSimulation::step() {
 rod::StepReport CoSimulation::solve_static_all() {
   if (!cath_) return sim_->solve_static();
   const PairStaticReport pair = solve_static_pair(*sim_, *cath_, *lumen_, 100, 1e-3 * sim_->model().h);
+  pair_static_ = pair;
   rod::StepReport rep = sim_->last_report();
   if (rep.converged() && (!pair.converged || !cath_->last_report().converged()))
     rep.status = rod::SolveStatus::MaxIterations;
+  if (!pair.converged)
+    warn(
+        fmt::format("the static solve of wire and catheter together did not converge in {} sweeps: the wire's "
+                    "residual against the catheter is {:.3g} times its tolerance",
+                    pair.sweeps, pair.imbalance));
   return rep;
 }
 

@@ -253,6 +253,13 @@ StepReport RodSimulator::solve_static() {
   return r;
 }
 
+double RodSimulator::static_imbalance() {
+  Work& w = *work_;
+  gather(w.q);
+  (void)assemble(Mode::Static, 1.0, 1.0, Need::Gradient);
+  return residual_norm(tip_clamped_ ? 7 : 0, 4 * first_clamped_) / force_scale(1.0);
+}
+
 StepReport RodSimulator::solve_static_once() {
   RodState& s = state_;
   s.base_angle = target_angle_;

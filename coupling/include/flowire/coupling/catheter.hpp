@@ -142,13 +142,15 @@ struct PairStaticReport {
   bool converged = false;
   int sweeps = 0;           ///< wire + catheter solves
   double correction = 0.0;  ///< last max |catheter change| [m]
+  double imbalance = 0.0;   ///< the wire's residual against the final catheter over its tolerance (≤ 1: balanced)
 };
 /// @brief Static equilibrium of wire and catheter together: block Gauss–Seidel sweeps (wire
 /// against the held catheter, then catheter against the held wire), accelerated by the
 /// interface quasi-Newton least-squares update on the held catheter (IQN-ILS, Degroote,
 /// Bruggeman, Haelterman & Vierendeels 2009), until the catheter moves less than @p tol [m]
-/// in a sweep. Plain sweeps would contract only by 1 − EI/(k L³) per sweep under a stiff
-/// lumen penalty; the least-squares update removes those slow modes.
+/// in a sweep and the wire balances against the catheter as it then is (the pair in
+/// equilibrium together, RodSimulator::static_imbalance). Plain sweeps would contract only by 1 − EI/(k L³) per sweep
+/// under a stiff lumen penalty; the least-squares update removes those slow modes.
 PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact,
                                    int max_sweeps = 200, double tol = 1e-9);
 

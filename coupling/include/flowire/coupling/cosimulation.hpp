@@ -119,6 +119,8 @@ class CoSimulation {
   [[nodiscard]] const LumenContact* lumen_contact() const { return lumen_.get(); }
   /// @brief Catheter steps that did not converge; coupled static solves that did not.
   [[nodiscard]] int catheter_unconverged_steps() const { return cath_failures_; }
+  /// @brief The last coupled static solve of wire and catheter (sweeps, imbalance).
+  [[nodiscard]] const PairStaticReport& pair_static_report() const { return pair_static_; }
 
  private:
   // The set-up steps of the constructor, in order; each reads its own sections.
@@ -151,6 +153,7 @@ class CoSimulation {
   std::shared_ptr<VesselForces> cath_forces_;
   std::shared_ptr<LumenContact> lumen_;
   int cath_failures_ = 0;
+  PairStaticReport pair_static_;
   /// Static equilibrium of what the scene has (the pair with a catheter).
   rod::StepReport solve_static_all();
   std::string initial_layout_ = "straight";

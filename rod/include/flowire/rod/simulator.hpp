@@ -229,6 +229,12 @@ class RodSimulator {
   /// zeroed). Loads (tip force and moment, point forces, gravity; not external forces)
   /// are ramped in `settings().static_load_steps` increments.
   StepReport solve_static();
+  /// @brief How far the current state is from static equilibrium under the full loads and
+  /// the external forces as they now are: the largest residual force (torques over the rest
+  /// length) over the tolerance solve_static() converges to. ≤ 1: in equilibrium. For solvers
+  /// that couple this rod to another body (a catheter over a wire) and must know that both
+  /// balance together, not only each against the other's last state.
+  [[nodiscard]] double static_imbalance();
 
   // --- controls and loads ---------------------------------------------------------------
   void set_integrator(Integrator integrator) { settings_.integrator = integrator; }
