@@ -297,4 +297,69 @@ PairStaticReport solve_static_pair(rod::RodSimulator& wire, rod::RodSimulator& c
   return rep;
 }
 
+PairStepReport step_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact, double dt,
+                         int max_sweeps) {
+  PairStepReport rep;
+  const bool iterate = wire.settings().integrator == rod::Integrator::ImplicitEuler && max_sweeps > 1;
+  if (iterate) wire.save_checkpoint(), catheter.save_checkpoint();
+  auto flat = [](std::span<const Eigen::Vector3d> v) {
+    Eigen::VectorXd f(3 * static_cast<Eigen::Index>(v.size()));
+    for (size_t i = 0; i < v.size(); ++i) f.segment<3>(3 * static_cast<Eigen::Index>(i)) = v[i];
+    return f;
+  };
+  // The columns of the least-squares update come from this step's sweeps only: columns kept
+  // from earlier steps (IQN-ILS "with reuse") sent the pair far off whenever the contact set
+  // changed between steps.
+  Eigen::VectorXd c = flat(contact.catheter_snapshot);
+  std::vector<Eigen::VectorXd> rs, hs;
+  double best_imbalance = std::numeric_limits<double>::infinity();
+  int best_sweep = 0;
+  for (rep.sweeps = 1;; ++rep.sweeps) {
+    rep.wire = wire.step(dt);
+    contact.hold_wire(wire);
+    rep.catheter = catheter.step(dt);
+    contact.hold_catheter(catheter);
+    if (!iterate || !rep.wire.converged() || !rep.catheter.converged()) break;
+    rep.imbalance = wire.step_imbalance();
+    if (rep.imbalance * wire.settings().force_tolerance <= kPairForceTolerance) {
+      rep.converged = true;
+      break;
+    }
+    // Stop where the sweeps stop gaining (the imbalance not halved in three sweeps): the contact
+    // set changing between sweeps (a wire sliding out of the catheter's tip, friction turning
+    // from stick to slip) leaves the fixed point no smooth map to converge on, and more sweeps
+    // only cost.
+    if (rep.imbalance < 0.5 * best_imbalance) best_imbalance = rep.imbalance, best_sweep = rep.sweeps;
+    if (rep.sweeps >= max_sweeps || rep.sweeps - best_sweep >= 3) break;
+    const Eigen::VectorXd h = flat(catheter.positions());
+    if (h.size() != c.size()) rs.clear(), hs.clear(), c = h;  // the catheter's vertex set changed
+    const Eigen::VectorXd r = h - c;
+    Eigen::VectorXd next = h;
+    if (!rs.empty()) {
+      const Eigen::Index m = static_cast<Eigen::Index>(rs.size());
+      Eigen::MatrixXd V(r.size(), m), W(r.size(), m);
+      for (Eigen::Index q = 0; q < m; ++q)
+        V.col(q) = r - rs[static_cast<size_t>(q)], W.col(q) = h - hs[static_cast<size_t>(q)];
+      // The least-squares correction, each vertex's part held within the lumen's clearance:
+      // an estimate farther off than the wire can be from the catheter is no estimate, and it
+      // pushed the wire through the vessel wall on the first step of a pair laid in an arch.
+      Eigen::VectorXd dc = W * V.colPivHouseholderQr().solve(-r);
+      for (Eigen::Index k = 0; k + 2 < dc.size(); k += 3)
+        if (const double n = dc.segment<3>(k).norm(); n > contact.clearance())
+          dc.segment<3>(k) *= contact.clearance() / n;
+      next = h + dc;
+    }
+    rs.push_back(r), hs.push_back(h);
+    if (rs.size() > 20) rs.erase(rs.begin()), hs.erase(hs.begin());
+    c = next;
+    // Both again from the step's start, the wire against the new estimate of the catheter.
+    wire.restore_checkpoint(true), catheter.restore_checkpoint(true);
+    for (size_t i = 0; i < contact.catheter_snapshot.size(); ++i)
+      contact.catheter_snapshot[i] = c.segment<3>(3 * static_cast<Eigen::Index>(i));
+    contact.assign_edges();
+  }
+  if (!iterate) rep.converged = rep.wire.converged() && rep.catheter.converged();
+  return rep;
+}
+
 }  // namespace flowire::coupling

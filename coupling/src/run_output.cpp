@@ -283,6 +283,10 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
       k["length_drift"] = cath->length_drift();
       k["unconverged_steps"] = cosim.catheter_unconverged_steps();
       k["solver"] = solver_totals_json(cath->solver_totals());
+      if (cosim.pair_sweeps() > 0)
+        k["pair"] = {{"sweeps_per_step",
+                      static_cast<double>(cosim.pair_sweeps()) / static_cast<double>(std::max(1L, cosim.step_count()))},
+                     {"unbalanced_steps", cosim.pair_unconverged_steps()}};
       if (const PairStaticReport& p = cosim.pair_static_report(); p.sweeps > 0)
         k["static_pair"] = {{"converged", p.converged}, {"sweeps", p.sweeps}, {"imbalance", p.imbalance}};
       // The shaft's EI: the largest over the vertices (the end vertices carry none, a tapered

@@ -306,25 +306,26 @@ void CoSimulation::step() {
       sim_->set_insertion_speed(insertion_speed_ = 0.0);
     if (sim_->inserted_length() >= max_length_ && sim_->push_force() > 0.0) sim_->set_push_force(0.0);  // held there
     const auto tr = Clock::now();
-    const auto rep = sim_->step(dt_);
+    rod::StepReport rep;
+    if (cath_) {
+      // Wire and catheter together (catheter.hpp, step_pair).
+      const PairStepReport pair = step_pair(*sim_, *cath_, *lumen_, dt_);
+      rep = pair.wire;
+      pair_sweeps_ += pair.sweeps;
+      if (!pair.converged && pair.wire.converged() && pair.catheter.converged()) ++pair_unconverged_;
+      const auto& crep = pair.catheter;
+      if (crep.status == rod::SolveStatus::NonFinite || crep.status == rod::SolveStatus::SingularMatrix)
+        throw_numerical_error(
+            fmt::format("catheter step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(crep.status)));
+      if (!crep.converged()) ++cath_failures_;
+    } else {
+      rep = sim_->step(dt_);
+    }
     t_rod_ += seconds_since(tr);
     if (rep.status == rod::SolveStatus::NonFinite || rep.status == rod::SolveStatus::SingularMatrix)
       throw_numerical_error(
           fmt::format("rod step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(rep.status)));
     if (!rep.converged()) ++failures_;
-    if (cath_) {
-      // Staggered (catheter.hpp): the wire above stepped against the catheter of the last
-      // step; now the catheter against that wire.
-      lumen_->hold_wire(*sim_);
-      const auto tc = Clock::now();
-      const auto crep = cath_->step(dt_);
-      t_rod_ += seconds_since(tc);
-      if (crep.status == rod::SolveStatus::NonFinite || crep.status == rod::SolveStatus::SingularMatrix)
-        throw_numerical_error(
-            fmt::format("catheter step {} (t = {:.6g} s) failed: {}", step + 1, t1, rod::to_string(crep.status)));
-      if (!crep.converged()) ++cath_failures_;
-      lumen_->hold_catheter(*cath_);
-    }
   }
   ++step_;
 }

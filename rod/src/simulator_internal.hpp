@@ -76,6 +76,18 @@ struct RodSimulator::Work {
     size_t trace_size = 0;
   };
   std::vector<Saved> saved;  ///< one per subdivision level
+  /// A checkpoint kept for a caller (save_checkpoint): a step start and what the next step's
+  /// guess is made from.
+  struct Checkpoint {
+    Saved at;
+    std::vector<Vec3> x_end, v0;
+    std::vector<double> omega0;
+    double h_end = 0.0, feed_end = 0.0;
+    bool valid = false;
+  } checkpoint;
+  std::vector<Vec3> guess_x;        ///< a caller's initial guess for the next stage (restore_checkpoint) …
+  std::vector<double> guess_theta;  ///< … its material angles; empty: none
+  double h_newton = 0.0;            ///< the step of the last dynamic Newton solve (a substep's if halved)
 
   // Assembly (assembly.cpp).
   Eigen::VectorXd mass, damp;       ///< (nd) lumped mass and damping diagonals

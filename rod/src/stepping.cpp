@@ -149,6 +149,11 @@ void RodSimulator::start_stage(double L, double angle, double fed, double h) {
   Work& w = *work_;
   RodState& s = state_;
   predict_feed(fed, h);
+  if (!w.guess_x.empty()) {  // a caller's guess (restore_checkpoint), for the free unknowns
+    if (w.guess_x.size() == s.x.size() && w.guess_theta.size() == s.theta.size())
+      s.x = w.guess_x, s.theta = w.guess_theta;
+    w.guess_x.clear(), w.guess_theta.clear();
+  }
   set_prescribed(L, angle, s.x, s.theta);
   transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
   s.time += h;
@@ -170,6 +175,7 @@ StepReport RodSimulator::step_euler(double dt) {
   // change of its speed, where the inertial guess has nothing to go on.
   const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feed_speed_ == w.feed_end;
   begin_step(dt, settings_.second_order_guess);
+  w.h_newton = dt;
   const int nv = s.vertex_count();
   start_stage(L_new, angle_new, steady_feed ? 0.0 : L_new - s.inserted_length, dt);
 
@@ -257,6 +263,51 @@ double RodSimulator::static_imbalance() {
   Work& w = *work_;
   gather(w.q);
   (void)assemble(Mode::Static, 1.0, 1.0, Need::Gradient);
+  return residual_norm(tip_clamped_ ? 7 : 0, 4 * first_clamped_) / force_scale(1.0);
+}
+
+void RodSimulator::save_checkpoint() {
+  Work& w = *work_;
+  Work::Checkpoint& c = w.checkpoint;
+  c.at.state = state_;
+  c.at.target_angle = target_angle_;
+  c.at.insertion_speed = insertion_speed_;
+  c.at.first_clamped = first_clamped_;
+  c.at.base_force = base_force_;
+  c.at.base_torque = base_torque_;
+  c.at.trace_size = trace_.size();
+  c.x_end = w.x_end, c.v0 = w.v0, c.omega0 = w.omega0;
+  c.h_end = w.h_end, c.feed_end = w.feed_end;
+  c.valid = true;
+  for (auto& e : externals_) e->save_checkpoint();
+}
+
+void RodSimulator::restore_checkpoint(bool guess_from_current) {
+  Work& w = *work_;
+  const Work::Checkpoint& c = w.checkpoint;
+  if (!c.valid) throw_usage_error("RodSimulator::restore_checkpoint: no checkpoint was saved");
+  w.guess_x.clear(), w.guess_theta.clear();
+  if (guess_from_current) w.guess_x = state_.x, w.guess_theta = state_.theta;
+  state_ = c.at.state;
+  target_angle_ = c.at.target_angle;
+  insertion_speed_ = c.at.insertion_speed;
+  first_clamped_ = c.at.first_clamped;
+  base_force_ = c.at.base_force;
+  base_torque_ = c.at.base_torque;
+  trace_.resize(c.at.trace_size);
+  w.x_end = c.x_end, w.v0 = c.v0, w.omega0 = c.omega0;
+  w.h_end = c.h_end, w.feed_end = c.feed_end;
+  for (auto& e : externals_) e->restore_checkpoint();
+  model_.discretize(state_.u, disc_);
+  refresh_arc_lengths();
+}
+
+double RodSimulator::step_imbalance() {
+  Work& w = *work_;
+  if (settings_.integrator != Integrator::ImplicitEuler || !(w.h_newton > 0.0))
+    throw_usage_error("RodSimulator::step_imbalance: only after an implicit Euler step");
+  gather(w.q);
+  (void)assemble(Mode::Dynamic, w.h_newton, 1.0, Need::Gradient);
   return residual_norm(tip_clamped_ ? 7 : 0, 4 * first_clamped_) / force_scale(1.0);
 }
 

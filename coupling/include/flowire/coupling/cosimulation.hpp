@@ -121,6 +121,10 @@ class CoSimulation {
   [[nodiscard]] int catheter_unconverged_steps() const { return cath_failures_; }
   /// @brief The last coupled static solve of wire and catheter (sweeps, imbalance).
   [[nodiscard]] const PairStaticReport& pair_static_report() const { return pair_static_; }
+  /// @brief Sweeps (wire + catheter steps) of the coupled steps so far, and the steps whose
+  /// sweeps ended with the pair out of balance.
+  [[nodiscard]] long pair_sweeps() const { return pair_sweeps_; }
+  [[nodiscard]] long pair_unconverged_steps() const { return pair_unconverged_; }
 
  private:
   // The set-up steps of the constructor, in order; each reads its own sections.
@@ -154,6 +158,8 @@ class CoSimulation {
   std::shared_ptr<LumenContact> lumen_;
   int cath_failures_ = 0;
   PairStaticReport pair_static_;
+  long pair_sweeps_ = 0;       ///< wire + catheter steps taken by the coupled steps
+  long pair_unconverged_ = 0;  ///< coupled steps whose sweeps ended with the pair out of balance
   /// Static equilibrium of what the scene has (the pair with a catheter).
   rod::StepReport solve_static_all();
   std::string initial_layout_ = "straight";

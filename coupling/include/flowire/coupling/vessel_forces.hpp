@@ -69,6 +69,13 @@ class VesselForces : public rod::ExternalForce {
 
   void evaluate(const rod::RodView& rod, rod::ForceAccumulator& out) override;
   void end_step(const rod::RodView& rod) override;
+  /// The friction's lagged normal forces of the step start (what end_step records).
+  void save_checkpoint() override { checkpoint_ = {lag_normal_force_, lag_normal_, lagged_}; }
+  void restore_checkpoint() override {
+    lag_normal_force_ = checkpoint_.normal_force;
+    lag_normal_ = checkpoint_.normal;
+    lagged_ = checkpoint_.lagged;
+  }
   /// Records the contact of a state set outside a step (initial, after a static solve), so
   /// the first step's friction is lagged as every other step's.
   void start(const rod::RodView& rod) override { end_step(rod); }
@@ -139,6 +146,11 @@ class VesselForces : public rod::ExternalForce {
   std::vector<double> cur_normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;
   bool lagged_ = false;
+  struct {
+    std::vector<double> normal_force;
+    std::vector<vessels::Vec3> normal;
+    bool lagged = false;
+  } checkpoint_;
   InteractionStats stats_;
   /// Wall distance and normal of vertex i at @p x (the lumen surface's smooth distance, or the
   /// network's blended capsules); false where the vertex is deep inside (no wall near).

@@ -167,6 +167,10 @@ class ExternalForce {
   virtual void evaluate(const RodView& rod, ForceAccumulator& out) = 0;
   /// @brief Called once after each accepted step (e.g. to update friction anchors).
   virtual void end_step(const RodView& /*rod*/) {}
+  /// Keep / bring back what end_step records (RodSimulator::save_checkpoint and
+  /// restore_checkpoint: a step taken again from its start must see the force as it was there).
+  virtual void save_checkpoint() {}
+  virtual void restore_checkpoint() {}
   /// @brief The rod's state was set outside a dynamic step (the force was just added, or a
   /// static solve finished): record what end_step would record for it.
   virtual void start(const RodView& rod) { (void)rod; }

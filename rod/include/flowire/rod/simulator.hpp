@@ -235,6 +235,19 @@ class RodSimulator {
   /// that couple this rod to another body (a catheter over a wire) and must know that both
   /// balance together, not only each against the other's last state.
   [[nodiscard]] double static_imbalance();
+  /// @brief Keep the current state, and what the next step's initial guess is made from, to
+  /// come back to with restore_checkpoint(): for a solver that takes a step of this rod again
+  /// from the same start, as one that iterates two bodies within a step does.
+  void save_checkpoint();
+  /// @p guess_from_current: the state being left becomes the next step's initial guess (a step
+  /// taken again with a little changed load starts from the last solution, not the predictor).
+  void restore_checkpoint(bool guess_from_current = false);
+  /// @brief After an implicit Euler step: the residual of that step's equations at the current
+  /// state with the external forces as they now are, over the tolerance the step converged to
+  /// (≤ 1: the state solves the step). For a coupled solver that changed another body after
+  /// this rod's step and must know whether this rod's step still holds.
+  /// @throws flowire::Error (usage) with the implicit midpoint rule or before any step.
+  [[nodiscard]] double step_imbalance();
 
   // --- controls and loads ---------------------------------------------------------------
   void set_integrator(Integrator integrator) { settings_.integrator = integrator; }
