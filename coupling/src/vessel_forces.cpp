@@ -203,6 +203,17 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       in.t = tn > 0.0 ? Vec3(t / tn) : Vec3::UnitX();
       in.v = rod.velocity(i);
       in.vessel_radius = s >= 0 ? net.segment(s).radius : 0.0;
+      // Where the wire crosses the vessel the walls confine it as a channel (drag.hpp): the
+      // law needs the vessel's axis and the vertex's offset from it.
+      in.axis.setZero();
+      in.axis_offset.setZero();
+      if (s >= 0) {
+        const auto& seg = net.segment(s);
+        const Vec3 p0 = net.node(seg.node_from);
+        const Vec3 axis = (net.node(seg.node_to) - p0).normalized();
+        in.axis = axis;
+        in.axis_offset = (x - p0) - (x - p0).dot(axis) * axis;
+      }
       const auto d = blood_drag(drag_, in);
       ++stats_.drag_evaluations;
       reynolds_[k] = d.reynolds_normal;

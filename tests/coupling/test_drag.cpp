@@ -1,14 +1,15 @@
 // Blood drag on the wire against fluid mechanics: the cylinder drag curve against
-// published solutions and measurements, the tangential law against a numerical solution of
-// the annulus between wire and wall, the whole chain (network flow → profile → drag on a
-// wire) against the exact annular Poiseuille force, and every Jacobian against finite
-// differences.
+// published solutions and measurements, the confinement across the vessel against Faxén's
+// channel drag, Glauert's blockage and an independent quadrature of the Oseen channel, the tangential law against a
+// numerical solution of the annulus between wire and wall, the whole chain (network flow → profile → drag on a wire)
+// against the exact annular Poiseuille force, and every Jacobian against finite differences.
 #include "flowire/coupling/drag.hpp"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <complex>
 #include <numbers>
 #include <random>
 
@@ -202,6 +203,12 @@ TEST(CylinderDrag, VelocityJacobianMatchesFiniteDifferences) {
       in.t = Vec3(uni(rng), uni(rng), uni(rng)).normalized();
       in.ell = 1e-3;
       in.vessel_radius = a * (3.0 + 20.0 * (0.5 + 0.5 * uni(rng)));
+      if (k % 2 == 1) {
+        // The vessel's axis and the vertex's offset from it (the law across the vessel).
+        in.axis = Vec3(uni(rng), uni(rng), uni(rng)).normalized();
+        const Vec3 o = 0.9 * in.vessel_radius * Vec3(uni(rng), uni(rng), uni(rng)) / std::sqrt(3.0);
+        in.axis_offset = o - o.dot(in.axis) * in.axis;
+      }
       const auto d = blood_drag(m, in);
       const Mat3 fd = fd_velocity_jacobian(m, in, 1e-7 * speed);
       if ((d.dfdv - fd).norm() > 1e-5 * d.dfdv.norm()) {
@@ -326,4 +333,168 @@ TEST(CylinderDrag, TheLargestReynoldsNumberIsThatOfAcceptedStates) {
   forces.evaluate(view, acc);
   forces.end_step(view);
   EXPECT_GT(forces.stats().max_reynolds, kCylinderDragMaxReynolds);
+}
+
+namespace {
+
+/// The wall images' velocity at a two-dimensional Oseen point force midway in a channel of
+/// half-width 1 (per unit force/η), W = 4π u_h with s = κ the Oseen parameter, by direct
+/// quadrature of its Fourier integral (the derivation in docs/blood-drag.md, independent of
+/// the law's table): for each wavenumber ξ the free-space stream function plus
+/// A sinh(ξz) + B sinh(βz) vanishes with its slope at z = 1.
+double oseen_wall_by_quadrature(double kappa) {
+  using C = std::complex<double>;
+  const auto integrand = [kappa](double xi) {
+    const C al(xi, 0.0);
+    const C be = std::sqrt(C(xi * xi, 2.0 * kappa * xi));
+    const C den(0.0, 2.0 * kappa * xi);
+    const C ea = std::exp(-al), eb = std::exp(-be);
+    const C psi = (eb - ea) / (2.0 * den), dpsi = (al * ea - be * eb) / (2.0 * den);
+    // Unknowns scaled by e^{−ξ}, e^{−β}: sinh → (1 − e^{−2·})/2, cosh → (1 + e^{−2·})/2.
+    const C s1 = 0.5 * (1.0 - ea * ea), c1 = 0.5 * (1.0 + ea * ea);
+    const C s2 = 0.5 * (1.0 - eb * eb), c2 = 0.5 * (1.0 + eb * eb);
+    const C det = s1 * be * c2 - s2 * al * c1;
+    const C A = (-psi * be * c2 + s2 * dpsi) / det;
+    const C B = (-s1 * dpsi + al * c1 * psi) / det;
+    return std::real(A * ea * al + B * eb * be);
+  };
+  // Simpson in ln ξ over [1e-8, 40].
+  const int n = 20000;
+  const double x0 = std::log(1e-8), x1 = std::log(40.0), hx = (x1 - x0) / n;
+  double sum = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double xi = std::exp(x0 + i * hx);
+    const double wgt = (i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+    sum += wgt * integrand(xi) * xi;
+  }
+  // Below ξ₀ = 1e-8 the integrand goes as ξ^{-1/2} (β ≈ √(2iκξ)): its integral is 2ξ₀ f(ξ₀).
+  const double tail = 2.0 * 1e-8 * integrand(1e-8);
+  return 4.0 * kPi * (sum * hx / 3.0 + tail) / kPi;
+}
+
+constexpr double kEulerGamma = 0.57721566490153286;
+
+}  // namespace
+
+TEST(ChannelDrag, OseenWallTableIsTheFourierSolution) {
+  // The law's tabulated W(s) (nodes at ln s = −8, −7.75, …, 9, cubic interpolation) against
+  // the Fourier integral evaluated here, at nodes and between them: within 10⁻⁴ of W (the
+  // interpolation between nodes), which moves the drag by less than 10⁻⁵.
+  for (double s : {0.01, 0.3, 1.0, 1.7, 4.2, 11.0, 60.0}) {
+    const double quad = oseen_wall_by_quadrature(s);
+    const double law = channel_oseen_wall(s).w;
+    std::printf("  s %6.2f: W table %.7f, quadrature %.7f\n", s, law, quad);
+    EXPECT_NEAR(law, quad, 1e-4 * std::max(1.0, std::abs(quad))) << s;
+  }
+}
+
+TEST(ChannelDrag, CreepingFlowLimitIsFaxensChannelDrag) {
+  // Faxén (1946), cylinder midway between plane walls 2h apart (as quoted by Happel &
+  // Brenner 1965): F'/(ηU) = 4π/(ln(h/a) − 0.9157 + 1.7244 k² − …). With Lamb's Oseen drag
+  // of the unbounded cylinder, 1/g = (ln(2/(κa)) − γ + ½)/(4π), the images' term must turn
+  // the Oseen length into the wall distance: ln(2/s) − γ + ½ − W(s) → −0.9157 as s → 0.
+  for (double s : {1e-2, 1e-4, 1e-6}) {
+    const double constant = std::log(2.0 / s) - kEulerGamma + 0.5 - channel_oseen_wall(s).w;
+    EXPECT_NEAR(constant, -0.9157, 1e-4) << s;
+  }
+  // The law's creeping-flow value across a channel is Faxén's.
+  for (double k : {0.01, 0.05, 0.119, 0.2, 0.4}) {
+    const auto c = channel_drag_coefficient(1e-6, k);
+    EXPECT_TRUE(c.stokes) << k;
+    EXPECT_DOUBLE_EQ(c.g, faxen_channel_coefficient(k)) << k;
+  }
+  // Faxén's series between its limits: the two-plane value is below the coaxial tube's of
+  // the same gap (walls on two sides against all round), by the constants 0.9157 and 1 as k → 0.
+  for (double k : {0.01, 0.05, 0.119, 0.2, 0.3}) {
+    const double tube = 4 * kPi / (std::log(1 / k) - (1 - k * k) / (1 + k * k));
+    EXPECT_LT(faxen_channel_coefficient(k), tube) << k;
+  }
+  const double k = 1e-4;
+  EXPECT_NEAR(4 * kPi / faxen_channel_coefficient(k) - std::log(1 / k), -0.9157, 1e-6);
+  EXPECT_THROW(faxen_channel_coefficient(0.6), Error);
+  EXPECT_THROW(faxen_channel_coefficient(0.0), Error);
+}
+
+TEST(ChannelDrag, InertialLimitIsGlauertsBlockage) {
+  // Far downstream of an Oseen point force the wake's displacement flux F'/(ρU) must pass
+  // the walls: W s → π/2, i.e. the stream at the wire is faster by the wake blockage
+  // ε = (C_D/4)(d/H), H = 2h (Glauert 1933; Allen & Vincenti 1944).
+  EXPECT_NEAR(channel_oseen_wall(1e4).w * 1e4, kPi / 2, 1e-2);
+  EXPECT_NEAR(channel_oseen_wall(1e8).w * 1e8, kPi / 2, 1e-4);
+  for (double re : {200.0, 1e3, 1e4}) {
+    for (double k : {0.05, 0.119, 0.2}) {
+      const double cd = cylinder_drag_coefficient(re);
+      const double eps = kPi * kPi / 12 * k * k + cd * k / 4;
+      const double glauert = (1 + eps) * 0.5 * re * (1 + eps) * cylinder_drag_coefficient(re * (1 + eps));
+      const auto c = channel_drag_coefficient(re, k);
+      EXPECT_FALSE(c.stokes);
+      EXPECT_NEAR(c.g / glauert, 1.0, 0.01) << re << " " << k;
+    }
+  }
+}
+
+TEST(ChannelDrag, FarWallsGiveTheUnconfinedLawAndTheLawIsAboveBothLimits) {
+  const double a = 0.178e-3;
+  const DragModel m{.law = DragLaw::Cylinder, .viscosity = 3.5e-3, .density = 1060, .wire_radius = a};
+  for (double re : {1.0, 10.0, 100.0, 1000.0}) {
+    const double U = re * 3.5e-3 / (1060 * 2 * a);
+    // A wire across a vessel of radius 1 m, on its axis: k = 1.8·10⁻⁴.
+    DragInput in{.u = Vec3(U, 0, 0), .t = Vec3::UnitY(), .ell = 1.0, .vessel_radius = 1.0};
+    in.axis = Vec3::UnitX();
+    const double unconfined = 0.5 * 1060 * cylinder_drag_coefficient(re) * 2 * a * U * U;
+    EXPECT_NEAR(blood_drag(m, in).force.x() / unconfined, 1.0, 1e-3) << re;
+  }
+  for (double k : {0.01, 0.119, 0.3, 0.4}) {
+    for (double re = 1e-4; re < 1e5; re *= 1.7) {
+      const double g = channel_drag_coefficient(re, k).g;
+      EXPECT_GE(g, faxen_channel_coefficient(k)) << re << " " << k;
+      EXPECT_GE(g, 0.5 * re * cylinder_drag_coefficient(re)) << re << " " << k;
+    }
+  }
+}
+
+TEST(ChannelDrag, AlongTheVesselTheLawIsUnchanged) {
+  // A wire along the vessel (t = A) keeps the coaxial-tube law, with or without the axis;
+  // for any orientation the force along the wire (annular Poiseuille shear) does not
+  // depend on the confinement across it.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  const double a = 0.178e-3, R = 1.5e-3;
+  const DragModel m{.law = DragLaw::Cylinder, .viscosity = 3.5e-3, .density = 1060, .wire_radius = a};
+  for (int i = 0; i < 100; ++i) {
+    DragInput in;
+    in.u = 0.3 * Vec3(uni(rng), uni(rng), uni(rng));
+    in.v = 0.1 * Vec3(uni(rng), uni(rng), uni(rng));
+    in.t = Vec3(uni(rng), uni(rng), uni(rng)).normalized();
+    in.ell = 1e-3;
+    in.vessel_radius = R;
+    const auto bare = blood_drag(m, in);
+    DragInput along = in;
+    along.axis = in.t;
+    EXPECT_LT((blood_drag(m, along).force - bare.force).norm(), 1e-12 * bare.force.norm());
+    DragInput oblique = in;
+    oblique.axis = Vec3(uni(rng), uni(rng), uni(rng)).normalized();
+    oblique.axis_offset = 0.5 * R * oblique.axis.unitOrthogonal();
+    EXPECT_NEAR(blood_drag(m, oblique).force.dot(in.t), bare.force.dot(in.t), 1e-12 * bare.force.norm());
+  }
+}
+
+TEST(ChannelDrag, DerivativesMatchFiniteDifferences) {
+  for (double s = 1e-5; s < 1e7; s *= 1.37) {
+    const double h = 1e-6 * s;
+    const double fd = (channel_oseen_wall(s + h).w - channel_oseen_wall(s - h).w) / (2 * h);
+    // W = ln(2/s) − γ + ½ − C(s) loses its last digits to the cancellation at large s: 10⁻¹⁴/h.
+    EXPECT_NEAR(channel_oseen_wall(s).dw, fd, 1e-5 * std::abs(fd) + 1e-14 / h) << s;
+  }
+  for (double k : {0.02, 0.119, 0.25, 0.4}) {
+    for (double re = 1e-3; re < 1e5; re *= 1.23) {
+      const double h = 1e-6 * re;
+      const auto lo = channel_drag_coefficient(re - h, k), hi = channel_drag_coefficient(re + h, k);
+      if (lo.stokes != hi.stokes) continue;  // the switch between Faxén's value and the inertial law
+      const double fd = (hi.g - lo.g) / (2 * h);
+      EXPECT_NEAR(channel_drag_coefficient(re, k).dg, fd, 1e-5 * std::abs(fd) + 1e-9) << re << " " << k;
+      // The force per length η g U grows with the speed: a monotone law.
+      EXPECT_GT(channel_drag_coefficient(re, k).g + re * channel_drag_coefficient(re, k).dg, 0.0) << re;
+    }
+  }
 }

@@ -1,10 +1,13 @@
 // The blood-drag law on a guidewire against 3D Navier–Stokes: a wire across a tube (a
 // cylinder spanning the diameter, perpendicular to the axis) at wire Reynolds numbers
-// 1, 10 and 100; the FEM force per unit length against the unconfined cylinder drag curve
-// (cylinder_drag_coefficient) and against the project's law (blood_drag, which holds the
-// normal coefficient at or above the confined-cylinder Stokes value), both at the
-// undisturbed Poiseuille velocity averaged along the wire's span. The figures and the
-// tolerances are discussed in docs/drag-verification.md.
+// 1, 10 and 100. The FEM force per unit length against the unconfined cylinder drag curve
+// (cylinder_drag_coefficient), against the law without the vessel's axis (which holds the
+// normal coefficient at or above the coaxial-tube Stokes value: the law before its
+// confinement across the vessel) at the span-averaged undisturbed velocity, and against
+// the law as the co-simulation evaluates it: at each point of the span with the local
+// undisturbed velocity and the vertex's offset from the vessel's axis (strip theory: the
+// wire stands across a channel of half-width √(R² − y²)). The figures and the tolerances
+// are discussed in docs/drag-verification.md.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,12 +33,36 @@ struct CrossWire {
   double force_per_length = 0.0;     ///< FEM, N/m
   double curve = 0.0;                ///< ½ρ C_D(Re_w) d U_w², U_w the span-averaged velocity
   double curve_local = 0.0;          ///< the same law integrated along the span with the local u(y)
-  double law = 0.0;                  ///< blood_drag at U_w (the confinement floor included)
-  double g_fem = 0.0, g_conf = 0.0;  ///< F'/(η U_w) of the FEM; the law's confined Stokes floor
+  double law_before = 0.0;           ///< blood_drag at U_w without the vessel's axis (coaxial-tube floor)
+  double law = 0.0;                  ///< blood_drag along the span: local velocity, offset and axis
+  double g_fem = 0.0, g_conf = 0.0;  ///< F'/(η U_w) of the FEM; the coaxial-tube Stokes floor
   int tets = 0, unknowns = 0, newton = 0;
 };
 
-CrossWire cross_wire(double re_d, double h, double h_wire, double growth, Vec3& f) {
+/// The law per unit length of a wire across the tube, evaluated like the co-simulation
+/// does at its vertices: at n points of the span, each with its undisturbed Poiseuille
+/// velocity u(y) = 2U(1 − y²/R²), the tube's axis and the point's offset from it.
+double law_along_span(double u_mean, int n = 400) {
+  coupling::DragModel model;
+  model.viscosity = kEta;
+  model.density = kRho;
+  model.wire_radius = kA;
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double y = -kR + (i + 0.5) * 2.0 * kR / n;
+    coupling::DragInput in;
+    in.u = Vec3(2.0 * u_mean * (1.0 - y * y / (kR * kR)), 0, 0);
+    in.t = Vec3::UnitY();
+    in.ell = 2.0 * kR / n;
+    in.vessel_radius = kR;
+    in.axis = Vec3::UnitX();
+    in.axis_offset = Vec3(0, y, 0);
+    sum += coupling::blood_drag(model, in).force.x();
+  }
+  return sum / (2.0 * kR);
+}
+
+CrossWire cross_wire(double re_d, double h, double h_wire, double growth, Equations equations, Vec3& f) {
   const double d = 2.0 * kA;
   const double u_mean = re_d * kEta / (kRho * d);
   ObstacleMesh sizes;
@@ -47,7 +74,7 @@ CrossWire cross_wire(double re_d, double h, double h_wire, double growth, Vec3& 
   StokesOptions so;
   so.viscosity = kEta;
   so.density = kRho;
-  so.equations = Equations::NavierStokes;
+  so.equations = equations;
   std::vector<GroupCondition> cond(mesh.groups.size(), GroupCondition::at_pressure(0.0));
   cond[static_cast<size_t>(mesh.group_named("inlet"))] = GroupCondition::with_flow(-u_mean * kPi * kR * kR);
   const StokesSolution sol = solve_stokes(mesh, std::span<const GroupCondition>(cond), so);
@@ -79,28 +106,42 @@ CrossWire cross_wire(double re_d, double h, double h_wire, double growth, Vec3& 
   in.t = Vec3::UnitY();
   in.ell = 1.0;
   in.vessel_radius = kR;
-  r.law = coupling::blood_drag(model, in).force.x();
+  r.law_before = coupling::blood_drag(model, in).force.x();
+  r.law = law_along_span(u_mean);
   r.g_fem = r.force_per_length / (kEta * uw);
   r.g_conf = 4.0 * kPi / (std::log(kR / kA) - (kR * kR - kA * kA) / (kR * kR + kA * kA));
   std::printf(
-      "cross wire Re_d %5.1f: %d tets, %d unknowns, %d Newton steps; F' FEM %.4e N/m, curve %.4e (ratio %.3f), "
-      "curve local %.4e (ratio %.3f), law %.4e (ratio %.3f); g FEM %.2f, g_conf %.2f; sideways %.1e of F_x\n",
-      re_d, r.tets, r.unknowns, r.newton, r.force_per_length, r.curve, r.force_per_length / r.curve, r.curve_local,
-      r.force_per_length / r.curve_local, r.law, r.force_per_length / r.law, r.g_fem, r.g_conf,
+      "cross wire Re_d %5.1f%s: %d tets, %d unknowns, %d Newton steps; F' FEM %.4e N/m, curve %.4e (ratio %.3f), "
+      "curve local %.4e (ratio %.3f), law without the axis %.4e (ratio %.3f), law along the span %.4e (ratio "
+      "%.3f); g FEM %.2f, g_conf %.2f; sideways %.1e of F_x\n",
+      re_d, equations == Equations::Stokes ? " (Stokes)" : "", r.tets, r.unknowns, r.newton, r.force_per_length,
+      r.curve, r.force_per_length / r.curve, r.curve_local, r.force_per_length / r.curve_local, r.law_before,
+      r.force_per_length / r.law_before, r.law, r.force_per_length / r.law, r.g_fem, r.g_conf,
       std::hypot(f.y(), f.z()) / f.x());
   return r;
 }
 
-/// What docs/drag-verification.md states: between Re_d = 1 and 100 the law (at the
-/// span-averaged undisturbed velocity) gives 0.6 to 1.1 times the FEM force on a wire
-/// across a 3 mm vessel, i.e. FEM/law in [0.9, 1.6]; the wire is confined, so at Re_d ≤ 10
-/// the FEM drag is above the unbounded-stream curve.
+/// What docs/drag-verification.md states for the law along the span (FEM/law): 1.11–1.12 at
+/// Re_d = 1 (strip theory misses the tube's three-dimensional confinement of the middle of
+/// the span and the inertia at Re_d = 1), 1.07–1.08 at Re_d = 10, 0.73–0.75 at Re_d = 100
+/// (a steady solution against a law for the time-mean drag of the shedding wake).
 void expect_documented(const CrossWire& r) {
   const double ratio = r.force_per_length / r.law;
-  EXPECT_GT(ratio, 0.9) << "Re_d " << r.re_d;
-  EXPECT_LT(ratio, 1.6) << "Re_d " << r.re_d;
+  if (r.re_d <= 1.0) {
+    EXPECT_GT(ratio, 1.0) << "Re_d " << r.re_d;
+    EXPECT_LT(ratio, 1.15) << "Re_d " << r.re_d;
+  } else if (r.re_d <= 10.0) {
+    EXPECT_GT(ratio, 0.9) << "Re_d " << r.re_d;
+    EXPECT_LT(ratio, 1.1) << "Re_d " << r.re_d;
+  } else {
+    EXPECT_GT(ratio, 0.65) << "Re_d " << r.re_d;
+    EXPECT_LT(ratio, 0.85) << "Re_d " << r.re_d;
+  }
   if (r.re_d <= 10.0) {
+    // Confined: above the unbounded-stream curve, and closer to the FEM than the law
+    // without the confinement across the vessel.
     EXPECT_GT(r.force_per_length, r.curve) << "Re_d " << r.re_d;
+    EXPECT_LT(std::abs(ratio - 1.0), std::abs(r.force_per_length / r.law_before - 1.0)) << "Re_d " << r.re_d;
   }
 }
 
@@ -109,19 +150,30 @@ void expect_documented(const CrossWire& r) {
 // within 0.33% of a mesh with 1.7 times the tetrahedra).
 TEST(FemWireDrag, CrossWireAtReynoldsOneAgainstTheLaw) {
   Vec3 f;
-  const CrossWire r = cross_wire(1.0, 0.6e-3, 0.1e-3, 0.4, f);
+  const CrossWire r = cross_wire(1.0, 0.6e-3, 0.1e-3, 0.4, Equations::NavierStokes, f);
   expect_documented(r);
   // The geometry is symmetric: no sideways force (up to the mesh's asymmetry).
   EXPECT_LT(std::hypot(f.y(), f.z()), 1e-2 * f.x());
   // In creeping flow the vessel wall, not the Oseen length, bounds the disturbance: the
-  // 3D drag is above the two-dimensional confined Stokes value the law uses as its floor.
+  // 3D drag is above the two-dimensional coaxial-tube Stokes value.
   EXPECT_GT(r.g_fem, r.g_conf);
+}
+
+TEST(FemWireDrag, CrossWireInStokesFlowAgainstFaxenStripTheory) {
+  // The law's creeping-flow limit across the vessel is Faxén's channel drag at each point
+  // of the span; the 3D Stokes force is 7–8% above it (the tube's wall closes in along the
+  // span, which strip theory leaves out).
+  Vec3 f;
+  const CrossWire r = cross_wire(1e-3, 0.6e-3, 0.1e-3, 0.4, Equations::Stokes, f);
+  const double ratio = r.force_per_length / r.law;
+  EXPECT_GT(ratio, 1.0);
+  EXPECT_LT(ratio, 1.1);
 }
 #else
 TEST(FemWireDragSlow, CrossWireAtReynolds1To100) {
   for (double re : {1.0, 10.0, 100.0}) {
     Vec3 f;
-    const CrossWire r = cross_wire(re, 0.45e-3, 0.09e-3, 0.3, f);
+    const CrossWire r = cross_wire(re, 0.45e-3, 0.09e-3, 0.3, Equations::NavierStokes, f);
     expect_documented(r);
   }
 }

@@ -15,14 +15,45 @@
 /// Reynolds number \f$ Re_n = \rho |w_n| d/\eta \f$ (d = 2a):
 /// \f[ f_n = \tfrac12 \rho\, C_D(Re_n)\, d\, |w_n|\, w_n = \eta\, g(Re_n)\, w_n,
 ///     \qquad g(Re) = \tfrac12 Re\, C_D(Re), \f]
-/// with the cylinder drag curve C_D of cylinder_drag_coefficient(). In creeping flow an
-/// unbounded cylinder's drag vanishes like 1/ln(1/Re) (Stokes' paradox: the Oseen length
-/// d/Re sets the logarithm); in a vessel the wall cuts the logarithm off first. The normal
-/// coefficient is therefore never below that of a cylinder translating across a coaxial
-/// tube of radius R in Stokes flow (the concentric two-dimensional Stokes solution, stream
-/// function sin θ (A r³ + B r + C r ln r + D/r); Happel & Brenner 1965, Low Reynolds Number
-/// Hydrodynamics):
-/// \f[ g \ge g_{conf} = \frac{4\pi}{\ln(R/a) - (R^2 - a^2)/(R^2 + a^2)}. \f]
+/// with the cylinder drag curve C_D of cylinder_drag_coefficient(). The vessel's wall raises
+/// g above the curve (confinement); how depends on how the wire's cross-section plane cuts
+/// the vessel (docs/blood-drag.md, "Confinement", has the derivation):
+///
+/// - *Wire along the vessel* (tangent t ∥ axis A): the cross-section plane cuts the vessel in
+///   a circle of radius R. In creeping flow an unbounded cylinder's drag vanishes like
+///   1/ln(1/Re) (Stokes' paradox: the Oseen length d/Re sets the logarithm); in the vessel the
+///   wall cuts the logarithm off first, so g is never below that of a cylinder translating in
+///   a coaxial tube (the concentric two-dimensional Stokes solution, stream function
+///   sin θ (A r³ + B r + C r ln r + D/r); Happel & Brenner 1965, Low Reynolds Number
+///   Hydrodynamics): \f$ g_\circ = \max\bigl(g_{conf}(a/R),\, g(Re_n)\bigr) \f$,
+///   \f$ g_{conf} = 4\pi/(\ln(R/a) - (R^2 - a^2)/(R^2 + a^2)) \f$.
+/// - *Wire across the vessel* (t ⊥ A): the plane contains the axis and cuts the vessel in
+///   a channel of half-width h (the distance from the wire to the wall along
+///   \f$ n = t \times A \f$, perpendicular to both wire and flow; \f$ h = \sqrt{R^2 - y^2} \f$ at
+///   distance y from the axis along a diameter), and the wire stands across it like a
+///   cylinder midway between two plane walls (strip theory). With k = a/h,
+///   \f$ g_= = \max\bigl(g_F(k),\ (1 + \varepsilon)\, g(Re_n (1 + \varepsilon))\bigr) \f$:
+///   Faxén's confined Stokes drag (faxen_channel_coefficient()) until the inertial law is
+///   larger, and the inertial law in the stream that the wall images of the wire's own far
+///   field accelerate by the fraction
+///   \f$ \varepsilon = \tfrac{\pi^2}{12} k^2 + g(Re_n)\, W(s)/(4\pi) \f$,
+///   \f$ s = Re_n/(4k) = U h/(2\nu) \f$. W is the wall images' velocity at the wire per unit
+///   force/η of a two-dimensional Oseen point force in the channel (channel_oseen_wall());
+///   the first term is the images of the potential doublet. For s → ∞ this is Glauert's
+///   blockage correction of wind-tunnel practice (solid blockage π²k²/12, wake blockage
+///   C_D k/4); for s → 0, with Lamb's Oseen g, 1/g − W/(4π) tends to Faxén's value.
+/// - In between, \f$ g = c^2 g_\circ + (1 - c^2) g_= \f$ with c = t·A: exact at both ends,
+///   an interpolation for oblique wires. Without the axis (DragInput::axis zero) the law
+///   takes the wire along the vessel on its axis.
+///
+/// Range: k ≤ 0.4 (the wall at least 1.5 wire radii from the wire's surface along n;
+/// closer, k is held at 0.4, where the last term of Faxén's truncated series is 1.3% of the
+/// sum); the wire midway in the chord (its eccentricity there ignored); a wire translating
+/// between walls at rest in still fluid (Faxén's and the Oseen problem), which stands for a
+/// wire held in the local Poiseuille flow (the two differ by O(k²) in creeping flow); strip
+/// theory, with the gap varying slowly along the span. Against the 3D Navier–Stokes force
+/// on a 0.014" wire across a 3 mm vessel (docs/drag-verification.md): 1.12 times the law
+/// at Re_d = 1, 1.07–1.08 at Re_d = 10, 0.73–0.75 at Re_d = 100 (steady, no shedding).
 ///
 /// **Tangential force**: fully developed axial flow in a straight vessel is unidirectional,
 /// so the convective term vanishes and the annular Poiseuille solution between a coaxial
@@ -101,6 +132,11 @@ struct DragInput {
   double ell = 0.0;            ///< length of wire the vertex represents [m]
   double vessel_radius = 0.0;  ///< R of the segment the vertex lies in [m] (Cylinder)
   double dt = 0.0;             ///< time step [s] (VelocityOffset)
+  /// Unit direction of the vessel's axis at the vertex (Cylinder); zero: unknown, the law
+  /// then takes the wire along the vessel on its axis.
+  Vec3 axis = Vec3::Zero();
+  /// The vertex minus its nearest point on the vessel's axis [m] (Cylinder, with `axis`).
+  Vec3 axis_offset = Vec3::Zero();
 };
 
 /// @brief Force on the vertex (per vertex, i.e. per unit length times ell) and its exact
@@ -126,6 +162,33 @@ double slender_body_normal_coefficient(double eta, double L, double r);
 ///     c_\perp = \frac{4\pi\eta}{\ln(L/r)},\ c_\parallel = c_\perp/2 \f]
 /// (leading order in 1/ln(L/r) of Cox's slender-body theory). The force returned is f·ell.
 DragForce slender_body_drag(const Vec3& u, const Vec3& v, const Vec3& t, double eta, double L, double r, double ell);
+
+/// @brief Faxén's drag of a cylinder of radius a translating midway between two plane
+/// walls a distance 2h apart, parallel to them, in Stokes flow, per unit length and η U
+/// (Faxén 1946; the coefficients as quoted by Happel & Brenner 1965), k = a/h:
+/// \f[ g_F = \frac{4\pi}{\ln(1/k) - 0.9157 + 1.7244 k^2 - 1.7302 k^4 + 2.4056 k^6 - 4.5913 k^8}. \f]
+/// @throws flowire::Error (usage) unless 0 < k ≤ 0.5 (beyond, the truncated series fails).
+double faxen_channel_coefficient(double k);
+
+/// @brief The wall term of a two-dimensional Oseen point force midway in a channel of
+/// half-width h, with the stream U along it: the velocity the wall images induce at the
+/// force, per unit force/η, as a function of s = U h/(2ν), and its derivative. Computed
+/// (Fourier transform along the channel, no-slip at both walls) and tabulated. Limits:
+/// \f$ W \to \ln(2/s) - \gamma + \tfrac12 + 0.91569 \f$ (s → 0: with Lamb's Oseen drag,
+/// Faxén's constant) and \f$ W s \to \pi/2 \f$ (s → ∞: Glauert's wake blockage).
+struct ChannelOseenWall {
+  double w = 0.0;   ///< W(s)
+  double dw = 0.0;  ///< dW/ds
+};
+ChannelOseenWall channel_oseen_wall(double s);
+
+/// @brief g = F'/(ηU) of a wire across a channel of half-width h = a/k at Re = ρUd/η (the
+/// "across" law of the file comment) and dg/dRe. Re > 0, 0 < k ≤ 0.4 (larger k is held at 0.4).
+struct ChannelDrag {
+  double g = 0.0, dg = 0.0;
+  bool stokes = false;  ///< Faxén's confined Stokes value is the larger
+};
+ChannelDrag channel_drag_coefficient(double reynolds, double k);
 
 /// @brief The annulus factor κ(a/R) and coefficient c_∥ = 2πη/ln(R/a) of the tangential law.
 struct AnnulusShear {
