@@ -3,34 +3,27 @@
 // (common/cmaes: each value's range mapped onto [0, 1], box handled by repair and penalty),
 // as the Cosserat guidewire paper fits push force and turn angle to tracked phantom data.
 // Every evaluation is a separate `flowire run` process (an isolated scene run: nothing of one
-// run can leak into the next), up to --jobs at a time.
+// run can leak into the next), up to --jobs at a time; under mpirun a generation's runs are
+// shared out over the ranks (dispatch.hpp) while rank 0 runs CMA-ES.
 #include "fit_command.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-#include <thread>
 
+#include "dispatch.hpp"
 #include "flowire/common/cmaes.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/common/units.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
-
-extern char** environ;
 
 namespace flowire::cli {
 namespace {
@@ -96,35 +89,37 @@ std::vector<TracePoint> padded(std::vector<TracePoint> sim, const std::vector<Tr
   return sim;
 }
 
-/// Run `flowire run` in a child process; its stdout and stderr go to DIR/run.log.
-int run_child(const std::vector<std::string>& args, const fs::path& log) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) return -1;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return -1;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
 struct RunOutcome {
   double rms = std::numeric_limits<double>::infinity();       // eq. 11, m
   double rms_mean = std::numeric_limits<double>::infinity();  // (1/n Σ)^½, m
   int status = 0;                                             // the run's exit status
 };
 
-}  // namespace
+/// One evaluation, on whichever rank the dispatcher gives it to: the run of the payload's
+/// command line in its folder, and its trace distance to the measured trace. The result is
+/// {"status": exit status, "rms": m, "rms_mean": m} (distances absent when not comparable).
+std::string evaluate_run(const std::string& payload, const std::string& trace) {
+  const auto task = nlohmann::json::parse(payload);
+  const fs::path dir = task.at("dir").get<std::string>();
+  fs::create_directories(dir);
+  RunOutcome r;
+  r.status = run_child(task.at("args").get<std::vector<std::string>>(), dir / "run.log");
+  if (r.status == 0 && fs::exists(dir / "tip_trace.csv")) {
+    try {
+      const auto measured = coupling::read_tip_trace(trace);
+      const auto c = coupling::compare_traces(
+          measured, padded(coupling::read_tip_trace((dir / "tip_trace.csv").string()), measured));
+      if (c.samples > 0) r.rms = c.rms_published_total, r.rms_mean = c.rms_total;
+    } catch (const Error&) {
+      r.status = -1;
+    }
+  }
+  nlohmann::json j{{"status", r.status}};
+  if (std::isfinite(r.rms)) j["rms"] = r.rms, j["rms_mean"] = r.rms_mean;
+  return j.dump();
+}
 
-int run_fit(const FitOptions& o) {
+int fit_root(const FitOptions& o, Dispatcher& dispatcher) {
   // Everything is checked before anything is written.
   if (o.out.empty()) throw_input_error("--out", "an output folder is required");
   if (!fs::exists(o.scene)) throw_input_error(o.scene, "no such file");
@@ -161,7 +156,7 @@ int run_fit(const FitOptions& o) {
   if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_input_error(o.out, "--out exists and is not a folder");
 
   const int n = static_cast<int>(params.size());
-  const int jobs = o.jobs > 0 ? o.jobs : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int jobs = dispatcher.slots();  // runs at a time over every rank
   cmaes::Options co;
   co.unit_box = true;
   co.sigma0 = 0.3;
@@ -182,7 +177,6 @@ int run_fit(const FitOptions& o) {
   const std::string exe_name = "flowire";
   const fs::path scene_abs = fs::absolute(o.scene);
 
-  std::mutex mu;
   long counter = 0;
   long best_id = -1;
   double best_rms = std::numeric_limits<double>::infinity();
@@ -204,33 +198,26 @@ int run_fit(const FitOptions& o) {
     std::vector<RunOutcome> outcome(k);
     std::vector<long> ids(k);
     for (int j = 0; j < k; ++j) ids[j] = counter++;
-    std::atomic<int> next{0};
-    auto worker = [&] {
-      for (int j; (j = next++) < k;) {
-        const auto values = to_values(pts.col(j));
-        const fs::path dir = work / fmt::format("eval-{:05d}", ids[j]);
-        fs::create_directories(dir);
-        std::vector<std::string> args{exe_name, "run", scene_abs.string(), "--out", fs::absolute(dir).string()};
-        for (const auto& s : o.sets) args.insert(args.end(), {"--set", s});
-        for (int i = 0; i < n; ++i) args.insert(args.end(), {"--set", params[i].key + "=" + si_text(values[i])});
-        auto& r = outcome[j];
-        r.status = run_child(args, dir / "run.log");
-        if (r.status != 0 || !fs::exists(dir / "tip_trace.csv")) continue;
-        try {
-          const auto c = coupling::compare_traces(
-              measured, padded(coupling::read_tip_trace((dir / "tip_trace.csv").string()), measured));
-          if (c.samples > 0) r.rms = c.rms_published_total, r.rms_mean = c.rms_total;
-        } catch (const Error&) {
-          r.status = -1;
-        }
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int t = 0; t < std::min(jobs, k); ++t) pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
+    std::vector<std::string> payloads(k);
+    for (int j = 0; j < k; ++j) {
+      const auto values = to_values(pts.col(j));
+      const fs::path dir = fs::absolute(work / fmt::format("eval-{:05d}", ids[j]));
+      std::vector<std::string> args{exe_name, "run", scene_abs.string(), "--out", dir.string()};
+      for (const auto& s : o.sets) args.insert(args.end(), {"--set", s});
+      for (int i = 0; i < n; ++i) args.insert(args.end(), {"--set", params[i].key + "=" + si_text(values[i])});
+      payloads[j] = nlohmann::json{{"dir", dir.string()}, {"args", args}}.dump();
+    }
+    const auto results = dispatcher.run(payloads);
+    for (int j = 0; j < k; ++j) {
+      auto& r = outcome[j];
+      r.status = -1;
+      if (!results[j].ok) continue;
+      const auto a = nlohmann::json::parse(results[j].text);
+      r.status = a.value("status", -1);
+      if (a.contains("rms")) r.rms = a["rms"].get<double>(), r.rms_mean = a["rms_mean"].get<double>();
+    }
 
     std::vector<double> f(k);
-    std::lock_guard<std::mutex> lock(mu);
     // A first generation in which every run fails is the scene's fault (a value it rejects
     // only when it runs, a missing file): stop with the first run's own message.
     if (generation == 0 &&
@@ -306,6 +293,24 @@ int run_fit(const FitOptions& o) {
   for (int i = 0; i < n; ++i) std::printf("  %s = %.9g\n", params[i].key.c_str(), best_values[i]);
   std::printf("outputs in %s\n", o.out.c_str());
   return 0;
+}
+
+}  // namespace
+
+int run_fit(const FitOptions& o) {
+  Dispatcher dispatcher(o.jobs, [trace = o.trace](const std::string& payload) { return evaluate_run(payload, trace); });
+  if (!dispatcher.root()) return dispatcher.serve();
+  try {
+    const int status = fit_root(o, dispatcher);
+    dispatcher.stop(status);
+    return status;
+  } catch (const Error& e) {
+    dispatcher.stop(exit_status(e));
+    throw;
+  } catch (...) {
+    dispatcher.stop(3);
+    throw;
+  }
 }
 
 }  // namespace flowire::cli

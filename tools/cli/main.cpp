@@ -12,6 +12,7 @@
 #include <new>
 #include <nlohmann/json.hpp>
 
+#include "dispatch.hpp"
 #include "fit_command.hpp"
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
@@ -21,6 +22,8 @@
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
 #include "flowire/vessels/io.hpp"
+#include "study_command.hpp"
+#include "study_file.hpp"
 #include "svzerod_command.hpp"
 
 namespace {
@@ -189,6 +192,7 @@ int cmd_compare(const std::string& a, const std::string& b, const std::string& o
 
 int main(int argc, char** argv) {
   flowire::install_interrupt_handlers();
+  flowire::cli::follow_parent();  // a run of a study or a fit ends with the study
   CLI::App app{"flowire: guidewire and blood-flow co-simulation in vessel networks", "flowire"};
   app.set_version_flag("--version", std::string("flowire ") + FLOWIRE_VERSION);
   app.require_subcommand(0, 1);
@@ -249,9 +253,20 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   fit->add_option("--seed", fit_opts.seed, "random seed of the search (equal seeds give equal fits; default 1)");
 
+  flowire::cli::StudyOptions study_opts;
+  auto* study = app.add_subcommand(
+      "study", "run a study: cases x a product of scene values, collected into tables and plots (docs/study.md)");
+  study->add_option("study", study_opts.file, "study file (.yaml; flowire help study lists its keys)")->required();
+  study->add_option("--out", study_opts.out, "output folder: study.csv, timings.csv, pairs.csv, plots/, runs/");
+  study
+      ->add_option("--jobs", study_opts.jobs,
+                   "runs at a time on each rank (default: the hardware threads; 1 per rank under mpirun)")
+      ->check(CLI::NonNegativeNumber);
+  study->add_flag("--list", study_opts.list, "check the study and print its runs; nothing is run or written");
+
   std::vector<std::string> help_topic;
   auto* help = app.add_subcommand("help", "help for a command; `help scene` lists every scene key");
-  help->add_option("command", help_topic, "command (run, network, compare, fit, scene)");
+  help->add_option("command", help_topic, "command (run, network, compare, fit, study, scene)");
 
   try {
     app.parse(argc, argv);
@@ -271,18 +286,23 @@ int main(int argc, char** argv) {
     if (*convert) return cmd_convert(in, outfile, unit, max_seg);
     if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows, cmp_plot);
     if (*fit) return flowire::cli::run_fit(fit_opts);
+    if (*study) return flowire::cli::run_study(study_opts);
     if (*help) {
       if (help_topic.empty()) {
         std::cout << app.help();
       } else if (help_topic[0] == "scene") {
         std::cout << "Scene keys (SI units; \"<number> <unit>\" strings accepted):\n\n"
                   << flowire::coupling::scene_schema().markdown();
+      } else if (help_topic[0] == "study") {
+        std::cout << app.get_subcommand("study")->help() << "\nStudy file keys (docs/study.md):\n\n"
+                  << flowire::cli::study_keys_markdown();
       } else if (help_topic[0] == "run" || help_topic[0] == "network" || help_topic[0] == "compare" ||
                  help_topic[0] == "fit") {
         std::cout << app.get_subcommand(help_topic[0])->help();
       } else {
         return error_exit(
-            fmt::format("help: unknown command '{}' (commands: run, network, compare, fit, help scene)", help_topic[0]),
+            fmt::format("help: unknown command '{}' (commands: run, network, compare, fit, study, help scene)",
+                        help_topic[0]),
             2);
       }
       return 0;
