@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "fit_probe_scene.hpp"
 #include "flowire_test.hpp"
 
 namespace fs = std::filesystem;
@@ -35,25 +36,9 @@ Result run(const std::string& args, const fs::path& dir) {
   return r;
 }
 
-/// A J-tipped wire pushed 4 cm along a wide straight tube (along x) without touching its wall:
-/// the J stands off the axis by a few mm in the direction the base rotation turns it to, so
-/// the tip trace's (y, z) fixes the rotation. 200 steps: a run takes well under a second.
-const char* kScene = R"(name: fit_probe
-vessels:
-  generator: {type: straight_tube, length: 80 mm, radius: 8 mm}
-  max_segment_length: 5 mm
-wire:
-  length: 0.1
-  radius: 0.3 mm
-  youngs_modulus: 20 GPa
-  segment_length: 2 mm
-  entry: 0
-  tip: {length: 2 cm, youngs_modulus: 5 GPa, shape: j, angle: 90 deg, bend_radius: 3 mm}
-insertion: {speed: 2 cm/s, initial_length: 1 cm, rotation_angle: 0 deg}
-solve: {dt: 10 ms, duration: 2 s}
-output: {every: 0, vtk: false}
-)";
+const char* const kScene = flowire::testing::kFitProbeScene;
 
+#ifdef FLOWIRE_FIT_SLOW
 struct Row {
   double t, L, x, y, z;
 };
@@ -70,7 +55,6 @@ std::vector<Row> read_trace(const fs::path& p) {
   return rows;
 }
 
-#ifdef FLOWIRE_FIT_SLOW
 // 48 runs of about a second each (process start-up dominates): labelled slow (test_fit_slow).
 TEST(Fit, RecoversAHiddenRotationFromANoisyTrace) {
   const auto dir = flowire::testing::scratch_dir("fit-recover");

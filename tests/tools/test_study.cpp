@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "fit_probe_scene.hpp"
 #include "flowire_test.hpp"
 
 extern char** environ;
@@ -419,21 +420,7 @@ TEST(StudyMpi, FitOnTwoRanksRecoversAHiddenRotation) {
   // fixes the base rotation. The "measured" trace is the scene's own at 0.5 rad; the fit runs
   // CMA-ES on rank 0 and each generation's runs on both ranks.
   const auto dir = flowire::testing::scratch_dir("study-fit");
-  std::ofstream(dir / "scene.yaml") << R"(name: fit_probe
-vessels:
-  generator: {type: straight_tube, length: 80 mm, radius: 8 mm}
-  max_segment_length: 5 mm
-wire:
-  length: 0.1
-  radius: 0.3 mm
-  youngs_modulus: 20 GPa
-  segment_length: 2 mm
-  entry: 0
-  tip: {length: 2 cm, youngs_modulus: 5 GPa, shape: j, angle: 90 deg, bend_radius: 3 mm}
-insertion: {speed: 2 cm/s, initial_length: 1 cm, rotation_angle: 0 deg}
-solve: {dt: 10 ms, duration: 2 s}
-output: {every: 0, vtk: false}
-)";
+  std::ofstream(dir / "scene.yaml") << flowire::testing::kFitProbeScene;
   const double hidden = 0.5;
   auto r = cli("run " + (dir / "scene.yaml").string() + " --out " + (dir / "truth").string() +
                    " --set insertion.rotation_angle=" + std::to_string(hidden),

@@ -25,6 +25,7 @@
 #include "study_command.hpp"
 #include "study_file.hpp"
 #include "svzerod_command.hpp"
+#include "terminal_line.hpp"
 
 namespace {
 
@@ -47,35 +48,22 @@ flowire::vessels::ReadOptions read_options(const std::string& unit, double max_s
   return ro;
 }
 
-/// A progress line on stderr, redrawn in place at most 5 times a second: only on a terminal,
-/// never into a pipe or a log file.
+/// The run's progress on the terminal line, redrawn at most 5 times a second.
 class ProgressLine {
  public:
-  ProgressLine() : enabled_(isatty(fileno(stderr)) == 1) {}
-  ~ProgressLine() { clear(); }
-  ProgressLine(const ProgressLine&) = delete;
-  ProgressLine& operator=(const ProgressLine&) = delete;
-  [[nodiscard]] bool enabled() const { return enabled_; }
+  [[nodiscard]] bool enabled() const { return line_.enabled(); }
   void update(const flowire::coupling::Progress& p) {
     if (p.steps <= 0 || (p.wall_seconds - last_ < 0.2 && p.step < p.steps)) return;
     last_ = p.wall_seconds;
     const double done = static_cast<double>(p.step) / static_cast<double>(p.steps);
     const double eta = done > 0 ? p.wall_seconds * (1.0 - done) / done : 0.0;
-    std::fprintf(stderr, "\r\033[Kflowire: %5.1f%%  t = %.4g of %.4g s  elapsed %.0f s  ETA %.0f s", 100.0 * done,
-                 p.time, p.duration, p.wall_seconds, eta);
-    std::fflush(stderr);
-    drawn_ = true;
+    line_.draw(fmt::format("flowire: {:5.1f}%  t = {:.4g} of {:.4g} s  elapsed {:.0f} s  ETA {:.0f} s", 100.0 * done,
+                           p.time, p.duration, p.wall_seconds, eta));
   }
-  void clear() {
-    if (!drawn_) return;
-    std::fprintf(stderr, "\r\033[K");
-    std::fflush(stderr);
-    drawn_ = false;
-  }
+  void clear() { line_.clear(); }
 
  private:
-  bool enabled_;
-  bool drawn_ = false;
+  flowire::cli::TerminalLine line_;
   double last_ = -1.0;
 };
 

@@ -33,6 +33,7 @@
 #include "flowire/common/output.hpp"
 #include "flowire/coupling/trace_compare.hpp"
 #include "study_file.hpp"
+#include "terminal_line.hpp"
 
 namespace flowire::cli {
 namespace {
@@ -272,41 +273,28 @@ std::string run_one(const std::string& payload, int rank) {
 
 // ---------------------------------------------------------------- rank 0
 
-/// Runs done out of the total, redrawn on stderr when it is a terminal.
+/// Runs done out of the total, on the terminal line.
 class StudyProgress {
  public:
-  StudyProgress(size_t total, size_t done) : enabled_(isatty(fileno(stderr)) == 1), total_(total), done_(done) {
-    if (!enabled_ || done_ == total_) return;
-    std::fprintf(stderr, "\r\033[Kflowire: study: %zu of %zu runs done, %zu to run", done_, total_, total_ - done_);
-    std::fflush(stderr);
-    drawn_ = true;
+  StudyProgress(size_t total, size_t done) : total_(total), done_(done) {
+    if (done_ != total_)
+      line_.draw(fmt::format("flowire: study: {} of {} runs done, {} to run", done_, total_, total_ - done_));
   }
-  ~StudyProgress() { clear(); }
-  StudyProgress(const StudyProgress&) = delete;
-  StudyProgress& operator=(const StudyProgress&) = delete;
 
   void finished(bool failed) {
     ++done_, ++now_;
     if (failed) ++failed_;
-    if (!enabled_) return;
+    if (!line_.enabled()) return;
     const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
     const size_t left = total_ - done_;
     const double eta = elapsed / static_cast<double>(now_) * static_cast<double>(left);
-    std::fprintf(stderr, "\r\033[Kflowire: study: %zu of %zu runs done%s  elapsed %.0f s  ETA %.0f s", done_, total_,
-                 failed_ ? fmt::format(" ({} failed)", failed_).c_str() : "", elapsed, eta);
-    std::fflush(stderr);
-    drawn_ = true;
+    line_.draw(fmt::format("flowire: study: {} of {} runs done{}  elapsed {:.0f} s  ETA {:.0f} s", done_, total_,
+                           failed_ ? fmt::format(" ({} failed)", failed_) : std::string(), elapsed, eta));
   }
-  void clear() {
-    if (!drawn_) return;
-    std::fprintf(stderr, "\r\033[K");
-    std::fflush(stderr);
-    drawn_ = false;
-  }
+  void clear() { line_.clear(); }
 
  private:
-  bool enabled_;
-  bool drawn_ = false;
+  TerminalLine line_;
   size_t total_, done_, now_ = 0, failed_ = 0;
   Clock::time_point start_ = Clock::now();
 };
