@@ -18,25 +18,31 @@ struct CliResult {
   std::string out, err;
 };
 
-/// `flowire ARGS` (a shell command line): its exit status (128 + the signal if one ended it),
-/// stdout and stderr.
+/// A shell command line's exit status (128 + the signal if one ended it), stdout and stderr,
+/// captured in files of @p dir.
+inline CliResult run_shell(const std::string& cmd, const std::filesystem::path& dir) {
+  const int raw = std::system((cmd + " >" + (dir / "o").string() + " 2>" + (dir / "e").string()).c_str());
+  CliResult r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  std::stringstream so, se;
+  so << std::ifstream(dir / "o").rdbuf();
+  se << std::ifstream(dir / "e").rdbuf();
+  r.out = so.str();
+  r.err = se.str();
+  return r;
+}
+
+/// `flowire ARGS` (a shell command line), captured in @p dir.
+inline CliResult run_cli_in(const std::string& args, const std::filesystem::path& dir) {
+  return run_shell(std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire " + args, dir);
+}
+
+/// `flowire ARGS` (a shell command line): its exit status, stdout and stderr.
 inline CliResult run_cli(const std::string& args) {
   // One capture folder per test and call: CTest runs the tests of a file in parallel.
   static int calls = 0;
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto dir = scratch_dir(std::string("cli-capture-") + info->name() + "-" + std::to_string(calls++));
-  const std::string cmd = std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire " + args + " >" + (dir / "o").string() +
-                          " 2>" + (dir / "e").string();
-  const int raw = std::system(cmd.c_str());
-  CliResult r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
-  std::ifstream o(dir / "o"), e(dir / "e");
-  std::stringstream so, se;
-  so << o.rdbuf();
-  se << e.rdbuf();
-  r.out = so.str();
-  r.err = se.str();
-  return r;
+  return run_cli_in(args, scratch_dir(std::string("cli-capture-") + info->name() + "-" + std::to_string(calls++)));
 }
 
 /// Write @p text to the file @p p.

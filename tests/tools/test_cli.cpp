@@ -693,6 +693,8 @@ TEST(Cli, PushedPulledAndTurnedWiresConvergeEveryStep) {
     EXPECT_EQ(s["status"], "ok") << name;
     // Each fed variant moved the wire (at 2 cm/s, 1 cm in the half second).
     const double initial = name == "pushed76" ? 0.76 : 0.4;
-    if (name != "held") EXPECT_GT(std::abs(s["wire"]["inserted_length"].get<double>() - initial), 2e-3) << name;
+    if (name != "held") {
+      EXPECT_GT(std::abs(s["wire"]["inserted_length"].get<double>() - initial), 2e-3) << name;
+    }
   }
 }

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "cli_run.hpp"
 #include "fit_probe_scene.hpp"
 #include "flowire_test.hpp"
 
@@ -17,24 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int status = -1;
-  std::string out, err;
-};
+using Result = flowire::testing::CliResult;
 
-Result run(const std::string& args, const fs::path& dir) {
-  const std::string cmd = std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire " + args + " >" + (dir / "o").string() +
-                          " 2>" + (dir / "e").string();
-  const int raw = std::system(cmd.c_str());
-  Result r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
-  std::stringstream so, se;
-  so << std::ifstream(dir / "o").rdbuf();
-  se << std::ifstream(dir / "e").rdbuf();
-  r.out = so.str();
-  r.err = se.str();
-  return r;
-}
+Result run(const std::string& args, const fs::path& dir) { return flowire::testing::run_cli_in(args, dir); }
 
 const char* const kScene = flowire::testing::kFitProbeScene;
 

@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_run.hpp"
 #include "fit_probe_scene.hpp"
 #include "flowire_test.hpp"
 
@@ -28,25 +29,12 @@ using nlohmann::json;
 
 namespace {
 
-struct Result {
-  int status = -1;
-  std::string out, err;
-};
+using Result = flowire::testing::CliResult;
 
 std::string flowire_exe() { return std::string(FLOWIRE_BINARY_DIR) + "/tools/flowire"; }
 
 /// A shell command line's exit status, stdout and stderr (captured in @p dir).
-Result shell(const std::string& cmd, const fs::path& dir) {
-  const int raw = std::system((cmd + " >" + (dir / "o").string() + " 2>" + (dir / "e").string()).c_str());
-  Result r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
-  std::stringstream so, se;
-  so << std::ifstream(dir / "o").rdbuf();
-  se << std::ifstream(dir / "e").rdbuf();
-  r.out = so.str();
-  r.err = se.str();
-  return r;
-}
+Result shell(const std::string& cmd, const fs::path& dir) { return flowire::testing::run_shell(cmd, dir); }
 
 Result cli(const std::string& args, const fs::path& dir) { return shell(flowire_exe() + " " + args, dir); }
 
