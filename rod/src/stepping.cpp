@@ -35,7 +35,10 @@ StepReport RodSimulator::step_subdivided(double dt, int depth) {
   StepReport rep = step_once(dt);
   if (!rep.converged() && can_retry) {
     restore_state(depth);
+    // The failed attempt's work counts too: the step cost it (the totals and per-step
+    // figures would otherwise show only the halves that converged).
     StepReport total;
+    total.add_work(rep);
     for (int half = 0; half < 2; ++half) {
       const StepReport r = step_subdivided(0.5 * dt, depth + 1);
       total.then(r);

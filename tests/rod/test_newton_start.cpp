@@ -99,5 +99,30 @@ TEST(RodNewtonStart, ChordIterationsLandWhereNewtonDoesInContact) {
   EXPECT_LT(max_tip_difference(ref, chord), 1e-7);
 }
 
+TEST(RodNewtonStart, AHalvedStepCountsTheAttemptThatFailed) {
+  // A step whose Newton solve fails is taken again as two halves; the figures a summary and
+  // a benchmark report (iterations per step, factorizations) must include the failed
+  // attempt, or a run that fails often looks cheaper than it is. With at most 2 iterations a
+  // solve, a dropping J wire fails its first attempts: each failed attempt used exactly 2.
+  flowire::testing::ExpectWarnings unconverged;  // the halves may stop at the limit too
+  RodSimulator sim(jwire());
+  sim.settings().max_iterations = 2;
+  sim.settings().max_subdivisions = 1;
+  sim.settings().second_order_guess = false;
+  sim.settings().chord_iterations = false;
+  sim.set_gravity({0.0, 0.0, -9.81});
+  int halved = 0;
+  for (int n = 0; n < 20; ++n) {
+    const auto rep = sim.step(2e-2);
+    if (rep.subdivisions == 0) continue;
+    ++halved;
+    // The failed whole step (2) plus each half (1 or 2; a half that fails again keeps its
+    // last iterate): at least 2 + 1 + 1.
+    EXPECT_GE(rep.newton_iterations, 4) << "step " << n;
+  }
+  ASSERT_GT(halved, 0) << "no step failed: the test does not exercise the halving";
+  EXPECT_EQ(sim.solver_totals().subdivided_steps, halved);
+}
+
 }  // namespace
 }  // namespace flowire::rod
