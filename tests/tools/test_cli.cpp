@@ -2,10 +2,12 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -227,6 +229,47 @@ TEST(Cli, RunsAnSvZeroDSolverModel) {
   EXPECT_EQ(b.status, 2) << b.err;
   EXPECT_NE(b.err.find("bad.json"), std::string::npos) << b.err;
   EXPECT_FALSE(fs::exists(dir / "b" / "svzerod_result.csv"));
+}
+
+TEST(Cli, RunsAnOpenbfModel) {
+  // `flowire run MODEL.yaml` on openBF's ADAN56: vessels.csv per openBF label, one period of
+  // 101 samples, and the summary; a broken model is one line, status 2, and no folder.
+  FLOWIRE_REQUIRE_SHARED("peers/openbf-models/boileau2015/adan56/adan56.yaml");
+  const auto dir = flowire::testing::scratch_dir("cli-openbf");
+  const auto model = (flowire::testing::shared_dir() / "peers/openbf-models/boileau2015/adan56/adan56.yaml").string();
+  const auto r = run("run " + model + " --out " + (dir / "o").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream csv(dir / "o" / "vessels.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "name,time,flow_in,flow_out,pressure_in,pressure_out");
+  std::map<std::string, int> rows;
+  while (std::getline(csv, line)) ++rows[line.substr(0, line.find(','))];
+  EXPECT_EQ(rows.size(), 77u);
+  EXPECT_EQ(rows["aortic_arch_I"], 101);
+  std::ifstream in(dir / "o" / "summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["openbf"]["vessels"].get<int>(), 77);
+  EXPECT_EQ(s["openbf"]["cycles"].get<int>(), 10);
+  EXPECT_LT(s["openbf"]["periodicity"].get<double>(), 0.01);
+  // The same model with a vessel of zero radius.
+  std::ifstream src(model);
+  std::stringstream text;
+  text << src.rdbuf();
+  std::string bad = text.str();
+  const auto at = bad.find("Rp: 0.00672809");
+  ASSERT_NE(at, std::string::npos);
+  bad.replace(at, std::string("Rp: 0.00672809").size(), "Rp: 0.0");
+  fs::copy_file(fs::path(model).parent_path() / "adan56_inlet.dat", dir / "adan56_inlet.dat",
+                fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "adan56.yaml") << bad;
+  const auto b = run("run " + (dir / "adan56.yaml").string() + " --out " + (dir / "b").string());
+  EXPECT_EQ(b.status, 2) << b.err;
+  EXPECT_NE(b.err.find("adan56.yaml:"), std::string::npos) << b.err;
+  EXPECT_NE(b.err.find("vessel `brachiocephalic_trunk`: Rp = 0 must be > 0"), std::string::npos) << b.err;
+  EXPECT_EQ(std::count(b.err.begin(), b.err.end(), '\n'), 1) << b.err;
+  EXPECT_FALSE(fs::exists(dir / "b"));
 }
 
 TEST(Cli, AFlowSineWithoutAmplitudesIsRefusedNamingTheKey) {

@@ -1,8 +1,8 @@
 // The flowire command line's front. `flowire run MODEL.json [--out DIR]` (an svZeroDSolver
-// model) runs here, in a program that loads no rendering, PETSc or gmsh library: loading
-// those takes longer than simulating a model of thousands of vessels. Every other command
-// line is handed unchanged to flowire-full (beside this program, or where it is installed).
-// Exit status as flowire-full: 0 success; 2 bad usage or bad input; 3 numerical failure.
+// model) and `flowire run MODEL.yaml [--out DIR]` for an openBF model run here, in a program that loads no rendering,
+// PETSc or gmsh library: loading those takes longer than simulating a model of thousands of vessels. Every other
+// command line is handed unchanged to flowire-full (beside this program, or where it is installed). Exit status as
+// flowire-full: 0 success; 2 bad usage or bad input; 3 numerical failure.
 #include <unistd.h>
 
 #include <cstdio>
@@ -15,19 +15,27 @@
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
+#include "flowire/flow/openbf.hpp"
 #include "svzerod_command.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-/// The model and output folder when the command line is `run MODEL.json [--out DIR]`.
-bool svzerod_run(int argc, char** argv, std::string& model, std::string& out) {
-  if (argc < 3 || std::string_view(argv[1]) != "run") return false;
+enum class ModelKind { None, Svzerod, Openbf };
+
+/// The model and output folder when the command line is `run MODEL.json [--out DIR]` or
+/// `run MODEL.yaml [--out DIR]` with an openBF model.
+ModelKind model_run(int argc, char** argv, std::string& model, std::string& out) {
+  if (argc < 3 || std::string_view(argv[1]) != "run") return ModelKind::None;
   model = argv[2];
   std::error_code ec;
-  if (model.size() < 6 || model.compare(model.size() - 5, 5, ".json") != 0 || !fs::is_regular_file(model, ec))
-    return false;
+  if (!fs::is_regular_file(model, ec)) return ModelKind::None;
+  const std::string ext = fs::path(model).extension().string();
+  ModelKind kind = ModelKind::None;
+  if (ext == ".json") kind = ModelKind::Svzerod;
+  if ((ext == ".yaml" || ext == ".yml") && flowire::flow::openbf::is_model(model)) kind = ModelKind::Openbf;
+  if (kind == ModelKind::None) return kind;
   for (int i = 3; i < argc;) {
     const std::string_view a = argv[i];
     if (a == "--out" && i + 1 < argc) {
@@ -37,10 +45,10 @@ bool svzerod_run(int argc, char** argv, std::string& model, std::string& out) {
       out = std::string(a.substr(6));
       ++i;
     } else {
-      return false;
+      return ModelKind::None;
     }
   }
-  return true;
+  return kind;
 }
 
 int error_exit(const std::string& message, int status) {
@@ -53,9 +61,14 @@ int error_exit(const std::string& message, int status) {
 
 int main(int argc, char** argv) {
   std::string model, out;
-  if (svzerod_run(argc, argv, model, out)) {
+  if (const ModelKind kind = model_run(argc, argv, model, out); kind != ModelKind::None) {
     flowire::install_interrupt_handlers();
     try {
+      if (kind == ModelKind::Openbf) {
+        const int status = flowire::cli::run_openbf(model, out, {});
+        for (const auto& w : flowire::take_warnings()) std::fprintf(stderr, "flowire: warning: %s\n", w.c_str());
+        return status;
+      }
       return flowire::cli::run_svzerod(model, out, {});
     } catch (const flowire::Error& e) {
       return error_exit(e.what(), flowire::exit_status(e));

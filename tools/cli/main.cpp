@@ -21,6 +21,7 @@
 #include "flowire/common/units.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
+#include "flowire/flow/openbf.hpp"
 #include "flowire/vessels/io.hpp"
 #include "study_command.hpp"
 #include "study_file.hpp"
@@ -84,6 +85,7 @@ int cmd_run(const std::string& scene, const std::string& out, const std::vector<
   flowire::check_input_file(scene, model ? flowire::input_limit::kTable : flowire::input_limit::kScene,
                             model ? "an svZeroDSolver model (JSON)" : "a scene (YAML)");
   if (model) return flowire::cli::run_svzerod(scene, out, sets);
+  if (flowire::flow::openbf::is_model(scene)) return flowire::cli::run_openbf(scene, out, sets);
   const auto cfg = flowire::coupling::load_scene(scene, sets, out);
   flowire::coupling::RunOptions options;
   ProgressLine line;
@@ -189,7 +191,10 @@ int main(int argc, char** argv) {
   std::string scene, out;
   std::vector<std::string> sets;
   auto* run = app.add_subcommand("run", "run a scene: YAML scene file or svZeroDSolver JSON model");
-  run->add_option("scene", scene, "scene file (.yaml) or svZeroDSolver model (.json)")->required();
+  run->add_option(
+         "scene", scene,
+         "scene file (.yaml), svZeroDSolver model (.json) or openBF model (.yaml with a network: of sn/tn vessels)")
+      ->required();
   run->add_option("--out", out, "output folder (overrides output.dir)");
   run->add_option("--set", sets, "override a scene key: --set flow.solver=sparse (repeatable)")
       ->allow_extra_args(false);

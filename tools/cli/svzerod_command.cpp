@@ -1,4 +1,5 @@
-// `flowire run model.json`: simulated as svZeroDSolver does, svzerod_result.csv written like it.
+// `flowire run` on model files: an svZeroDSolver model (JSON), simulated as svZeroDSolver does,
+// svzerod_result.csv written like it; an openBF model (YAML with a `network:` of sn/tn vessels).
 #include "svzerod_command.hpp"
 
 #include <fmt/format.h>
@@ -9,39 +10,49 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
+#include "flowire/flow/openbf.hpp"
 #include "flowire/flow/svzerod.hpp"
 
 namespace flowire::cli {
 
 using flowire::ErrorKind;
 
-/// An svZeroDSolver model: simulated as svZeroDSolver does, svzerod_result.csv written like it.
-int run_svzerod(const std::string& model, const std::string& out, const std::vector<std::string>& sets) {
+namespace {
+/// What a model run reports: its files are written by `write` into the held folder.
+struct ModelRun {
+  nlohmann::json section;  ///< summary.json's section for the model kind
+  int steps = 0;
+  double seconds = 0.0;  ///< simulation
+  std::string result;    ///< the main output file, for the closing line
+};
+
+/// The skeleton of `flowire run` on a model file (svZeroDSolver JSON, openBF YAML): the model
+/// is read and simulated by @p simulate before anything is written, so bad input leaves the
+/// folder as it was; then, as a scene run, the folder is held and summary.json says
+/// "running" until @p write has put the results in place.
+int run_model(const std::string& model, const std::string& out, const std::vector<std::string>& sets, const char* kind,
+              const std::function<ModelRun()>& simulate,
+              const std::function<void(const std::filesystem::path&, ModelRun&)>& write) {
   if (!sets.empty())
-    throw flowire::Error(ErrorKind::Usage,
-                         fmt::format("{}: --set applies to YAML scenes, not svZeroDSolver models", model));
+    throw flowire::Error(ErrorKind::Usage, fmt::format("{}: --set applies to YAML scenes, not {} models", model, kind));
   const std::filesystem::path dir = out.empty() ? std::filesystem::path("out") : std::filesystem::path(out);
   const auto t0 = std::chrono::steady_clock::now();
-  flowire::flow::svzerod::Summary s;
-  flowire::flow::svzerod::Result result;
+  ModelRun run;
   std::optional<flowire::OutputFolder> folder;
   try {
-    // The model is read and simulated before anything is written: bad input leaves the
-    // folder as it was. Then, as a scene run, the folder is held and the summary says
-    // "running" until the result is in place.
-    result = flowire::flow::svzerod::simulate(model, &s);
+    run = simulate();
     folder.emplace(dir);
     flowire::write_text_atomically(
         dir / "summary.json",
         nlohmann::json{{"status", "running"}, {"pid", static_cast<long>(::getpid())}, {"model", model}}.dump(2) + "\n");
-    s.result_file = (dir / "svzerod_result.csv").string();
-    flowire::flow::svzerod::write_result_csv(result, s.result_file);
+    write(dir, run);
   } catch (const flowire::Error& e) {
     if (folder || e.kind() == ErrorKind::Numerical) {
       try {
@@ -56,30 +67,82 @@ int run_svzerod(const std::string& model, const std::string& out, const std::vec
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::json j = {{"status", "ok"},
                       {"model", model},
-                      {"steps", s.steps},
-                      {"svzerod",
-                       {{"vessels", s.vessels},
-                        {"junctions", s.junctions},
-                        {"boundary_conditions", s.boundary_conditions},
-                        {"unknowns", s.unknowns},
-                        {"cycles", s.cycles},
-                        {"period", s.period},
-                        {"dt", s.dt},
-                        {"rows", s.rows},
-                        {"newton_iterations_per_step", s.newton_iterations_per_step},
-                        {"factorizations", s.factorizations}}},
+                      {"steps", run.steps},
                       {"timings",
                        {{"setup", 0.0},
-                        {"flow", s.seconds},
+                        {"flow", run.seconds},
                         {"rod", 0.0},
                         {"contact", 0.0},
                         {"coupling", 0.0},
-                        {"output", std::max(0.0, total - s.seconds)},
+                        {"output", std::max(0.0, total - run.seconds)},
                         {"total", total}}},
                       {"warnings", flowire::take_warnings()}};
+  j.update(run.section);
   flowire::write_text_atomically(dir / "summary.json", j.dump(2) + "\n");
-  std::printf("flowire: %s: ok in %.3f s, %d steps; %s\n", model.c_str(), total, s.steps, s.result_file.c_str());
+  std::printf("flowire: %s: ok in %.3f s, %d steps; %s\n", model.c_str(), total, run.steps, run.result.c_str());
   return 0;
+}
+}  // namespace
+
+/// An svZeroDSolver model: simulated as svZeroDSolver does, svzerod_result.csv written like it.
+int run_svzerod(const std::string& model, const std::string& out, const std::vector<std::string>& sets) {
+  flowire::flow::svzerod::Result result;
+  return run_model(
+      model, out, sets, "svZeroDSolver",
+      [&] {
+        flowire::flow::svzerod::Summary s;
+        result = flowire::flow::svzerod::simulate(model, &s);
+        ModelRun r;
+        r.steps = s.steps;
+        r.seconds = s.seconds;
+        r.section = {{"svzerod",
+                      {{"vessels", s.vessels},
+                       {"junctions", s.junctions},
+                       {"boundary_conditions", s.boundary_conditions},
+                       {"unknowns", s.unknowns},
+                       {"cycles", s.cycles},
+                       {"period", s.period},
+                       {"dt", s.dt},
+                       {"rows", s.rows},
+                       {"newton_iterations_per_step", s.newton_iterations_per_step},
+                       {"factorizations", s.factorizations}}}};
+        return r;
+      },
+      [&](const std::filesystem::path& dir, ModelRun& r) {
+        r.result = (dir / "svzerod_result.csv").string();
+        flowire::flow::svzerod::write_result_csv(result, r.result);
+      });
+}
+
+/// An openBF model: run as a compliant lumped network (openbf.hpp), vessels.csv per openBF label.
+int run_openbf(const std::string& model, const std::string& out, const std::vector<std::string>& sets) {
+  namespace openbf = flowire::flow::openbf;
+  openbf::Waveforms w;
+  return run_model(
+      model, out, sets, "openBF",
+      [&] {
+        const openbf::Model m = openbf::read(model);
+        for (const auto& msg : m.warnings) flowire::warn(msg);
+        const openbf::Options options;
+        w = openbf::simulate(m, options);
+        ModelRun r;
+        r.steps = w.steps;
+        r.seconds = w.seconds;
+        r.section = {{"openbf",
+                      {{"name", m.name},
+                       {"vessels", m.vessels.size()},
+                       {"segments", w.segments},
+                       {"max_segment_length", options.max_segment_length},
+                       {"unknowns", w.unknowns},
+                       {"cycles", w.cycles},
+                       {"steps_per_cycle", options.steps_per_cycle},
+                       {"periodicity", w.periodicity}}}};
+        return r;
+      },
+      [&](const std::filesystem::path& dir, ModelRun& r) {
+        r.result = (dir / "vessels.csv").string();
+        openbf::write_vessels_csv(w, r.result);
+      });
 }
 
 }  // namespace flowire::cli

@@ -264,10 +264,15 @@ Model read_model(const std::string& json_path, const Options& options) {
       throw_input_error(json_path, fmt::format("not valid JSON: {}", e.what()));
     }
   }
+  return read_model(cfg, json_path, options);
+}
+
+Model read_model(const nlohmann::json& cfg, const std::string& json_path, const Options& options) {
   Model m;
   m.file = json_path;
   try {
     m.sim = read_sim(json_path, cfg);
+    m.sim.last_cycles = std::clamp(options.last_cycles, 1, std::max(m.sim.cycles, 1));
     read_blocks(m, cfg, options);
     m.initial = read_initial(m, cfg);
   } catch (const json::exception& e) {

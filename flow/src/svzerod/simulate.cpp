@@ -112,9 +112,8 @@ Result make_result(const Model& m, Recorder& rec) {
 
 }  // namespace
 
-Result simulate(const std::string& json_path, Summary* summary, const Options& options) {
-  Stopwatch sw;
-  Model m = read_model(json_path, options);
+namespace {
+Result simulate_model(Model& m, const std::string& json_path, const Stopwatch& sw, Summary* summary) {
   auto& sp = m.sim;
   if (sp.cycle_error && m.has_rcr) {
     // Enough cycles for the slowest RCR to settle within the error: checked before it is an int.
@@ -140,7 +139,7 @@ Result simulate(const std::string& json_path, Summary* summary, const Options& o
   GeneralizedAlpha integ(sys, sp.rho, dt, sp.atol, sp.max_iter, m.file);
 
   Recorder rec(m.unknowns, sp.mean_only);
-  const int start_last = num_steps - sp.pts;
+  const int start_last = num_steps - 1 - (sp.pts - 1) * sp.last_cycles;
   double time = 0.0;
   if (sp.all_cycles || 0 >= start_last) rec.record(time, state);
   int counter = 0;
@@ -223,6 +222,19 @@ Result simulate(const std::string& json_path, Summary* summary, const Options& o
     summary->seconds = sw.seconds();
   }
   return r;
+}
+}  // namespace
+
+Result simulate(const std::string& json_path, Summary* summary, const Options& options) {
+  Stopwatch sw;
+  Model m = read_model(json_path, options);
+  return simulate_model(m, json_path, sw, summary);
+}
+
+Result simulate(const nlohmann::json& model, const std::string& name, Summary* summary, const Options& options) {
+  Stopwatch sw;
+  Model m = read_model(model, name, options);
+  return simulate_model(m, name, sw, summary);
 }
 
 void write_result_csv(const Result& r, const std::filesystem::path& path) {

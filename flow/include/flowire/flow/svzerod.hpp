@@ -32,6 +32,7 @@
 /// output of the last cycle (times from 0) or of all cycles, vessel- or variable-based,
 /// mean only, with derivatives, as its `simulation_parameters` ask.
 #include <filesystem>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,10 @@ struct Options {
   /// `initial_condition` still name each connection's pressure; an initial condition that
   /// gives a junction's connections different pressures sets the shared one to the last.
   bool share_junction_pressures = true;
+  /// Without `output_all_cycles`, the output covers this many cycles at the end (1: the last,
+  /// as svZeroDSolver writes it; 2 lets a caller measure how periodic the run became), times
+  /// from the first of them.
+  int last_cycles = 1;
 };
 
 /// @brief Simulate an svZeroDSolver JSON model file.
@@ -73,6 +78,10 @@ struct Options {
 /// inconsistent period, naming the file and block), numerical (singular system, Newton
 /// not converging).
 Result simulate(const std::string& json_path, Summary* summary = nullptr, const Options& options = {});
+/// @brief Simulate a model given as JSON in memory (e.g. built from an openBF network, openbf.hpp);
+/// @p name stands for its file in messages and the summary.
+Result simulate(const nlohmann::json& model, const std::string& name, Summary* summary = nullptr,
+                const Options& options = {});
 
 /// @brief Write a result as svZeroDSolver's CSV (scientific, 16 digits), atomically.
 void write_result_csv(const Result& result, const std::filesystem::path& path);

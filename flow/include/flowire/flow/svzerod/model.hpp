@@ -3,6 +3,7 @@
 /// @brief An svZeroDSolver JSON model read into blocks (through the Registry), connection
 /// nodes, unknowns and simulation parameters.
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +27,7 @@ struct SimulationParameters {
   bool derivative = false;          ///< output_derivative
   bool all_cycles = false;          ///< output_all_cycles
   int output_interval = 1;          ///< output_interval
+  int last_cycles = 1;              ///< cycles output without output_all_cycles (Options::last_cycles)
   double period = -1.0;             ///< cardiac_period (-1: from the tables)
   bool cycle_error = false;         ///< use_cycle_to_cycle_error
   double cycle_error_value = 0.01;  ///< sim_cycle_to_cycle_percent_error / 100
@@ -59,6 +61,9 @@ struct Model {
 /// @brief Read a model file. @throws flowire::Error (input) naming the file and the block, or
 /// the key of simulation_parameters out of its range.
 Model read_model(const std::string& json_path, const Options& options = {});
+/// @brief The same from a model already in memory (e.g. one built from an openBF network);
+/// @p json_path names it in messages.
+Model read_model(const nlohmann::json& cfg, const std::string& json_path, const Options& options = {});
 
 /// @brief Refuse a run of more time steps than a run may plan (kMaxSteps, steps.hpp):
 /// (@p pts - 1) x @p cycles, the cycles from @p cycles_from (a key, or what set them).
