@@ -126,6 +126,28 @@ const Key* Schema::find(std::string_view path) const {
   return it == index_.end() ? nullptr : &keys_[it->second];
 }
 
+const Key* Schema::find_concrete(std::string_view path, std::string* declared) const {
+  std::string decl;
+  size_t start = 0;
+  while (start <= path.size()) {
+    const size_t dot = path.find('.', start);
+    const std::string_view part =
+        path.substr(start, dot == std::string_view::npos ? std::string_view::npos : dot - start);
+    const std::string prefix = decl.empty() ? std::string() : decl + ".";
+    if (find(prefix + std::string(part))) {
+      decl = prefix + std::string(part);
+    } else if (find(prefix + "*")) {
+      decl = prefix + "*";
+    } else {
+      return nullptr;
+    }
+    if (dot == std::string_view::npos) break;
+    start = dot + 1;
+  }
+  if (declared) *declared = decl;
+  return find(decl);
+}
+
 namespace {
 
 std::string_view parent_of(std::string_view path) {
@@ -294,8 +316,13 @@ class Loader {
       const std::string dpath = decl.empty() ? key : decl + "." + key;
       const std::string cpath = concrete.empty() ? key : concrete + "." + key;
       const Key* k = schema_.find(dpath);
+      std::string declared = dpath;
+      if (!k && schema_.find(decl + ".*")) {  // a named entry of a section that takes names
+        declared = decl + ".*";
+        k = schema_.find(declared);
+      }
       if (!k) unknown_key(kv.first, dpath);
-      value(kv.second, *k, dpath, cpath);
+      value(kv.second, *k, declared, cpath);
     }
   }
 
@@ -430,7 +457,7 @@ std::string apply_override(YAML::Node& root, const std::string& text, const Sche
   if (eq == std::string::npos || eq == 0) throw_input_error("--set", fmt::format("'{}' must be KEY=VALUE", text));
   const std::string path = text.substr(0, eq);
   const std::string val = text.substr(eq + 1);
-  if (!schema.find(path)) throw_input_error("--set", fmt::format("unknown key '{}'", path));
+  if (!schema.find_concrete(path)) throw_input_error("--set", fmt::format("unknown key '{}'", path));
   YAML::Node value;
   try {
     value = YAML::Load(val);

@@ -161,21 +161,28 @@ void resolve_nodes(FlowSpec& spec, const Network& net) {
   if (spec.inlets.empty()) throw_usage_error("flow: no inlet boundary condition");
   for (auto& in : spec.inlets)
     if (in.node < 0) in.node = net.widest_end();
-  // A single outlet with node -1 is a template for every end that is not an inlet.
+  // An outlet with node -1 (at most one) is a template for every end that is neither an
+  // inlet nor given an outlet of its own; no outlet at all: 0 Pa at every such end.
   OutletBC tmpl;
-  bool expand = spec.outlets.empty();
-  if (spec.outlets.size() == 1 && spec.outlets[0].node < 0) {
-    tmpl = spec.outlets[0];
-    expand = true;
+  const auto templates =
+      std::count_if(spec.outlets.begin(), spec.outlets.end(), [](const OutletBC& o) { return o.node < 0; });
+  const bool expand = spec.outlets.empty() || templates == 1;
+  if (templates == 1) {
+    const auto it =
+        std::find_if(spec.outlets.begin(), spec.outlets.end(), [](const OutletBC& o) { return o.node < 0; });
+    tmpl = *it;
+    spec.outlets.erase(it);
   }
   if (expand) {
-    spec.outlets.clear();
     for (int e : net.ends()) {
       const bool is_inlet =
           std::any_of(spec.inlets.begin(), spec.inlets.end(), [&](const InletBC& i) { return i.node == e; });
-      if (is_inlet) continue;
+      const bool given =
+          std::any_of(spec.outlets.begin(), spec.outlets.end(), [&](const OutletBC& o) { return o.node == e; });
+      if (is_inlet || given) continue;
       OutletBC o = tmpl;
       o.node = e;
+      o.defaulted = true;
       spec.outlets.push_back(o);
     }
   }
@@ -241,6 +248,74 @@ int node_from(const Config& cfg, const std::string& path, const Network& net) {
     return first;
   }
   throw_input_error(cfg.where(path), fmt::format("'{}' is neither a node index nor a branch name", text));
+}
+
+/// The condition of the section at @p path (flow.outlets, or one named outlet under it).
+OutletBC outlet_from(const Config& cfg, const std::string& path) {
+  OutletBC o;
+  const bool has_r = cfg.has(path + ".resistance");
+  const bool has_rcr = cfg.has_section(path + ".rcr");
+  const bool has_p = cfg.has(path + ".pressure");
+  if (has_r + has_rcr + (has_p && path != "flow.outlets") > 1)
+    throw_input_error(cfg.where(path), fmt::format("{}: give one of pressure, resistance or rcr", path));
+  if (has_rcr) {
+    o.type = OutletBC::Type::Rcr;
+    o.rp = cfg.number_or(path + ".rcr.Rp", 0.0);
+    o.c = cfg.number_or(path + ".rcr.C", 0.0);
+    o.rd = cfg.number_or(path + ".rcr.Rd", 0.0);
+    o.distal_pressure = cfg.number_or(path + ".rcr.Pd", 0.0);
+    if (!(o.rp + o.rd > 0.0)) throw_input_error(cfg.where(path + ".rcr"), "Rp + Rd must be positive");
+  } else if (has_r) {
+    o.type = OutletBC::Type::Resistance;
+    o.resistance = cfg.number(path + ".resistance");
+    o.distal_pressure = cfg.number_or(path + ".distal_pressure", 0.0);
+    if (!(o.resistance > 0.0)) throw_input_error(cfg.where(path + ".resistance"), "resistance must be positive");
+  } else {
+    o.type = OutletBC::Type::Pressure;
+    o.pressure = cfg.number_or(path + ".pressure", 0.0);
+  }
+  return o;
+}
+
+/// The network end a named outlet stands for: a node id that is an end, or the end of the
+/// branch of that name that is not the inlet.
+int outlet_node(const Config& cfg, const std::string& path, const std::string& name, const Network& net, int inlet) {
+  int node = -1;
+  size_t used = 0;
+  try {
+    const int n = std::stoi(name, &used);
+    if (used == name.size()) {
+      if (n < 0 || n >= net.num_nodes())
+        throw_input_error(cfg.where(path),
+                          fmt::format("outlet node {} is not in the network (0..{})", n, net.num_nodes() - 1));
+      node = n;
+    }
+  } catch (const std::logic_error&) {
+  }
+  if (node < 0) {
+    for (const auto& b : net.branches()) {
+      if (b.name != name) continue;
+      for (int e : {b.nodes.back(), b.nodes.front()})
+        if (node < 0 && net.degree(e) == 1 && e != inlet) node = e;
+      if (node < 0)
+        throw_input_error(cfg.where(path),
+                          fmt::format("branch '{}' has no outlet: neither of its ends ({} and {}) is a network end "
+                                      "other than the inlet",
+                                      name, b.nodes.front(), b.nodes.back()));
+    }
+  }
+  if (node < 0) {
+    std::string names;
+    for (const auto& b : net.branches())
+      if (!b.name.empty() && (net.degree(b.nodes.front()) == 1 || net.degree(b.nodes.back()) == 1))
+        names += (names.empty() ? "" : ", ") + b.name;
+    throw_input_error(cfg.where(path), fmt::format("no branch named '{}' and no such node (branches with an end: {})",
+                                                   name, names.empty() ? "none named" : names));
+  }
+  if (net.degree(node) != 1 || node == inlet)
+    throw_input_error(cfg.where(path), fmt::format("node {} ('{}') is not an outlet: {}", node, name,
+                                                   node == inlet ? "it is the inlet" : "not a network end"));
+  return node;
 }
 
 }  // namespace
@@ -313,6 +388,21 @@ void declare_scene_keys(config::Schema& s) {
   s.add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance").non_negative();
   s.add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance").non_negative();
   s.add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure, "distal pressure");
+  // One outlet's own condition, under its branch name or node id; the keys above are the
+  // default for the rest (and Murray's split is over the rest only).
+  s.add("flow.outlets.*", Type::Section, "", D::None,
+        "NAME (a branch name or an end's node id): that outlet's own condition, with the keys below; the keys above "
+        "apply to every other outlet");
+  s.add("flow.outlets.*.pressure", Type::Number, "", D::Pressure, "this outlet: fixed pressure");
+  s.add("flow.outlets.*.resistance", Type::Number, "", D::Resistance, "this outlet: resistance to a distal pressure")
+      .positive();
+  s.add("flow.outlets.*.distal_pressure", Type::Number, "", D::Pressure,
+        "this outlet: pressure behind its resistance (default 0)");
+  s.add("flow.outlets.*.rcr", Type::Section, "", D::None, "this outlet: RCR windkessel");
+  s.add("flow.outlets.*.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance").non_negative();
+  s.add("flow.outlets.*.rcr.C", Type::Number, "", D::Compliance, "capacitance").non_negative();
+  s.add("flow.outlets.*.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance").non_negative();
+  s.add("flow.outlets.*.rcr.Pd", Type::Number, "", D::Pressure, "distal pressure (default 0)");
 }
 
 FlowSpec from_config(const config::Config& cfg, const Network& net) {
@@ -374,27 +464,19 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   }
   s.inlets.push_back(in);
 
-  OutletBC o;  // template for every other end
-  const bool has_r = cfg.has("flow.outlets.resistance");
-  const bool has_rcr = cfg.has_section("flow.outlets.rcr");
-  if (has_r && has_rcr)
-    throw_input_error(cfg.where("flow.outlets.resistance"),
-                      "give either flow.outlets.resistance or flow.outlets.rcr, not both");
-  if (has_rcr) {
-    o.type = OutletBC::Type::Rcr;
-    o.rp = cfg.number_or("flow.outlets.rcr.Rp", 0.0);
-    o.c = cfg.number_or("flow.outlets.rcr.C", 0.0);
-    o.rd = cfg.number_or("flow.outlets.rcr.Rd", 0.0);
-    o.distal_pressure = cfg.number("flow.outlets.rcr.Pd");
-    if (!(o.rp + o.rd > 0.0)) throw_input_error(cfg.where("flow.outlets.rcr"), "Rp + Rd must be positive");
-  } else if (has_r) {
-    o.type = OutletBC::Type::Resistance;
-    o.resistance = cfg.number("flow.outlets.resistance");
-    o.distal_pressure = cfg.number("flow.outlets.distal_pressure");
-    if (!(o.resistance > 0.0)) throw_input_error(cfg.where("flow.outlets.resistance"), "resistance must be positive");
-  } else {
-    o.type = OutletBC::Type::Pressure;
-    o.pressure = cfg.number_or("flow.outlets.pressure", 0.0);
+  const OutletBC o = outlet_from(cfg, "flow.outlets");  // template for every end not named
+  // Outlets named under flow.outlets (branch names or node ids) with their own condition.
+  for (const auto& [path, value] : cfg.values()) {
+    if (value.type != config::Type::Section || path.rfind("flow.outlets.", 0) != 0) continue;
+    const std::string name = path.substr(std::string("flow.outlets.").size());
+    if (name.find('.') != std::string::npos || name == "rcr") continue;
+    OutletBC named = outlet_from(cfg, path);
+    named.node = outlet_node(cfg, path, name, net, s.inlets.front().node);
+    for (const auto& other : s.outlets)
+      if (other.node == named.node)
+        throw_input_error(cfg.where(path),
+                          fmt::format("outlet '{}' is node {}, which is already given a condition", name, named.node));
+    s.outlets.push_back(named);
   }
   s.outlets.push_back(o);
   resolve_nodes(s, net);
@@ -409,8 +491,10 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
       return seg.node_from == node ? seg.radius_from : seg.radius_to;  // the vessel's radius at the outlet
     };
     double sum = 0.0;
-    for (const auto& x : s.outlets) sum += std::pow(end_radius(x.node), 3);
+    for (const auto& x : s.outlets)
+      if (x.defaulted) sum += std::pow(end_radius(x.node), 3);
     for (auto& x : s.outlets) {
+      if (!x.defaulted) continue;  // a named outlet has its own values
       const double f = sum / std::pow(end_radius(x.node), 3);
       x.resistance *= f;
       x.rp *= f;

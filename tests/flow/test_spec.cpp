@@ -1,4 +1,5 @@
 // FlowSpec from a validated scene (keys as flow::declare_scene_keys declares them for the scene).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -7,6 +8,7 @@
 #include "flowire/common/config.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/flow/spec.hpp"
+#include "flowire/vessels/generators.hpp"
 #include "flowire_test.hpp"
 
 namespace flowire::flow {
@@ -126,6 +128,76 @@ TEST(FlowSpec, ASineTakesOnlyTheDefaultsTheSchemaDeclares) {
     EXPECT_EQ(e.kind(), ErrorKind::Input);
     EXPECT_NE(std::string(e.what()).find("s.yaml:3"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("flow.inlet.flow.systolic"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FlowSpec, EachOutletItsOwnByBranchNameOrNodeTheRestByDefault) {
+  // The arch's six ends: the root is the inlet; the left subclavian gets its own windkessel,
+  // the right iliac a pressure, the left iliac's end (by node id) a resistance; the rest
+  // (brachiocephalic, left carotid) share the default resistance split by Murray's law over
+  // them alone: in parallel they are the default's total.
+  const Network net = Network::build(vessels::aortic_arch(), {.max_segment_length = 5e-3});
+  int left_iliac_end = -1;
+  for (const auto& b : net.branches())
+    if (b.name == "left_iliac_femoral")
+      left_iliac_end = net.degree(b.nodes.back()) == 1 ? b.nodes.back() : b.nodes.front();
+  ASSERT_GE(left_iliac_end, 0);
+  const std::string text = fmt::format(R"(
+flow:
+  outlets:
+    resistance: 1 mmHg*s/mL
+    scaling: murray
+    left_subclavian: {{rcr: {{Rp: 1e7, C: 2e-9, Rd: 1.5e8, Pd: 5 mmHg}}}}
+    right_iliac_femoral: {{pressure: 10 mmHg}}
+    "{}": {{resistance: 3e8, distal_pressure: 2 mmHg}}
+)",
+                                       left_iliac_end);
+  const FlowSpec s = from_config(config::load_config_text(text, "s.yaml", flow_schema()), net);
+  ASSERT_EQ(s.outlets.size(), 5u);
+  const double mmHg = 133.322387415;
+  double parallel = 0.0;
+  int named = 0;
+  for (const auto& o : s.outlets) {
+    if (o.defaulted) {
+      EXPECT_EQ(o.type, OutletBC::Type::Resistance);
+      parallel += 1.0 / o.resistance;
+      continue;
+    }
+    ++named;
+    if (o.type == OutletBC::Type::Rcr) {
+      EXPECT_DOUBLE_EQ(o.rp, 1e7);
+      EXPECT_DOUBLE_EQ(o.c, 2e-9);
+      EXPECT_DOUBLE_EQ(o.rd, 1.5e8);
+      EXPECT_NEAR(o.distal_pressure, 5 * mmHg, 1e-9);
+    } else if (o.type == OutletBC::Type::Pressure) {
+      EXPECT_NEAR(o.pressure, 10 * mmHg, 1e-9);
+    } else {
+      EXPECT_EQ(o.node, left_iliac_end);
+      EXPECT_DOUBLE_EQ(o.resistance, 3e8);
+      EXPECT_NEAR(o.distal_pressure, 2 * mmHg, 1e-9);
+    }
+  }
+  EXPECT_EQ(named, 3);
+  EXPECT_NEAR(1.0 / parallel, mmHg * 1e6, 1e-6 * mmHg * 1e6);
+
+  // Bad outlets: one line naming the file, the line and the key.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"flow:\n  outlets:\n    nowhere: {pressure: 0}\n", "s.yaml:3: flow.outlets.nowhere: no branch named 'nowhere'"},
+      {"flow:\n  outlets:\n    ascending_aorta: {pressure: 0}\n", "branch 'ascending_aorta' has no outlet"},
+      {"flow:\n  outlets:\n    left_subclavian: {pressure: 0, resistance: 1e8}\n",
+       "flow.outlets.left_subclavian: give one of pressure, resistance or rcr"},
+      {"flow:\n  outlets:\n    left_subclavian: {rcr: {Rp: -1, C: 1e-9, Rd: 1e8}}\n",
+       "flow.outlets.left_subclavian.rcr.Rp"},
+      {"flow:\n  outlets:\n    left_subclavian: {colour: red}\n", "unknown key 'flow.outlets.*.colour'"},
+  };
+  for (const auto& [scene, message] : bad) {
+    try {
+      (void)from_config(config::load_config_text(scene, "s.yaml", flow_schema()), net);
+      ADD_FAILURE() << "accepted: " << scene;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input);
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
   }
 }
 

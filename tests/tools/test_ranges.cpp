@@ -26,7 +26,8 @@ using flowire::config::Type;
 namespace {
 
 /// A one-line YAML scene that gives the declared key @p path the value @p value: its sections
-/// nested as flow maps, a list item key ("loads[].s") as the one item of its list.
+/// nested as flow maps, a list item key ("loads[].s") as the one item of its list, a named
+/// entry ("flow.outlets.*.pressure") under the name some_name.
 std::string scene_with(const std::string& path, const std::string& value) {
   std::vector<std::string> parts;
   std::stringstream ss(path);
@@ -34,7 +35,7 @@ std::string scene_with(const std::string& path, const std::string& value) {
   std::string text = value;
   for (auto it = parts.rbegin(); it != parts.rend(); ++it) {
     const bool list = it->ends_with("[]");
-    const std::string name = list ? it->substr(0, it->size() - 2) : *it;
+    const std::string name = list ? it->substr(0, it->size() - 2) : *it == "*" ? "some_name" : *it;
     text = list ? fmt::format("{{{}: [{}]}}", name, text) : fmt::format("{{{}: {}}}", name, text);
   }
   return text + "\n";
@@ -43,6 +44,7 @@ std::string scene_with(const std::string& path, const std::string& value) {
 /// The concrete path of a declared key in the scene scene_with() writes ("loads[].s" is "loads[0].s").
 std::string concrete(std::string path) {
   for (size_t at; (at = path.find("[]")) != std::string::npos;) path.replace(at, 2, "[0]");
+  for (size_t at; (at = path.find(".*")) != std::string::npos;) path.replace(at, 2, ".some_name");
   return path;
 }
 

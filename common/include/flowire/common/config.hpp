@@ -93,6 +93,10 @@ class Schema {
   Schema& below(double v);     ///< < v
   ///@}
   [[nodiscard]] const Key* find(std::string_view path) const;
+  /// @brief The key a concrete path is declared by: the path itself, or with names in place
+  /// of a declared wildcard `<section>.*` ("flow.outlets.left_iliac.rcr.Rp" is declared as
+  /// "flow.outlets.*.rcr.Rp"). The declared path in @p declared. Null if none.
+  [[nodiscard]] const Key* find_concrete(std::string_view path, std::string* declared = nullptr) const;
   [[nodiscard]] const std::vector<Key>& keys() const { return keys_; }
   /// @brief Children declared directly under `path` ("" for the top level).
   [[nodiscard]] std::vector<const Key*> children(std::string_view path) const;

@@ -74,6 +74,7 @@ struct OutletBC {
   double resistance = 0.0;             ///< Resistance: Pa·s/m³
   double distal_pressure = 0.0;        ///< Resistance and Rcr: Pa
   double rp = 0.0, c = 0.0, rd = 0.0;  ///< Rcr: proximal resistance, compliance (m³/Pa), distal resistance
+  bool defaulted = false;              ///< expanded from the template for the ends not named (resolve_nodes)
 };
 
 enum class Model { Poiseuille, Rlc };
@@ -130,8 +131,9 @@ struct FlowSpec {
 /// @brief Inlet at the widest end with `inlet_pressure`, every other end at 0 Pa.
 FlowSpec default_spec(const Network& net, const Waveform& inlet_pressure);
 
-/// @brief Fill missing nodes: an inlet without node gets the widest end; an empty outlet
-/// list (or the template outlet with node -1) is copied to every end that is no inlet.
+/// @brief Fill missing nodes: an inlet without node gets the widest end; the template outlet
+/// (node -1, at most one) is copied to every end that is neither an inlet nor given an outlet
+/// of its own (an empty list: 0 Pa there).
 void resolve_nodes(FlowSpec& spec, const Network& net);
 
 /// @brief Declare the keys of a scene's `flow:` section (type, default, unit, doc): the
