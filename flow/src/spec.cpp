@@ -279,7 +279,11 @@ OutletBC outlet_from(const Config& cfg, const std::string& path) {
 
 /// The network end a named outlet stands for: a node id that is an end, or the end of the
 /// branch of that name that is not the inlet.
-int outlet_node(const Config& cfg, const std::string& path, const std::string& name, const Network& net, int inlet) {
+int outlet_node(const Config& cfg, const std::string& path, const std::string& name, const Network& net,
+                const std::vector<InletBC>& inlets) {
+  const auto is_inlet = [&](int e) {
+    return std::any_of(inlets.begin(), inlets.end(), [e](const InletBC& in) { return in.node == e; });
+  };
   int node = -1;
   size_t used = 0;
   try {
@@ -296,7 +300,7 @@ int outlet_node(const Config& cfg, const std::string& path, const std::string& n
     for (const auto& b : net.branches()) {
       if (b.name != name) continue;
       for (int e : {b.nodes.back(), b.nodes.front()})
-        if (node < 0 && net.degree(e) == 1 && e != inlet) node = e;
+        if (node < 0 && net.degree(e) == 1 && !is_inlet(e)) node = e;
       if (node < 0)
         throw_input_error(cfg.where(path),
                           fmt::format("branch '{}' has no outlet: neither of its ends ({} and {}) is a network end "
@@ -312,9 +316,9 @@ int outlet_node(const Config& cfg, const std::string& path, const std::string& n
     throw_input_error(cfg.where(path), fmt::format("no branch named '{}' and no such node (branches with an end: {})",
                                                    name, names.empty() ? "none named" : names));
   }
-  if (net.degree(node) != 1 || node == inlet)
+  if (net.degree(node) != 1 || is_inlet(node))
     throw_input_error(cfg.where(path), fmt::format("node {} ('{}') is not an outlet: {}", node, name,
-                                                   node == inlet ? "it is the inlet" : "not a network end"));
+                                                   is_inlet(node) ? "it is an inlet" : "not a network end"));
   return node;
 }
 
@@ -350,29 +354,41 @@ void declare_scene_keys(config::Schema& s) {
         "inlet node id (default: the network end with the largest radius)");
   // The inlet: a pressure (by default the 120/80 mmHg sine, declared here once) or a flow.
   // A flow has no default amplitude: a flow sine needs its systolic and diastolic values.
-  for (const char* what : {"pressure", "flow"}) {
-    const bool p = std::string_view(what) == "pressure";
-    const D dim = p ? D::Pressure : D::FlowRate;
-    const std::string base = std::string("flow.inlet.") + what;
-    const std::string q = p ? "P" : "Q";
-    if (p)
-      s.add(base, Type::NumberOrSection, "{waveform: sine}", dim,
-            "inlet pressure: a constant, or a waveform section (default: the sine with the defaults below)");
-    else
-      s.add(base, Type::NumberOrSection, "", dim,
-            "prescribed inlet flow instead of a pressure: a constant or a waveform section");
-    s.add(base + ".waveform", Type::Enum, "", D::None,
-          "sine: (" + q + "1-" + q + "2)/2 sin(2 pi t/T) + (" + q + "1+" + q +
-              "2)/2; constant; table (default: table if file is given, else sine)",
-          {"sine", "constant", "table"});
-    s.add(base + ".systolic", Type::Number, p ? "120 mmHg" : "", dim,
-          p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
-    s.add(base + ".diastolic", Type::Number, p ? "80 mmHg" : "", dim,
-          p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
-    s.add(base + ".period", Type::Number, "0.8 s", D::Time, "sine: period T").positive();
-    s.add(base + ".value", Type::Number, "", dim, "constant: the value");
-    s.add(base + ".file", Type::String, "", D::None, "table: CSV with a header and columns time,value (SI), periodic");
-  }
+  // Under flow.inlets[] (several inlets) nothing has a default: each says its whole condition.
+  auto declare_inlet = [&s](const std::string& prefix, bool defaults) {
+    for (const char* what : {"pressure", "flow"}) {
+      const bool p = std::string_view(what) == "pressure";
+      const D dim = p ? D::Pressure : D::FlowRate;
+      const std::string base = prefix + "." + what;
+      const std::string q = p ? "P" : "Q";
+      if (p)
+        s.add(base, Type::NumberOrSection, defaults ? "{waveform: sine}" : "", dim,
+              defaults ? "inlet pressure: a constant, or a waveform section (default: the sine with the defaults below)"
+                       : "inlet pressure: a constant, or a waveform section");
+      else
+        s.add(base, Type::NumberOrSection, "", dim,
+              "prescribed inlet flow instead of a pressure: a constant or a waveform section");
+      s.add(base + ".waveform", Type::Enum, "", D::None,
+            "sine: (" + q + "1-" + q + "2)/2 sin(2 pi t/T) + (" + q + "1+" + q +
+                "2)/2; constant; table (default: table if file is given, else sine)",
+            {"sine", "constant", "table"});
+      s.add(base + ".systolic", Type::Number, p && defaults ? "120 mmHg" : "", dim,
+            p ? "sine: P1, the highest pressure" : "sine: Q1, the highest flow (required: a flow has no default)");
+      s.add(base + ".diastolic", Type::Number, p && defaults ? "80 mmHg" : "", dim,
+            p ? "sine: P2, the lowest pressure" : "sine: Q2, the lowest flow (required: a flow has no default)");
+      s.add(base + ".period", Type::Number, defaults ? "0.8 s" : "", D::Time, "sine: period T").positive();
+      s.add(base + ".value", Type::Number, "", dim, "constant: the value");
+      s.add(base + ".file", Type::String, "", D::None,
+            "table: CSV with a header and columns time,value (SI), periodic");
+    }
+  };
+  declare_inlet("flow.inlet", true);
+  s.add("flow.inlets", Type::List, "", D::None,
+        "several inlets (a circle of Willis, a bypass): each {node, pressure | flow} as flow.inlet, which is the "
+        "one-inlet form; give one or the other");
+  s.add("flow.inlets[].node", Type::StringOrInteger, "", D::None,
+        "this inlet's end: node id or branch name (required)");
+  declare_inlet("flow.inlets[]", false);
   s.add("flow.outlets", Type::Section, "{}", D::None, "boundary condition at every other network end");
   s.add("flow.outlets.pressure", Type::Number, "", D::Pressure,
         "fixed outlet pressure (default 0 when nothing else is given)");
@@ -442,27 +458,48 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   s.wall_thickness_ratio = cfg.number_or("flow.wall.thickness_ratio", s.wall_thickness_ratio);
   if (cfg.has("solve.dt")) s.dt = cfg.number("solve.dt");
 
-  InletBC in;
-  in.node = cfg.has("flow.inlet.node") ? node_from(cfg, "flow.inlet.node", net) : net.widest_end();
   // The schema declares the default inlet (a pressure sine); a flow given replaces it.
-  const auto given = [&](const char* path) {
+  const auto given = [&](const std::string& path) {
     if (!(cfg.has(path) || cfg.has_section(path))) return false;
     const auto it = cfg.values().find(path);
     return it == cfg.values().end() || it->second.where != "default";
   };
-  const bool has_q = given("flow.inlet.flow");
-  const bool has_p = cfg.has("flow.inlet.pressure") || cfg.has_section("flow.inlet.pressure");
-  if (given("flow.inlet.pressure") && has_q)
-    throw_input_error(cfg.where("flow.inlet.flow"), "give either flow.inlet.pressure or flow.inlet.flow, not both");
-  if (has_q) {
-    in.type = InletBC::Type::Flow;
-    in.waveform = waveform_from(cfg, "flow.inlet.flow");
-  } else if (has_p) {
-    in.waveform = waveform_from(cfg, "flow.inlet.pressure");
+  if (cfg.count("flow.inlets") > 0) {
+    for (const char* k : {"flow.inlet.node", "flow.inlet.pressure", "flow.inlet.flow"})
+      if (given(k)) throw_input_error(cfg.where(k), "give flow.inlet (one inlet) or flow.inlets (several), not both");
+    for (int i = 0; i < cfg.count("flow.inlets"); ++i) {
+      const std::string p = fmt::format("flow.inlets[{}]", i);
+      if (!cfg.has(p + ".node")) throw_input_error(cfg.where(p), fmt::format("{}: an inlet needs its node", p));
+      InletBC in;
+      in.node = node_from(cfg, p + ".node", net);
+      if (net.degree(in.node) != 1)
+        throw_input_error(cfg.where(p + ".node"), fmt::format("{}: node {} is not a network end", p, in.node));
+      for (const auto& other : s.inlets)
+        if (other.node == in.node)
+          throw_input_error(cfg.where(p + ".node"), fmt::format("{}: node {} is already an inlet", p, in.node));
+      const bool q = given(p + ".flow"), pr = given(p + ".pressure");
+      if (q == pr) throw_input_error(cfg.where(p), fmt::format("{}: give its pressure or its flow (one of them)", p));
+      in.type = q ? InletBC::Type::Flow : InletBC::Type::Pressure;
+      in.waveform = waveform_from(cfg, p + (q ? ".flow" : ".pressure"));
+      s.inlets.push_back(in);
+    }
   } else {
-    throw_input_error(cfg.where("flow.inlet"), "no inlet condition: give flow.inlet.pressure or flow.inlet.flow");
+    InletBC in;
+    in.node = cfg.has("flow.inlet.node") ? node_from(cfg, "flow.inlet.node", net) : net.widest_end();
+    const bool has_q = given("flow.inlet.flow");
+    const bool has_p = cfg.has("flow.inlet.pressure") || cfg.has_section("flow.inlet.pressure");
+    if (given("flow.inlet.pressure") && has_q)
+      throw_input_error(cfg.where("flow.inlet.flow"), "give either flow.inlet.pressure or flow.inlet.flow, not both");
+    if (has_q) {
+      in.type = InletBC::Type::Flow;
+      in.waveform = waveform_from(cfg, "flow.inlet.flow");
+    } else if (has_p) {
+      in.waveform = waveform_from(cfg, "flow.inlet.pressure");
+    } else {
+      throw_input_error(cfg.where("flow.inlet"), "no inlet condition: give flow.inlet.pressure or flow.inlet.flow");
+    }
+    s.inlets.push_back(in);
   }
-  s.inlets.push_back(in);
 
   const OutletBC o = outlet_from(cfg, "flow.outlets");  // template for every end not named
   // Outlets named under flow.outlets (branch names or node ids) with their own condition.
@@ -471,7 +508,7 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
     const std::string name = path.substr(std::string("flow.outlets.").size());
     if (name.find('.') != std::string::npos || name == "rcr") continue;
     OutletBC named = outlet_from(cfg, path);
-    named.node = outlet_node(cfg, path, name, net, s.inlets.front().node);
+    named.node = outlet_node(cfg, path, name, net, s.inlets);
     for (const auto& other : s.outlets)
       if (other.node == named.node)
         throw_input_error(cfg.where(path),

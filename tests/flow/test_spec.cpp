@@ -7,6 +7,7 @@
 #include "flow_test_networks.hpp"
 #include "flowire/common/config.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/flow/solver.hpp"
 #include "flowire/flow/spec.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire_test.hpp"
@@ -189,6 +190,53 @@ flow:
       {"flow:\n  outlets:\n    left_subclavian: {rcr: {Rp: -1, C: 1e-9, Rd: 1e8}}\n",
        "flow.outlets.left_subclavian.rcr.Rp"},
       {"flow:\n  outlets:\n    left_subclavian: {colour: red}\n", "unknown key 'flow.outlets.*.colour'"},
+  };
+  for (const auto& [scene, message] : bad) {
+    try {
+      (void)from_config(config::load_config_text(scene, "s.yaml", flow_schema()), net);
+      ADD_FAILURE() << "accepted: " << scene;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input);
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(FlowSpec, SeveralInletsFeedOneOutletAsTheResistorNetworkDoes) {
+  // A parent and two daughters, fed at both daughters' ends (1000 and 600 Pa) and drained at
+  // the parent's (0 Pa): the junction's pressure is the conductance-weighted mean of the
+  // three ends, exactly, and the flows follow.
+  const Network net = test::murray_tree(1);
+  const auto cfg = config::load_config_text(R"(
+flow:
+  inlets:
+    - {node: 2, pressure: 1000}
+    - {node: 3, pressure: {waveform: constant, value: 600}}
+)",
+                                            "s.yaml", flow_schema());
+  const FlowSpec spec = from_config(cfg, net);
+  ASSERT_EQ(spec.inlets.size(), 2u);
+  ASSERT_EQ(spec.outlets.size(), 1u);
+  EXPECT_EQ(spec.outlets[0].node, 0);
+  auto solver = make_solver(net, spec);
+  solver->advance(0.0);
+  double g[3], p[3] = {0.0, 1000.0, 600.0};
+  for (int i = 0; i < 3; ++i) {
+    const auto& seg = net.segment(i);
+    g[i] = 1.0 / poiseuille_resistance(spec.viscosity, seg.length, seg.radius);
+  }
+  const double pj = (g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) / (g[0] + g[1] + g[2]);
+  EXPECT_NEAR(solver->node_pressure(1), pj, 1e-10 * pj);
+  EXPECT_NEAR(std::abs(solver->segment_flow(0)), g[0] * pj, 1e-10 * g[0] * pj);
+
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"flow:\n  inlet: {node: 2}\n  inlets:\n    - {node: 3, pressure: 1}\n",
+       "give flow.inlet (one inlet) or flow.inlets"},
+      {"flow:\n  inlets:\n    - {pressure: 1}\n", "flow.inlets[0]: an inlet needs its node"},
+      {"flow:\n  inlets:\n    - {node: 2, pressure: 1, flow: 1e-6}\n", "flow.inlets[0]: give its pressure or its flow"},
+      {"flow:\n  inlets:\n    - {node: 1, pressure: 1}\n", "flow.inlets[0]: node 1 is not a network end"},
+      {"flow:\n  inlets:\n    - {node: 2, pressure: 1}\n    - {node: 2, flow: 1e-6}\n", "node 2 is already an inlet"},
+      {"flow:\n  inlets:\n    - {node: 2, pressure: {waveform: sine, systolic: 2}}\n", "a sine waveform needs"},
   };
   for (const auto& [scene, message] : bad) {
     try {
