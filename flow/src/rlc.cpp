@@ -192,8 +192,7 @@ class RlcSolver final : public FlowSolver {
       tf.emplace_back(row, row, resistance_[s]);
       tf.emplace_back(row, seg.node_from, -1.0);
       tf.emplace_back(row, seg.node_to, 1.0);
-      const double c = segment_compliance(spec_.wall_youngs_modulus, spec_.wall_thickness_ratio, seg.length,
-                                          seg.radius_from, seg.radius_to);
+      const double c = spec_.segment_compliance(net_, static_cast<int>(s));
       node_c[static_cast<size_t>(seg.node_from)] += 0.5 * c;
       node_c[static_cast<size_t>(seg.node_to)] += 0.5 * c;
       // Node balance rows (non-Dirichlet): C dp/dt + sum_out Q - sum_in Q + outflow = injected.

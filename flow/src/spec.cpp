@@ -1,10 +1,13 @@
 #include "flowire/flow/spec.hpp"
 
+#include "flowire/flow/rlc.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 #include "flowire/common/config.hpp"
@@ -145,6 +148,18 @@ double FlowSpec::cycle() const {
   for (const auto& in : inlets)
     if (const double c = in.waveform.cycle(); c > 0.0) return c;
   return 0.0;
+}
+
+double FlowSpec::segment_compliance(const Network& net, int s) const {
+  const auto& seg = net.segment(s);
+  const double r1 = seg.radius_from, r2 = seg.radius_to, l = seg.length;
+  for (const auto& w : branch_walls) {
+    if (w.branch != seg.branch) continue;
+    if (w.thickness > 0.0)  // 3π/(2Eh) ∫ r³ dx, r linear: l (r1 + r2)(r1² + r2²)/4
+      return 3.0 * std::numbers::pi * l * (r1 + r2) * (r1 * r1 + r2 * r2) / (8.0 * w.youngs_modulus * w.thickness);
+    return flow::segment_compliance(w.youngs_modulus, w.thickness_ratio, l, r1, r2);
+  }
+  return flow::segment_compliance(wall_youngs_modulus, wall_thickness_ratio, l, r1, r2);
 }
 
 FlowSpec default_spec(const Network& net, const Waveform& inlet_pressure) {
@@ -344,6 +359,12 @@ void declare_scene_keys(config::Schema& s) {
   s.add("flow.wall.youngs_modulus", Type::Number, "0.4 MPa", D::Pressure, "rlc: vessel wall Young's modulus")
       .positive();
   s.add("flow.wall.thickness_ratio", Type::Number, "0.1", D::None, "rlc: wall thickness / radius").positive();
+  s.add(
+      "flow.wall.*", Type::Section, "", D::None,
+      "NAME (a branch name): that branch's own wall, with the keys below; the keys above apply to every other branch");
+  s.add("flow.wall.*.youngs_modulus", Type::Number, "", D::Pressure, "this branch: wall Young's modulus").positive();
+  s.add("flow.wall.*.thickness", Type::Number, "", D::Length, "this branch: wall thickness").positive();
+  s.add("flow.wall.*.thickness_ratio", Type::Number, "", D::None, "this branch: wall thickness / radius").positive();
   s.add("flow.profile", Type::Enum, "laminar", D::None,
         "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
         "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
@@ -457,6 +478,28 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   s.wall_youngs_modulus = cfg.number_or("flow.wall.youngs_modulus", s.wall_youngs_modulus);
   s.wall_thickness_ratio = cfg.number_or("flow.wall.thickness_ratio", s.wall_thickness_ratio);
   if (cfg.has("solve.dt")) s.dt = cfg.number("solve.dt");
+  // Branches with a wall of their own.
+  for (const auto& [path, value] : cfg.values()) {
+    if (value.type != config::Type::Section || path.rfind("flow.wall.", 0) != 0) continue;
+    const std::string name = path.substr(std::string("flow.wall.").size());
+    if (name.find('.') != std::string::npos) continue;
+    BranchWall w;
+    for (size_t b = 0; b < net.branches().size(); ++b)
+      if (net.branches()[b].name == name) w.branch = static_cast<int>(b);
+    if (w.branch < 0) {
+      std::string names;
+      for (const auto& b : net.branches())
+        if (!b.name.empty()) names += (names.empty() ? "" : ", ") + b.name;
+      throw_input_error(cfg.where(path),
+                        fmt::format("no branch named '{}' (branches: {})", name, names.empty() ? "none named" : names));
+    }
+    if (cfg.has(path + ".thickness") && cfg.has(path + ".thickness_ratio"))
+      throw_input_error(cfg.where(path), fmt::format("{}: give thickness or thickness_ratio, not both", path));
+    w.youngs_modulus = cfg.number_or(path + ".youngs_modulus", s.wall_youngs_modulus);
+    w.thickness = cfg.number_or(path + ".thickness", 0.0);
+    w.thickness_ratio = cfg.number_or(path + ".thickness_ratio", s.wall_thickness_ratio);
+    s.branch_walls.push_back(w);
+  }
 
   // The schema declares the default inlet (a pressure sine); a flow given replaces it.
   const auto given = [&](const std::string& path) {

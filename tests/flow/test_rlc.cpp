@@ -1,6 +1,8 @@
 // The rlc model: Womersley correction of the quasi-steady error (reference 5), steady
 // limit equal to Poiseuille, periodic steady state with RCR outlets and compliant walls.
 #include <gtest/gtest.h>
+#include "flowire/common/config.hpp"
+#include "flowire/common/error.hpp"
 
 #include <cmath>
 #include <complex>
@@ -176,4 +178,71 @@ TEST(FlowRlc, StepMatrixIsFactorizedOncePerPhaseAndPerOcclusionChange) {
 }
 
 }  // namespace
+
+TEST(FlowRlc, ABranchWithItsOwnWallFollowsTheExactTransmissionLine) {
+  // A straight 30 cm tube of two named branches, the distal one stiffer (flow.wall.distal:
+  // E = 2 MPa, h = 1 mm against the network's 0.4 MPa and h = r/10), fed a 4 Hz pressure
+  // wave and drained through a mismatched resistance: the inlet flow's harmonic against the
+  // exact linear solution of the two transmission lines in series. The same with the
+  // network's wall everywhere differs from it by far more than the tolerance.
+  vessels::Centerlines c;
+  c.branches.push_back({"proximal", {Vec3(0, 0, 0), Vec3(0.15, 0, 0)}, {5e-3, 5e-3}});
+  c.branches.push_back({"distal", {Vec3(0.15, 0, 0), Vec3(0.3, 0, 0)}, {5e-3, 5e-3}});
+  const Network net = Network::build(c, {.max_segment_length = 2.5e-3});
+  config::Schema schema;
+  declare_scene_keys(schema);
+  const double T = 0.25;
+  const auto cfg = config::load_config_text(R"(
+flow:
+  model: rlc
+  inlet: {pressure: {waveform: sine, systolic: 1100, diastolic: 900, period: 0.25 s}, node: proximal}
+  outlets: {resistance: 1.5e8}
+  wall:
+    youngs_modulus: 0.4 MPa
+    thickness_ratio: 0.1
+    distal: {youngs_modulus: 2 MPa, thickness: 1 mm}
+)",
+                                            "s.yaml", schema);
+  FlowSpec spec = from_config(cfg, net);
+  spec.dt = T / 400;  // (solve.dt in a scene)
+  ASSERT_EQ(spec.branch_walls.size(), 1u);
+  auto solver = make_solver(net, spec);
+  ASSERT_TRUE(periodic_info(*solver).converged);
+  const int n = 400;
+  int inlet_seg = -1;
+  for (int sgm = 0; sgm < net.num_segments(); ++sgm)
+    if (net.segment(sgm).node_from == spec.inlets[0].node || net.segment(sgm).node_to == spec.inlets[0].node)
+      inlet_seg = sgm;
+  const double sign = net.segment(inlet_seg).node_from == spec.inlets[0].node ? 1.0 : -1.0;
+  std::complex<double> q1 = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double t = 10.0 * T + T * k / n;
+    solver->advance(t);
+    q1 += sign * solver->segment_flow(inlet_seg) * std::exp(std::complex<double>(0.0, -2.0 * M_PI * k / n));
+  }
+  q1 /= static_cast<double>(n);
+  // The sine's first harmonic: (P1 − P2)/2 sin(ωt) = −i (P1 − P2)/4 e^{iωt} + c.c.
+  const std::complex<double> p1(0.0, -(1100.0 - 900.0) / 4.0);
+  const double w = 2.0 * M_PI / T, r = 5e-3, mu = spec.viscosity, rho = spec.density;
+  auto line = [&](double E, double h, double l, std::complex<double> load) {
+    const std::complex<double> z(8.0 * mu / (M_PI * std::pow(r, 4)), w * rho / (M_PI * r * r));
+    const std::complex<double> y(0.0, w * 3.0 * M_PI * r * r * r / (2.0 * E * h));
+    const auto zc = std::sqrt(z / y), th = std::tanh(std::sqrt(z * y) * l);
+    return zc * (load + zc * th) / (zc + load * th);
+  };
+  const auto exact = p1 / line(0.4e6, 0.5e-3, 0.15, line(2e6, 1e-3, 0.15, 1.5e8));
+  const auto uniform = p1 / line(0.4e6, 0.5e-3, 0.15, line(0.4e6, 0.5e-3, 0.15, 1.5e8));
+  EXPECT_LT(std::abs(q1 / exact - 1.0), 0.01) << "simulated " << q1 << " exact " << exact;
+  EXPECT_GT(std::abs(uniform / exact - 1.0), 0.1) << "the override would not show";
+  // A wall for a branch the network does not have.
+  try {
+    (void)from_config(config::load_config_text("flow:\n  wall:\n    nowhere: {thickness: 1 mm}\n", "s.yaml", schema),
+                      net);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("s.yaml:3: flow.wall.nowhere: no branch named 'nowhere'"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace flowire::flow

@@ -77,6 +77,14 @@ struct OutletBC {
   bool defaulted = false;              ///< expanded from the template for the ends not named (resolve_nodes)
 };
 
+/// @brief A branch's own vessel wall (`flow.wall.NAME`), in place of the network-wide one.
+struct BranchWall {
+  int branch = -1;
+  double youngs_modulus = 0.0;   ///< Pa
+  double thickness = 0.0;        ///< m; > 0: an absolute thickness
+  double thickness_ratio = 0.0;  ///< h / r where thickness is 0
+};
+
 enum class Model { Poiseuille, Rlc };
 enum class SolverKind { Superposition, DenseInverse, Sparse, Petsc };
 /// @brief Inertance per segment in the rlc model.
@@ -110,12 +118,13 @@ struct FlowSpec {
 
   /// rlc model: wall compliance of a segment \f$ C = 3\pi r^3 l / (2 E h) \f$ (thin elastic
   /// wall, incompressible), with h = `wall_thickness_ratio`·r; half of it at each end node.
-  double wall_youngs_modulus = 0.4e6;  ///< Pa
-  double wall_thickness_ratio = 0.1;   ///< h / r
-  double dt = 1e-3;                    ///< rlc time step (s)
-  double rho_infinity = 0.5;           ///< rlc generalized-α spectral radius (1: trapezoidal-like, 0: most damping)
-  double periodic_tolerance = 1e-6;    ///< rlc: relative change between cycles taken as periodic
-  int max_cycles = 50;                 ///< rlc: cycles run at most when looking for the periodic state
+  double wall_youngs_modulus = 0.4e6;    ///< Pa
+  double wall_thickness_ratio = 0.1;     ///< h / r
+  std::vector<BranchWall> branch_walls;  ///< branches with a wall of their own
+  double dt = 1e-3;                      ///< rlc time step (s)
+  double rho_infinity = 0.5;             ///< rlc generalized-α spectral radius (1: trapezoidal-like, 0: most damping)
+  double periodic_tolerance = 1e-6;      ///< rlc: relative change between cycles taken as periodic
+  int max_cycles = 50;                   ///< rlc: cycles run at most when looking for the periodic state
 
   /// dense_inverse refuses when K and K⁻¹ (2·8·(N+E)² bytes) exceed this many bytes;
   /// 0: half of the machine's physical memory.
@@ -124,6 +133,9 @@ struct FlowSpec {
   std::string petsc_pc = "gamg";
   double petsc_rtol = 1e-14;
 
+  /// @brief rlc: the compliance of segment @p s (its branch's own wall, else the network's):
+  /// \f$ \int 3\pi r^3 / (2 E h)\,dx \f$ over the segment, r linear between its ends.
+  [[nodiscard]] double segment_compliance(const Network& net, int s) const;
   /// @brief Period of the first periodic inlet waveform, or 0 if all are constant.
   [[nodiscard]] double cycle() const;
 };
