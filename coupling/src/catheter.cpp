@@ -153,6 +153,23 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   return p;
 }
 
+namespace {
+/// The reaction −f of a vertex's friction f (at relative velocity v_vertex − v_point) on the
+/// point (1 − α) x_j + α x_{j+1} of an edge, split between its ends, with the incremental
+/// potential Δt·D and its Jacobian: v_point enters v with −1, so ∂F_j/∂v_j = (1 − α)² ∂f/∂v,
+/// ∂F_j/∂v_{j+1} = (1 − α) α ∂f/∂v, ∂F_{j+1}/∂v_{j+1} = α² ∂f/∂v, entered as the edge's position
+/// Jacobian over Δt (the rod's ∂v/∂x).
+void add_edge_point_friction(rod::ForceAccumulator& out, int j, double alpha, const FrictionResult& fr, double dt) {
+  const double w0 = 1.0 - alpha, w1 = alpha;
+  out.add_conservative_force(j, -w0 * fr.force);
+  out.add_conservative_force(j + 1, -w1 * fr.force);
+  out.add_energy(dt * fr.dissipation);
+  Eigen::Matrix<double, 6, 6> jac;
+  jac << w0 * w0 * fr.dfdv, w0 * w1 * fr.dfdv, w0 * w1 * fr.dfdv, w1 * w1 * fr.dfdv;
+  out.add_edge_jacobian(j, jac / dt);
+}
+}  // namespace
+
 int LumenContact::nearest_edge(const Eigen::Vector3d& x, double s, const std::vector<Eigen::Vector3d>& cath,
                                const std::vector<double>& arc) const {
   const int nv = static_cast<int>(cath.size());
@@ -191,6 +208,46 @@ void LumenContact::evaluate_wire(const rod::RodView& rod, rod::ForceAccumulator&
     out.add_energy(p.energy);
     out.add_position_jacobian(i, -p.hess_xx);
   }
+  if (!(friction_ > 0.0) || !(rod.dt > 0.0)) return;
+  // With N, the normal and the other rod held, f = −∇_v D(v) and v = (x − x₀)/Δt − v_other: the
+  // gradient in x of Δt·D, reported as a potential for the line search (as on the walls).
+  for (int i = 0; i < rod.first_clamped_vertex && i < static_cast<int>(friction_contact.size()); ++i) {
+    const FrictionContact& fc = friction_contact[static_cast<size_t>(i)];
+    if (fc.edge < 0 || static_cast<size_t>(fc.edge) + 1 >= catheter_velocity.size()) continue;
+    const auto j = static_cast<size_t>(fc.edge);
+    const FrictionResult fr = friction_at(fc, rod.velocity(i), catheter_velocity[j], catheter_velocity[j + 1]);
+    out.add_conservative_force(i, fr.force);
+    out.add_energy(rod.dt * fr.dissipation);
+    out.add_velocity_jacobian(i, fr.dfdv);
+  }
+}
+
+FrictionResult LumenContact::friction_at(const FrictionContact& fc, const Eigen::Vector3d& vp,
+                                         const Eigen::Vector3d& va, const Eigen::Vector3d& vb) const {
+  if (fc.edge < 0 || !(fc.normal > 0.0)) return FrictionResult{};
+  const Eigen::Vector3d v_edge = (1.0 - fc.alpha) * va + fc.alpha * vb;
+  return coulomb_friction(vp - v_edge, fc.direction, fc.normal, friction_, slip_speed_);
+}
+
+void LumenContact::lag_friction() {
+  friction_contact.assign(wire_snapshot.size(), FrictionContact{});
+  if (!(friction_ > 0.0)) return;
+  // N = |∂E/∂x| of the penalty at the held states, the normal along x − (the edge's point).
+  for (size_t i = 0; i < wire_snapshot.size() && i < wire_edge.size(); ++i) {
+    const int j = wire_edge[i];
+    if (j < 0 || j + 1 >= static_cast<int>(catheter_snapshot.size())) continue;
+    const Eigen::Vector3d& x = wire_snapshot[i];
+    const Eigen::Vector3d& a = catheter_snapshot[static_cast<size_t>(j)];
+    const Eigen::Vector3d& b = catheter_snapshot[static_cast<size_t>(j) + 1];
+    const LumenPenalty p = lumen_penalty(x, a, b, clearance_, stiffness_, j == 0, onset_);
+    const Eigen::Vector3d r = x - (a + p.alpha * (b - a));
+    if (!(p.energy > 0.0) || !(r.norm() > 0.0)) continue;
+    FrictionContact& fc = friction_contact[i];
+    fc.edge = j;
+    fc.alpha = std::clamp(p.alpha, 0.0, 1.0);
+    fc.normal = p.grad_x.norm();
+    fc.direction = r.normalized();
+  }
 }
 
 void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumulator& out) const {
@@ -208,6 +265,13 @@ void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumula
     Eigen::Matrix<double, 6, 6> hess;
     hess << p.hess_aa, p.hess_ab, p.hess_ab.transpose(), p.hess_bb;
     out.add_edge_jacobian(j, -hess);
+  }
+  if (!(friction_ > 0.0) || !(rod.dt > 0.0)) return;
+  for (size_t i = 0; i < friction_contact.size() && i < wire_velocity.size(); ++i) {
+    const FrictionContact& fc = friction_contact[i];
+    if (fc.edge < 0 || fc.edge + 1 >= rod.vertex_count()) continue;
+    const FrictionResult fr = friction_at(fc, wire_velocity[i], rod.velocity(fc.edge), rod.velocity(fc.edge + 1));
+    add_edge_point_friction(out, fc.edge, fc.alpha, fr, rod.dt);
   }
 }
 
@@ -231,12 +295,14 @@ void LumenContact::assign_edges() {
 
 void LumenContact::hold_catheter(const rod::RodSimulator& catheter) {
   catheter_snapshot.assign(catheter.positions().begin(), catheter.positions().end());
+  catheter_velocity.assign(catheter.velocities().begin(), catheter.velocities().end());
   catheter_arc.assign(catheter.arc_lengths().begin(), catheter.arc_lengths().end());
   assign_edges();
 }
 
 void LumenContact::hold_wire(const rod::RodSimulator& wire) {
   wire_snapshot.assign(wire.positions().begin(), wire.positions().end());
+  wire_velocity.assign(wire.velocities().begin(), wire.velocities().end());
   wire_arc.assign(wire.arc_lengths().begin(), wire.arc_lengths().end());
   assign_edges();
 }
@@ -301,6 +367,8 @@ PairStepReport step_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, L
                          int max_sweeps) {
   PairStepReport rep;
   const bool iterate = wire.settings().integrator == rod::Integrator::ImplicitEuler && max_sweeps > 1;
+  // Friction in the lumen takes the normal forces of the step's start, the same in every sweep.
+  contact.lag_friction();
   if (iterate) wire.save_checkpoint(), catheter.save_checkpoint();
   auto flat = [](std::span<const Eigen::Vector3d> v) {
     Eigen::VectorXd f(3 * static_cast<Eigen::Index>(v.size()));

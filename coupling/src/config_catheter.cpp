@@ -29,6 +29,9 @@ void declare_catheter_keys(config::Schema& s) {
         "lumen penalty per wire vertex (N/m): a wire vertex pushing on the lumen with force F above k*delta/2 sinks "
         "F/k into it (its onset is smoothed over delta = 0.3 of the clearance, docs/catheter.md)")
       .positive();
+  s.add("catheter.inner_friction", Type::Number, "0", D::None,
+        "Coulomb friction coefficient between the wire and the catheter's lumen (0: frictionless; docs/catheter.md)")
+      .non_negative();
   s.add("catheter.insertion", Type::Section, "", D::None, "pushing and turning the catheter at the entry");
   s.add("catheter.insertion.speed", Type::Number, "0", D::Velocity, "catheter insertion speed (negative: pull back)");
   s.add("catheter.insertion.rotation_speed", Type::Number, "0", D::AngularSpeed, "catheter rotation speed");
@@ -43,6 +46,7 @@ CatheterSpec scene_catheter_spec(const config::Config& c, const rod::WireSpec& w
   k.density = c.number("catheter.density");
   k.initial_length = c.number("catheter.initial_length");
   k.stiffness = c.number("catheter.stiffness");
+  k.inner_friction = c.number("catheter.inner_friction");
   if (c.has_section("catheter.insertion")) {
     k.speed = c.number("catheter.insertion.speed");
     k.rotation_speed = c.number("catheter.insertion.rotation_speed");

@@ -146,6 +146,7 @@ void CoSimulation::build_catheter(const rod::WireSpec& wire) {
   cath_->set_insertion_speed(cath_spec_->speed);
   cath_->set_rotation_speed(cath_spec_->rotation_speed);
   lumen_ = std::make_shared<LumenContact>(cath_spec_->inner_radius - wire.radius, cath_spec_->stiffness);
+  lumen_->set_friction(cath_spec_->inner_friction, ContactParams{}.slip_speed);
 }
 
 void CoSimulation::lay_along_vessels(int entry) {
@@ -202,7 +203,9 @@ void CoSimulation::couple_catheter(nlohmann::json& s) {
   lumen_->hold_wire(*sim_);
   sim_->add_external(std::make_shared<LumenContactSide>(lumen_, LumenContactSide::Side::Wire));
   cath_->add_external(std::make_shared<LumenContactSide>(lumen_, LumenContactSide::Side::Catheter));
-  s["catheter"] = {{"clearance", lumen_->clearance()}, {"lumen_stiffness", lumen_->stiffness()}};
+  s["catheter"] = {{"clearance", lumen_->clearance()},
+                   {"lumen_stiffness", lumen_->stiffness()},
+                   {"inner_friction", lumen_->friction()}};
 }
 
 void CoSimulation::plan_steps() {

@@ -4,8 +4,11 @@
 // EI_wire + EI_catheter (tip deflection P L³ / (3 EI)), converging in the segment length.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 
 #include "flowire/common/config.hpp"
@@ -240,6 +243,124 @@ TEST(LumenContact, WireLeavesTheTipWithAContinuousForce) {
       EXPECT_NEAR(f[m], fd, 1e-6 * k * (y - c)) << "alpha " << alpha << ", component " << m;
     }
   }
+}
+
+namespace {
+/// A straight catheter along x (tip at the origin, 6 edges of 2 mm, entry at x = 12 mm) and a
+/// three-vertex wire leaving it at an angle: vertex 0 beyond the tip, 1 and 2 inside and off the
+/// axis by more than the clearance, so that both press on the lumen. Velocities
+/// v = (x − x₀)/Δt from the given positions of the step's start.
+struct FrictionScene {
+  LumenContact lc{1e-4, 3e4};
+  std::vector<V3> wire_x0, cath_x0;
+  std::vector<double> wire_arc, cath_arc;
+  double dt = 1e-3;
+  FrictionScene() {
+    for (int j = 0; j <= 6; ++j) cath_x0.emplace_back(j * 2e-3, 0.0, 0.0), cath_arc.push_back((6 - j) * 2e-3);
+    wire_x0 = {V3(-1.5e-3, 1.2e-3, 0.1e-3), V3(0.5e-3, 0.25e-3, 0.05e-3), V3(2.5e-3, -0.22e-3, 0.03e-3)};
+    wire_arc = {13.5e-3, 11.5e-3, 9.5e-3};
+    lc.set_friction(0.3, 1e-4);
+    lc.catheter_snapshot = cath_x0, lc.catheter_arc = cath_arc;
+    lc.wire_snapshot = wire_x0, lc.wire_arc = wire_arc;
+    lc.assign_edges();
+    lc.lag_friction();  // N and normals of these states
+  }
+  /// The forces and energy on the wire at positions @p x (the catheter held at @p cx moving
+  /// with @p cv), or on the catheter at @p cx (the wire held at @p x moving with @p wv).
+  rod::ForceAccumulator on_wire(const std::vector<V3>& x, const std::vector<V3>& cv) {
+    lc.catheter_velocity = cv;
+    std::vector<V3> v(x.size());
+    for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - wire_x0[i]) / dt;
+    return evaluate(x, v, wire_arc, true);
+  }
+  rod::ForceAccumulator on_catheter(const std::vector<V3>& cx, const std::vector<V3>& wv) {
+    lc.wire_velocity = wv;
+    std::vector<V3> v(cx.size());
+    for (size_t i = 0; i < cx.size(); ++i) v[i] = (cx[i] - cath_x0[i]) / dt;
+    return evaluate(cx, v, cath_arc, false);
+  }
+  rod::ForceAccumulator evaluate(const std::vector<V3>& x, const std::vector<V3>& v, const std::vector<double>& arc,
+                                 bool wire) {
+    rod::RodView view;
+    view.positions = x, view.velocities = v, view.arc_length = arc;
+    view.first_clamped_vertex = static_cast<int>(x.size());
+    view.dt = dt;
+    rod::ForceAccumulator out;
+    out.reset(static_cast<int>(x.size()));
+    if (wire)
+      lc.evaluate_wire(view, out);
+    else
+      lc.evaluate_catheter(view, out);
+    return out;
+  }
+};
+}  // namespace
+
+// Friction in the lumen: every force on either rod is −∂E/∂x of the energy
+// it reports (penalties plus the incremental potential Δt·D of friction, v = (x − x₀)/Δt), the
+// Jacobians entered (vertex, velocity over Δt, edge blocks) are ∂f/∂x by central differences,
+// and the forces on wire and catheter add up to zero (Newton's third law) when each side is
+// evaluated at the other's held state.
+TEST(LumenContact, FrictionForcesAreGradientsWithExactJacobiansAndActBothWays) {
+  FrictionScene fs;
+  for (int i : {1, 2}) ASSERT_GT(fs.lc.friction_contact[static_cast<size_t>(i)].normal, 0.0) << i;
+  // The end of step: the wire moved (sliding back into the catheter and sideways), the catheter
+  // too (more slowly).
+  std::vector<V3> wx = fs.wire_x0, cx = fs.cath_x0;
+  const V3 dw(2e-6, -0.3e-6, 0.4e-6), dc(-0.5e-6, 0.2e-6, -0.1e-6);
+  for (auto& x : wx) x += dw;
+  for (size_t j = 0; j < cx.size(); ++j) cx[j] += (0.5 + 0.1 * static_cast<double>(j)) * dc;
+  std::vector<V3> wv(wx.size()), cv(cx.size());
+  for (size_t i = 0; i < wx.size(); ++i) wv[i] = (wx[i] - fs.wire_x0[i]) / fs.dt;
+  for (size_t j = 0; j < cx.size(); ++j) cv[j] = (cx[j] - fs.cath_x0[j]) / fs.dt;
+  // Hold each rod at its end of step (the vertices keep their edges).
+  fs.lc.catheter_snapshot = cx, fs.lc.wire_snapshot = wx;
+  const rod::ForceAccumulator fw = fs.on_wire(wx, cv), fc = fs.on_catheter(cx, wv);
+  V3 total = V3::Zero();
+  double scale = 0.0;
+  for (const V3& f : fw.forces()) total += f, scale = std::max(scale, f.norm());
+  for (const V3& f : fc.forces()) total += f;
+  EXPECT_LT(total.norm(), 1e-12 * scale) << "the two sides do not balance";
+  EXPECT_NEAR(fw.energy(), fc.energy(), 1e-12 * fw.energy());
+  const double h = 1e-10;
+  auto check = [&](bool wire) {
+    std::vector<V3>& x = wire ? wx : cx;
+    auto eval = [&]() { return wire ? fs.on_wire(wx, cv) : fs.on_catheter(cx, wv); };
+    const rod::ForceAccumulator base = eval();
+    const int n = static_cast<int>(x.size());
+    for (int i = 0; i < n; ++i) {
+      for (int m = 0; m < 3; ++m) {
+        x[static_cast<size_t>(i)][m] += h;
+        const rod::ForceAccumulator plus = eval();
+        x[static_cast<size_t>(i)][m] -= 2 * h;
+        const rod::ForceAccumulator minus = eval();
+        x[static_cast<size_t>(i)][m] += h;
+        const double fd = -(plus.energy() - minus.energy()) / (2 * h);
+        EXPECT_NEAR(base.forces()[static_cast<size_t>(i)][m], fd, 1e-6 * scale)
+            << (wire ? "wire" : "catheter") << " vertex " << i << " component " << m;
+        // Column (i, m) of ∂f/∂x against the assembled blocks.
+        for (int r = 0; r < n; ++r) {
+          const V3 col = (plus.forces()[static_cast<size_t>(r)] - minus.forces()[static_cast<size_t>(r)]) / (2 * h);
+          V3 jac = V3::Zero();
+          if (r == i)
+            jac += (base.position_jacobians()[static_cast<size_t>(i)] +
+                    base.velocity_jacobians()[static_cast<size_t>(i)] / fs.dt)
+                       .col(m);
+          for (int e : {r - 1, r}) {  // edge e joins vertices e and e + 1
+            if (e < 0 || e + 1 >= n || !base.has_edge_jacobians()) continue;
+            const auto& J = base.edge_jacobians()[static_cast<size_t>(e)];
+            const int ri = r - e, ci = i - e;
+            if (ci == 0 || ci == 1) jac += J.block<3, 3>(3 * ri, 3 * ci).col(m);
+          }
+          for (int l = 0; l < 3; ++l)
+            EXPECT_NEAR(jac[l], col[l], 1e-5 * 3e4 + 1e-4 * col.norm())
+                << (wire ? "wire" : "catheter") << " df" << r << "/dx" << i << " (" << l << "," << m << ")";
+        }
+      }
+    }
+  };
+  check(true);
+  check(false);
 }
 
 TEST(CatheterPair, AnAngledWirePushedOutOfTheCatheterConvergesEveryStep) {
@@ -508,5 +629,93 @@ output: {csv: false, vtk: false}
     std::printf("mu %.1f: push %.4e N, mu m g %.4e N, push / m g %.4f\n", mu, push, mu * weight, push / weight);
     EXPECT_NEAR(push / weight, mu, 0.03 * mu + 1e-6) << "mu " << mu;
     EXPECT_LT(c["contact"]["max_penetration"].get<double>(), 1e-6);
+  }
+}
+
+namespace {
+/// A vessel along +x for `lead` from the origin, bending by `turn` on a centerline radius
+/// `bend` (in the xy plane, towards +y), then straight for `tail`: a flowire .yaml network.
+std::string bent_vessel(double lead, double bend, double turn, double tail, double radius) {
+  std::string pts = fmt::format("[[0, 0, 0, {0}], [{1}, 0, 0, {0}]", radius, lead);
+  const int n = std::max(4, static_cast<int>(std::ceil(bend * turn / 1e-3)));
+  for (int k = 1; k <= n; ++k) {
+    const double a = turn * k / n;
+    pts += fmt::format(", [{}, {}, 0, {}]", lead + bend * std::sin(a), bend * (1.0 - std::cos(a)), radius);
+  }
+  const double xe = lead + bend * std::sin(turn), ye = bend * (1.0 - std::cos(turn));
+  pts += fmt::format(", [{}, {}, 0, {}]]", xe + tail * std::cos(turn), ye + tail * std::sin(turn), radius);
+  return "branches:\n  - name: bend\n    points: " + pts + "\n";
+}
+}  // namespace
+
+// The capstan law through a scene: a wire runs through a catheter laid in a vessel that turns
+// by θ (the catheter ends 1 cm past the bend), a tension T pulls its tip on along the vessel,
+// and the wire is pulled back at 1 cm/s. Sliding on the lumen with friction μ, the tension grows
+// along the bend as dT/dθ = μ T (the normal force per unit length is T/R, the friction μ T/R),
+// so the clamp pulls with T e^(μθ) (Euler–Eytelwein). Checked for θ = π/2 and π and μ = 0, 0.1,
+// 0.3, on the clamp's force averaged over the last edge fed (0.2 s): wire and catheter share the
+// feeding grid, so their vertices pass each other once per edge and the force ripples with that
+// period (-3% to +8% here, where the wire's bending length √(EI/T) ≈ 0.9 mm is below the 2 mm edge).
+// The wire's own bending adds forces where it enters and leaves the bend, about √(EI T)/R each
+// (1% of T θ μ here: a soft 0.3 mm wire); the walls are frictionless so that only the lumen rubs.
+// The tension comes on at once at t = 0 (a scene's loads have no ramp), and that start is the
+// pair's hardest part: at dt 5 ms every step converges; at 2.5 ms (θ = π, μ = 0.3) or 1 ms
+// (θ = π/2, μ = 0.3) a few of its first sub-steps stay at the Newton limit, and at T = 0.1 N
+// even without friction (docs/catheter.md).
+TEST(CatheterPair, AWirePulledThroughABentCatheterFollowsTheCapstanLaw) {
+  const double pi = std::numbers::pi, T = 0.5, bend = 0.025, v = 0.01, h = 2e-3, duration = 0.5, dt = 5e-3;
+  for (const double turn : {0.5 * pi, pi}) {
+    const auto dir = flowire::testing::scratch_dir("catheter-capstan");
+    const std::string net = (dir / "bend.yaml").string();
+    {
+      std::ofstream f(net);
+      f << bent_vessel(0.03, bend, turn, 0.06, 0.003);
+    }
+    const double arc = 0.03 + bend * turn;  // the vessel's length to the end of the bend
+    const V3 out_dir(std::cos(turn), std::sin(turn), 0.0);
+    for (const double mu : {0.0, 0.1, 0.3}) {
+      const std::string yaml =
+          fmt::format(R"(
+vessels: {{file: {net}}}
+wire: {{length: 0.3, radius: 0.15 mm, youngs_modulus: 1 GPa, density: 6450, segment_length: {h}, damping: 200,
+       entry: 0}}
+insertion: {{speed: {speed}, initial_length: {wire_in}}}
+catheter: {{length: 0.3, outer_radius: 1 mm, inner_radius: 0.55 mm, initial_length: {cath_in},
+           inner_friction: {mu}}}
+loads: [{{type: tip_force, value: [{fx}, {fy}, 0]}}]
+contact: {{friction: 0, settle: false}}
+solve: {{dt: {dt}, duration: {duration}}}
+output: {{csv: true, vtk: false}}
+)",
+                      fmt::arg("net", net), fmt::arg("h", h), fmt::arg("speed", -v), fmt::arg("wire_in", arc + 0.03),
+                      fmt::arg("cath_in", arc + 0.01), fmt::arg("mu", mu), fmt::arg("fx", T * out_dir.x()),
+                      fmt::arg("fy", T * out_dir.y()), fmt::arg("dt", dt), fmt::arg("duration", duration));
+      const auto cfg = config::load_config_text(yaml, "scene.yaml", scene_schema(), {"output.dir=" + dir.string()});
+      const auto s = run_scene(cfg).summary;
+      ASSERT_EQ(s["status"], "ok") << s.dump();
+      // The clamp's force along the entry (−x: it holds the wire against the pull) over the last
+      // edge fed.
+      std::ifstream in(dir / "base_force.csv");
+      std::string line;
+      std::getline(in, line);
+      double sum = 0.0, lo = 1e300, hi = -1e300;
+      int count = 0;
+      while (std::getline(in, line)) {
+        double t = 0.0, fx = 0.0;
+        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf", &t, &fx), 2) << line;
+        if (t <= duration - h / v + 1e-9) continue;
+        sum += -fx, ++count, lo = std::min(lo, -fx), hi = std::max(hi, -fx);
+      }
+      ASSERT_EQ(count, static_cast<int>(std::lround(h / v / dt)));
+      const double pull = sum / count, capstan = T * std::exp(mu * turn);
+      std::printf(
+          "turn %.3f mu %.1f: clamp %.4f N (%.4f-%.4f over the edge), T e^(mu turn) %.4f N, ratio %.4f; %.2f "
+          "sweeps a step, %d unbalanced\n",
+          turn, mu, pull, lo, hi, capstan, pull / capstan, s["catheter"]["pair"]["sweeps_per_step"].get<double>(),
+          s["catheter"]["pair"]["unbalanced_steps"].get<int>());
+      EXPECT_NEAR(pull / capstan, 1.0, 0.02) << "turn " << turn << " mu " << mu;
+      EXPECT_EQ(s["wire"]["unconverged_steps"].get<int>(), 0);
+      EXPECT_EQ(s["catheter"]["unconverged_steps"].get<int>(), 0);
+    }
   }
 }

@@ -25,6 +25,7 @@
 #include <memory>
 #include <vector>
 
+#include "flowire/coupling/interaction.hpp"
 #include "flowire/rod/external.hpp"
 #include "flowire/rod/model.hpp"
 #include "flowire/rod/simulator.hpp"
@@ -41,6 +42,7 @@ struct CatheterSpec {
   double density = 1200.0;       ///< [kg/m³]
   double initial_length = 0.02;  ///< [m] inside at t = 0
   double stiffness = 3e4;        ///< [N/m] lumen penalty per wire vertex
+  double inner_friction = 0.0;   ///< Coulomb coefficient between wire and lumen
   double speed = 0.0;            ///< [m/s] insertion speed
   double rotation_speed = 0.0;   ///< [rad/s]
 };
@@ -125,9 +127,41 @@ class LumenContact {
   std::vector<int> wire_edge;
   /// @brief Choose wire_edge from the held configurations.
   void assign_edges();
-  /// @brief Hold the catheter / the wire at the rod's current state (and assign_edges()).
+  /// @brief Hold the catheter / the wire at the rod's current state, velocities included (and
+  /// assign_edges()).
   void hold_catheter(const rod::RodSimulator& catheter);
   void hold_wire(const rod::RodSimulator& wire);
+  /// @brief Held velocities of the catheter's and the wire's vertices (hold_catheter, hold_wire).
+  std::vector<Eigen::Vector3d> catheter_velocity;
+  std::vector<Eigen::Vector3d> wire_velocity;
+
+  /// @brief Coulomb friction between the wire and the lumen (catheter.inner_friction): on each
+  /// wire vertex pressed on the lumen, f = −μ N v_t/√(|v_t|² + ε²) (coulomb_friction) of the
+  /// velocity relative to the catheter's at the same point, v = v_w − ((1 − α) v_j + α v_{j+1}),
+  /// and −f on the catheter's edge j split as (1 − α, α). The normal
+  /// force N, the normal, the edge and α are those of the step's start (lag_friction), as on the
+  /// walls: friction is then the gradient of Δt·D(v) in either rod's positions, an exact
+  /// incremental potential with an exact Jacobian, and the two sides are equal and opposite to
+  /// round-off. Static solves have none. μ = 0: frictionless (the default).
+  void set_friction(double mu, double slip_speed) { friction_ = mu, slip_speed_ = slip_speed; }
+  [[nodiscard]] double friction() const { return friction_; }
+  /// @brief Record N, the normal, the edge and α of every wire vertex from the held states (the
+  /// step's start); step_pair calls it before its sweeps.
+  void lag_friction();
+  /// @brief A wire vertex's friction contact of the step's start (lag_friction): against the
+  /// point α along a catheter edge.
+  struct FrictionContact {
+    int edge = -1;                                        ///< the catheter edge (−1: none)
+    double alpha = 0.0;                                   ///< the point (1 − α) x_edge + α x_edge+1
+    double normal = 0.0;                                  ///< N [N]
+    Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< unit normal between the two
+  };
+  /// @brief Per wire vertex, against the catheter's edges.
+  std::vector<FrictionContact> friction_contact;
+  /// @brief The friction on the wire vertex of contact @p fc at its velocity @p vp and the
+  /// catheter edge's vertex velocities @p va, @p vb (zero force without a contact).
+  [[nodiscard]] FrictionResult friction_at(const FrictionContact& fc, const Eigen::Vector3d& vp,
+                                           const Eigen::Vector3d& va, const Eigen::Vector3d& vb) const;
   [[nodiscard]] double clearance() const { return clearance_; }
   [[nodiscard]] double stiffness() const { return stiffness_; }
   /// @brief Width δ of the penalty's smoothed onset [m].
@@ -137,6 +171,8 @@ class LumenContact {
   double clearance_;
   double stiffness_;
   double onset_;
+  double friction_ = 0.0;
+  double slip_speed_ = 1e-4;
 };
 
 /// @brief Outcome of a coupled static solve.
