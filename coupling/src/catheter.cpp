@@ -293,6 +293,16 @@ void LumenContact::assign_edges() {
     wire_edge[i] = nearest_edge(wire_snapshot[i], wire_arc[i], catheter_snapshot, catheter_arc);
 }
 
+std::vector<char> LumenContact::inside() const {
+  std::vector<char> in(wire_snapshot.size(), 0);
+  if (catheter_snapshot.size() < 2) return in;
+  const Eigen::Vector3d& a0 = catheter_snapshot[0];
+  const Eigen::Vector3d into = catheter_snapshot[1] - a0;
+  for (size_t i = 0; i < in.size() && i < wire_edge.size(); ++i)
+    in[i] = wire_edge[i] > 0 || (wire_edge[i] == 0 && (wire_snapshot[i] - a0).dot(into) >= 0.0);
+  return in;
+}
+
 void LumenContact::hold_catheter(const rod::RodSimulator& catheter) {
   catheter_snapshot.assign(catheter.positions().begin(), catheter.positions().end());
   catheter_velocity.assign(catheter.velocities().begin(), catheter.velocities().end());

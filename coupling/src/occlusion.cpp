@@ -30,13 +30,23 @@ WireOcclusion::WireOcclusion(const flow::FlowSolver& flow) : flow_(flow) {
 std::span<const flow::SegmentOcclusion> WireOcclusion::update(std::span<const Eigen::Vector3d> x, int free,
                                                               std::span<const int> segment,
                                                               std::span<const double> edge_radius) {
-  const auto& net = flow_.network();
-  const double eta = flow_.spec().viscosity, rho = flow_.spec().density;
+  return update({Body{x, free, segment, edge_radius}});
+}
+
+std::span<const flow::SegmentOcclusion> WireOcclusion::update(std::initializer_list<Body> bodies) {
   for (int s : touched_) {
     sum_[static_cast<size_t>(s)] = Sum{};
     occ_[static_cast<size_t>(s)] = flow::SegmentOcclusion{};
   }
   touched_.clear();
+  for (const Body& b : bodies) add(b.x, b.free, b.segment, b.edge_radius);
+  return finish();
+}
+
+void WireOcclusion::add(std::span<const Eigen::Vector3d> x, int free, std::span<const int> segment,
+                        std::span<const double> edge_radius) {
+  const auto& net = flow_.network();
+  const double eta = flow_.spec().viscosity, rho = flow_.spec().density;
   const int n = static_cast<int>(x.size());
   free = std::min({free, n, static_cast<int>(segment.size())});
   for (int i = 0; i < free; ++i) {
@@ -72,6 +82,10 @@ std::span<const flow::SegmentOcclusion> WireOcclusion::update(std::span<const Ei
     acc.resistance += 8.0 * eta * ell / (kPi * r * r * r * r);
     acc.inertance += rho * ell * (1.0 / (kPi * (r_eff * r_eff - a * a)) - 1.0 / (kPi * r_eff * r_eff));
   }
+}
+
+std::span<const flow::SegmentOcclusion> WireOcclusion::finish() {
+  const auto& net = flow_.network();
   stats_.occupied_segments = static_cast<int>(touched_.size());
   for (int s : touched_) {
     const auto k = static_cast<size_t>(s);

@@ -236,9 +236,29 @@ void CoSimulation::couple_occlusion() {
   }
 }
 
+void CoSimulation::shield_wire() {
+  // The wire inside the catheter is out of the blood: no drag there (the catheter's own
+  // VesselForces drags on its outer radius), and the catheter occludes in its place.
+  if (cath_ && forces_) forces_->set_shielded(lumen_->inside());
+}
+
 void CoSimulation::occlude() {
   if (!occlusion_) return;
   const auto positions = sim_->positions();
+  if (cath_ && cath_forces_) {
+    // The catheter, and the wire up to the first vertex inside it (the part beyond its tip).
+    shield_wire();
+    const auto& inside = forces_->shielded();
+    int exposed = 0;
+    while (exposed < sim_->first_clamped_vertex() &&
+           !(static_cast<size_t>(exposed) < inside.size() && inside[static_cast<size_t>(exposed)]))
+      ++exposed;
+    fsolver_->set_occlusion(
+        occlusion_->update({{positions, exposed, forces_->segments(), sim_->discretization().edge_radius},
+                            {cath_->positions(), cath_->first_clamped_vertex(), cath_forces_->segments(),
+                             cath_->discretization().edge_radius}}));
+    return;
+  }
   fsolver_->set_occlusion(occlusion_->update(positions, sim_->first_clamped_vertex(), forces_->segments(),
                                              sim_->discretization().edge_radius));
 }
@@ -312,6 +332,7 @@ void CoSimulation::step() {
     rod::StepReport rep;
     if (cath_) {
       // Wire and catheter together (catheter.hpp, step_pair).
+      shield_wire();
       const PairStepReport pair = step_pair(*sim_, *cath_, *lumen_, dt_);
       rep = pair.wire;
       pair_sweeps_ += pair.sweeps;

@@ -189,6 +189,10 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     in.dt = rod.dt;
     for (int i = 0; i < free; ++i) {
       const auto k = static_cast<size_t>(i);
+      if (k < shielded_.size() && shielded_[k]) {
+        fluid_[k].setZero(), reynolds_[k] = 0.0;
+        continue;
+      }
       const Vec3& x = rod.position(i);
       const int s = segment_[k];
       in.u = velocity_(s, x);

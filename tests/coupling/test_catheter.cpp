@@ -14,6 +14,7 @@
 #include "flowire/common/config.hpp"
 #include "flowire/coupling/catheter.hpp"
 #include "flowire/coupling/scene.hpp"
+#include "flowire/flow/annulus.hpp"
 #include "flowire/rod/simulator.hpp"
 #include "flowire_test.hpp"
 
@@ -718,4 +719,68 @@ output: {{csv: true, vtk: false}}
       EXPECT_EQ(s["catheter"]["unconverged_steps"].get<int>(), 0);
     }
   }
+}
+
+// The catheter in the blood, through a scene: a 1 mm catheter lies 4 cm along the axis of a
+// 3 mm tube carrying a steady flow, the 0.2 mm wire runs 2 cm on beyond its tip. A segment the
+// catheter fills is occluded as a concentric annulus of the catheter's outer radius: its
+// resistance factor is the exact one for κ = 1/3 (flow/annulus.hpp), not the wire's κ = 1/15.
+// The wire inside the catheter feels no blood drag (zero at every vertex behind its tip), the
+// wire beyond the tip and the catheter do.
+TEST(CatheterPair, TheCatheterOccludesTheVesselAndShieldsTheWireFromTheBlood) {
+  const auto dir = flowire::testing::scratch_dir("catheter-blood");
+  const std::string yaml = R"(
+vessels: {generator: {type: straight_tube, length: 0.1, radius: 3 mm}, max_segment_length: 5 mm}
+flow: {solver: superposition, inlet: {pressure: 100 Pa}, outlets: {pressure: 0 Pa}}
+wire: {length: 0.3, radius: 0.2 mm, youngs_modulus: 60 GPa, density: 6450, segment_length: 2 mm}
+insertion: {speed: 0, initial_length: 6 cm}
+catheter: {length: 0.3, outer_radius: 1 mm, inner_radius: 0.55 mm, initial_length: 4 cm}
+solve: {dt: 5 ms, duration: 0.02 s}
+output: {csv: true, vtk: false}
+)";
+  const auto cfg = config::load_config_text(yaml, "scene.yaml", scene_schema(), {"output.dir=" + dir.string()});
+  const auto s = run_scene(cfg).summary;
+  ASSERT_EQ(s["status"], "ok") << s.dump();
+  ASSERT_EQ(s["occlusion"]["model"], "annulus");
+  const double f_cath = flow::annulus_resistance_factor(1.0 / 3.0, 0.0);
+  const double f_wire = flow::annulus_resistance_factor(0.2 / 3.0, 0.0);
+  const double f = s["occlusion"]["max_resistance_factor"].get<double>();
+  std::printf("largest resistance factor %.5f; concentric annulus of the catheter %.5f, of the wire %.5f\n", f, f_cath,
+              f_wire);
+  EXPECT_NEAR(f / f_cath, 1.0, 2e-3);
+  // Drag per vertex (arc length s from the base, |drag|), the wire's and the catheter's.
+  auto drag_of = [&](const char* file) {
+    std::vector<std::pair<double, double>> out;
+    std::ifstream in(dir / file);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      double t, vertex, arc, x, y, z, dx, dy, dz;
+      if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &t, &vertex, &arc, &x, &y, &z, &dx, &dy,
+                      &dz) == 9)
+        out.emplace_back(arc, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    return out;
+  };
+  double inside_max = 0.0, outside_min = 1e300, cath_min = 1e300;
+  int inside = 0, outside = 0, cath = 0;
+  for (const auto& [arc, drag] : drag_of("wire.csv")) {
+    if (arc <= 0.0 || arc >= 0.06) continue;  // the clamp and the tip
+    if (arc < 0.04 - 2e-3)
+      inside_max = std::max(inside_max, drag), ++inside;
+    else if (arc > 0.04 + 2e-3)
+      outside_min = std::min(outside_min, drag), ++outside;
+  }
+  for (const auto& [arc, drag] : drag_of("catheter.csv"))
+    if (arc > 0.0 && arc < 0.04 - 2e-3) cath_min = std::min(cath_min, drag), ++cath;
+  ASSERT_GT(inside, 10);
+  ASSERT_GT(outside, 5);
+  ASSERT_GT(cath, 10);
+  std::printf(
+      "drag: largest on the wire behind the catheter's tip %.3e N, smallest beyond it %.3e N, on the "
+      "catheter %.3e N\n",
+      inside_max, outside_min, cath_min);
+  EXPECT_EQ(inside_max, 0.0);
+  EXPECT_GT(outside_min, 0.0);
+  EXPECT_GT(cath_min, 0.0);
 }

@@ -127,6 +127,9 @@ class LumenContact {
   std::vector<int> wire_edge;
   /// @brief Choose wire_edge from the held configurations.
   void assign_edges();
+  /// @brief Per held wire vertex: inside the catheter (assigned an edge and behind the plane of
+  /// its tip), where the blood does not reach it.
+  [[nodiscard]] std::vector<char> inside() const;
   /// @brief Hold the catheter / the wire at the rod's current state, velocities included (and
   /// assign_edges()).
   void hold_catheter(const rod::RodSimulator& catheter);

@@ -142,6 +142,7 @@ class CoSimulation {
   void couple_occlusion();                      ///< coupling.occlusion
   /// Sets the flow's segment occlusion from the wire of the last accepted step.
   void occlude();
+  void shield_wire();
   config::Config scene_;
   std::optional<vessels::Network> net_;
   std::unique_ptr<flow::FlowSolver> fsolver_;

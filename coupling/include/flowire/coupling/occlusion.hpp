@@ -26,6 +26,7 @@
 /// an occupied segment is the empty tube's scaled by F (the oscillatory annulus is not
 /// solved); a wire wider than kMaxOcclusionRadiusRatio of the vessel is taken at that ratio
 /// (counted in `radius_ratio_clamped`).
+#include <initializer_list>
 #include <span>
 #include <vector>
 
@@ -58,11 +59,24 @@ class WireOcclusion {
   /// edge i (x_i → x_{i+1}) of radius `edge_radius[i]`.
   std::span<const flow::SegmentOcclusion> update(std::span<const Eigen::Vector3d> x, int free,
                                                  std::span<const int> segment, std::span<const double> edge_radius);
+  /// @brief One instrument in the vessels, as update()'s arguments.
+  struct Body {
+    std::span<const Eigen::Vector3d> x;
+    int free = 0;
+    std::span<const int> segment;
+    std::span<const double> edge_radius;
+  };
+  /// @brief Occlusion by several instruments that do not overlap (a catheter, and the part of
+  /// the wire beyond its tip): each segment's sums run over all of them.
+  std::span<const flow::SegmentOcclusion> update(std::initializer_list<Body> bodies);
 
   [[nodiscard]] std::span<const flow::SegmentOcclusion> occlusion() const { return occ_; }
   [[nodiscard]] const OcclusionStats& stats() const { return stats_; }
 
  private:
+  void add(std::span<const Eigen::Vector3d> x, int free, std::span<const int> segment,
+           std::span<const double> edge_radius);
+  std::span<const flow::SegmentOcclusion> finish();
   struct Sum {
     double length = 0.0;      // Σ ℓ
     double offset = 0.0;      // Σ ℓ d

@@ -127,8 +127,13 @@ class VesselForces : public rod::ExternalForce {
     intro_reach_ = reach;
   }
   [[nodiscard]] std::uint64_t introducer_contacts() const { return intro_contacts_; }
+  /// @brief Vertices the blood does not reach (a wire inside a catheter): shielded[i] != 0 has
+  /// no drag. Set between steps (the catheter's LumenContact knows which); empty: none.
+  void set_shielded(std::vector<char> shielded) { shielded_ = std::move(shielded); }
+  [[nodiscard]] const std::vector<char>& shielded() const { return shielded_; }
 
  private:
+  std::vector<char> shielded_;
   void ensure_size(int n);
   std::vector<int> remap_segments_;
   std::vector<vessels::Neighbourhood> remap_near_;
