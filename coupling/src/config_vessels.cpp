@@ -5,9 +5,11 @@
 #include <string>
 
 #include "flowire/common/error.hpp"
+#include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/io.hpp"
+#include "flowire/vessels/sections.hpp"
 #include "scene_sections.hpp"
 
 namespace flowire::coupling {
@@ -28,6 +30,13 @@ void declare_vessel_keys(config::Schema& s) {
         "width of the Gaussian weights of the smooth implicit surface (a weighted mean of the nearby triangles' "
         "planes) whose distance the contact uses (default 0.4 of the mean edge length; 0: the exact distance)")
       .non_negative();
+  s.add(
+      "vessels.radius", Type::Enum, "auto", D::None,
+      "where the network's radii come from: surface: each branch's radius at each node is sqrt(A/pi) of the lumen "
+      "surface's cross-section there (docs/fem-real-lumens.md; junctions and open ends take the nearest section's "
+      "ratio); inscribed: the centerline file's (maximum inscribed sphere) radii; auto: surface where vessels.surface "
+      "is given",
+      {"auto", "surface", "inscribed"});
   s.add("vessels.max_segment_length", Type::Number, "5 mm", D::Length,
         "branches are split into cylinders no longer than this")
       .positive();
@@ -68,7 +77,47 @@ void declare_vessel_keys(config::Schema& s) {
       .positive();
 }
 
-vessels::Network build_scene_network(const config::Config& c) {
+namespace {
+vessels::Network build_centerline_network(const config::Config& c);
+}
+
+vessels::Network build_scene_network(const config::Config& c) { return build_scene_network_and_radii(c).network; }
+
+SceneNetwork build_scene_network_and_radii(const config::Config& c) {
+  SceneNetwork out{build_centerline_network(c), nullptr, {}, 0.0, {}};
+  const std::string mode = c.string("vessels.radius");
+  const bool surface = c.has("vessels.surface");
+  if (mode == "surface" && !surface)
+    throw_input_error(c.where("vessels.radius"), "surface radii need a vessels.surface");
+  if (mode == "inscribed" || !surface) {
+    out.radius = {{"source", "inscribed"},
+                  {"why", surface ? "vessels.radius: inscribed" : "no vessels.surface: the centerline file's radii"}};
+    return out;
+  }
+  try {
+    out.surface = make_scene_surface(c, out.network, out.surface_info, out.surface_smoothing);
+  } catch (const Error& e) {
+    if (e.kind() != ErrorKind::Input) throw;
+    throw_input_error(c.where("vessels.surface"), e.what());  // the key as well as the file
+  }
+  vessels::SectionRadii r = vessels::section_radii(out.network, *out.surface);
+  out.radius = {{"source", "surface"},
+                {"points", r.points},
+                {"measured", r.measured},
+                {"filled", r.filled},
+                {"branches_unmeasured", r.branches_unmeasured},
+                {"median_ratio", r.median_ratio}};
+  if (r.measured == 0)
+    throw_input_error(c.where("vessels.surface"),
+                      fmt::format("{}: no cross-section of the surface encloses the centerline ({} points cut): is it "
+                                  "the lumen of vessels.file, in the same length unit?",
+                                  c.string("vessels.surface"), r.points));
+  out.network = std::move(r.network);
+  return out;
+}
+
+namespace {
+vessels::Network build_centerline_network(const config::Config& c) {
   vessels::BuildOptions build;
   build.max_segment_length = c.number("vessels.max_segment_length");
   build.radius_change = c.number("vessels.radius_change");
@@ -109,5 +158,6 @@ vessels::Network build_scene_network(const config::Config& c) {
     throw;
   }
 }
+}  // namespace
 
 }  // namespace flowire::coupling

@@ -104,8 +104,13 @@ CoSimulation::CoSimulation(const config::Config& scene, nlohmann::json* facts) :
 }
 
 void CoSimulation::build_network(nlohmann::json& s) {
-  net_ = build_scene_network(scene_);
+  SceneNetwork sn = build_scene_network_and_radii(scene_);
+  net_ = std::move(sn.network);
+  surface_ = std::move(sn.surface);  // read for the radii: the wall contact takes it as it is
+  surface_info_ = std::move(sn.surface_info);
+  surface_smoothing_ = sn.surface_smoothing;
   s["network"] = counts_json(net_->counts());
+  s["network"]["radius"] = sn.radius;
 }
 
 void CoSimulation::build_flow(nlohmann::json& s) {
@@ -183,7 +188,10 @@ void CoSimulation::add_wall_forces(const rod::WireSpec& spec, int entry, nlohman
   forces_ = make_vessel_forces(c, *index_, spec, fsolver_.get());
   if (forces_) {
     nlohmann::json info;
-    surface_ = make_scene_surface(c, *net_, info, wall_smoothing);  // vessels.surface: the wall the wire touches
+    if (!surface_)  // vessels.surface: the wall the wire touches
+      surface_ = make_scene_surface(c, *net_, surface_info_, surface_smoothing_);
+    info = surface_info_;
+    wall_smoothing = surface_smoothing_;
     if (surface_) forces_->set_surface(surface_.get(), wall_smoothing), s["surface"] = info;
     introduce(*forces_);
     sim_->add_external(forces_);

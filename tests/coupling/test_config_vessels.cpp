@@ -1,6 +1,11 @@
 // The vessels: section (coupling/src/config_vessels.cpp): its keys, and the network they build.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+#include "flowire_test.hpp"
 #include "scene_config_test.hpp"
 #include "scene_sections.hpp"
 
@@ -32,6 +37,51 @@ TEST(ConfigVessels, BadVesselsAreRejectedNamingFileLineAndKey) {
             }).find("exactly one of vessels.file or vessels.generator"),
             std::string::npos);
 }
+
+#ifdef FLOWIRE_TEST_HAVE_VTK
+// vessels.radius through a scene: an elliptic tube (half-axes 3 and 2 mm, a 128-gon, as an OBJ
+// surface) around a centerline file that gives the inscribed radius 2 mm. With the surface the
+// network's radius is √(A/π) of the section (√(ab) to 3e-4); inscribed keeps the file's; surface
+// radii without a surface are bad input naming the key.
+TEST(ConfigVessels, ASurfaceGivesTheNetworkTheRadiusOfItsSectionsArea) {
+  const auto dir = flowire::testing::scratch_dir("config-vessels-sections");
+  const double a = 3e-3, b = 2e-3, pi = std::numbers::pi;
+  const int n = 128, rings = 22;
+  {
+    std::ofstream obj(dir / "tube.obj");
+    obj.precision(17);
+    for (int r = 0; r < rings; ++r)
+      for (int k = 0; k < n; ++k)
+        obj << "v " << -1e-3 + 0.042 * r / (rings - 1) << " " << a * std::cos(2 * pi * k / n) << " "
+            << b * std::sin(2 * pi * k / n) << "\n";
+    for (int r = 0; r + 1 < rings; ++r)
+      for (int k = 0; k < n; ++k) {
+        const int i0 = r * n + k + 1, i1 = r * n + (k + 1) % n + 1;
+        obj << "f " << i0 << " " << i1 << " " << i1 + n << "\nf " << i0 << " " << i1 + n << " " << i0 + n << "\n";
+      }
+    std::ofstream net(dir / "tube.yaml");
+    net << "branches:\n  - name: tube\n    points: [[0, 0, 0, 0.002], [0.04, 0, 0, 0.002]]\n";
+  }
+  const std::string vessels =
+      "vessels: {file: " + (dir / "tube.yaml").string() + ", surface: " + (dir / "tube.obj").string();
+  const SceneNetwork sn = build_scene_network_and_radii(test::scene(vessels + "}\n"));
+  EXPECT_EQ(sn.radius["source"], "surface");
+  EXPECT_EQ(sn.radius["measured"].get<int>(), sn.radius["points"].get<int>());
+  ASSERT_TRUE(sn.surface);  // kept for the wall contact
+  const double r_section = std::sqrt(0.5 * n * a * b * std::sin(2 * pi / n) / pi);
+  EXPECT_NEAR(r_section / std::sqrt(a * b), 1.0, 3e-4);  // the 128-gon's deficit
+  EXPECT_NEAR(sn.network.counts().radius_max, r_section, 1e-9 * r_section);
+  EXPECT_NEAR(sn.network.counts().radius_min, r_section, 1e-9 * r_section);
+  const SceneNetwork kept = build_scene_network_and_radii(test::scene(vessels + ", radius: inscribed}\n"));
+  EXPECT_EQ(kept.radius["source"], "inscribed");
+  EXPECT_EQ(kept.network.counts().radius_max, 2e-3);
+  EXPECT_NE(test::input_error([&] {
+              (void)build_scene_network(
+                  test::scene("vessels: {file: " + (dir / "tube.yaml").string() + ", radius: surface}\n"));
+            }).find("vessels.radius"),
+            std::string::npos);
+}
+#endif
 
 }  // namespace
 }  // namespace flowire::coupling

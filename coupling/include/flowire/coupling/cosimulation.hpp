@@ -149,6 +149,8 @@ class CoSimulation {
   std::unique_ptr<rod::RodSimulator> sim_;
   std::optional<vessels::SpatialIndex> index_;
   std::unique_ptr<vessels::LumenSurface> surface_;  // vessels.surface, null without
+  nlohmann::json surface_info_;                     // what reading it found (summary.json)
+  double surface_smoothing_ = 0.0;
   std::shared_ptr<VesselForces> forces_;
   std::shared_ptr<TipForces> tip_forces_;
   std::unique_ptr<WireOcclusion> occlusion_;

@@ -12,6 +12,7 @@
 #include "flowire/coupling/catheter.hpp"
 #include "flowire/rod/model.hpp"
 #include "flowire/vessels/network.hpp"
+#include "flowire/vessels/surface.hpp"
 
 namespace flowire::flow {
 class FlowSolver;
@@ -29,8 +30,21 @@ const config::Schema& scene_schema();
 config::Config load_scene(const std::string& file, const std::vector<std::string>& overrides,
                           const std::string& out_dir = {});
 
-/// @brief Build the vessel network a scene describes (`vessels.file` or `vessels.generator`).
+/// @brief Build the vessel network a scene describes (`vessels.file` or `vessels.generator`),
+/// with its radii from the sections of `vessels.surface` where the scene has one
+/// (`vessels.radius`, vessels/sections.hpp).
 vessels::Network build_scene_network(const config::Config& scene);
+
+/// @brief The network with what building it read and measured: the lumen surface when the
+/// radii came from it (kept for the wall contact), and the radii's source for summary.json.
+struct SceneNetwork {
+  vessels::Network network;
+  std::unique_ptr<vessels::LumenSurface> surface;  ///< read for the radii; null otherwise
+  nlohmann::json surface_info;                     ///< make_scene_surface's facts
+  double surface_smoothing = 0.0;
+  nlohmann::json radius;  ///< {"source": "surface" | "inscribed", ...}
+};
+SceneNetwork build_scene_network_and_radii(const config::Config& scene);
 
 /// @brief The wire a scene describes (`wire:` and `insertion.initial_length`), before the
 /// vessel network places its base.

@@ -160,6 +160,9 @@ class LumenSurface {
   /// any triangle), else by the hierarchy. The same answer either way.
   SurfaceDistance distance(const Vec3& x, const SurfaceNeighbourhood& near) const;
 
+  /// @brief The triangles whose bounding boxes lie within @p radius of @p x (into @p out).
+  void triangles_within(const Vec3& x, double radius, std::vector<int>& out) const { gather(x, radius, out); }
+
   /// @brief Reference answer by checking every triangle (tests and benchmarks).
   SurfaceDistance distance_brute_force(const Vec3& x) const;
 
