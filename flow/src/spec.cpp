@@ -1,5 +1,6 @@
 #include "flowire/flow/spec.hpp"
 
+#include "flowire/flow/outlet_file.hpp"
 #include "flowire/flow/rlc.hpp"
 
 #include <fmt/format.h>
@@ -337,6 +338,61 @@ int outlet_node(const Config& cfg, const std::string& path, const std::string& n
   return node;
 }
 
+/// The outlets of `flow.outlets.file`, each at the network end it names (by name) or lies at (a
+/// deck's outlet node, within a tenth of the end's radius); the scene's own named outlets win.
+/// Every other end needs a condition: from the file, the scene, or a default the scene states.
+void add_file_outlets(const Config& cfg, const Network& net, FlowSpec& s) {
+  const std::string key = "flow.outlets.file";
+  const std::string path = cfg.resolve_path(cfg.string(key));
+  const std::string unit = cfg.string_or("vessels.length_unit", "");
+  const double factor = units::length_unit_factor(unit.empty() ? "cm" : unit, cfg.where("vessels.length_unit"));
+  std::vector<FileOutlet> file;
+  try {
+    file = read_outlet_file(path, factor);
+  } catch (const Error& e) {
+    if (e.kind() != ErrorKind::Input) throw;
+    throw_input_error(cfg.where(key), e.what());
+  }
+  const auto taken = [&](int node) {
+    return std::any_of(s.outlets.begin(), s.outlets.end(), [node](const OutletBC& o) { return o.node == node; });
+  };
+  const auto is_inlet = [&](int e) {
+    return std::any_of(s.inlets.begin(), s.inlets.end(), [e](const InletBC& in) { return in.node == e; });
+  };
+  for (const FileOutlet& f : file) {
+    int node = -1;
+    if (f.has_position) {
+      double best = std::numeric_limits<double>::infinity();
+      for (int e : net.ends()) {
+        const double d = (net.node(e) - f.position).norm();
+        if (d < best) best = d, node = e;
+      }
+      const auto& seg = net.segment(*net.node_segments(node).first);
+      if (!(best <= 0.1 * seg.radius) || is_inlet(node))
+        throw_input_error(cfg.where(key),
+                          fmt::format("{}: the outlet of {} at ({:.6g}, {:.6g}, {:.6g}) m is not an outlet of the "
+                                      "network (the nearest end, node {}, is {:.3g} mm away{})",
+                                      f.where, f.name, f.position.x(), f.position.y(), f.position.z(), node, 1e3 * best,
+                                      is_inlet(node) ? ", and it is the inlet" : ""));
+    } else {
+      node = outlet_node(cfg, key, f.name, net, s.inlets);
+    }
+    if (taken(node)) continue;  // the scene names this outlet itself
+    OutletBC bc = f.bc;
+    bc.node = node;
+    s.outlets.push_back(bc);
+  }
+  const bool stated_default =
+      cfg.has("flow.outlets.pressure") || cfg.has("flow.outlets.resistance") || cfg.has_section("flow.outlets.rcr");
+  std::string missing;
+  for (int e : net.ends())
+    if (!is_inlet(e) && !taken(e)) missing += (missing.empty() ? "" : ", ") + std::to_string(e);
+  if (!missing.empty() && !stated_default)
+    throw_input_error(cfg.where(key), fmt::format("{}: the network's outlets {} have no condition in the file; give "
+                                                  "them one (flow.outlets.NAME) or a default for the rest",
+                                                  path, missing));
+}
+
 }  // namespace
 
 // The keys from_config reads, declared where they are read.
@@ -416,6 +472,11 @@ void declare_scene_keys(config::Schema& s) {
   s.add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure")
       .positive();
   s.add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
+  s.add("flow.outlets.file", Type::String, "", D::None,
+        "outlet conditions from a patient model's file: an svOneDSolver deck (.in: each outlet SEGMENT's RCR, "
+        "RESISTANCE or PRESSURE table, matched to the network end at its outlet node) or SimVascular's rcrt.dat (an "
+        "RCR per name, a branch name or node id of the network); CGS units as those tools write them; the outlets "
+        "named in the scene win (docs/flow-conditions.md)");
   s.add("flow.outlets.scaling", Type::Enum, "none", D::None,
         "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so "
         "each outlet flow is proportional to r^3",
@@ -558,6 +619,7 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
                           fmt::format("outlet '{}' is node {}, which is already given a condition", name, named.node));
     s.outlets.push_back(named);
   }
+  if (cfg.has("flow.outlets.file")) add_file_outlets(cfg, net, s);
   s.outlets.push_back(o);
   resolve_nodes(s, net);
 
