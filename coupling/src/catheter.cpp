@@ -39,6 +39,21 @@ rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wi
   return s;
 }
 
+std::vector<double> cell_weights(const rod::RodSimulator& r) {
+  const auto& rest = r.discretization().rest_length;
+  const int nv = r.vertex_count(), ne = static_cast<int>(rest.size());
+  const double h = r.model().h;
+  std::vector<double> w(static_cast<size_t>(nv), 1.0);
+  for (int i = 0; i < nv; ++i) {
+    double sum = 0.0;
+    int count = 0;
+    if (i > 0 && i - 1 < ne) sum += rest[static_cast<size_t>(i - 1)], ++count;
+    if (i < ne) sum += rest[static_cast<size_t>(i)], ++count;
+    if (count && h > 0.0) w[static_cast<size_t>(i)] = sum / count / h;
+  }
+  return w;
+}
+
 double tip_weight(double alpha, double* dw, double* d2w) {
   // The share of the vertex's cell (one edge, centred on it) inside the lumen, α + ½ for
   // α ∈ [−½, ½], smoothed by the quintic smoothstep so that w, w′ and w″ are continuous.
@@ -74,6 +89,7 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   LumenPenalty p;
   p.grad_x.setZero(), p.grad_a.setZero(), p.grad_b.setZero();
   p.hess_xx.setZero(), p.hess_aa.setZero(), p.hess_bb.setZero(), p.hess_ab.setZero();
+  p.hess_xa.setZero(), p.hess_xb.setZero();
   const Eigen::Vector3d e = b - a;
   const double l2 = e.squaredNorm();
   const double raw = l2 > 0.0 ? (x - a).dot(e) / l2 : 0.0;
@@ -124,6 +140,11 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
   const M sab = interior ? M(n * db.transpose() - da * n.transpose()) : M::Zero();
   p.hess_ab = k * (d2phi * (ra.transpose() * n) * (rb.transpose() * n).transpose() +
                    dphi * (ra.transpose() * pn * rb / d + sab));
+  // ∂²r/∂x_i∂a_j · n = n_j e_i/|e|² and ∂²r/∂x_i∂b_j · n = −n_j e_i/|e|² (interior; n ⊥ e).
+  const M sxa = interior ? M(e * n.transpose() / l2) : M::Zero();
+  const Eigen::Vector3d rxn = rx.transpose() * n;
+  p.hess_xa = k * (d2phi * rxn * (ra.transpose() * n).transpose() + dphi * (rx.transpose() * pn * ra / d + sxa));
+  p.hess_xb = k * (d2phi * rxn * (rb.transpose() * n).transpose() + dphi * (rx.transpose() * pn * rb / d - sxa));
   p.energy = energy;
   if (w < 1.0) {
     // E_w = w(α) E: ∂_y E_w = w ∂_y E + E w′ α_y,
@@ -145,6 +166,10 @@ LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, c
     p.hess_aa = hess(p.hess_aa, p.grad_a, p.grad_a, da, da, aaa);
     p.hess_bb = hess(p.hess_bb, p.grad_b, p.grad_b, db, db, abb);
     p.hess_ab = hess(p.hess_ab, p.grad_a, p.grad_b, da, db, aab);
+    // α_xa = (−I + 2 e eᵀ/|e|²)/|e|², α_xb = −α_xa.
+    const M axa = (-I + 2.0 * e * e.transpose() / l2) / l2;
+    p.hess_xa = hess(p.hess_xa, p.grad_x, p.grad_a, ax, da, axa);
+    p.hess_xb = hess(p.hess_xb, p.grad_x, p.grad_b, ax, db, M(-axa));
     p.grad_x = w * p.grad_x + energy * dw * ax;
     p.grad_a = w * p.grad_a + energy * dw * da;
     p.grad_b = w * p.grad_b + energy * dw * db;
@@ -239,7 +264,7 @@ void LumenContact::lag_friction() {
     const Eigen::Vector3d& x = wire_snapshot[i];
     const Eigen::Vector3d& a = catheter_snapshot[static_cast<size_t>(j)];
     const Eigen::Vector3d& b = catheter_snapshot[static_cast<size_t>(j) + 1];
-    const LumenPenalty p = lumen_penalty(x, a, b, clearance_, stiffness_, j == 0, onset_);
+    const LumenPenalty p = lumen_penalty(x, a, b, clearance_, stiffness_ * weight(i), j == 0, onset_);
     const Eigen::Vector3d r = x - (a + p.alpha * (b - a));
     if (!(p.energy > 0.0) || !(r.norm() > 0.0)) continue;
     FrictionContact& fc = friction_contact[i];
@@ -257,11 +282,11 @@ void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumula
     const int j = i < wire_edge.size() ? wire_edge[i] : nearest_edge(wire_snapshot[i], wire_arc[i], cath, arc);
     if (j < 0 || j + 1 >= static_cast<int>(cath.size())) continue;
     const LumenPenalty p =
-        lumen_penalty(wire_snapshot[i], cath[j], cath[j + 1], clearance_, stiffness_, j == 0, onset_);
+        lumen_penalty(wire_snapshot[i], cath[j], cath[j + 1], clearance_, stiffness_ * weight(i), j == 0, onset_);
     if (!(p.energy > 0.0)) continue;
     out.add_conservative_force(j, -p.grad_a);
     out.add_conservative_force(j + 1, -p.grad_b);
-    out.add_energy(p.energy);
+    if (catheter_reports_energy) out.add_energy(p.energy);
     Eigen::Matrix<double, 6, 6> hess;
     hess << p.hess_aa, p.hess_ab, p.hess_ab.transpose(), p.hess_bb;
     out.add_edge_jacobian(j, -hess);
@@ -270,7 +295,8 @@ void LumenContact::evaluate_catheter(const rod::RodView& rod, rod::ForceAccumula
   for (size_t i = 0; i < friction_contact.size() && i < wire_velocity.size(); ++i) {
     const FrictionContact& fc = friction_contact[i];
     if (fc.edge < 0 || fc.edge + 1 >= rod.vertex_count()) continue;
-    const FrictionResult fr = friction_at(fc, wire_velocity[i], rod.velocity(fc.edge), rod.velocity(fc.edge + 1));
+    FrictionResult fr = friction_at(fc, wire_velocity[i], rod.velocity(fc.edge), rod.velocity(fc.edge + 1));
+    if (!catheter_reports_energy) fr.dissipation = 0.0;
     add_edge_point_friction(out, fc.edge, fc.alpha, fr, rod.dt);
   }
 }
@@ -280,8 +306,8 @@ double LumenContact::energy() const {
   for (size_t i = 0; i < wire_snapshot.size(); ++i) {
     const int j = i < wire_edge.size() ? wire_edge[i] : -1;
     if (j >= 0 && j + 1 < static_cast<int>(catheter_snapshot.size()))
-      e += lumen_penalty(wire_snapshot[i], catheter_snapshot[j], catheter_snapshot[j + 1], clearance_, stiffness_,
-                         j == 0, onset_)
+      e += lumen_penalty(wire_snapshot[i], catheter_snapshot[j], catheter_snapshot[j + 1], clearance_,
+                         stiffness_ * weight(i), j == 0, onset_)
                .energy;
   }
   return e;
@@ -314,6 +340,7 @@ void LumenContact::hold_wire(const rod::RodSimulator& wire) {
   wire_snapshot.assign(wire.positions().begin(), wire.positions().end());
   wire_velocity.assign(wire.velocities().begin(), wire.velocities().end());
   wire_arc.assign(wire.arc_lengths().begin(), wire.arc_lengths().end());
+  wire_weight = cell_weights(wire);
   assign_edges();
 }
 

@@ -341,7 +341,11 @@ void CoSimulation::step() {
     if (cath_) {
       // Wire and catheter together (catheter.hpp, step_pair).
       shield_wire();
-      const PairStepReport pair = step_pair(*sim_, *cath_, *lumen_, dt_);
+      // One Newton over both rods (implicit Euler, kinematic feeding); the block sweeps otherwise.
+      const bool joint = sim_->settings().integrator == rod::Integrator::ImplicitEuler && !(sim_->push_force() > 0.0) &&
+                         !(cath_->push_force() > 0.0);
+      const PairStepReport pair =
+          joint ? step_pair_newton(*sim_, *cath_, *lumen_, dt_) : step_pair(*sim_, *cath_, *lumen_, dt_);
       rep = pair.wire;
       pair_sweeps_ += pair.sweeps;
       if (!pair.converged && pair.wire.converged() && pair.catheter.converged()) ++pair_unconverged_;

@@ -121,6 +121,7 @@ struct RodSimulator::Work {
   std::vector<double> theta_accepted, twist_accepted;  ///< (ne), (nv)
   std::vector<EdgeFrame> frame_accepted;               ///< (ne)
   Eigen::VectorXd fext_accepted, fcons_accepted;       ///< (nd) its loads
+  Eigen::VectorXd q_accepted;                          ///< (nd) its unknowns (coupled steps)
 
   // Adaptivity (adapt.cpp): the plan, and the old state while resampling.
   std::vector<double> turn_angle;         ///< (nv) turning angle, or the rest shape's if larger

@@ -51,6 +51,13 @@ void check_block(const V3& x, const V3& a, const V3& b, double c, double k, bool
       for (int l = 0; l < 3; ++l)
         EXPECT_NEAR(p.hess_ab(l, m), cross[l], 1e-5 * k) << "hessian a-b, (" << l << "," << m << ")";
     }
+    if (which > 0) {  // the cross blocks ∂²E/∂x∂a, ∂²E/∂x∂b: column m of ∂(∂E/∂x)/∂a or /∂b
+      const V3 cross = (plus.grad_x - minus.grad_x) / (2 * h);
+      const Eigen::Matrix3d& hx = which == 1 ? p.hess_xa : p.hess_xb;
+      for (int l = 0; l < 3; ++l)
+        EXPECT_NEAR(hx(l, m), cross[l], 1e-5 * k)
+            << "hessian x-" << (which == 1 ? "a" : "b") << ", (" << l << "," << m << ")";
+    }
   }
 }
 
@@ -659,10 +666,9 @@ std::string bent_vessel(double lead, double bend, double turn, double tail, doub
 // period (-3% to +8% here, where the wire's bending length √(EI/T) ≈ 0.9 mm is below the 2 mm edge).
 // The wire's own bending adds forces where it enters and leaves the bend, about √(EI T)/R each
 // (1% of T θ μ here: a soft 0.3 mm wire); the walls are frictionless so that only the lumen rubs.
-// The tension comes on at once at t = 0 (a scene's loads have no ramp), and that start is the
-// pair's hardest part: at dt 5 ms every step converges; at 2.5 ms (θ = π, μ = 0.3) or 1 ms
-// (θ = π/2, μ = 0.3) a few of its first sub-steps stay at the Newton limit, and at T = 0.1 N
-// even without friction (docs/catheter.md).
+// The tension comes on at once at t = 0 (a scene's loads have no ramp): with one Newton over
+// both rods every step converges (also at dt 2.5 and 1 ms; with the block sweeps a few of the
+// start's sub-steps stayed at the Newton limit there, docs/catheter.md).
 TEST(CatheterPair, AWirePulledThroughABentCatheterFollowsTheCapstanLaw) {
   const double pi = std::numbers::pi, T = 0.5, bend = 0.025, v = 0.01, h = 2e-3, duration = 0.5, dt = 5e-3;
   for (const double turn : {0.5 * pi, pi}) {

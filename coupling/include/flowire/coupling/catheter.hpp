@@ -13,7 +13,9 @@
 /// EI_pair = EI_wire + EI_catheter exactly (the composite tube in contact), not the
 /// Halpin–Tsai estimate of a homogenized composite (composite catheter paper, 2006).
 ///
-/// **Coupling.** Partitioned (block Gauss–Seidel sweeps): the wire is solved against the
+/// **Coupling.** Dynamic implicit Euler steps: one Newton over both rods (step_pair_newton), the
+/// contact's coupling blocks in the joint matrix. Statics and the midpoint rule: partitioned
+/// (block Gauss–Seidel sweeps): the wire is solved against the
 /// catheter held, then the catheter against the wire just computed; each rod keeps its own
 /// side of the penalty implicit (force and Jacobian in its Newton), so stiff lumen contact is
 /// stable in each solve. Within a time step the sweeps repeat from the step's start, with the
@@ -22,6 +24,7 @@
 /// the gradient of the same energy with respect to the catheter's vertices (the force at the
 /// nearest point, split between the edge's ends by the projection parameter).
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <memory>
 #include <vector>
 
@@ -51,6 +54,10 @@ struct CatheterSpec {
 /// its entry (same base position and direction, same segment length).
 [[nodiscard]] rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wire);
 
+/// @brief The mean rest length of the edges at each vertex of @p rod over its grid's segment length
+/// (RodView::cell_weight, for every vertex).
+[[nodiscard]] std::vector<double> cell_weights(const rod::RodSimulator& rod);
+
 /// @brief Width of the lumen penalty's smoothed onset as a fraction of the clearance: δ = 0.3 c
 /// (a wire vertex starts to feel the lumen 0.15 c inside the clearance and feels ½ k (d − c)₊²'s
 /// force from 0.15 c beyond it). With the plain ½ k (d − c)₊² (δ = 0), whose stiffness jumps
@@ -78,6 +85,7 @@ struct LumenPenalty {
   Eigen::Vector3d grad_x, grad_a, grad_b;     ///< ∂E/∂x, ∂E/∂a, ∂E/∂b
   Eigen::Matrix3d hess_xx, hess_aa, hess_bb;  ///< ∂²E/∂x², ∂²E/∂a², ∂²E/∂b²
   Eigen::Matrix3d hess_ab;                    ///< ∂²E/∂a∂b
+  Eigen::Matrix3d hess_xa, hess_xb;           ///< ∂²E/∂x∂a, ∂²E/∂x∂b (rows x)
 };
 /// @brief The penalty of x against edge [a, b] with clearance @p c, stiffness @p k and onset
 /// width @p onset (δ of onset_quadratic; zero when d ≤ c − δ/2). Exact derivatives of the
@@ -137,6 +145,10 @@ class LumenContact {
   /// @brief Held velocities of the catheter's and the wire's vertices (hold_catheter, hold_wire).
   std::vector<Eigen::Vector3d> catheter_velocity;
   std::vector<Eigen::Vector3d> wire_velocity;
+  /// @brief The held wire's cell weights (RodView::cell_weight): the penalty of wire vertex i is
+  /// stiffness × weight(i) on both sides.
+  std::vector<double> wire_weight;
+  [[nodiscard]] double weight(size_t i) const { return i < wire_weight.size() ? wire_weight[i] : 1.0; }
 
   /// @brief Coulomb friction between the wire and the lumen (catheter.inner_friction): on each
   /// wire vertex pressed on the lumen, f = −μ N v_t/√(|v_t|² + ε²) (coulomb_friction) of the
@@ -165,6 +177,19 @@ class LumenContact {
   /// catheter edge's vertex velocities @p va, @p vb (zero force without a contact).
   [[nodiscard]] FrictionResult friction_at(const FrictionContact& fc, const Eigen::Vector3d& vp,
                                            const Eigen::Vector3d& va, const Eigen::Vector3d& vb) const;
+  /// @brief One Newton iteration over both rods (step_pair_newton): the catheter's side adds its
+  /// forces without their energy, which the wire's side reports whole (the penalty and the
+  /// friction's Δt·D as functions of both rods), so that the two rods' potentials add up to the
+  /// pair's once.
+  bool catheter_reports_energy = true;
+  /// @brief Copy both rods' positions and velocities into the held states, keeping the edges
+  /// each wire vertex is measured against (assigned at the step's start).
+  void sync(const rod::RodSimulator& wire, const rod::RodSimulator& catheter);
+  /// @brief The coupling blocks of the pair's Newton matrix, ∂²(E + Δt·D)/∂x_w∂x_c, as the
+  /// lower-triangle entries (catheter rows at @p catheter_offset, wire columns at 0) at the held
+  /// states, for the free vertices of each rod; Δt = @p dt.
+  void cross_matrix(std::vector<Eigen::Triplet<double>>& out, const rod::RodSimulator& wire,
+                    const rod::RodSimulator& catheter, int catheter_offset, double dt) const;
   [[nodiscard]] double clearance() const { return clearance_; }
   [[nodiscard]] double stiffness() const { return stiffness_; }
   /// @brief Width δ of the penalty's smoothed onset [m].
@@ -222,6 +247,14 @@ struct PairStepReport {
 /// step. Implicit Euler only (step_imbalance); with the midpoint rule one sweep per step.
 PairStepReport step_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact, double dt,
                          int max_sweeps = 8);
+
+/// @brief One implicit Euler step of wire and catheter as one system: Newton's method on both
+/// rods' unknowns at once, the lumen contact's coupling blocks in the matrix (cross_matrix), a
+/// sparse LDLᵀ of the joint system, and a backtracking line search on the sum of the two rods'
+/// merits; a step that does not converge is taken again as two halves (the rods' own
+/// max_subdivisions). The pair balances to each rod's own tolerance in every converged step,
+/// where the block sweeps (step_pair) stopped at 1e-5 of the force scale or not at all.
+PairStepReport step_pair_newton(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact, double dt);
 
 /// @brief ExternalForce adaptor: one side of a LumenContact.
 class LumenContactSide : public rod::ExternalForce {

@@ -356,6 +356,51 @@ class RodSimulator {
   /// current state — 0 means the equilibrium is stable.
   [[nodiscard]] int static_hessian_negative_eigenvalues();
 
+  /// @name One implicit Euler step solved together with other bodies
+  /// The parts of step() for a solver that takes one Newton iteration over several rods coupled
+  /// by external forces that depend on both (coupling/pair_newton.hpp): begin the step, then
+  /// per iteration assemble, give the gradient and matrix, try points along a direction and
+  /// keep or reject them, and finish. Implicit Euler and kinematic feeding only.
+  ///@{
+  /// @brief The step's start for a step of @p dt (as step(): feed, predictor, prescribed unknowns).
+  void coupled_begin(double dt);
+  /// @brief The incremental potential at the current iterate (external potentials included),
+  /// its gradient and with @p matrix the Newton matrix (@p psd: the positive semi-definite one).
+  double coupled_assemble(bool matrix, bool psd = false);
+  /// @brief The residual over its tolerance (≤ 1: this rod's step is solved).
+  [[nodiscard]] double coupled_residual() const;
+  /// @brief Number of unknowns (4 per vertex, minus one).
+  [[nodiscard]] int coupled_dofs() const { return dof_count(); }
+  /// @brief −gradient on the free unknowns, 0 on the held ones (the Newton right-hand side).
+  void coupled_rhs(Eigen::Ref<Eigen::VectorXd> rhs) const;
+  /// @brief The Newton matrix's lower triangle, held unknowns as identity rows, at row and column
+  /// @p offset of a larger system.
+  void coupled_matrix(std::vector<Eigen::Triplet<double>>& out, int offset) const;
+  /// @brief Whether vertex @p k's position is an unknown (not held by the clamp or a tip clamp).
+  [[nodiscard]] bool coupled_free_vertex(int k) const;
+  /// @brief The vertex velocities of the current iterate, (x − x₀)/Δt (velocities() is the
+  /// step's start until coupled_finish).
+  void coupled_velocities(std::vector<Eigen::Vector3d>& out) const;
+  /// @brief Keep the current iterate as the base of the line search.
+  void coupled_accept();
+  /// @brief The largest fraction of @p dq the trust region allows (no vertex moves more than half
+  /// its shortest edge, no edge turns more than 0.5 rad).
+  [[nodiscard]] double coupled_max_step(const Eigen::Ref<const Eigen::VectorXd>& dq) const;
+  /// @brief Move to the accepted iterate + @p alpha @p dq (frames transported).
+  void coupled_trial(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha);
+  /// @brief The trapezoidal work of the non-conservative external forces from the accepted
+  /// iterate to the current one (after an assembly there): the merit is potential − this work.
+  [[nodiscard]] double coupled_nonconservative_work() const;
+  /// @brief Back to the accepted iterate (its loads kept).
+  void coupled_reject();
+  /// @brief End the step: velocities, the clamp's reaction (from the last assembly's gradient),
+  /// the trace, the externals' end_step, and @p rep counted in solver_totals().
+  void coupled_finish(double dt, const StepReport& rep);
+  /// @brief Keep / bring back the step's start for taking it again in two halves.
+  void coupled_save(int slot) { save_state(slot); }
+  void coupled_restore(int slot) { restore_state(slot); }
+  ///@}
+
  private:
   struct Work;
   enum class Mode { Static, Dynamic };
@@ -472,6 +517,8 @@ class RodSimulator {
   Eigen::Vector3d tip_clamp_x1_ = Eigen::Vector3d::Zero();
   double tip_clamp_theta_ = 0.0;
   StepReport last_report_;
+  double coupled_angle_ = 0.0;  // the base angle at the end of a coupled step
+  double coupled_phi_ = 0.0;    // the potential of the accepted iterate
   NewtonPhaseSeconds phase_seconds_;
   SolverTotals totals_;
   std::vector<TipSample> trace_;
