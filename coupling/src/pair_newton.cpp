@@ -22,12 +22,14 @@ void LumenContact::sync(const rod::RodSimulator& wire, const rod::RodSimulator& 
   wire_weight = cell_weights(wire);
 }
 
-void LumenContact::cross_matrix(std::vector<Eigen::Triplet<double>>& out, const rod::RodSimulator& wire,
-                                const rod::RodSimulator& catheter, int catheter_offset, double dt) const {
+void LumenContact::cross_matrix(std::vector<Eigen::Triplet<double>>& out, const std::vector<char>& wire_free,
+                                const std::vector<char>& catheter_free, int catheter_offset, double dt) const {
   const int nc = static_cast<int>(catheter_snapshot.size());
   // Block (catheter vertex c, wire vertex i) of the lower triangle: the transpose of ∂²E/∂x_i∂a_c.
   auto put = [&](int i, int c, const Eigen::Matrix3d& b) {
-    if (!wire.coupled_free_vertex(i) || !catheter.coupled_free_vertex(c)) return;
+    if (static_cast<size_t>(i) >= wire_free.size() || !wire_free[static_cast<size_t>(i)] ||
+        static_cast<size_t>(c) >= catheter_free.size() || !catheter_free[static_cast<size_t>(c)])
+      return;
     for (int r = 0; r < 3; ++r)
       for (int q = 0; q < 3; ++q)
         if (b(q, r) != 0.0) out.emplace_back(catheter_offset + 4 * c + r, 4 * i + q, b(q, r));
@@ -90,6 +92,10 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
       for (int c = 0; c < dofs; ++c) perm[static_cast<size_t>(base + 4 * key.vertex + c)] = next++;
     }
   }
+  std::vector<char> wire_free(static_cast<size_t>(wire.vertex_count())),
+      cath_free(static_cast<size_t>(cath.vertex_count()));
+  for (int k = 0; k < wire.vertex_count(); ++k) wire_free[static_cast<size_t>(k)] = wire.coupled_free_vertex(k);
+  for (int k = 0; k < cath.vertex_count(); ++k) cath_free[static_cast<size_t>(k)] = cath.coupled_free_vertex(k);
   Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt;
   SpMat A(n, n);
   Eigen::VectorXd prhs(n);
@@ -126,7 +132,7 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
         trip.clear();
         wire.coupled_matrix(trip, 0);
         cath.coupled_matrix(trip, nw);
-        contact.cross_matrix(trip, wire, cath, nw, dt);
+        contact.cross_matrix(trip, wire_free, cath_free, nw, dt);
         for (auto& t : trip) {  // into the interleaved order, kept in the lower triangle
           const int i = perm[static_cast<size_t>(t.row())], j = perm[static_cast<size_t>(t.col())];
           t = Eigen::Triplet<double>(std::max(i, j), std::min(i, j), t.value());

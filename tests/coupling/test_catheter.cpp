@@ -371,6 +371,51 @@ TEST(LumenContact, FrictionForcesAreGradientsWithExactJacobiansAndActBothWays) {
   check(false);
 }
 
+// The coupling blocks of the pair's joint Newton matrix (LumenContact::cross_matrix) against
+// central differences of the forces on the wire as the catheter moves (its velocities
+// (x − x₀)/Δt moving with it): penalty and friction, every pair of vertices.
+TEST(LumenContact, TheJointMatrixCouplingBlocksAreTheForcesDerivatives) {
+  FrictionScene fs;
+  std::vector<V3> wx = fs.wire_x0, cx = fs.cath_x0;
+  for (auto& x : wx) x += V3(2e-6, -0.3e-6, 0.4e-6);
+  for (size_t j = 0; j < cx.size(); ++j) cx[j] += (0.5 + 0.1 * static_cast<double>(j)) * V3(-0.5e-6, 0.2e-6, -0.1e-6);
+  auto velocities = [&](const std::vector<V3>& x, const std::vector<V3>& x0) {
+    std::vector<V3> v(x.size());
+    for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - x0[i]) / fs.dt;
+    return v;
+  };
+  fs.lc.wire_snapshot = wx, fs.lc.wire_velocity = velocities(wx, fs.wire_x0);
+  fs.lc.catheter_snapshot = cx, fs.lc.catheter_velocity = velocities(cx, fs.cath_x0);
+  const int nw = 4 * static_cast<int>(wx.size()) - 1, nc = static_cast<int>(cx.size());
+  std::vector<Eigen::Triplet<double>> trip;
+  fs.lc.cross_matrix(trip, std::vector<char>(wx.size(), 1), std::vector<char>(cx.size(), 1), nw, fs.dt);
+  ASSERT_FALSE(trip.empty());
+  Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(4 * nc, nw);  // catheter rows, wire columns
+  for (const auto& t : trip) cross(t.row() - nw, t.col()) += t.value();
+  const double h = 1e-10;
+  double largest = 0.0;
+  for (int c = 0; c < nc; ++c)
+    for (int r = 0; r < 3; ++r) {
+      auto forces = [&](double s) {
+        std::vector<V3> moved = cx;
+        moved[static_cast<size_t>(c)][r] += s;
+        fs.lc.catheter_snapshot = moved;
+        const auto f = fs.on_wire(wx, velocities(moved, fs.cath_x0));
+        fs.lc.catheter_snapshot = cx;
+        return f.forces();
+      };
+      const auto plus = forces(h), minus = forces(-h);
+      for (size_t i = 0; i < wx.size(); ++i)
+        for (int q = 0; q < 3; ++q) {
+          const double fd = -(plus[i][q] - minus[i][q]) / (2 * h);  // ∂²E/∂x_i,q ∂a_c,r
+          largest = std::max(largest, std::abs(fd));
+          EXPECT_NEAR(cross(4 * c + r, 4 * static_cast<int>(i) + q), fd, 1e-5 * 3e4 + 1e-4 * std::abs(fd))
+              << "catheter vertex " << c << " (" << r << "), wire vertex " << i << " (" << q << ")";
+        }
+    }
+  EXPECT_GT(largest, 1e3);  // the blocks are not all zero
+}
+
 TEST(CatheterPair, AnAngledWirePushedOutOfTheCatheterConvergesEveryStep) {
   // A 45°-angled wire tip, 1 cm inside a straight cantilevered catheter, fed 2 cm out of it
   // at 1 cm/s in 5 ms steps (staggered as in the scene runner). Every step of both rods

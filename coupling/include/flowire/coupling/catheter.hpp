@@ -186,10 +186,11 @@ class LumenContact {
   /// each wire vertex is measured against (assigned at the step's start).
   void sync(const rod::RodSimulator& wire, const rod::RodSimulator& catheter);
   /// @brief The coupling blocks of the pair's Newton matrix, ∂²(E + Δt·D)/∂x_w∂x_c, as the
-  /// lower-triangle entries (catheter rows at @p catheter_offset, wire columns at 0) at the held
-  /// states, for the free vertices of each rod; Δt = @p dt.
-  void cross_matrix(std::vector<Eigen::Triplet<double>>& out, const rod::RodSimulator& wire,
-                    const rod::RodSimulator& catheter, int catheter_offset, double dt) const;
+  /// lower-triangle entries (catheter rows at @p catheter_offset + 4 c, wire columns at 4 i) at
+  /// the held states, for the vertices free in each rod (@p wire_free, @p catheter_free: nonzero
+  /// where free); Δt = @p dt.
+  void cross_matrix(std::vector<Eigen::Triplet<double>>& out, const std::vector<char>& wire_free,
+                    const std::vector<char>& catheter_free, int catheter_offset, double dt) const;
   [[nodiscard]] double clearance() const { return clearance_; }
   [[nodiscard]] double stiffness() const { return stiffness_; }
   /// @brief Width δ of the penalty's smoothed onset [m].
