@@ -58,7 +58,9 @@ void declare_wire_keys(config::Schema& s) {
   s.add("wire.base.position", Type::Vector3, "[0, 0, 0]", D::Length, "base position (vessel scenes: the entry node)");
   s.add("wire.base.direction", Type::Vector3, "[1, 0, 0]", D::None,
         "base direction (vessel scenes: into the entry vessel)");
-  s.add("wire.entry", Type::StringOrInteger, "auto", D::None, "network end where the wire enters (node id, or auto)");
+  s.add("wire.entry", Type::StringOrInteger, "auto", D::None,
+        "network end where the wire enters: auto (the end farthest from the flow inlet), a node id, or a branch name "
+        "(its end)");
 }
 
 void declare_load_keys(config::Schema& s) {
@@ -142,10 +144,30 @@ int enter_network(const config::Config& c, const vessels::Network& net, rod::Wir
   if (entry_key == "auto") {
     entry = net.farthest_end(inlet);
   } else {
+    size_t used = 0;
     try {
-      entry = std::stoi(entry_key);
+      entry = std::stoi(entry_key, &used);
     } catch (const std::exception&) {
-      throw_input_error(c.where("wire.entry"), fmt::format("'{}' is not a node id or auto", entry_key));
+      used = 0;
+    }
+    if (used != entry_key.size()) {
+      // A branch name: the end of that branch which is a network end (the one farther from the
+      // flow's inlet where both are).
+      entry = -1;
+      std::string names;
+      for (const auto& b : net.branches()) {
+        const int first = b.nodes.front(), last = b.nodes.back();
+        if (net.degree(first) == 1 || net.degree(last) == 1) names += (names.empty() ? "" : ", ") + b.name;
+        if (b.name != entry_key) continue;
+        for (int e : {last, first})
+          if (entry < 0 && net.degree(e) == 1 && e != inlet) entry = e;
+        if (entry < 0 && net.degree(first) == 1) entry = first;
+      }
+      if (entry < 0)
+        throw_input_error(c.where("wire.entry"),
+                          fmt::format("'{}' is neither auto, a node id nor a branch with an end (branches with an "
+                                      "end: {})",
+                                      entry_key, names.empty() ? "none named" : names));
     }
     if (entry < 0 || entry >= net.num_nodes() || net.degree(entry) != 1)
       throw_input_error(c.where("wire.entry"), fmt::format("node {} is not an end of the network", entry));

@@ -15,7 +15,7 @@ if [ ! -d "$shared" ]; then
 fi
 if command -v xvfb-run >/dev/null; then RUN=(xvfb-run -a -s "-screen 0 1024x768x24"); else RUN=(); fi
 mkdir -p "$OUT"
-for scene in feelpp_arch vmtk_abdominal simvascular_aorta aneurisk_ica; do
+for scene in feelpp_arch vmtk_abdominal simvascular_aorta aneurisk_ica aortofemoral_deck; do
   "${RUN[@]}" "$FLOWIRE" run "$here/$scene.yaml" --out "$OUT/$scene" --set output.png=true
 done
 echo "pictures: $OUT/*/network.png; open $OUT/*/wire.pvd with the surfaces of $shared in ParaView"

@@ -61,6 +61,27 @@ TEST(ConfigWire, TheWireEntersAtTheFarthestEndOrTheNodeGiven) {
             std::string::npos);
 }
 
+TEST(ConfigWire, TheWireEntersAtTheEndOfABranchNamed) {
+  // By branch name, as an outlet is named: the end of the left subclavian artery of the arch.
+  const std::string arch = "vessels:\n  generator: {type: aortic_arch}\n";
+  const auto c = test::scene(arch + "wire: {entry: left_subclavian}\n");
+  const vessels::Network net = build_scene_network(c);
+  int end = -1;
+  for (const auto& b : net.branches())
+    if (b.name == "left_subclavian") end = net.degree(b.nodes.back()) == 1 ? b.nodes.back() : b.nodes.front();
+  ASSERT_GE(end, 0);
+  rod::WireSpec w = scene_wire_spec(c);
+  EXPECT_EQ(enter_network(c, net, w), end);
+  EXPECT_TRUE(w.base_position.isApprox(net.node(end)));
+  // A name the network does not have: the branches with an end are listed.
+  const auto bad = test::scene(arch + "wire: {entry: left_renal}\n");
+  rod::WireSpec wb = scene_wire_spec(bad);
+  const std::string msg = test::input_error([&] { (void)enter_network(bad, net, wb); });
+  EXPECT_NE(msg.find("wire.entry: 'left_renal' is neither auto, a node id nor a branch with an end"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("left_subclavian"), std::string::npos) << msg;
+}
+
 TEST(ConfigWire, ALoadWithoutItsValueOrArcLengthIsRejectedNamingFileLineAndKey) {
   const auto c = test::scene("wire: {}\nloads:\n  - {type: point_force, value: [0, 0, 1e-3]}\n");
   rod::RodSimulator sim(scene_wire_spec(c));
