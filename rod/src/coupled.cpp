@@ -109,30 +109,10 @@ double RodSimulator::coupled_max_step(const Eigen::Ref<const Eigen::VectorXd>& d
 }
 
 void RodSimulator::coupled_trial(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha) {
-  // As one trial of line_search (the curvilinear update included).
   Work& w = *work_;
-  RodState& s = state_;
-  const int nv = s.vertex_count();
-  const int nd = dof_count();
-  for (int k = 0; k < nv; ++k) {
-    s.x[k] = w.x_accepted[k] + alpha * dq.segment<3>(4 * k);
-    if (k < nv - 1) s.theta[k] = w.theta_accepted[k] + alpha * dq(4 * k + 3);
-  }
-  if (settings_.curvilinear_update && !tip_clamped_) {
-    Vec3 next_unprojected = s.x[first_clamped_];
-    for (int j = first_clamped_ - 1; j >= 0; --j) {
-      const Vec3 xn = s.x[j];
-      const Vec3 eb = w.x_accepted[j + 1] - w.x_accepted[j];
-      const double lb = eb.norm();
-      const double target = lb + alpha * (eb / lb).dot(dq.segment<3>(4 * (j + 1)) - dq.segment<3>(4 * j));
-      const Vec3 d = next_unprojected - xn;
-      s.x[j] = s.x[j + 1] - std::max(target, 0.1 * lb) * d / d.norm();
-      next_unprojected = xn;
-    }
-  }
-  transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
-  w.q.head(nd) = w.q_accepted + alpha * dq;
-  for (int k = 0; k < first_clamped_; ++k) w.q.segment<3>(4 * k) = s.x[k];
+  move_along(dq, alpha);  // as one trial of line_search
+  w.q.head(dof_count()) = w.q_accepted + alpha * dq;
+  for (int k = 0; k < first_clamped_; ++k) w.q.segment<3>(4 * k) = state_.x[k];
 }
 
 double RodSimulator::coupled_nonconservative_work() const {
@@ -153,19 +133,7 @@ void RodSimulator::coupled_reject() {
 }
 
 void RodSimulator::coupled_finish(double dt, const StepReport& rep) {
-  Work& w = *work_;
-  RodState& s = state_;
-  const int nv = s.vertex_count();
-  for (int k = 0; k < nv; ++k) {
-    s.v[k] = (s.x[k] - w.x0[k]) / dt;
-    if (k < nv - 1) s.omega[k] = (s.theta[k] - w.theta0[k]) / dt;
-  }
-  target_angle_ = coupled_angle_;
-  s.base_angle = coupled_angle_;
-  w.x_end = s.x;
-  w.h_end = dt;
-  w.feed_end = feed_speed_;
-  compute_base_reaction();
+  end_euler_step(dt, coupled_angle_);
   last_report_ = rep;
   record_trace();
   if (!externals_.empty()) {

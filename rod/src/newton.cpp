@@ -185,6 +185,32 @@ bool RodSimulator::solve_direction(Mode mode, double h, double load_scale, bool 
   return ok;
 }
 
+void RodSimulator::move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha) {
+  Work& w = *work_;
+  RodState& s = state_;
+  const int nv = s.vertex_count();
+  for (int k = 0; k < nv; ++k) {
+    s.x[k] = w.x_accepted[k] + alpha * dq.segment<3>(4 * k);
+    if (k < nv - 1) s.theta[k] = w.theta_accepted[k] + alpha * dq(4 * k + 3);
+  }
+  if (settings_.curvilinear_update && !tip_clamped_) {
+    // Walk from the clamp to the tip keeping each free edge's updated direction but
+    // its linearized length: removes the O(α²) spurious stretch of a straight-line
+    // step through a rotation, so stiff stretching does not throttle the step.
+    Vec3 next_unprojected = s.x[first_clamped_];
+    for (int j = first_clamped_ - 1; j >= 0; --j) {
+      const Vec3 xn = s.x[j];
+      const Vec3 eb = w.x_accepted[j + 1] - w.x_accepted[j];
+      const double lb = eb.norm();
+      const double target = lb + alpha * (eb / lb).dot(dq.segment<3>(4 * (j + 1)) - dq.segment<3>(4 * j));
+      const Vec3 d = next_unprojected - xn;
+      s.x[j] = s.x[j + 1] - std::max(target, 0.1 * lb) * d / d.norm();
+      next_unprojected = xn;
+    }
+  }
+  transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
+}
+
 double RodSimulator::line_search(Mode mode, double h, double load_scale, int first_free, int first_fixed, double& phi,
                                  double& max_step, StepReport& rep) {
   Work& w = *work_;
@@ -232,26 +258,7 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
   for (int pass = 0; pass < passes && !accepted; ++pass) {
     alpha = alpha_max;
     for (int cut = 0; cut <= settings_.max_line_search_cuts; ++cut) {
-      for (int k = 0; k < nv; ++k) {
-        s.x[k] = w.x_accepted[k] + alpha * dq.segment<3>(4 * k);
-        if (k < nv - 1) s.theta[k] = w.theta_accepted[k] + alpha * dq(4 * k + 3);
-      }
-      if (settings_.curvilinear_update && !tip_clamped_) {
-        // Walk from the clamp to the tip keeping each free edge's updated direction but
-        // its linearized length: removes the O(α²) spurious stretch of a straight-line
-        // step through a rotation, so stiff stretching does not throttle the step.
-        Vec3 next_unprojected = s.x[first_clamped_];
-        for (int j = first_clamped_ - 1; j >= 0; --j) {
-          const Vec3 xn = s.x[j];
-          const Vec3 eb = w.x_accepted[j + 1] - w.x_accepted[j];
-          const double lb = eb.norm();
-          const double target = lb + alpha * (eb / lb).dot(dq.segment<3>(4 * (j + 1)) - dq.segment<3>(4 * j));
-          const Vec3 d = next_unprojected - xn;
-          s.x[j] = s.x[j + 1] - std::max(target, 0.1 * lb) * d / d.norm();
-          next_unprojected = xn;
-        }
-      }
-      transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
+      move_along(dq, alpha);
       // Keep q consistent for the inertia terms while evaluating the trial.
       w.rhs.head(nd) = qb.head(nd) + alpha * dq;  // trial unknowns
       for (int k = 0; k < first_clamped_; ++k) w.rhs.segment<3>(4 * k) = s.x[k];

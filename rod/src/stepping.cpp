@@ -179,7 +179,6 @@ StepReport RodSimulator::step_euler(double dt) {
   const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feed_speed_ == w.feed_end;
   begin_step(dt, settings_.second_order_guess);
   w.h_newton = dt;
-  const int nv = s.vertex_count();
   start_stage(L_new, angle_new, steady_feed ? 0.0 : L_new - s.inserted_length, dt);
 
   StepReport rep = newton(Mode::Dynamic, dt, 1.0);
@@ -190,6 +189,14 @@ StepReport RodSimulator::step_euler(double dt) {
     set_prescribed(L_new, angle_new, s.x, s.theta);
     transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
   }
+  end_euler_step(dt, angle_new);
+  return rep;
+}
+
+void RodSimulator::end_euler_step(double dt, double angle_new) {
+  Work& w = *work_;
+  RodState& s = state_;
+  const int nv = s.vertex_count();
   for (int k = 0; k < nv; ++k) {
     s.v[k] = (s.x[k] - w.x0[k]) / dt;
     if (k < nv - 1) s.omega[k] = (s.theta[k] - w.theta0[k]) / dt;
@@ -201,7 +208,6 @@ StepReport RodSimulator::step_euler(double dt) {
   w.h_end = dt;
   w.feed_end = feed_speed_;
   compute_base_reaction();
-  return rep;
 }
 
 StepReport RodSimulator::step_midpoint(double dt) {

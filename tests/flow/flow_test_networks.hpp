@@ -5,10 +5,18 @@
 #include <utility>
 #include <vector>
 
+#include "flowire/common/config.hpp"
 #include "flowire/flow/spec.hpp"
 #include "flowire/vessels/network.hpp"
 
 namespace flowire::flow::test {
+
+/// The flow keys as the scene declares them (declare_scene_keys).
+inline config::Schema flow_schema() {
+  config::Schema s;
+  declare_scene_keys(s);
+  return s;
+}
 
 /// η = π/8 with r = 1 makes R = 8ηl/(πr⁴) = l: dimensionless resistances are lengths.
 inline constexpr double kUnitViscosity = 3.14159265358979323846 / 8.0;

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "flow_test_networks.hpp"
 #include "flowire/common/config.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/flow/outlet_file.hpp"
@@ -20,11 +21,7 @@
 namespace flowire::flow {
 namespace {
 
-config::Schema flow_schema() {
-  config::Schema s;
-  declare_scene_keys(s);
-  return s;
-}
+using test::flow_schema;
 
 std::string write(const std::filesystem::path& p, const std::string& text) {
   std::ofstream(p) << text;

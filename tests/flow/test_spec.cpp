@@ -15,12 +15,7 @@
 namespace flowire::flow {
 namespace {
 
-/// The flow keys as the scene declares them (declare_scene_keys).
-config::Schema flow_schema() {
-  config::Schema s;
-  declare_scene_keys(s);
-  return s;
-}
+using test::flow_schema;
 
 /// Each scene (flow section text) refused as bad input whose message contains its fragment.
 void expect_refused(const Network& net, const std::vector<std::pair<std::string, std::string>>& cases) {

@@ -456,6 +456,11 @@ class RodSimulator {
   /// the inertial prediction q + h·v, with q̂ = that prediction; shared by both integrators.
   void begin_step(double h, bool extrapolate);
   StepReport step_euler(double dt);
+  /// The end of an implicit Euler step of @p dt: velocities, the base angle, the predictor's
+  /// record, the clamp's reaction.
+  void end_euler_step(double dt, double angle_new);
+  /// The state at the accepted iterate + @p alpha @p dq (curvilinear update, frames transported).
+  void move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha);
   StepReport step_once(double dt);
   StepReport step_subdivided(double dt, int depth);
   void save_state(int depth);
