@@ -92,7 +92,11 @@ void RodSimulator::coupled_accept() {
 }
 
 double RodSimulator::coupled_max_step(const Eigen::Ref<const Eigen::VectorXd>& dq) const {
-  // As line_search's trust region.
+  // The trust region on the motion (line_search's too): no vertex moves more than half its
+  // shortest edge and no edge turns about its tangent more than 0.5 rad in one iteration. The
+  // discrete rod's energy is far from quadratic beyond that (edges rotate by O(step/ℓ)), so a
+  // longer Newton step, which a nearly singular matrix gives (a snapping pre-shaped tip, a
+  // wire free between walls), is only cut back by the line search after costly trials.
   const int nv = state_.vertex_count();
   const int first_fixed = 4 * first_clamped_, first_free = tip_clamped_ ? 7 : 0;
   double lmin = model_.h;

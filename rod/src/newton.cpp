@@ -215,7 +215,6 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
                                  double& max_step, StepReport& rep) {
   Work& w = *work_;
   RodState& s = state_;
-  const int nv = s.vertex_count();
   const int nd = dof_count();
   auto dq = w.dq.head(nd);
   const double slope = w.grad.head(nd).dot(dq);
@@ -236,18 +235,7 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
   // far from quadratic beyond that (edges rotate by O(step/ℓ)), so a longer Newton step,
   // which a nearly singular matrix gives (a snapping pre-shaped tip, a wire free between
   // walls), is only cut back by the line search after costly trials.
-  double alpha_max = 1.0;
-  {
-    double lmin = model_.h;
-    for (int j = 0; j < nv - 1; ++j) lmin = std::min(lmin, disc_.rest_length[j]);
-    double sx = 0.0, st = 0.0;
-    for (int k = first_free / 4; 4 * k < first_fixed; ++k) {
-      sx = std::max(sx, dq.segment<3>(4 * k).norm());
-      if (4 * k + 3 < first_fixed) st = std::max(st, std::abs(dq(4 * k + 3)));
-    }
-    if (sx > 0.5 * lmin) alpha_max = 0.5 * lmin / sx;
-    if (st > 0.5) alpha_max = std::min(alpha_max, 0.5 / st);
-  }
+  const double alpha_max = coupled_max_step(dq);  // (first_free, first_fixed: the rod's own)
   double alpha = alpha_max;
   bool accepted = false;
   // Pass 0 measures conservative external forces by their potential. A potential that
