@@ -8,6 +8,7 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/coupling/catheter.hpp"
+#include "flowire/rod/banded.hpp"
 
 namespace flowire::coupling {
 
@@ -96,9 +97,30 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
       cath_free(static_cast<size_t>(cath.vertex_count()));
   for (int k = 0; k < wire.vertex_count(); ++k) wire_free[static_cast<size_t>(k)] = wire.coupled_free_vertex(k);
   for (int k = 0; k < cath.vertex_count(); ++k) cath_free[static_cast<size_t>(k)] = cath.coupled_free_vertex(k);
+  // In that order the band is a few vertices of each rod wide; a wider one (a wire looping back
+  // within the catheter's reach) takes the sparse path.
+  constexpr int kMaxBand = 96;
+  bool banded = true;
+  rod::BandedMatrix H;
+  rod::BandedLDLT hldlt;
   Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt;
   SpMat A(n, n);
   Eigen::VectorXd prhs(n);
+  // The sparse path: the matrix, or with @p shifted growing diagonal shifts until positive.
+  auto sparse_factorize = [&](SpMat& m, bool shifted) {
+    double dmax = 0.0, shift = 0.0;
+    for (int k = 0; k < n; ++k) dmax = std::max(dmax, std::abs(m.coeff(k, k)));
+    for (int tries = 0; tries < (shifted ? 12 : 1); ++tries) {
+      if (shifted) {
+        const double next = tries == 0 ? 1e-12 * dmax : 10.0 * shift;
+        for (int k = 0; k < n; ++k) m.coeffRef(k, k) += next - shift;
+        shift = next;
+      }
+      ldlt.compute(m);  // the pattern changes with the matrix and the shift
+      if (ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0.0).all()) return true;
+    }
+    return false;
+  };
   auto evaluate = [&](bool matrix, bool psd) {
     contact.sync(wire, cath);
     return wire.coupled_assemble(matrix, psd) + cath.coupled_assemble(matrix, psd);
@@ -119,11 +141,10 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
     wire.coupled_rhs(rhs.head(nw));
     cath.coupled_rhs(rhs.tail(nc));
     // The exact matrix first; where it is indefinite (a bent or compressed rod, the contact's
-    // distance to a segment), the rods' positive semi-definite ones, then growing diagonal shifts
-    // (as each rod's own sparse fallback).
+    // distance to a segment), the rods' positive semi-definite ones, then growing diagonal
+    // shifts, as each rod's own sparse fallback.
     bool ok = false;
-    double shift = 0.0, dmax = 0.0;
-    for (int attempt = 0; attempt < 14 && !ok; ++attempt) {
+    for (int attempt = 0; attempt < 3 && !ok; ++attempt) {
       if (attempt <= 1) {
         if (attempt == 1) {
           phi = evaluate(true, true);
@@ -133,29 +154,47 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
         wire.coupled_matrix(trip, 0);
         cath.coupled_matrix(trip, nw);
         contact.cross_matrix(trip, wire_free, cath_free, nw, dt);
+        int band = 0;
         for (auto& t : trip) {  // into the interleaved order, kept in the lower triangle
           const int i = perm[static_cast<size_t>(t.row())], j = perm[static_cast<size_t>(t.col())];
           t = Eigen::Triplet<double>(std::max(i, j), std::min(i, j), t.value());
+          band = std::max(band, std::abs(i - j));
         }
-        A.setFromTriplets(trip.begin(), trip.end());
-        dmax = 0.0;
-        for (int k = 0; k < n; ++k) dmax = std::max(dmax, std::abs(A.coeff(k, k)));
-      } else {
-        const double next = attempt == 2 ? 1e-12 * dmax : 10.0 * shift;
-        for (int k = 0; k < n; ++k) A.coeffRef(k, k) += next - shift;
-        shift = next;
+        banded = band <= kMaxBand;
+        if (banded) {
+          H = rod::BandedMatrix(n, band);
+          for (const auto& t : trip) H.lower(t.row(), t.col()) += t.value();
+        } else {
+          A.setFromTriplets(trip.begin(), trip.end());
+        }
       }
-      if (attempt <= 2) ldlt.analyzePattern(A);  // the pattern changes with the matrix and the shift
-      ldlt.factorize(A);
-      ok = ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0.0).all();
+      if (banded) {
+        ok = hldlt.factorize(H) && hldlt.negative_pivots() == 0;
+        // Growing diagonal shifts until positive definite: a direction between Newton's and the
+        // gradient's, which is what carried the violent start of a pulled pair (the modified
+        // factorization's did not).
+        const double dmax = std::max(H.max_diagonal(), 1e-300);
+        double shift = 0.0;
+        for (int tries = 0; attempt == 2 && !ok && tries < 12; ++tries) {
+          const double next = tries == 0 ? 1e-12 * dmax : 10.0 * shift;
+          H.add_to_diagonal(next - shift);
+          shift = next;
+          ok = hldlt.factorize(H) && hldlt.negative_pivots() == 0;
+        }
+      } else {
+        ok = sparse_factorize(A, attempt == 2);
+      }
     }
     if (!ok) {
       rep.status = rod::SolveStatus::SingularMatrix;
       break;
     }
     for (int k = 0; k < n; ++k) prhs(perm[static_cast<size_t>(k)]) = rhs(k);
-    const Eigen::VectorXd pdq = ldlt.solve(prhs);
-    for (int k = 0; k < n; ++k) dq(k) = pdq(perm[static_cast<size_t>(k)]);
+    if (banded)
+      hldlt.solve_in_place(prhs);
+    else
+      prhs = ldlt.solve(Eigen::VectorXd(prhs));
+    for (int k = 0; k < n; ++k) dq(k) = prhs(perm[static_cast<size_t>(k)]);
     if (!dq.allFinite()) {
       rep.status = rod::SolveStatus::NonFinite;
       break;
