@@ -287,9 +287,20 @@ PairStepReport step_halving(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
 
 PairStepReport step_pair_newton(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact,
                                 double dt) {
-  contact.catheter_reports_energy = false;
-  PairStepReport rep = step_halving(wire, catheter, contact, dt, 0);
-  contact.catheter_reports_energy = true;
+  // The catheter's side leaves the contact's energy to the wire's for this step, also when a
+  // numerical failure ends it early.
+  struct EnergyOnWireSide {
+    LumenContact& c;
+    explicit EnergyOnWireSide(LumenContact& contact) : c(contact) { c.catheter_reports_energy = false; }
+    ~EnergyOnWireSide() { c.catheter_reports_energy = true; }
+    EnergyOnWireSide(const EnergyOnWireSide&) = delete;
+    EnergyOnWireSide& operator=(const EnergyOnWireSide&) = delete;
+  };
+  PairStepReport rep;
+  {
+    const EnergyOnWireSide guard(contact);
+    rep = step_halving(wire, catheter, contact, dt, 0);
+  }
   rep.sweeps = 1;
   rep.imbalance = rep.converged ? 0.0 : rep.wire.residual;
   contact.hold_catheter(catheter);
