@@ -63,7 +63,7 @@ using SpMat = Eigen::SparseMatrix<double>;
 
 /// One try at the step (no halving): Newton on both rods from their begun state.
 rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, LumenContact& contact, double dt,
-                            rod::StepReport& cath_rep) {
+                            int max_band, rod::StepReport& cath_rep) {
   rod::StepReport rep;
   rep.status = rod::SolveStatus::MaxIterations;
   const int nw = wire.coupled_dofs(), nc = cath.coupled_dofs(), n = nw + nc;
@@ -99,7 +99,6 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
   for (int k = 0; k < cath.vertex_count(); ++k) cath_free[static_cast<size_t>(k)] = cath.coupled_free_vertex(k);
   // In that order the band is a few vertices of each rod wide; a wider one (a wire looping back
   // within the catheter's reach) takes the sparse path.
-  constexpr int kMaxBand = 96;
   bool banded = true;
   rod::BandedMatrix H;
   rod::BandedLDLT hldlt;
@@ -160,7 +159,7 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
           t = Eigen::Triplet<double>(std::max(i, j), std::min(i, j), t.value());
           band = std::max(band, std::abs(i - j));
         }
-        banded = band <= kMaxBand;
+        banded = band <= max_band;
         if (banded) {
           H = rod::BandedMatrix(n, band);
           for (const auto& t : trip) H.lower(t.row(), t.col()) += t.value();
@@ -247,7 +246,7 @@ rod::StepReport newton_pair(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
 
 /// The step of @p dt, taken again as two halves where Newton fails (down to the rods' limit).
 PairStepReport step_halving(rod::RodSimulator& wire, rod::RodSimulator& cath, LumenContact& contact, double dt,
-                            int depth) {
+                            int max_band, int depth) {
   PairStepReport out;
   const bool can_retry = depth < wire.settings().max_subdivisions;
   if (can_retry) wire.coupled_save(depth), cath.coupled_save(depth);
@@ -260,13 +259,13 @@ PairStepReport step_halving(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
   contact.sync(wire, cath);  // the vertex sets after feeding; the edges as assigned at the start
   if (contact.wire_edge.size() != contact.wire_snapshot.size()) contact.assign_edges();
   rod::StepReport cr;
-  rod::StepReport wr = newton_pair(wire, cath, contact, dt, cr);
+  rod::StepReport wr = newton_pair(wire, cath, contact, dt, max_band, cr);
   if (!wr.converged() && can_retry) {
     wire.coupled_restore(depth), cath.coupled_restore(depth);
     PairStepReport total;
     total.wire.add_work(wr), total.catheter.add_work(cr);
     for (int half = 0; half < 2; ++half) {
-      const PairStepReport r = step_halving(wire, cath, contact, 0.5 * dt, depth + 1);
+      const PairStepReport r = step_halving(wire, cath, contact, 0.5 * dt, max_band, depth + 1);
       total.wire.then(r.wire), total.catheter.then(r.catheter);
       total.converged = r.converged;
       if (!r.converged) break;
@@ -285,8 +284,8 @@ PairStepReport step_halving(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
 
 }  // namespace
 
-PairStepReport step_pair_newton(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact,
-                                double dt) {
+PairStepReport step_pair_newton(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact, double dt,
+                                int max_band) {
   // The catheter's side leaves the contact's energy to the wire's for this step, also when a
   // numerical failure ends it early.
   struct EnergyOnWireSide {
@@ -299,7 +298,7 @@ PairStepReport step_pair_newton(rod::RodSimulator& wire, rod::RodSimulator& cath
   PairStepReport rep;
   {
     const EnergyOnWireSide guard(contact);
-    rep = step_halving(wire, catheter, contact, dt, 0);
+    rep = step_halving(wire, catheter, contact, dt, max_band, 0);
   }
   rep.sweeps = 1;
   rep.imbalance = rep.converged ? 0.0 : rep.wire.residual;

@@ -568,6 +568,39 @@ TEST(CatheterPair, CantileverBendsWithTheSumOfBothStiffnesses) {
 // other over ℓ ≈ (4c / κ_w)^½ = 2.5 cm at the curvature κ_w = P (L − a) / EI_w, and tilts by
 // about (κ_w − κ_pair) ℓ more than the composite would, some 1.2 mm at the tip: there the tip
 // must lie between the play-free formula and the wire alone.
+// The joint step's two linear solvers give the same steps: a tip-loaded overlapping pair stepped
+// for 50 ms with its joint matrix factorized as a band (the default) and by the sparse LDLᵀ that
+// takes bands wider than step_pair_newton's max_band (forced with max_band 0): the same Newton
+// iterations and the same positions to round-off.
+TEST(CatheterPair, TheJointStepsBandedAndSparseSolversAgree) {
+  std::vector<std::vector<V3>> tips;
+  std::vector<int> iterations;
+  for (const int max_band : {96, 0}) {
+    Pair p = cantilever_pair(0.04, 20);
+    p.cat.inner_radius = 0.3e-3;  // clearance 0.1 mm
+    rod::RodSimulator wire(p.wire);
+    rod::RodSimulator cath(catheter_rod_spec(p.cat, p.wire));
+    auto contact = std::make_shared<LumenContact>(p.cat.inner_radius - p.wire.radius, p.cat.stiffness);
+    contact->set_friction(0.2, 1e-4);
+    contact->hold_catheter(cath);
+    contact->hold_wire(wire);
+    wire.add_external(std::make_shared<LumenContactSide>(contact, LumenContactSide::Side::Wire));
+    cath.add_external(std::make_shared<LumenContactSide>(contact, LumenContactSide::Side::Catheter));
+    wire.set_tip_force({0.0, 2e-3, 0.0});
+    int its = 0;
+    for (int n = 0; n < 10; ++n) {
+      const PairStepReport r = step_pair_newton(wire, cath, *contact, 5e-3, max_band);
+      ASSERT_TRUE(r.converged) << "max_band " << max_band << " step " << n;
+      its += r.wire.newton_iterations;
+    }
+    iterations.push_back(its);
+    tips.push_back({wire.tip_position(), cath.tip_position()});
+  }
+  EXPECT_EQ(iterations[0], iterations[1]);
+  ASSERT_GT(std::abs(tips[0][0].y()), 1e-5);  // the pair has bent
+  for (int k = 0; k < 2; ++k) EXPECT_LT((tips[0][k] - tips[1][k]).norm(), 1e-12) << k;
+}
+
 TEST(CatheterPair, AStaticSceneBendsThePairAsOneBeamAndBalancesTheLoad) {
   const double pi = std::numbers::pi, L = 0.2, P = 5e-4;
   const double ei_w = 60e9 * pi * std::pow(0.2e-3, 4) / 4.0;

@@ -250,12 +250,15 @@ PairStepReport step_pair(rod::RodSimulator& wire, rod::RodSimulator& catheter, L
                          int max_sweeps = 8);
 
 /// @brief One implicit Euler step of wire and catheter as one system: Newton's method on both
-/// rods' unknowns at once, the lumen contact's coupling blocks in the matrix (cross_matrix), a
-/// sparse LDLᵀ of the joint system, and a backtracking line search on the sum of the two rods'
-/// merits; a step that does not converge is taken again as two halves (the rods' own
-/// max_subdivisions). The pair balances to each rod's own tolerance in every converged step,
-/// where the block sweeps (step_pair) stopped at 1e-5 of the force scale or not at all.
-PairStepReport step_pair_newton(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact, double dt);
+/// rods' unknowns at once, the lumen contact's coupling blocks in the matrix (cross_matrix), the
+/// unknowns interleaved by arc length so that the joint matrix is a band (factorized by the
+/// rods' banded LDLᵀ; a band wider than @p max_band by a sparse LDLᵀ), and a backtracking line
+/// search on the sum of the two rods' merits; a step that does not converge is taken again as
+/// two halves (the rods' own max_subdivisions). The pair balances to each rod's own tolerance in
+/// every converged step, where the block sweeps (step_pair) stopped at 1e-5 of the force scale
+/// or not at all.
+PairStepReport step_pair_newton(rod::RodSimulator& wire, rod::RodSimulator& catheter, LumenContact& contact, double dt,
+                                int max_band = 96);
 
 /// @brief ExternalForce adaptor: one side of a LumenContact.
 class LumenContactSide : public rod::ExternalForce {
