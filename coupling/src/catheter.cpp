@@ -40,17 +40,11 @@ rod::WireSpec catheter_rod_spec(const CatheterSpec& cat, const rod::WireSpec& wi
 }
 
 std::vector<double> cell_weights(const rod::RodSimulator& r) {
-  const auto& rest = r.discretization().rest_length;
-  const int nv = r.vertex_count(), ne = static_cast<int>(rest.size());
-  const double h = r.model().h;
-  std::vector<double> w(static_cast<size_t>(nv), 1.0);
-  for (int i = 0; i < nv; ++i) {
-    double sum = 0.0;
-    int count = 0;
-    if (i > 0 && i - 1 < ne) sum += rest[static_cast<size_t>(i - 1)], ++count;
-    if (i < ne) sum += rest[static_cast<size_t>(i)], ++count;
-    if (count && h > 0.0) w[static_cast<size_t>(i)] = sum / count / h;
-  }
+  rod::RodView view;  // RodView::cell_weight reads only the rest lengths and the grid's segment length
+  view.rest_lengths = r.discretization().rest_length;
+  view.segment_length = r.model().h;
+  std::vector<double> w(static_cast<size_t>(r.vertex_count()));
+  for (int i = 0; i < r.vertex_count(); ++i) w[static_cast<size_t>(i)] = view.cell_weight(i);
   return w;
 }
 

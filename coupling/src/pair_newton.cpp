@@ -20,7 +20,6 @@ void LumenContact::sync(const rod::RodSimulator& wire, const rod::RodSimulator& 
   catheter_snapshot.assign(catheter.positions().begin(), catheter.positions().end());
   catheter.coupled_velocities(catheter_velocity);
   catheter_arc.assign(catheter.arc_lengths().begin(), catheter.arc_lengths().end());
-  wire_weight = cell_weights(wire);
 }
 
 void LumenContact::cross_matrix(std::vector<Eigen::Triplet<double>>& out, const std::vector<char>& wire_free,
@@ -256,7 +255,8 @@ PairStepReport step_halving(rod::RodSimulator& wire, rod::RodSimulator& cath, Lu
   contact.lag_friction();
   wire.coupled_begin(dt);
   cath.coupled_begin(dt);
-  contact.sync(wire, cath);  // the vertex sets after feeding; the edges as assigned at the start
+  contact.sync(wire, cath);                  // the vertex sets after feeding; the edges as assigned at the start
+  contact.wire_weight = cell_weights(wire);  // constant through the step's iterations
   if (contact.wire_edge.size() != contact.wire_snapshot.size()) contact.assign_edges();
   rod::StepReport cr;
   rod::StepReport wr = newton_pair(wire, cath, contact, dt, max_band, cr);

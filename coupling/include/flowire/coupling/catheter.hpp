@@ -183,7 +183,7 @@ class LumenContact {
   /// pair's once.
   bool catheter_reports_energy = true;
   /// @brief Copy both rods' positions and velocities into the held states, keeping the edges
-  /// each wire vertex is measured against (assigned at the step's start).
+  /// each wire vertex is measured against (assigned at the step's start) and wire_weight.
   void sync(const rod::RodSimulator& wire, const rod::RodSimulator& catheter);
   /// @brief The coupling blocks of the pair's Newton matrix, ∂²(E + Δt·D)/∂x_w∂x_c, as the
   /// lower-triangle entries (catheter rows at @p catheter_offset + 4 c, wire columns at 4 i) at
