@@ -36,6 +36,11 @@ void declare_coupling_keys(config::Schema& s) {
         "velocity_offset: the published form (blood velocity added to the velocity update) | none",
         {"cylinder", "slender_body", "velocity_offset", "none"});
   s.add("coupling.drag_scale", Type::Number, "1", D::None, "multiplies the drag force (0: no drag)").non_negative();
+  s.add("coupling.drag_update", Type::Enum, "step", D::None,
+        "step: the drag law is evaluated once a step, at Newton's initial guess, and taken into the step linearized in "
+        "the wire velocity (linearly implicit; docs/blood-drag.md) | iterate: evaluated again at every Newton iterate "
+        "(fully implicit)",
+        {"step", "iterate"});
   s.add("coupling.occlusion", Type::Enum, "annulus", D::None,
         "annulus: the wire raises the resistance of the segments it lies in (concentric to eccentric annular "
         "Poiseuille flow at its offset; updated every flow evaluation; needs flow.solver superposition, sparse or "
@@ -61,6 +66,7 @@ DragModel drag_model(const config::Config& scene, const rod::WireSpec& spec, boo
            : law == "slender_body"    ? DragLaw::SlenderBody
                                       : DragLaw::Cylinder;
   dp.scale = c.number("coupling.drag_scale");
+  dp.once_per_step = c.string("coupling.drag_update") == "step";
   dp.viscosity = blood.number("flow.viscosity");
   dp.density = blood.number("flow.density");
   dp.wire_radius = spec.radius;

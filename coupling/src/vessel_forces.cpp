@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -40,6 +41,7 @@ void VesselForces::ensure_size(int n) {
     drag_force_.resize(static_cast<size_t>(n), Vec3::Zero());
     contact_force_.resize(static_cast<size_t>(n), Vec3::Zero());
     reynolds_.resize(static_cast<size_t>(n), 0.0);
+    drag_lin_.resize(static_cast<size_t>(n));
     cur_normal_force_.resize(static_cast<size_t>(n), 0.0);
     cur_normal_.resize(static_cast<size_t>(n), Vec3::UnitX());
     lag_normal_force_.resize(static_cast<size_t>(n), 0.0);
@@ -187,10 +189,37 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
   if (drag_.law != DragLaw::None && velocity_) {
     DragInput in;
     in.dt = rod.dt;
+    // Once a step (DragModel::once_per_step): the first evaluation of a step, at Newton's
+    // initial guess, evaluates the law and keeps it; the step's later iterates and trials
+    // take it linearized in the wire velocity. The blood velocity, the vessel geometry and
+    // the drag coefficient are then those of the guess (the flow frame is the step's anyway),
+    // and the velocity Jacobian is exact for the force the step uses.
+    const bool per_step = drag_.once_per_step && rod.dt > 0.0;
+    if (per_step &&
+        !(rod.time == drag_step_time_ && rod.dt == drag_step_dt_ && rod.solve_serial == drag_step_serial_)) {
+      for (auto& l : drag_lin_) l.valid = false;
+      drag_step_time_ = rod.time;
+      drag_step_dt_ = rod.dt;
+      drag_step_serial_ = rod.solve_serial;
+    }
     for (int i = 0; i < free; ++i) {
       const auto k = static_cast<size_t>(i);
       if (k < shielded_.size() && shielded_[k]) {
         fluid_[k].setZero(), reynolds_[k] = 0.0;
+        continue;
+      }
+      auto& lin = drag_lin_[k];
+      if (per_step && lin.valid) {
+        const Vec3 f = lin.force + lin.dfdv * (rod.velocity(i) - lin.v);
+        // The normal Reynolds number of this iterate (what end_step records of the accepted one).
+        if (drag_.law == DragLaw::Cylinder) {
+          const Vec3 w = fluid_[k] - rod.velocity(i);
+          reynolds_[k] = drag_.density * (w - w.dot(lin.t) * lin.t).norm() * 2.0 * wire_radius_ / drag_.viscosity;
+        }
+        out.add_force(i, f);
+        out.add_velocity_jacobian(i, lin.dfdv);
+        force_[k] += f;
+        drag_force_[k] = f;
         continue;
       }
       const Vec3& x = rod.position(i);
@@ -220,6 +249,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       }
       const auto d = blood_drag(drag_, in);
       ++stats_.drag_evaluations;
+      if (per_step) lin = {d.force, in.v, in.t, d.dfdv, true};
       reynolds_[k] = d.reynolds_normal;
       out.add_force(i, d.force);
       out.add_velocity_jacobian(i, d.dfdv);
@@ -232,6 +262,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
 
 void VesselForces::end_step(const rod::RodView& rod) {
   const auto t0 = Clock::now();
+  drag_step_time_ = std::numeric_limits<double>::quiet_NaN();  // the next step linearizes anew
   const int free = std::min(rod.first_clamped_vertex, rod.vertex_count());
   ensure_size(rod.vertex_count());
   lagged_ = contact_.enabled;
@@ -293,6 +324,7 @@ void VesselForces::end_step(const rod::RodView& rod) {
 
 void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
   const int n = rod.vertex_count();
+  drag_step_time_ = std::numeric_limits<double>::quiet_NaN();  // another vertex set
   remap_segments_.assign(segment_.begin(), segment_.end());
   remap_surf_near_.swap(surf_near_);
   surf_near_.resize(remap_surf_near_.size());

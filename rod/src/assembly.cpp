@@ -112,6 +112,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
     view.first_clamped_vertex = first_clamped_;
     view.time = s.time;
     view.dt = mode == Mode::Dynamic ? h : 0.0;
+    view.solve_serial = solve_serial_;
     for (auto& ext : externals_) ext->evaluate(view, w.acc);
     w.ext_k.resize(nv);
     w.ext_spin_k.resize(nv - 1);

@@ -226,6 +226,7 @@ RodView RodSimulator::current_view(double dt) {
   view.first_clamped_vertex = first_clamped_;
   view.time = s.time;
   view.dt = dt;
+  view.solve_serial = solve_serial_;
   return view;
 }
 

@@ -95,6 +95,7 @@ StepReport RodSimulator::step_once(double dt) {
 void RodSimulator::begin_step(double h, bool extrapolate) {
   auto& w = *work_;
   auto& s = state_;
+  ++solve_serial_;
   const int nv = s.vertex_count();
   // Newton's initial guess. Inertial: q + h q̇. With `extrapolate` (implicit Euler), where the
   // vertex is where the last step of the same h left it (not moved since: not resampled, not

@@ -37,6 +37,10 @@ TEST(ConfigCoupling, TheDragIsTheSceneOrTheDeclaredOneAndNoneWithoutFlow) {
   EXPECT_DOUBLE_EQ(a.scale, 1.0);
   EXPECT_DOUBLE_EQ(a.viscosity, 3.5e-3);
   EXPECT_DOUBLE_EQ(a.density, 1060.0);
+  // Once a step by default; every iterate when the scene asks.
+  EXPECT_TRUE(a.once_per_step);
+  EXPECT_FALSE(
+      drag_model(test::scene("wire: {}\nflow: {}\ncoupling: {drag_update: iterate}\n"), w, true).once_per_step);
 }
 
 TEST(ConfigCoupling, OcclusionAndFlowEveryFollowTheScene) {

@@ -309,3 +309,37 @@ TEST(SceneWire, TheTipAngleDefaultsToTheShapesOwn) {
   EXPECT_NEAR(turn("{shape: angled, angle: 30 deg}"), std::numbers::pi / 6.0, 1e-12);
   EXPECT_NEAR(turn("{shape: straight}"), 0.0, 1e-15);
 }
+
+TEST(CoSim, TheDragTakenOnceAStepMovesTheTipAsTheDragIteratedEveryNewtonStep) {
+  // coupling.drag_update: step (the law once a step at Newton's guess, linearized in the
+  // wire velocity) against iterate (the law at every iterate), where the drag is what moves
+  // the wire: examples/flow_bends_wire, whose soft angled tip the systole swings 2–3 mm
+  // across the artery. The two tip traces agree to within 1% of the flow's own effect (the
+  // distance between the traces with and without drag); measured over 2.4 s: RMS 0.26 µm
+  // against 1.4 mm.
+  const std::string scene = std::string(FLOWIRE_SOURCE_DIR) + "/examples/flow_bends_wire/scene.yaml";
+  std::ifstream in(scene);
+  std::stringstream text;
+  text << in.rdbuf();
+  auto trace = [&](const std::string& name, const std::string& set) {
+    const auto dir = flowire::testing::scratch_dir("cosim-drag-update-" + name);
+    const auto cfg = config::load_config_text(
+        text.str(), scene, scene_schema(),
+        {"output.dir=" + dir.string(), "output.vtk=false", "output.png=false", "solve.duration=2.4 s", set});
+    const auto s = run_scene(cfg).summary;
+    EXPECT_EQ(s["wire"]["unconverged_steps"].get<int>(), 0) << name;
+    return read_tip_trace((dir / "tip_trace.csv").string());
+  };
+  const auto step = trace("step", "coupling.drag_update=step");
+  const auto iterate = trace("iterate", "coupling.drag_update=iterate");
+  const auto off = trace("off", "coupling.drag=none");
+  ASSERT_EQ(step.size(), iterate.size());
+  ASSERT_EQ(step.size(), off.size());
+  double linearization = 0, flow = 0;
+  for (size_t i = 0; i < step.size(); ++i) {
+    linearization += (step[i].x - iterate[i].x).squaredNorm();
+    flow += (iterate[i].x - off[i].x).squaredNorm();
+  }
+  EXPECT_GT(flow, 0.0);
+  EXPECT_LT(std::sqrt(linearization), 0.01 * std::sqrt(flow));
+}

@@ -193,3 +193,80 @@ TEST(VesselForces, WallStiffnessScalesWithTheVertexEdgesOfARefinedWire) {
     EXPECT_NEAR(f_grid, cp.stiffness * 0.1e-3, 1e-9);  // k δ on the grid
   }
 }
+
+TEST(VesselForces, AStepsDragIsTheLawAtItsGuessLinearizedInTheWireVelocity) {
+  // coupling.drag_update: step. The first evaluation of a step (Newton's initial guess)
+  // evaluates the cylinder law; every later iterate of the same step gets that force plus
+  // its velocity Jacobian times the change of velocity, exactly; the next step evaluates the
+  // law again. The blood velocity here depends on the position, so that keeping the guess's
+  // is visible too.
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 0.2, .radius = 5e-3}), {.max_segment_length = 5e-3});
+  const vessels::SpatialIndex index(net);
+  const VelocityField u = [](int, const Vec3& p) { return Vec3(0.3 + 40.0 * p.y(), 0.05 - 20.0 * p.z(), 0.02); };
+  const double a = 0.2e-3;
+  DragModel law{.law = DragLaw::Cylinder};
+  VesselForces per_step(index, a, ContactParams{.enabled = false}, law, u);
+  law.once_per_step = false;
+  VesselForces per_iterate(index, a, ContactParams{.enabled = false}, law, u);
+  std::vector<Vec3> x0, v0, x1, v1;
+  for (int i = 0; i < 6; ++i) {
+    x0.push_back(Vec3(0.05 + 1e-3 * i, 1e-3 * std::sin(i), 0.5e-3 * std::cos(i)));
+    v0.push_back(Vec3(0.01 * i, -0.02, 0.005 * i));
+    x1.push_back(x0.back() + Vec3(2e-4, -1e-4 * i, 3e-5));
+    v1.push_back(v0.back() + Vec3(0.03, 0.01 * i, -0.02));
+  }
+  RigidWire geometry(x0, 1e-4);
+  auto evaluate = [&](VesselForces& f, double time, const std::vector<Vec3>& xs, const std::vector<Vec3>& vs) {
+    rod::ForceAccumulator acc;
+    acc.reset(static_cast<int>(xs.size()));
+    auto view = geometry.view(1e-3, xs, vs);
+    view.time = time;
+    f.evaluate(view, acc);
+    return acc;
+  };
+  const auto guess = evaluate(per_step, 0.01, x0, v0);
+  const auto law_at_guess = evaluate(per_iterate, 0.01, x0, v0);
+  const auto iterate = evaluate(per_step, 0.01, x1, v1);
+  const auto law_at_iterate = evaluate(per_iterate, 0.01, x1, v1);
+  for (size_t i = 0; i < x0.size(); ++i) {
+    EXPECT_EQ(guess.forces()[i], law_at_guess.forces()[i]) << i;
+    const Vec3 linear = guess.forces()[i] + guess.velocity_jacobians()[i] * (v1[i] - v0[i]);
+    EXPECT_LT((iterate.forces()[i] - linear).norm(), 1e-14 * linear.norm()) << i;
+    EXPECT_EQ(iterate.velocity_jacobians()[i], guess.velocity_jacobians()[i]) << i;
+    // (The law itself is neither linear in the velocity nor blind to the position.)
+    EXPECT_GT((law_at_iterate.forces()[i] - linear).norm(), 1e-3 * linear.norm()) << i;
+  }
+  // A new step (after end_step) evaluates the law again, at its own guess.
+  per_step.end_step(geometry.view(1e-3, x1, v1));
+  const auto next = evaluate(per_step, 0.011, x1, v1);
+  for (size_t i = 0; i < x0.size(); ++i) EXPECT_EQ(next.forces()[i], law_at_iterate.forces()[i]) << i;
+}
+
+TEST(VesselForces, TheOncePerStepDragReachesTheSameTerminalVelocityAndErrsAtSecondOrderInTheStep) {
+  // A straight wire across a Reynolds-dependent cross flow (cylinder law), pulled against it
+  // by a load: the terminal velocity is the law's fixed point whether the law is linearized
+  // once a step or iterated to convergence. On the way the two differ by the linearization's
+  // O(Δv²) = O(Δt²) per step, i.e. at second order in Δt over a fixed time, below backward
+  // Euler's own first-order error: halving Δt quarters the difference.
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 1.0, .radius = 0.02}), {.max_segment_length = 0.01});
+  const vessels::SpatialIndex index(net);
+  std::vector<Vec3> x0;
+  for (int i = 0; i < 10; ++i) x0.push_back(Vec3(0.4 + 1e-3 * i, 0, 0));
+  const VelocityField u = [](int, const Vec3&) { return Vec3(0, 0.3, 0); };
+  auto run = [&](bool once, double dt, double until) {
+    DragModel law{.law = DragLaw::Cylinder};
+    law.once_per_step = once;
+    VesselForces f(index, 0.45e-3, ContactParams{.enabled = false}, law, u);
+    RigidWire w(x0, 4e-3);
+    const int n = static_cast<int>(std::lround(until / dt));
+    for (int k = 0; k < n; ++k) w.step(f, dt, Vec3(0, -0.02, 0));
+    return w.V.y();
+  };
+  EXPECT_NEAR(run(true, 1e-3, 2.0), run(false, 1e-3, 2.0), 1e-9);
+  const double d1 = std::abs(run(true, 2e-3, 0.02) - run(false, 2e-3, 0.02));
+  const double d2 = std::abs(run(true, 1e-3, 0.02) - run(false, 1e-3, 0.02));
+  EXPECT_GT(d1, 0.0);
+  EXPECT_NEAR(std::log2(d1 / d2), 2.0, 0.2);
+}

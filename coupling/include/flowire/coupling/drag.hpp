@@ -122,6 +122,10 @@ struct DragModel {
   double scale = 1.0;            ///< multiplies the force (sensitivity studies)
   double wire_length = 1.0;      ///< slender_body: L in c⊥ = 4πη/ln(L/a) [m]
   double mass_per_length = 0.0;  ///< velocity_offset: ρ_wire·A [kg/m]
+  /// Evaluate the law once a step, at Newton's initial guess, and take it into the step
+  /// linearized in the wire velocity, f(v) = f* + (∂f/∂v)*(v − v*) (linearly implicit, as
+  /// in Rosenbrock methods); false: the law again at every Newton iterate and trial.
+  bool once_per_step = true;
 };
 
 /// @brief What one vertex sees: blood and wire velocity, tangent, the length it stands for.

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "flowire/coupling/interaction.hpp"
@@ -72,6 +73,7 @@ class VesselForces : public rod::ExternalForce {
   /// The friction's lagged normal forces of the step start (what end_step records).
   void save_checkpoint() override { checkpoint_ = {lag_normal_force_, lag_normal_, lagged_}; }
   void restore_checkpoint() override {
+    drag_step_time_ = std::numeric_limits<double>::quiet_NaN();  // the retaken step linearizes anew
     lag_normal_force_ = checkpoint_.normal_force;
     lag_normal_ = checkpoint_.normal;
     lagged_ = checkpoint_.lagged;
@@ -147,7 +149,20 @@ class VesselForces : public rod::ExternalForce {
   std::vector<int> segment_;
   std::vector<vessels::Vec3> fluid_, force_, drag_force_, contact_force_;
   std::vector<double> reynolds_;  ///< (vertices) normal Reynolds number at the last evaluation
-  int free_ = 0;                  ///< free vertices at the last evaluation
+  /// The drag of the step linearized at Newton's initial guess (DragModel::once_per_step):
+  /// per vertex the force, its velocity Jacobian and the velocity they were taken at, valid
+  /// for the solve drag_step_serial_ (RodView::solve_serial) of the step that ends at
+  /// drag_step_time_ with drag_step_dt_.
+  struct DragLinearization {
+    vessels::Vec3 force = vessels::Vec3::Zero(), v = vessels::Vec3::Zero(), t = vessels::Vec3::UnitX();
+    Eigen::Matrix3d dfdv = Eigen::Matrix3d::Zero();
+    bool valid = false;
+  };
+  std::vector<DragLinearization> drag_lin_;
+  double drag_step_time_ = std::numeric_limits<double>::quiet_NaN();
+  double drag_step_dt_ = 0.0;
+  long drag_step_serial_ = -1;
+  int free_ = 0;                                             ///< free vertices at the last evaluation
   std::vector<double> cur_normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
   std::vector<vessels::Vec3> cur_normal_, lag_normal_;
   bool lagged_ = false;

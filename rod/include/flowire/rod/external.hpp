@@ -58,6 +58,10 @@ struct RodView {
   int first_clamped_vertex = 0;  ///< vertices with index ≥ this are held by the clamp
   double time = 0.0;             ///< [s] end of the step (implicit evaluation time)
   double dt = 0.0;               ///< [s] step size (0 in a static solve)
+  /// Serial number of the solve this evaluation belongs to: it changes whenever a step (or a
+  /// stage of one) is started or taken again, so that a force can keep what it computed at
+  /// a step's first evaluation for the rest of that step.
+  long solve_serial = 0;
   [[nodiscard]] int vertex_count() const { return static_cast<int>(positions.size()); }
   [[nodiscard]] const Eigen::Vector3d& position(int i) const { return positions[i]; }
   [[nodiscard]] const Eigen::Vector3d& velocity(int i) const { return velocities[i]; }

@@ -489,6 +489,7 @@ class RodSimulator {
   Discretization disc_;  // constants of the simulated vertices (state_.u)
   long adapt_splits_ = 0, adapt_merges_ = 0;
   SolverSettings settings_;
+  long solve_serial_ = 0;  ///< RodView::solve_serial: counts the steps and stages begun
   std::unique_ptr<Work> work_;
   std::vector<double> arc_length_;
   std::vector<std::shared_ptr<ExternalForce>> externals_;
