@@ -58,25 +58,6 @@ double tip_weight(double alpha, double* dw, double* d2w) {
   return t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
 }
 
-double onset_quadratic(double g, double delta, double* d1, double* d2) {
-  // ½ g₊² with its kink at g = 0 replaced by the cubic u³/(6δ), u = g + δ/2, over
-  // |g| < δ/2: the second derivative ramps linearly from 0 to 1 there, so φ ∈ C².
-  if (!(g > -0.5 * delta)) {
-    if (d1) *d1 = 0.0;
-    if (d2) *d2 = 0.0;
-    return 0.0;
-  }
-  if (g < 0.5 * delta) {
-    const double u = g + 0.5 * delta;
-    if (d1) *d1 = 0.5 * u * u / delta;
-    if (d2) *d2 = u / delta;
-    return u * u * u / (6.0 * delta);
-  }
-  if (d1) *d1 = g;
-  if (d2) *d2 = 1.0;
-  return 0.5 * g * g + delta * delta / 24.0;
-}
-
 LumenPenalty lumen_penalty(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double c,
                            double k, bool open_before_a, double onset) {
   using M = Eigen::Matrix3d;

@@ -10,14 +10,36 @@
 
 namespace flowire::coupling {
 
-PenaltyResult wall_penalty(double d, const Vec3& n, const Mat3& hess_d, double a, double k) {
+double onset_quadratic(double g, double delta, double* d1, double* d2) {
+  // ½ g₊² with its kink at g = 0 replaced by the cubic u³/(6δ), u = g + δ/2, over
+  // |g| < δ/2: the second derivative ramps linearly from 0 to 1 there, so φ ∈ C².
+  if (!(g > -0.5 * delta)) {
+    if (d1) *d1 = 0.0;
+    if (d2) *d2 = 0.0;
+    return 0.0;
+  }
+  if (g < 0.5 * delta) {
+    const double u = g + 0.5 * delta;
+    if (d1) *d1 = 0.5 * u * u / delta;
+    if (d2) *d2 = u / delta;
+    return u * u * u / (6.0 * delta);
+  }
+  if (d1) *d1 = g;
+  if (d2) *d2 = 1.0;
+  return 0.5 * g * g + delta * delta / 24.0;
+}
+
+PenaltyResult wall_penalty(double d, const Vec3& n, const Mat3& hess_d, double a, double k, double onset) {
   PenaltyResult r;
   const double delta = d + a;
-  if (delta <= 0.0) return r;
-  r.penetration = delta;
-  r.energy = 0.5 * k * delta * delta;
-  r.gradient = k * delta * n;
-  r.hessian = k * (n * n.transpose() + delta * hess_d);
+  double d1 = 0.0, d2 = 0.0;
+  const double phi = onset_quadratic(delta, onset, &d1, &d2);
+  if (!(phi > 0.0)) return r;
+  r.penetration = std::max(delta, 0.0);
+  r.normal_force = k * d1;
+  r.energy = k * phi;
+  r.gradient = k * d1 * n;
+  r.hessian = k * (d2 * n * n.transpose() + d1 * hess_d);
   return r;
 }
 

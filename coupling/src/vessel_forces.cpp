@@ -66,7 +66,8 @@ bool VesselForces::wall_at(int i, const Vec3& x, double* d, Vec3* n, Mat3* H) {
   const auto& net = index_.network();
   const auto& seg = net.segment(segment_[k]);
   // The union's distance is at most the located capsule's: deep inside it, no wall is near.
-  if (capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + wire_radius_ <
+  if (capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + wire_radius_ +
+          0.5 * contact_.onset <
       0.0)
     return false;
   *d = index_.wall_distance(x, location_[k], near_[k], n, H);
@@ -116,8 +117,8 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       if ((r - along * intro_dir_).norm() < intro_reach_) {
         // The plane lies one wire radius behind the entry, so that vertices fed in at the
         // entry itself are free: δ = −along − a + a > 0 once a vertex is behind it.
-        const auto pen = wall_penalty(-along - 2.0 * a, -intro_dir_, Mat3::Zero(), a, k_wall);
-        if (pen.penetration > 0.0) {
+        const auto pen = wall_penalty(-along - 2.0 * a, -intro_dir_, Mat3::Zero(), a, k_wall, contact_.onset);
+        if (pen.energy > 0.0) {
           ++intro_contacts_;
           out.add_conservative_force(i, -pen.gradient);
           out.add_energy(pen.energy);
@@ -131,8 +132,8 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     Vec3 n_wall;
     Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
     if (!wall_at(i, x, &d, &n_wall, &H_wall)) continue;
-    const auto pen = wall_penalty(d, n_wall, H_wall, a, k_wall);
-    if (pen.penetration <= 0.0) continue;
+    const auto pen = wall_penalty(d, n_wall, H_wall, a, k_wall, contact_.onset);
+    if (!(pen.energy > 0.0)) continue;
     ++stats_.contacts;
     // The penalty has a potential (k/2 δ₊²): reported, the rod's line search measures the
     // contact exactly instead of by the work along its search ray.
@@ -140,7 +141,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     out.add_conservative_force(i, f);
     out.add_energy(pen.energy);
     out.add_position_jacobian(i, -pen.hessian);
-    cur_normal_force_[static_cast<size_t>(i)] = k_wall * pen.penetration;
+    cur_normal_force_[static_cast<size_t>(i)] = pen.normal_force;
     cur_normal_[static_cast<size_t>(i)] = n_wall;
     force_[static_cast<size_t>(i)] += f;
     contact_force_[static_cast<size_t>(i)] += f;
@@ -260,6 +261,12 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
   stats_.seconds_drag += since(t0);
 }
 
+double VesselForces::wall_normal_force(double d, double cell_weight) const {
+  double d1 = 0.0;
+  (void)onset_quadratic(d + wire_radius_, contact_.onset, &d1);
+  return contact_.stiffness * cell_weight * d1;
+}
+
 void VesselForces::end_step(const rod::RodView& rod) {
   const auto t0 = Clock::now();
   drag_step_time_ = std::numeric_limits<double>::quiet_NaN();  // the next step linearizes anew
@@ -284,8 +291,9 @@ void VesselForces::end_step(const rod::RodView& rod) {
           surface_->smooth_distance(rod.position(i), smoothing_, surf_near_[k], surf_margin_, nullptr, surf_skip_);
       if (q.skipped) continue;
       nrm = q.gradient;
-      if (q.distance + wire_radius_ > 0.0) {
-        lag_normal_force_[k] = contact_.stiffness * rod.cell_weight(i) * (q.distance + wire_radius_);
+      const double fn = wall_normal_force(q.distance, rod.cell_weight(i));
+      if (fn > 0.0) {
+        lag_normal_force_[k] = fn;
         lag_normal_[k] = nrm;
       }
       d = surface_->distance(rod.position(i), surf_near_[k]).distance;
@@ -299,13 +307,14 @@ void VesselForces::end_step(const rod::RodView& rod) {
       // Deep inside the located capsule the union's wall is farther still: nothing to record.
       if (capsule_distance(rod.position(i), net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr,
                            nullptr) +
-              wire_radius_ <
+              wire_radius_ + 0.5 * contact_.onset <
           0.0)
         continue;
       const auto loc = index_.locate(rod.position(i), s, near_[k]);
       d = index_.wall_distance(rod.position(i), loc, near_[k], &nrm);
-      if (d + wire_radius_ > 0.0) {
-        lag_normal_force_[static_cast<size_t>(i)] = contact_.stiffness * rod.cell_weight(i) * (d + wire_radius_);
+      const double fn = wall_normal_force(d, rod.cell_weight(i));
+      if (fn > 0.0) {
+        lag_normal_force_[static_cast<size_t>(i)] = fn;
         lag_normal_[static_cast<size_t>(i)] = nrm;
       }
     }

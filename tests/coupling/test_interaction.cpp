@@ -63,6 +63,52 @@ TEST(Interaction, CapsuleDistanceGradientAndHessianMatchFiniteDifferences) {
   }
 }
 
+TEST(Interaction, TheWallPenaltysSmoothedOnsetHasExactDerivativesAndNoJumpInItsStiffness) {
+  // contact.onset w: the force k φ′(δ) ramps in over |δ| < w/2 (δ = d + a), k/2 δ² beyond it.
+  // Central differences of the energy and of the gradient, inside the band, at its edges and
+  // beyond, and the stiffness along the normal continuous where the sharp penalty jumps.
+  const Vec3 a(0, 0, 0), b(0.02, 0, 0);
+  const double R = 2e-3, wire = 0.45e-3, k = 3e4, w = 0.2 * wire;
+  auto at = [&](const Vec3& x) {
+    Vec3 n;
+    Mat3 H;
+    const double d = capsule_distance(x, a, b, R, &n, &H);
+    return wall_penalty(d, n, H, wire, k, w);
+  };
+  auto energy = [&](const Vec3& x) { return at(x).energy; };
+  auto gradient = [&](const Vec3& x) { return at(x).gradient; };
+  const Vec3 dir(0, 0.6, 0.8);
+  for (double delta : {-0.49 * w, -0.3 * w, -0.01 * w, 0.0, 0.2 * w, 0.45 * w, 0.55 * w, 2.0 * w}) {
+    const Vec3 x = Vec3(0.01, 0, 0) + (R - wire + delta) * dir;
+    const auto p = at(x);
+    EXPECT_GT(p.energy, 0.0) << delta;
+    EXPECT_NEAR(p.normal_force, p.gradient.norm(), 1e-12 * (1 + p.normal_force)) << delta;
+    EXPECT_NEAR(p.penetration, std::max(delta, 0.0), 1e-15) << delta;
+    EXPECT_LT((p.gradient - fd_gradient(energy, x)).norm(), 1e-6 * (1 + p.gradient.norm())) << delta;
+    EXPECT_LT((p.hessian - fd_jacobian(gradient, x)).norm(), 1e-4 * (1 + p.hessian.norm())) << delta;
+    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Mat3>(p.hessian).eigenvalues().minCoeff(), -1e-9) << delta;
+    if (delta >= 0.5 * w) {  // beyond the band: the sharp penalty's force
+      EXPECT_NEAR(p.normal_force, k * delta, 1e-12 * k * delta) << delta;
+    }
+  }
+  // Before the band: nothing. Across both band edges: the normal stiffness n·H·n is continuous.
+  EXPECT_EQ(at(Vec3(0.01, 0, 0) + (R - wire - 0.51 * w) * dir).energy, 0.0);
+  for (double edge : {-0.5 * w, 0.5 * w}) {
+    const double e = 1e-12;
+    const double below = dir.dot(at(Vec3(0.01, 0, 0) + (R - wire + edge - e) * dir).hessian * dir);
+    const double above = dir.dot(at(Vec3(0.01, 0, 0) + (R - wire + edge + e) * dir).hessian * dir);
+    EXPECT_NEAR(below, above, 1e-6 * k) << edge;
+  }
+  // The sharp onset (w = 0) jumps by k at first touch.
+  Vec3 n;
+  Mat3 H;
+  const Vec3 x0 = Vec3(0.01, 0, 0) + (R - wire) * dir;
+  const double d0 = capsule_distance(x0, a, b, R, &n, &H);
+  EXPECT_NEAR(dir.dot(wall_penalty(d0 + 1e-12, n, H, wire, k).hessian * dir) -
+                  dir.dot(wall_penalty(d0 - 1e-12, n, H, wire, k).hessian * dir),
+              k, 1e-3 * k);
+}
+
 TEST(Interaction, WallPenaltyDerivativesMatchFiniteDifferences) {
   const Vec3 a(0, 0, 0), b(0.02, 0, 0);
   const double R = 2e-3, wire = 0.45e-3, k = 1e4;

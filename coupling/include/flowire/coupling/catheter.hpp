@@ -68,12 +68,6 @@ struct CatheterSpec {
 /// (docs/catheter.md).
 inline constexpr double lumen_onset_fraction = 0.3;
 
-/// @brief φ(g) = ½ g² for g ≥ δ/2, u³/(6δ) with u = g + δ/2 for |g| < δ/2, 0 below, plus
-/// δ²/24 on the quadratic part so that φ, φ′ and φ″ are continuous (φ″ ramps from 0 to 1 over the
-/// band): the penalty's force k φ′ is that of ½ k g₊² beyond the band, and its stiffness k φ″ has
-/// no jump. δ = 0: the plain ½ g₊². @p d1, @p d2: φ′ and φ″.
-[[nodiscard]] double onset_quadratic(double g, double delta, double* d1 = nullptr, double* d2 = nullptr);
-
 /// @brief Energy, gradients and diagonal Hessian blocks of the lumen penalty
 /// E = k φ(d − c) (onset_quadratic) for one point x and one edge [a, b] (d: distance from x to
 /// the edge).

@@ -10,22 +10,30 @@
 
 namespace flowire::coupling {
 
+/// @brief φ(g) = ½ g² for g ≥ δ/2, u³/(6δ) with u = g + δ/2 for |g| < δ/2, 0 below, plus
+/// δ²/24 on the quadratic part so that φ, φ′ and φ″ are continuous (φ″ ramps from 0 to 1 over the
+/// band): the penalty's force k φ′ is that of ½ k g₊² beyond the band, and its stiffness k φ″ has
+/// no jump. δ = 0: the plain ½ g₊². @p d1, @p d2: φ′ and φ″.
+[[nodiscard]] double onset_quadratic(double g, double delta, double* d1 = nullptr, double* d2 = nullptr);
+
 /// @brief Wall penalty on a wire vertex of radius a.
 ///
 /// With d(x) the signed distance from the vertex to the wall (negative inside the lumen),
-/// n = ∇d and H_d = ∇²d, the penetration is δ = d + a and
-/// \f[ E = \tfrac{k}{2}\,\delta_+^2, \quad \nabla E = k\,\delta_+\,n, \quad
-///     \nabla^2 E = k\,(n n^T + \delta_+ H_d) \f]
-/// (zero where δ ≤ 0). The Hessian is positive semi-definite for a convex lumen section
-/// (H_d ⪰ 0 for the distance to a cylinder's axis), so the implicit step stays a
-/// minimisation.
+/// n = ∇d and H_d = ∇²d, the penetration is δ = d + a and, with φ = onset_quadratic(·, w),
+/// \f[ E = k\,\varphi(\delta), \quad \nabla E = k\,\varphi'(\delta)\,n, \quad
+///     \nabla^2 E = k\,(\varphi''(\delta)\, n n^T + \varphi'(\delta)\, H_d) \f]
+/// (zero where δ ≤ −w/2): k/2 δ₊² beyond the onset band |δ| < w/2, where the force ramps in
+/// smoothly (w = 0: the sharp k/2 δ₊², whose stiffness jumps from 0 to k at first touch). The
+/// Hessian is positive semi-definite for a convex lumen section (H_d ⪰ 0 for the distance to a
+/// cylinder's axis), so the implicit step stays a minimisation.
 struct PenaltyResult {
   double energy = 0.0;
   Vec3 gradient = Vec3::Zero();
   Mat3 hessian = Mat3::Zero();
-  double penetration = 0.0;  ///< δ₊ (m)
+  double penetration = 0.0;   ///< δ₊ (m)
+  double normal_force = 0.0;  ///< k φ′(δ) = |∇E| (N)
 };
-PenaltyResult wall_penalty(double d, const Vec3& n, const Mat3& hess_d, double a, double k);
+PenaltyResult wall_penalty(double d, const Vec3& n, const Mat3& hess_d, double a, double k, double onset = 0.0);
 
 /// @brief Signed distance to a capsule's wall and its derivatives (exact): d = |x − q(x)| − r
 /// with q the closest axis point; on the cylinder part
