@@ -79,7 +79,6 @@ std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& c, const 
                                                  const rod::WireSpec& spec, flow::FlowSolver* flow) {
   ContactParams cp = contact_settings(c).params;
   cp.tip_length = spec.tip.length;  // the wire's tip (wire.tip.length); a catheter has none
-  if (cp.onset < 0.0) cp.onset = wall_onset_fraction * spec.radius;
   const DragModel dp = drag_model(c, spec, flow != nullptr);
   if (!cp.enabled && dp.law == DragLaw::None) return nullptr;
   VelocityField vf;

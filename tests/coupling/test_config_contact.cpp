@@ -15,13 +15,14 @@ TEST(ConfigContact, DeclaresTheContactKeysOfTheScene) {
 TEST(ConfigContact, ValuesGivenInTheSceneAreRead) {
   const auto k =
       contact_settings(test::scene("contact: {enabled: false, stiffness: 2e3, friction: 0.3, tip_friction: 0.05, "
-                                   "viscous_friction: 4, settle: false,\n"
+                                   "viscous_friction: 4, onset: 0.1 mm, settle: false,\n"
                                    "          allow_outside: true, introducer: false}\n"));
   EXPECT_FALSE(k.params.enabled);
   EXPECT_DOUBLE_EQ(k.params.stiffness, 2e3);
   EXPECT_DOUBLE_EQ(k.params.friction, 0.3);
   EXPECT_DOUBLE_EQ(k.params.tip_friction, 0.05);
   EXPECT_DOUBLE_EQ(k.params.viscous_friction, 4.0);
+  EXPECT_DOUBLE_EQ(k.params.onset, 1e-4);
   EXPECT_FALSE(k.settle);
   EXPECT_TRUE(k.allow_outside);
   EXPECT_FALSE(k.introducer);
@@ -38,6 +39,7 @@ TEST(ConfigContact, WithoutAContactSectionTheDeclaredDefaultsApply) {
   EXPECT_DOUBLE_EQ(absent.params.friction, 0.1);
   EXPECT_DOUBLE_EQ(absent.params.tip_friction, 0.1);
   EXPECT_DOUBLE_EQ(absent.params.viscous_friction, 0.0);
+  EXPECT_DOUBLE_EQ(absent.params.onset, 0.0);
   EXPECT_TRUE(absent.settle);
   EXPECT_FALSE(absent.allow_outside);
   EXPECT_TRUE(absent.introducer);

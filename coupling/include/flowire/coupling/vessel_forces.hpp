@@ -36,12 +36,6 @@ struct ContactParams {
   double viscous_friction = 0.0;  ///< [N s/m²] tangential viscous wall friction per unit length
 };
 
-/// @brief Default width of the wall penalty's onset as a fraction of the wire radius
-/// (ContactParams::onset, `contact.onset`): on the 40 cm arch pushed at 2 cm/s it takes the
-/// Newton iterations from 8.9 to 5.9 a step and the line-search cuts from 11 to 1.1 a step;
-/// the wire lying lightly on a wall rests up to 0.1 radius short of it (docs/performance.md).
-inline constexpr double wall_onset_fraction = 0.2;
-
 /// @brief Blood velocity at a point located in a segment (e.g. FlowSolver::velocity_at).
 using VelocityField = std::function<vessels::Vec3(int segment, const vessels::Vec3& p)>;
 
