@@ -272,20 +272,25 @@ BENCHMARK(BM_CoSimStep_NoFriction)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_CoSimStep_NoDrag)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_CoSimStep_NoContact)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
-/// Surface contact against cylinder contact per step on the Feel++ aortic arch
-/// (examples/real/feelpp_arch.yaml as it is: the J tip pushed from 2 to 12 cm over the arch
-/// against the flow): the same scene run once with its lumen surface as the wall and once with
-/// the network's cylinders; contact = lookup + wall distance + penalty + friction, per step.
-/// The shared data is found in FLOWIRE_SHARED_DIR or ../shared next to the source tree.
-void BM_RealArch_SurfaceVsCylinderContact(benchmark::State& state) {
+/// The Feel++ arch's folder in FLOWIRE_SHARED_DIR or ../shared next to the source tree;
+/// empty (and the benchmark marked skipped, saying where it looked) when it is absent.
+std::filesystem::path feelpp_arch_data(benchmark::State& state) {
   const char* env = std::getenv("FLOWIRE_SHARED_DIR");
   const std::filesystem::path shared =
       env ? std::filesystem::path(env) : std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR).parent_path() / "shared";
   const auto data = shared / "data/real/feelpp-aortic-arch";
-  if (!std::filesystem::exists(data / "aorta2.stl")) {
-    state.SkipWithError(("shared data not found at " + data.string()).c_str());
-    return;
-  }
+  if (std::filesystem::exists(data / "aorta2.stl")) return data;
+  state.SkipWithError(("shared data not found at " + data.string()).c_str());
+  return {};
+}
+
+/// Surface contact against cylinder contact per step on the Feel++ aortic arch
+/// (examples/real/feelpp_arch.yaml as it is: the J tip pushed from 2 to 12 cm over the arch
+/// against the flow): the same scene run once with its lumen surface as the wall and once with
+/// the network's cylinders; contact = lookup + wall distance + penalty + friction, per step.
+void BM_RealArch_SurfaceVsCylinderContact(benchmark::State& state) {
+  const auto data = feelpp_arch_data(state);
+  if (data.empty()) return;
   const auto scene = std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR) / "examples/real/feelpp_arch.yaml";
   const auto out = std::filesystem::temp_directory_path() / "flowire-bench-real-arch";
   auto contact_per_step = [&](bool surface) {
@@ -317,14 +322,8 @@ BENCHMARK(BM_RealArch_SurfaceVsCylinderContact)->Unit(benchmark::kSecond)->Itera
 /// steps of 10 ms through the scene runner (flow, drag, friction on). Counters: ms a step
 /// (the run's time without its setup), Newton iterations a step, unconverged steps.
 void BM_RealArchDriven(benchmark::State& state) {
-  const char* env = std::getenv("FLOWIRE_SHARED_DIR");
-  const std::filesystem::path shared =
-      env ? std::filesystem::path(env) : std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR).parent_path() / "shared";
-  const auto data = shared / "data/real/feelpp-aortic-arch";
-  if (!std::filesystem::exists(data / "aorta2.stl")) {
-    state.SkipWithError(("shared data not found at " + data.string()).c_str());
-    return;
-  }
+  const auto data = feelpp_arch_data(state);
+  if (data.empty()) return;
   const auto scene = std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR) / "examples/real/feelpp_arch.yaml";
   const auto drive = static_cast<Drive>(state.range(0));
   std::vector<std::string> sets = {
