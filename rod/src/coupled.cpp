@@ -82,10 +82,7 @@ void RodSimulator::coupled_velocities(std::vector<Eigen::Vector3d>& out) const {
 void RodSimulator::coupled_accept() {
   Work& w = *work_;
   const int nd = dof_count();
-  w.x_accepted = state_.x;
-  w.theta_accepted = state_.theta;
-  w.frame_accepted = state_.frame;
-  w.twist_accepted = state_.ref_twist;
+  keep_iterate();
   w.fext_accepted = w.fext.head(nd);
   w.fcons_accepted = w.fcons.head(nd);
   w.q_accepted = w.q.head(nd);
@@ -129,10 +126,7 @@ double RodSimulator::coupled_nonconservative_work() const {
 void RodSimulator::coupled_reject() {
   Work& w = *work_;
   const int nd = dof_count();
-  state_.x = w.x_accepted;
-  state_.theta = w.theta_accepted;
-  state_.frame = w.frame_accepted;
-  state_.ref_twist = w.twist_accepted;
+  back_to_kept_iterate();
   w.q.head(nd) = w.q_accepted;
 }
 

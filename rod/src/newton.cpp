@@ -37,7 +37,6 @@ double RodSimulator::residual_norm(int first_free, int first_fixed) const {
 
 StepReport RodSimulator::newton(Mode mode, double h, double load_scale, int max_iterations) {
   Work& w = *work_;
-  RodState& s = state_;
   const int nd = dof_count();
   const int first_fixed = 4 * first_clamped_;
   const int first_free = tip_clamped_ ? 7 : 0;  // x0, θ0, x1 held by a tip clamp
@@ -92,10 +91,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale, int max_
     phase_seconds_.line_search += seconds_since(t_phase);
     if (alpha == 0.0) {
       // Restore the last accepted iterate and its derivatives.
-      s.x = w.x_accepted;
-      s.theta = w.theta_accepted;
-      s.frame = w.frame_accepted;
-      s.ref_twist = w.twist_accepted;
+      back_to_kept_iterate();
       gather(w.q);
       phi = assemble(mode, h, load_scale, Need::Matrix);
       matrix_current = true;
@@ -185,6 +181,22 @@ bool RodSimulator::solve_direction(Mode mode, double h, double load_scale, bool 
   return ok;
 }
 
+void RodSimulator::keep_iterate() {
+  Work& w = *work_;
+  w.x_accepted = state_.x;
+  w.theta_accepted = state_.theta;
+  w.frame_accepted = state_.frame;
+  w.twist_accepted = state_.ref_twist;
+}
+
+void RodSimulator::back_to_kept_iterate() {
+  const Work& w = *work_;
+  state_.x = w.x_accepted;
+  state_.theta = w.theta_accepted;
+  state_.frame = w.frame_accepted;
+  state_.ref_twist = w.twist_accepted;
+}
+
 void RodSimulator::move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha) {
   Work& w = *work_;
   RodState& s = state_;
@@ -222,10 +234,7 @@ double RodSimulator::line_search(Mode mode, double h, double load_scale, int fir
   // Backtracking line search on φ + E_ext − W: φ the incremental potential, E_ext the
   // potential of conservative external forces (penalty contact), W the trapezoidal work
   // of the remaining loads (dead loads, friction, drag) along the ray.
-  w.x_accepted = s.x;
-  w.theta_accepted = s.theta;
-  w.frame_accepted = s.frame;
-  w.twist_accepted = s.ref_twist;
+  keep_iterate();
   w.fext_accepted.head(nd) = w.fext.head(nd);
   w.fcons_accepted.head(nd) = w.fcons.head(nd);
   const double ext_energy_b = w.ext_energy;

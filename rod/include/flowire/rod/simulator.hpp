@@ -459,6 +459,10 @@ class RodSimulator {
   /// The end of an implicit Euler step of @p dt: velocities, the base angle, the predictor's
   /// record, the clamp's reaction.
   void end_euler_step(double dt, double angle_new);
+  /// The iterate's positions, angles, frames and reference twists into the accepted slots
+  /// the line search moves from (keep_iterate), and back (back_to_kept_iterate).
+  void keep_iterate();
+  void back_to_kept_iterate();
   /// The state at the accepted iterate + @p alpha @p dq (curvilinear update, frames transported).
   void move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha);
   StepReport step_once(double dt);
