@@ -255,6 +255,29 @@ double characteristic_impedance(const Model& m, const Vessel& v, double r) {
   return m.rho * c / (kPi * r * r);
 }
 
+flow::OutletBC outlet_condition(const Model& m, const Vessel& v) {
+  flow::OutletBC bc;
+  bc.distal_pressure = v.pout;
+  const double r = v.rd;
+  if (v.r1 > 0.0) {
+    double r2 = v.r2;
+    if (!(r2 > 0.0)) r2 = v.r1 - characteristic_impedance(m, v, r);  // openBF's reading
+    if (!(r2 > 0.0))
+      throw_input_error(fmt::format("{}:{}", m.file, v.line),
+                        fmt::format("vessel `{}`: without R2 openBF takes R2 = R1 - Z0 = {:.4g}, not positive "
+                                    "(Z0 = {:.4g} Pa s/m^3)",
+                                    v.label, r2, characteristic_impedance(m, v, r)));
+    bc.type = flow::OutletBC::Type::Rcr;
+    bc.rp = v.r1;
+    bc.c = v.cc;
+    bc.rd = r2;
+  } else {
+    bc.type = flow::OutletBC::Type::Resistance;
+    bc.resistance = characteristic_impedance(m, v, r) * (1.0 + v.rt) / (1.0 - v.rt);
+  }
+  return bc;
+}
+
 nlohmann::json to_svzerod(const Model& m, const Options& o) {
   using nlohmann::json;
   json vessels = json::array(), junctions = json::array(), bcs = json::array();
@@ -309,24 +332,15 @@ nlohmann::json to_svzerod(const Model& m, const Options& o) {
                              {"outlet_vessels", {id - 1}}});
     }
     if (std::none_of(m.vessels.begin(), m.vessels.end(), [&](const Vessel& w) { return w.sn == v.tn; })) {
-      const double r = v.rd;
-      if (v.r1 > 0.0) {
-        double r2 = v.r2;
-        if (!(r2 > 0.0)) r2 = v.r1 - characteristic_impedance(m, v, r);  // openBF's reading
-        if (!(r2 > 0.0))
-          throw_input_error(fmt::format("{}:{}", m.file, v.line),
-                            fmt::format("vessel `{}`: without R2 openBF takes R2 = R1 - Z0 = {:.4g}, not positive "
-                                        "(Z0 = {:.4g} Pa s/m^3)",
-                                        v.label, r2, characteristic_impedance(m, v, r)));
+      const flow::OutletBC bc = outlet_condition(m, v);
+      if (bc.type == flow::OutletBC::Type::Rcr)
         bcs.push_back({{"bc_name", "OUT_" + v.label},
                        {"bc_type", "RCR"},
-                       {"bc_values", {{"Rp", v.r1}, {"C", v.cc}, {"Rd", r2}, {"Pd", v.pout}}}});
-      } else {
-        const double z0 = characteristic_impedance(m, v, r);
+                       {"bc_values", {{"Rp", bc.rp}, {"C", bc.c}, {"Rd", bc.rd}, {"Pd", bc.distal_pressure}}}});
+      else
         bcs.push_back({{"bc_name", "OUT_" + v.label},
                        {"bc_type", "RESISTANCE"},
-                       {"bc_values", {{"R", z0 * (1.0 + v.rt) / (1.0 - v.rt)}, {"Pd", v.pout}}}});
-      }
+                       {"bc_values", {{"R", bc.resistance}, {"Pd", bc.distal_pressure}}}});
     }
   }
   // Junctions at the network's nodes (ids of the blocks by name).

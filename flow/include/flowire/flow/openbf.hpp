@@ -28,6 +28,8 @@
 #include <string>
 #include <vector>
 
+#include "flowire/flow/spec.hpp"
+
 namespace flowire::flow::openbf {
 
 struct Vessel {
@@ -67,6 +69,11 @@ Model read(const std::string& path);
 double wall_thickness(const Vessel& v, double r);
 /// @brief Characteristic impedance ρc/A at radius r (c² = 2Eh/(3ρr)).
 double characteristic_impedance(const Model& m, const Vessel& v, double r);
+
+/// @brief The condition at the end of outlet vessel @p v as openBF reads it (node unset): its
+/// windkessel (R2 = R1 − Z0 where R2 is absent), else the resistance of its reflection
+/// coefficient. @throws flowire::Error (input) naming the vessel when R1 − Z0 is not positive.
+flow::OutletBC outlet_condition(const Model& m, const Vessel& v);
 
 struct Options {
   double max_segment_length = 0.02;  ///< m
