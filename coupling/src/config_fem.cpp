@@ -180,6 +180,11 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   const fem::BoundaryValues bv = fem::boundary_values(spec, net, fs.time());
   const bool has_rcr = std::any_of(spec.outlets.begin(), spec.outlets.end(),
                                    [](const flow::OutletBC& o) { return o.type == flow::OutletBC::Type::Rcr; });
+  if (std::any_of(spec.outlets.begin(), spec.outlets.end(),
+                  [](const flow::OutletBC& o) { return o.type == flow::OutletBC::Type::Coronary; }))
+    warn(
+        "fem: the finite-element side takes coronary outlets as their steady resistance Ra + Ram + Rv to Pv (its "
+        "series integrates RCR windkessels only)");
   const bool time_dependent = c.boolean("fem.time_dependent");
   // Windkessel dynamics on both sides when the network integrates them (rlc model).
   const bool dynamic_rcr = has_rcr && spec.model == flow::Model::Rlc;
@@ -226,8 +231,7 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
     dyn.values_at = [&spec, &net](double t) { return fem::boundary_values(spec, net, t); };
     if (dynamic_rcr)
       for (const auto& o : spec.outlets)
-        if (o.type == flow::OutletBC::Type::Rcr)
-          dyn.windkessels.push_back({o.node, o.rp, o.c, o.rd, o.distal_pressure});
+        if (o.type == flow::OutletBC::Type::Rcr) dyn.windkessels.push_back(o);
     if (spec.model == flow::Model::Rlc) {
       periodic = flow::make_solver(net, spec);
       const double start = 30.0 * period;

@@ -59,8 +59,8 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
     if (in.type == InletBC::Type::Pressure) a.dirichlet[static_cast<size_t>(in.node)] = 1;
     add_value(in.node, in.waveform, 1.0);
   }
-  bool warned_rcr = false;
-  std::vector<char> dynamic_ground(nn, 0);  // RCR outlets of the dynamic model
+  bool warned_dynamic = false;
+  std::vector<char> dynamic_ground(nn, 0);  // outlets with state of the dynamic model (RCR, coronary)
   for (const auto& o : spec.outlets) {
     check_node(net, o.node, "outlet");
     ++bc_count[static_cast<size_t>(o.node)];
@@ -68,28 +68,32 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
     switch (o.type) {
       case OutletBC::Type::Pressure:
         a.dirichlet[n] = 1;
-        a.sources[0].node_values.emplace_back(o.node, o.pressure);
+        add_value(o.node, o.pressure, 1.0);
+        break;
+      case OutletBC::Type::Flow:  // a flow leaving the network: injected with the opposite sign
+        add_value(o.node, o.flow, -1.0);
         break;
       case OutletBC::Type::Rcr:
+      case OutletBC::Type::Coronary:
       case OutletBC::Type::Resistance: {
-        double r = o.resistance;
-        if (o.type == OutletBC::Type::Rcr) {
-          if (!steady_rcr) {  // handled by the dynamic model
+        if (o.type != OutletBC::Type::Resistance) {
+          if (!steady_rcr) {  // the dynamic model simulates the outlet's own block
             dynamic_ground[n] = 1;
             break;
           }
-          r = o.rp + o.rd;
-          if (!warned_rcr) {
-            warn(
-                "flow: the quasi-steady Poiseuille model uses each RCR outlet's total resistance Rp + Rd to Pd "
-                "(its compliance needs flow.model: rlc)");
-            warned_rcr = true;
+          if (!warned_dynamic) {
+            warn(fmt::format(
+                "flow: the quasi-steady Poiseuille model uses each {} outlet's steady resistance (Rp + Rd, or Ra + "
+                "Ram + Rv) to its distal pressure (its compliance needs flow.model: rlc)",
+                o.kind()));
+            warned_dynamic = true;
           }
         }
+        const double r = o.steady_resistance();
         if (!(r > 0.0) || !std::isfinite(r))
           throw_usage_error(fmt::format("flow: outlet at node {}: resistance {} must be positive", o.node, r));
         a.outlet_conductance[n] += 1.0 / r;
-        a.sources[0].node_values.emplace_back(o.node, o.distal_pressure / r);
+        a.sources[0].node_values.emplace_back(o.node, o.steady_pressure() / r);
         break;
       }
     }

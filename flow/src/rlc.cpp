@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "assembly.hpp"
 #include "flowire/common/diagnostics.hpp"
@@ -44,8 +45,9 @@ double segment_compliance(double youngs_modulus, double thickness_ratio, double 
 namespace detail {
 namespace {
 
-/// E and F of the network, rows and unknowns [p (num_nodes) | Q (num_segments) | p_c (RCR
-/// outlets)]: constant within a phase, rewritten only when a wire changes a segment.
+/// E and F of the network: rows [node balances and pressures (num_nodes) | segments], over
+/// the unknowns [p (num_nodes) | Q (num_segments) | per outlet block its outflow and its own
+/// unknowns]: constant within a phase, rewritten only when a wire changes a segment.
 class RlcNetwork final : public svzerod::Block {
  public:
   RlcNetwork(Eigen::SparseMatrix<double> e, Eigen::SparseMatrix<double> f)
@@ -109,10 +111,9 @@ class RlcBoundary final : public svzerod::Block {
   std::vector<double> values_;  // (rows × sources)
 };
 
-/// Unknown layout: [p (num_nodes) | Q (num_segments) | p_c (num RCR outlets)]. The equations
-/// E ẏ + F y + c(t) = 0 are two blocks on an svzerod::System, stepped by its generalized-α
-/// integrator: J = α_m E + α_f γ Δt F is factorized (KLU) once for the phase and again only
-/// when a wire changes a segment.
+/// Unknown layout: [p (num_nodes) | Q (num_segments) | per RCR or coronary outlet its outflow and its own unknowns].
+/// The equations E ẏ + F y + c(t) = 0 are two blocks on an svzerod::System, stepped by its generalized-α integrator: J
+/// = α_m E + α_f γ Δt F is factorized (KLU) once for the phase and again only when a wire changes a segment.
 class RlcSolver final : public FlowSolver {
  public:
   RlcSolver(const Network& net, FlowSpec spec) : FlowSolver(net, std::move(spec)) {
@@ -125,6 +126,7 @@ class RlcSolver final : public FlowSolver {
     timings_.assemble = sw.seconds();
     Stopwatch sf;
     initial_state();
+    for (auto& b : outlets_) b->prepare(st_.y, st_.yd, /*after_steady=*/true, spec_.cycle());
     system_->set_phase(/*steady=*/false, 0.0);
     factorize("the time-step matrix is singular; check that every piece of the network has a pressure reference");
     settle();
@@ -177,9 +179,27 @@ class RlcSolver final : public FlowSolver {
   void build() {
     n_nodes_ = static_cast<size_t>(net_.num_nodes());
     const auto ne = static_cast<size_t>(net_.num_segments());
-    for (const auto& o : spec_.outlets)
-      if (o.type == OutletBC::Type::Rcr) rcr_.push_back(&o);
-    n_ = static_cast<Eigen::Index>(n_nodes_ + ne + rcr_.size());
+    // Outlets with state (RCR, coronary) are their svZeroDSolver blocks, connected to their
+    // node through an outflow unknown; each brings as many rows as unknowns.
+    int next = static_cast<int>(n_nodes_ + ne);
+    double period = spec_.cycle() > 0.0 ? spec_.cycle() : -1.0;
+    for (const auto& o : spec_.outlets) {
+      if (!o.dynamic() && o.type != OutletBC::Type::Rcr) continue;
+      const std::string name = fmt::format("outlet at node {}", o.node);
+      const nlohmann::json bc = o.to_svzerod(name);
+      svzerod::BlockInput in(bc.at("bc_values"), "flow (rlc)", name, period);
+      auto block = svzerod::Registry::instance().create(svzerod::Section::BoundaryCondition,
+                                                        bc.at("bc_type").get<std::string>(), in);
+      const int q = next++;
+      block->add_inlet({name, q, o.node});
+      const int own = static_cast<int>(block->internal_unknowns().size());
+      block->place(q, next);
+      next += own;
+      outflow_.emplace_back(o.node, q);
+      outlets_.push_back(std::move(block));
+    }
+    n_ = next;
+    const auto n_rows = static_cast<Eigen::Index>(n_nodes_ + ne);
     std::vector<Eigen::Triplet<double>> te, tf;
     const auto qi = [&](size_t s) { return static_cast<int>(n_nodes_ + s); };
     std::vector<double> node_c(n_nodes_, 0.0);
@@ -208,34 +228,22 @@ class RlcSolver final : public FlowSolver {
       if (node_c[i] > 0.0) te.emplace_back(r, r, node_c[i]);
       if (a_.outlet_conductance[i] > 0.0) tf.emplace_back(r, r, a_.outlet_conductance[i]);
     }
-    for (size_t k = 0; k < rcr_.size(); ++k) {
-      const auto& o = *rcr_[k];
-      if (!(o.rp > 0.0) || !(o.rd > 0.0) || !(o.c >= 0.0))
-        throw_usage_error(fmt::format("flow (rlc): RCR outlet at node {} needs Rp > 0, Rd > 0, C >= 0", o.node));
-      const int row = static_cast<int>(n_nodes_ + ne + k);
-      // Outflow (p_i - p_c)/Rp leaves node i.
-      tf.emplace_back(o.node, o.node, 1.0 / o.rp);
-      tf.emplace_back(o.node, row, -1.0 / o.rp);
-      // C dp_c/dt - (p_i - p_c)/Rp + (p_c - Pd)/Rd = 0  (Pd in the boundary values).
-      if (o.c > 0.0) te.emplace_back(row, row, o.c);
-      tf.emplace_back(row, o.node, -1.0 / o.rp);
-      tf.emplace_back(row, row, 1.0 / o.rp + 1.0 / o.rd);
-    }
-    Eigen::SparseMatrix<double> e(n_, n_), f(n_, n_);
+    for (const auto& [node, q] : outflow_)  // the outlet block's inflow leaves the node
+      if (!a_.dirichlet[static_cast<size_t>(node)]) tf.emplace_back(node, q, 1.0);
+    Eigen::SparseMatrix<double> e(n_rows, n_), f(n_rows, n_);
     e.setFromTriplets(te.begin(), te.end());
     f.setFromTriplets(tf.begin(), tf.end());
     // Boundary values per BC source: rows of the node values (pressure at Dirichlet rows,
-    // injected flow elsewhere), RCR distal pressures in the constant part.
+    // injected flow elsewhere); the outlet blocks write their own.
     std::vector<Eigen::VectorXd> src(a_.sources.size(), Eigen::VectorXd::Zero(n_));
     for (size_t k = 0; k < a_.sources.size(); ++k)
       for (const auto& [node, value] : a_.sources[k].node_values) src[k][node] += value;
-    for (size_t k = 0; k < rcr_.size(); ++k)
-      src[0][static_cast<Eigen::Index>(n_nodes_ + ne + k)] += rcr_[k]->distal_pressure / rcr_[k]->rd;
     network_ = std::make_unique<RlcNetwork>(std::move(e), std::move(f));
     boundary_ = std::make_unique<RlcBoundary>(a_, src);
     network_->place(0, static_cast<int>(n_nodes_));
-    system_ = std::make_unique<svzerod::System>(std::vector<svzerod::Block*>{network_.get(), boundary_.get()},
-                                                static_cast<int>(n_), spec_.cycle(), "flow (rlc)");
+    std::vector<svzerod::Block*> blocks{network_.get(), boundary_.get()};
+    for (auto& b : outlets_) blocks.push_back(b.get());
+    system_ = std::make_unique<svzerod::System>(blocks, static_cast<int>(n_), spec_.cycle(), "flow (rlc)");
     // A linear system: one solve per step (tolerance 0 never skips it).
     integrator_ = std::make_unique<svzerod::GeneralizedAlpha>(*system_, std::clamp(spec_.rho_infinity, 0.0, 1.0),
                                                               spec_.dt, 0.0, 1, "flow (rlc)");
@@ -304,8 +312,9 @@ class RlcSolver final : public FlowSolver {
   }
 
   Assembly a_;
-  std::vector<const OutletBC*> rcr_;
-  std::vector<double> inertance_;  // (num_segments) without occlusion
+  std::vector<std::unique_ptr<svzerod::Block>> outlets_;  // RCR and coronary outlets
+  std::vector<std::pair<int, int>> outflow_;              // (node, outflow unknown) of each
+  std::vector<double> inertance_;                         // (num_segments) without occlusion
   size_t n_nodes_ = 0;
   Eigen::Index n_ = 0;
   std::unique_ptr<RlcNetwork> network_;

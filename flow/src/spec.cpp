@@ -271,25 +271,43 @@ OutletBC outlet_from(const Config& cfg, const std::string& path) {
   OutletBC o;
   const bool has_r = cfg.has(path + ".resistance");
   const bool has_rcr = cfg.has_section(path + ".rcr");
+  const bool has_cor = cfg.has_section(path + ".coronary");
+  const bool has_q = cfg.has(path + ".flow");
   const bool has_p = cfg.has(path + ".pressure");
-  if (has_r + has_rcr + (has_p && path != "flow.outlets") > 1)
-    throw_input_error(cfg.where(path), fmt::format("{}: give one of pressure, resistance or rcr", path));
+  if (has_r + has_rcr + has_cor + has_q + (has_p && path != "flow.outlets") > 1)
+    throw_input_error(cfg.where(path),
+                      fmt::format("{}: give one of pressure, resistance, rcr, coronary or flow", path));
+  const auto num = [&](const std::string& key, double fallback) { return cfg.number_or(path + key, fallback); };
+  std::string where = cfg.where(path);
   if (has_rcr) {
-    o.type = OutletBC::Type::Rcr;
-    o.rp = cfg.number_or(path + ".rcr.Rp", 0.0);
-    o.c = cfg.number_or(path + ".rcr.C", 0.0);
-    o.rd = cfg.number_or(path + ".rcr.Rd", 0.0);
-    o.distal_pressure = cfg.number_or(path + ".rcr.Pd", 0.0);
-    if (!(o.rp + o.rd > 0.0)) throw_input_error(cfg.where(path + ".rcr"), "Rp + Rd must be positive");
+    o = OutletBC::rcr(num(".rcr.Rp", 0.0), num(".rcr.C", 0.0), num(".rcr.Rd", 0.0), num(".rcr.Pd", 0.0));
+    where = cfg.where(path + ".rcr");
+  } else if (has_cor) {
+    o.type = OutletBC::Type::Coronary;
+    auto& k = o.coronary;
+    k.ra = num(".coronary.Ra", 0.0);
+    k.ca = num(".coronary.Ca", 0.0);
+    k.ram = num(".coronary.Ram", 0.0);
+    k.cim = num(".coronary.Cim", 0.0);
+    k.pv = num(".coronary.Pv", 0.0);
+    where = cfg.where(path + ".coronary");
+    if (!cfg.has(path + ".coronary.Rv")) throw_input_error(where, "a coronary bed needs Rv");
+    k.rv = cfg.number(path + ".coronary.Rv");
+    if (cfg.has(path + ".coronary.Pim") && cfg.has(path + ".coronary.Pim_file"))
+      throw_input_error(where, "give Pim or Pim_file, not both");
+    k.pim = cfg.has(path + ".coronary.Pim_file")
+                ? read_waveform_csv(cfg.resolve_path(cfg.string(path + ".coronary.Pim_file")))
+                : Waveform::constant(num(".coronary.Pim", 0.0));
   } else if (has_r) {
-    o.type = OutletBC::Type::Resistance;
-    o.resistance = cfg.number(path + ".resistance");
-    o.distal_pressure = cfg.number_or(path + ".distal_pressure", 0.0);
-    if (!(o.resistance > 0.0)) throw_input_error(cfg.where(path + ".resistance"), "resistance must be positive");
+    o = OutletBC::with_resistance(cfg.number(path + ".resistance"), num(".distal_pressure", 0.0));
+    where = cfg.where(path + ".resistance");
+  } else if (has_q) {
+    o.type = OutletBC::Type::Flow;
+    o.flow = Waveform::constant(cfg.number(path + ".flow"));
   } else {
-    o.type = OutletBC::Type::Pressure;
-    o.pressure = cfg.number_or(path + ".pressure", 0.0);
+    o = OutletBC::at_pressure(num(".pressure", 0.0));
   }
+  o.check(where);
   return o;
 }
 
@@ -375,15 +393,29 @@ void add_file_outlets(const Config& cfg, const Network& net, FlowSpec& s) {
                                       f.where, f.name, f.position.x(), f.position.y(), f.position.z(), node, 1e3 * best,
                                       is_inlet(node) ? ", and it is the inlet" : ""));
     } else {
-      node = outlet_node(cfg, key, f.name, net, s.inlets);
+      // The first of its names the network knows (a branch name or node id), else an error naming the first.
+      std::string name = f.name;
+      for (const auto& n : f.aliases)
+        if (std::none_of(net.branches().begin(), net.branches().end(), [&](const auto& b) { return b.name == name; }))
+          name = std::any_of(net.branches().begin(), net.branches().end(), [&](const auto& b) { return b.name == n; })
+                     ? n
+                     : name;
+      try {
+        node = outlet_node(cfg, key, name, net, s.inlets);
+      } catch (const Error& e) {
+        if (e.kind() != ErrorKind::Input) throw;
+        throw_input_error(f.where,
+                          fmt::format("outlet '{}' of the file does not match the network: {}", name, e.what()));
+      }
     }
     if (taken(node)) continue;  // the scene names this outlet itself
     OutletBC bc = f.bc;
     bc.node = node;
     s.outlets.push_back(bc);
   }
-  const bool stated_default =
-      cfg.has("flow.outlets.pressure") || cfg.has("flow.outlets.resistance") || cfg.has_section("flow.outlets.rcr");
+  const bool stated_default = cfg.has("flow.outlets.pressure") || cfg.has("flow.outlets.resistance") ||
+                              cfg.has("flow.outlets.flow") || cfg.has_section("flow.outlets.rcr") ||
+                              cfg.has_section("flow.outlets.coronary");
   std::string missing;
   for (int e : net.ends())
     if (!is_inlet(e) && !taken(e)) missing += (missing.empty() ? "" : ", ") + std::to_string(e);
@@ -481,11 +513,30 @@ void declare_scene_keys(config::Schema& s) {
         "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so "
         "each outlet flow is proportional to r^3",
         {"none", "murray"});
-  s.add("flow.outlets.rcr", Type::Section, "", D::None, "RCR windkessel at every outlet");
-  s.add("flow.outlets.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance").non_negative();
-  s.add("flow.outlets.rcr.C", Type::Number, "", D::Compliance, "capacitance").non_negative();
-  s.add("flow.outlets.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance").non_negative();
-  s.add("flow.outlets.rcr.Pd", Type::Number, "0", D::Pressure, "distal pressure");
+  // The windkessel and coronary sections, at every outlet and at one named outlet.
+  const auto declare_dynamic = [&](const std::string& base, const char* whose) {
+    s.add(base + ".rcr", Type::Section, "", D::None, fmt::format("RCR windkessel {}", whose));
+    s.add(base + ".rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance").non_negative();
+    s.add(base + ".rcr.C", Type::Number, "", D::Compliance, "capacitance").non_negative();
+    s.add(base + ".rcr.Rd", Type::Number, "", D::Resistance, "distal resistance").non_negative();
+    s.add(base + ".rcr.Pd", Type::Number, "", D::Pressure, "distal pressure (default 0)");
+    s.add(base + ".coronary", Type::Section, "", D::None,
+          fmt::format("open-loop coronary bed {} (Kim et al. 2010; svZeroDSolver's CORONARY): Ra, then Ca, Ram, then "
+                      "Cim against the intramyocardial pressure Pim, then Rv to Pv",
+                      whose));
+    s.add(base + ".coronary.Ra", Type::Number, "", D::Resistance, "arterial resistance").non_negative();
+    s.add(base + ".coronary.Ca", Type::Number, "", D::Compliance, "arterial compliance").non_negative();
+    s.add(base + ".coronary.Ram", Type::Number, "", D::Resistance, "microvascular resistance").non_negative();
+    s.add(base + ".coronary.Cim", Type::Number, "", D::Compliance, "intramyocardial compliance").non_negative();
+    s.add(base + ".coronary.Rv", Type::Number, "", D::Resistance, "venous resistance").positive();
+    s.add(base + ".coronary.Pv", Type::Number, "", D::Pressure, "venous pressure (default 0)");
+    s.add(base + ".coronary.Pim", Type::Number, "", D::Pressure,
+          "intramyocardial pressure, constant (default 0; or Pim_file)");
+    s.add(base + ".coronary.Pim_file", Type::String, "", D::None,
+          "intramyocardial pressure over the cycle: CSV time,value (SI), periodic");
+  };
+  declare_dynamic("flow.outlets", "at every outlet");
+  s.add("flow.outlets.flow", Type::Number, "", D::FlowRate, "a fixed flow leaving every outlet");
   // One outlet's own condition, under its branch name or node id; the keys above are the
   // default for the rest (and Murray's split is over the rest only).
   s.add("flow.outlets.*", Type::Section, "", D::None,
@@ -496,11 +547,8 @@ void declare_scene_keys(config::Schema& s) {
       .positive();
   s.add("flow.outlets.*.distal_pressure", Type::Number, "", D::Pressure,
         "this outlet: pressure behind its resistance (default 0)");
-  s.add("flow.outlets.*.rcr", Type::Section, "", D::None, "this outlet: RCR windkessel");
-  s.add("flow.outlets.*.rcr.Rp", Type::Number, "", D::Resistance, "proximal resistance").non_negative();
-  s.add("flow.outlets.*.rcr.C", Type::Number, "", D::Compliance, "capacitance").non_negative();
-  s.add("flow.outlets.*.rcr.Rd", Type::Number, "", D::Resistance, "distal resistance").non_negative();
-  s.add("flow.outlets.*.rcr.Pd", Type::Number, "", D::Pressure, "distal pressure (default 0)");
+  s.add("flow.outlets.*.flow", Type::Number, "", D::FlowRate, "this outlet: a fixed flow leaving it");
+  declare_dynamic("flow.outlets.*", "at this outlet");
 }
 
 FlowSpec from_config(const config::Config& cfg, const Network& net) {

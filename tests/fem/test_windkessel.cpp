@@ -27,18 +27,19 @@ constexpr double kP0 = 200.0, kAmp = 100.0, kPeriod = 0.8;
 struct TubeWindkessel {
   vessels::Network net = test::tube(kR, kL);
   int outlet = -1;
-  Windkessel wk;
+  flow::OutletBC wk;
   TubeWindkessel() {
     for (int e : net.ends())
       if (e != net.widest_end() || outlet >= 0) outlet = e;
     const double rt = 8 * kEta * kL / (kPi * std::pow(kR, 4));
     // R_d C = 0.2 s against ω = 7.85 rad/s: the capacitor takes most of the oscillation.
-    wk = {outlet, 0.5 * rt, 0.2 / (5 * rt), 5 * rt, 20.0};
+    wk = flow::OutletBC::rcr(0.5 * rt, 0.2 / (5 * rt), 5 * rt, 20.0);
+    wk.node = outlet;
   }
   [[nodiscard]] BoundaryValues at(double t) const {
     BoundaryValues bv;
     bv.inlet_pressure = kP0 + kAmp * std::sin(2 * kPi * t / kPeriod);
-    bv.outlets.push_back({outlet, OutletValue::Type::Resistance, wk.pd, wk.rp + wk.rd});
+    bv.outlets.push_back({outlet, OutletValue::Type::Resistance, wk.distal_pressure, wk.rp + wk.rd});
     bv.viscosity = kEta;
     bv.density = kRho;
     return bv;

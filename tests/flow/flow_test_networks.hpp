@@ -109,7 +109,7 @@ inline FlowSpec pressure_spec(const Network& net, int inlet, const Waveform& w,
   for (const auto& [node, p] : outlets) {
     OutletBC o;
     o.node = node;
-    o.pressure = p;
+    o.pressure = Waveform::constant(p);
     s.outlets.push_back(o);
   }
   return s;

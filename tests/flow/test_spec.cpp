@@ -179,7 +179,7 @@ flow:
       EXPECT_DOUBLE_EQ(o.rd, 1.5e8);
       EXPECT_NEAR(o.distal_pressure, 5 * mmHg, 1e-9);
     } else if (o.type == OutletBC::Type::Pressure) {
-      EXPECT_NEAR(o.pressure, 10 * mmHg, 1e-9);
+      EXPECT_NEAR(o.pressure.value, 10 * mmHg, 1e-9);
     } else {
       EXPECT_EQ(o.node, left_iliac_end);
       EXPECT_DOUBLE_EQ(o.resistance, 3e8);
@@ -194,7 +194,7 @@ flow:
       {"flow:\n  outlets:\n    nowhere: {pressure: 0}\n", "s.yaml:3: flow.outlets.nowhere: no branch named 'nowhere'"},
       {"flow:\n  outlets:\n    ascending_aorta: {pressure: 0}\n", "branch 'ascending_aorta' has no outlet"},
       {"flow:\n  outlets:\n    left_subclavian: {pressure: 0, resistance: 1e8}\n",
-       "flow.outlets.left_subclavian: give one of pressure, resistance or rcr"},
+       "flow.outlets.left_subclavian: give one of pressure, resistance, rcr, coronary or flow"},
       {"flow:\n  outlets:\n    left_subclavian: {rcr: {Rp: -1, C: 1e-9, Rd: 1e8}}\n",
        "flow.outlets.left_subclavian.rcr.Rp"},
       {"flow:\n  outlets:\n    left_subclavian: {colour: red}\n", "unknown key 'flow.outlets.*.colour'"},

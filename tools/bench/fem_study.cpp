@@ -42,7 +42,7 @@ std::vector<double> network_flows(const vessels::Network& net, const std::vector
   spec.inlets.push_back(in);
   flow::OutletBC o;
   o.type = flow::OutletBC::Type::Pressure;
-  o.pressure = kOutletPressure;
+  o.pressure = flow::Waveform::constant(kOutletPressure);
   spec.outlets.push_back(o);
   flow::resolve_nodes(spec, net);
   // Setup and one frame, repeated so that the clock resolves it.

@@ -129,7 +129,7 @@ int flow_frame_cost(const Options& o) {
                                .waveform = flow::Waveform::sine(1000.0 + amp, 1000.0 - amp, period)});
         flow::OutletBC out;
         out.node = outlet_node;
-        out.pressure = 1000.0;
+        out.pressure = flow::Waveform::constant(1000.0);
         spec.outlets.push_back(out);
         const auto t0 = Clock::now();
         auto s = flow::make_solver(tube, spec);

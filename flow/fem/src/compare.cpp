@@ -252,18 +252,19 @@ BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, d
     v.node = o.node;
     switch (o.type) {
       case flow::OutletBC::Type::Pressure:
-        v.pressure = o.pressure;
+        v.pressure = o.pressure(t);
         break;
       case flow::OutletBC::Type::Resistance:
+      case flow::OutletBC::Type::Rcr:  // quasi-steady: the capacitors carry no flow
+      case flow::OutletBC::Type::Coronary:
         v.type = OutletValue::Type::Resistance;
-        v.pressure = o.distal_pressure;
-        v.resistance = o.resistance;
+        v.pressure = o.steady_pressure();
+        v.resistance = o.steady_resistance();
         break;
-      case flow::OutletBC::Type::Rcr:  // quasi-steady: the capacitor carries no flow
-        v.type = OutletValue::Type::Resistance;
-        v.pressure = o.distal_pressure;
-        v.resistance = o.rp + o.rd;
-        break;
+      case flow::OutletBC::Type::Flow:
+        throw_input_error("fem", fmt::format("outlet node {}: a fixed outflow is not a condition the comparison "
+                                             "takes (pressure, resistance, RCR or coronary)",
+                                             o.node));
     }
     bv.outlets.push_back(v);
   }
@@ -297,16 +298,10 @@ NetworkFlow network_flow(const Network& net, const BoundaryValues& bv) {
   for (int e : net.ends()) {
     if (e == inlet) continue;
     const OutletValue v = outlet_value_of(bv, e);
-    flow::OutletBC out;
+    flow::OutletBC out = v.type == OutletValue::Type::Resistance
+                             ? flow::OutletBC::with_resistance(v.resistance, v.pressure)
+                             : flow::OutletBC::at_pressure(v.pressure);
     out.node = e;
-    if (v.type == OutletValue::Type::Resistance) {
-      out.type = flow::OutletBC::Type::Resistance;
-      out.resistance = v.resistance;
-      out.distal_pressure = v.pressure;
-    } else {
-      out.type = flow::OutletBC::Type::Pressure;
-      out.pressure = v.pressure;
-    }
     spec.outlets.push_back(out);
   }
   auto solver = flow::make_solver(net, spec);
@@ -600,16 +595,17 @@ std::vector<StokesSolution> integrate_frames(const TetMesh& mesh, const StokesOp
   const double dt = dyn.period / steps;
   struct Cap {
     int group;
-    Windkessel w;
+    flow::OutletBC w;
     double pc, pc_prev;
   };
   std::vector<Cap> caps;
   for (const auto& w : dyn.windkessels) {
-    if (!(w.c > 0.0) || !(w.rd > 0.0) || !(w.rp >= 0.0) || !std::isfinite(w.c + w.rd + w.rp + w.pd))
+    if (w.type != flow::OutletBC::Type::Rcr || !(w.c > 0.0) || !(w.rd > 0.0) || !(w.rp >= 0.0) ||
+        !std::isfinite(w.c + w.rd + w.rp + w.distal_pressure))
       throw_usage_error(fmt::format("fem: windkessel at node {} needs C > 0, Rd > 0, Rp >= 0", w.node));
     const int g = mesh.group_of_node(w.node);
     if (g < 0) throw_usage_error(fmt::format("fem: windkessel node {} is not an outlet of the mesh", w.node));
-    caps.push_back({g, w, w.pd, w.pd});
+    caps.push_back({g, w, w.distal_pressure, w.distal_pressure});
   }
   std::optional<UnsteadyStokes> unsteady;
   if (dyn.time_dependent) {
@@ -619,7 +615,7 @@ std::vector<StokesSolution> integrate_frames(const TetMesh& mesh, const StokesOp
   } else if (basis) {
     // Start the capacitors at the quasi-steady state of t = 0 (R_p + R_d to P_d).
     const StokesSolution s0 = basis->solve(group_conditions(mesh, dyn.values_at(0.0)));
-    for (auto& c : caps) c.pc = c.pc_prev = c.w.pd + c.w.rd * s0.group_flow[static_cast<size_t>(c.group)];
+    for (auto& c : caps) c.pc = c.pc_prev = c.w.distal_pressure + c.w.rd * s0.group_flow[static_cast<size_t>(c.group)];
   } else {
     throw_usage_error("fem: a dynamic series is for Stokes");
   }
@@ -635,7 +631,7 @@ std::vector<StokesSolution> integrate_frames(const TetMesh& mesh, const StokesOp
         // BDF2: P_c = [(4P_c^n − P_c^{n−1})/(2Δt) + P_d/(R_d C) + Q/C] / D.
         const Cap& c = caps[k];
         d[k] = 1.5 / dt + 1.0 / (c.w.rd * c.w.c);
-        hist[k] = ((4.0 * c.pc - c.pc_prev) / (2.0 * dt) + c.w.pd / (c.w.rd * c.w.c)) / d[k];
+        hist[k] = ((4.0 * c.pc - c.pc_prev) / (2.0 * dt) + c.w.distal_pressure / (c.w.rd * c.w.c)) / d[k];
         cond[static_cast<size_t>(c.group)] = GroupCondition::with_resistance(c.w.rp + 1.0 / (c.w.c * d[k]), hist[k]);
       }
       StokesSolution sol = unsteady ? unsteady->step(cond) : basis->solve(cond);

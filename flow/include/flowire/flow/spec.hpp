@@ -10,6 +10,8 @@
 /// 47, 131–141). An RCR outlet has state, so it is only dynamic
 /// in `Model::Rlc`; the quasi-steady Poiseuille model replaces it by its total
 /// resistance Rp + Rd to Pd and reports that with a warning.
+#include <complex>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -66,15 +68,63 @@ struct InletBC {
   Waveform waveform;  ///< Pa or m³/s into the network
 };
 
+/// @brief Open-loop coronary outlet (Kim et al. 2010, "Patient-specific modeling of blood flow
+/// and pressure in human coronary arteries", Ann. Biomed. Eng. 38, 3195–3209): Ra, then Ca to
+/// ground, Ram, then Cim against the intramyocardial pressure Pim(t), then Rv to Pv.
+struct CoronaryValues {
+  double ra = 0.0, ca = 0.0, ram = 0.0, cim = 0.0, rv = 0.0;  ///< Pa·s/m³ and m³/Pa
+  Waveform pim;                                               ///< intramyocardial pressure (Pa)
+  double pv = 0.0;                                            ///< venous pressure (Pa)
+};
+
+/// @brief One outlet's condition: the catalogue every solver reads (boundary.cpp).
+///
+/// Each kind is the svZeroDSolver boundary block of that name (svzerod/blocks.hpp), where its
+/// equations live: `to_svzerod` writes it as such a block (the compliant `rlc` model simulates
+/// its windkessels and coronary beds with those very blocks) and `from_svzerod` reads one back.
+/// The quasi-steady models see the steady law `steady_resistance()` to `steady_pressure()`;
+/// the frequency domain sees `impedance(ω)`. Adding a kind: a Type here, its block class.
 struct OutletBC {
-  enum class Type { Pressure, Resistance, Rcr };
+  enum class Type { Pressure, Resistance, Rcr, Coronary, Flow };
   int node = -1;
   Type type = Type::Pressure;
-  double pressure = 0.0;               ///< Pressure: Pa
+  Waveform pressure;                   ///< Pressure: Pa (constant, sine or table)
+  Waveform flow;                       ///< Flow: m³/s leaving the network
   double resistance = 0.0;             ///< Resistance: Pa·s/m³
   double distal_pressure = 0.0;        ///< Resistance and Rcr: Pa
   double rp = 0.0, c = 0.0, rd = 0.0;  ///< Rcr: proximal resistance, compliance (m³/Pa), distal resistance
+  CoronaryValues coronary;             ///< Coronary
   bool defaulted = false;              ///< expanded from the template for the ends not named (resolve_nodes)
+
+  static OutletBC at_pressure(double p);
+  static OutletBC with_resistance(double r, double pd = 0.0);
+  static OutletBC rcr(double rp, double c, double rd, double pd = 0.0);
+
+  /// @brief svZeroDSolver's name of the kind: PRESSURE, RESISTANCE, RCR, CORONARY, FLOW.
+  [[nodiscard]] std::string_view kind() const;
+  /// @brief Whether the outlet has state of its own (a capacitor): RCR with C > 0, CORONARY.
+  [[nodiscard]] bool dynamic() const;
+  /// @brief The steady law P = R Q + P₀ it obeys at constant flow: R = resistance, Rp + Rd,
+  /// Ra + Ram + Rv (Pressure and Flow: 0). @see steady_pressure.
+  [[nodiscard]] double steady_resistance() const;
+  /// @brief P₀ of the steady law: Pd, Pv (coronary), the pressure's mean (Pressure).
+  [[nodiscard]] double steady_pressure() const;
+  /// @brief Input impedance P̂/Q̂ at angular frequency ω ≥ 0 (Resistance, Rcr, Coronary; the
+  /// distal and intramyocardial pressures held constant): R; Rp + Rd/(1 + iωRdC);
+  /// Ra + 1/(iωCa + 1/(Ram + 1/(iωCim + 1/Rv))).
+  /// @throws flowire::Error (usage) for Pressure and Flow, which have none.
+  [[nodiscard]] std::complex<double> impedance(double omega) const;
+  /// @brief The svZeroDSolver boundary condition `{bc_name, bc_type, bc_values}` (SI; a
+  /// waveform that is a table or a sine is written over `t`, the sine sampled 128 times a period).
+  [[nodiscard]] nlohmann::json to_svzerod(const std::string& name) const;
+  /// @brief Read an svZeroDSolver boundary condition (its `bc_type` and `bc_values`, SI as that
+  /// JSON is). @throws flowire::Error (input) naming @p where: an unknown or inlet-only type,
+  /// a missing or negative value, a value table over time where the catalogue keeps a constant.
+  static OutletBC from_svzerod(const nlohmann::json& bc, const std::string& where);
+  /// @brief Refuse values no outlet can have: a negative or non-finite resistance, compliance
+  /// or pressure, Rp + Rd = 0, a coronary bed without resistance. @throws flowire::Error
+  /// (input) naming @p where.
+  void check(const std::string& where) const;
 };
 
 /// @brief A branch's own vessel wall (`flow.wall.NAME`), in place of the network-wide one.

@@ -175,13 +175,6 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
 /// @throws flowire::Error as build_mesh, solve_stokes and the flow solver do.
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir);
 
-/// @brief An RCR windkessel at an outlet end: C dP_c/dt = Q − (P_c − P_d)/R_d, outlet
-/// pressure P_c + R_p·Q (Q the flow out).
-struct Windkessel {
-  int node = -1;
-  double rp = 0.0, c = 0.0, rd = 0.0, pd = 0.0;
-};
-
 /// @brief Time integration of a pulsatile FEM series (see compare_pulsatile).
 struct DynamicOptions {
   /// Boundary values at any time of the period (inlet waveform; the outlets listed in
@@ -191,7 +184,9 @@ struct DynamicOptions {
   /// model run over enough periods); empty: the quasi-steady Poiseuille network of the
   /// frame's boundary values.
   std::function<NetworkFlow(double)> network_at;
-  std::vector<Windkessel> windkessels;
+  /// RCR outlets of the catalogue (flow::OutletBC::Type::Rcr, with C > 0) at their ends:
+  /// C dP_c/dt = Q − (P_c − P_d)/R_d, outlet pressure P_c + R_p·Q (Q the flow out).
+  std::vector<flow::OutletBC> windkessels;
   double period = 0.0;          ///< s, > 0; the frame times are k·period/N
   bool time_dependent = false;  ///< time-dependent Stokes (UnsteadyStokes) instead of quasi-steady frames
   int steps_per_period = 200;   ///< at least; rounded up to a multiple of the frames
