@@ -6,6 +6,8 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 
 #include "flowire/common/error.hpp"
@@ -17,6 +19,7 @@ namespace {
 constexpr double kResistanceCgs = 1e5;   // dyn s/cm⁵ → Pa s/m³
 constexpr double kComplianceCgs = 1e-5;  // cm⁵/dyn → m³/Pa
 constexpr double kPressureCgs = 0.1;     // dyn/cm² → Pa
+constexpr double kFlowCgs = 1e-6;        // cm³/s → m³/s
 
 std::vector<std::string> tokens(const std::string& line) {
   std::vector<std::string> t;
@@ -125,8 +128,7 @@ std::vector<FileOutlet> read_deck(const std::string& path, double length_factor)
       if (!(o.bc.resistance > 0.0))
         throw_input_error(tab.where, fmt::format("DATATABLE {}: the resistance must be positive", p.table));
     } else if (p.kind == "PRESSURE") {
-      o.bc.type = OutletBC::Type::Pressure;
-      o.bc.pressure = kPressureCgs * constant_of(tab, p.table, "pressure");
+      o.bc = OutletBC::at_pressure(kPressureCgs * constant_of(tab, p.table, "pressure"));
     } else {
       throw_input_error(
           p.where, fmt::format("SEGMENT {}: outlet kind {} is not read (RCR, RESISTANCE, PRESSURE)", p.name, p.kind));
@@ -188,10 +190,93 @@ std::vector<FileOutlet> read_rcrt(const std::string& path) {
   return out;
 }
 
+Waveform scaled(Waveform w, double f) {
+  w.value *= f;
+  w.systolic *= f;
+  w.diastolic *= f;
+  for (double& v : w.values) v *= f;
+  return w;
+}
+
+/// An outlet condition of an svZeroDSolver model, from its CGS values to SI.
+OutletBC si_of_cgs(OutletBC o) {
+  o.pressure = scaled(o.pressure, kPressureCgs);
+  o.flow = scaled(o.flow, kFlowCgs);
+  o.resistance *= kResistanceCgs;
+  o.distal_pressure *= kPressureCgs;
+  o.rp *= kResistanceCgs;
+  o.rd *= kResistanceCgs;
+  o.c *= kComplianceCgs;
+  auto& k = o.coronary;
+  k.ra *= kResistanceCgs;
+  k.ram *= kResistanceCgs;
+  k.rv *= kResistanceCgs;
+  k.ca *= kComplianceCgs;
+  k.cim *= kComplianceCgs;
+  k.pv *= kPressureCgs;
+  k.pim = scaled(k.pim, kPressureCgs);
+  return o;
+}
+
+std::vector<FileOutlet> read_svzerod_outlets(const std::string& path) {
+  // An svZeroDSolver model: its vessels name their outlet's boundary condition
+  // (`boundary_conditions: {outlet: NAME}`), the conditions are listed by bc_name.
+  using nlohmann::json;
+  json model;
+  try {
+    std::ifstream in(path);
+    model = json::parse(in);
+  } catch (const json::exception& e) {
+    throw_input_error(path, fmt::format("not valid JSON: {}", e.what()));
+  }
+  if (!model.is_object() || !model.contains("boundary_conditions") || !model.at("boundary_conditions").is_array())
+    throw_input_error(path, "an svZeroDSolver model needs its boundary_conditions list");
+  std::map<std::string, std::vector<std::string>> vessel_of;  // bc_name → the vessels it ends
+  if (model.contains("vessels") && model.at("vessels").is_array())
+    for (const auto& v : model.at("vessels")) {
+      if (!v.is_object() || !v.contains("boundary_conditions") || !v.contains("vessel_name")) continue;
+      const auto& b = v.at("boundary_conditions");
+      if (b.is_object() && b.contains("outlet") && b.at("outlet").is_string() && v.at("vessel_name").is_string())
+        vessel_of[b.at("outlet").get<std::string>()].push_back(v.at("vessel_name").get<std::string>());
+    }
+  std::vector<FileOutlet> out;
+  const auto& list = model.at("boundary_conditions");
+  for (size_t i = 0; i < list.size(); ++i) {
+    const auto& bc = list[i];
+    const std::string where = fmt::format("{}: boundary_conditions[{}]", path, i);
+    if (!bc.is_object() || !bc.contains("bc_name") || !bc.at("bc_name").is_string())
+      throw_input_error(where, "a boundary condition needs its bc_name");
+    const std::string name = bc.at("bc_name").get<std::string>();
+    const auto v = vessel_of.find(name);
+    if (v == vessel_of.end()) continue;  // an inlet's condition, or one no vessel uses
+    FileOutlet o;
+    o.name = name;
+    o.where = where;
+    // The outlet by its condition's name, else by the vessel ending there (SimVascular's
+    // `branchN_segK` blocks are branch N's pieces).
+    for (const auto& vessel : v->second) {
+      o.aliases.push_back(vessel);
+      const std::string branch = std::regex_replace(vessel, std::regex("_seg[0-9]+$"), "");
+      if (branch != vessel) o.aliases.push_back(branch);
+    }
+    o.bc = si_of_cgs(OutletBC::from_svzerod(bc, where));
+    o.bc.check(where);
+    out.push_back(std::move(o));
+  }
+  if (out.empty()) throw_input_error(path, "no vessel of the model ends in an outlet condition");
+  return out;
+}
+
 }  // namespace
 
 std::vector<FileOutlet> read_outlet_file(const std::string& path, double length_factor) {
   const auto lines = lines_of(path);
+  for (const auto& l : lines) {
+    const auto first = l.find_first_not_of(" \t\r");
+    if (first == std::string::npos) continue;
+    if (l[first] == '{') return read_svzerod_outlets(path);
+    break;
+  }
   for (const auto& l : lines) {
     const auto t = tokens(l);
     if (t.empty()) continue;
@@ -201,7 +286,9 @@ std::vector<FileOutlet> read_outlet_file(const std::string& path, double length_
   }
   for (const auto& l : lines)
     if (l.rfind("SEGMENT ", 0) == 0) return read_deck(path, length_factor);
-  throw_input_error(path, "not an outlet file flowire reads (an svOneDSolver deck .in, or SimVascular rcrt.dat)");
+  throw_input_error(path,
+                    "not an outlet file flowire reads (an svOneDSolver deck .in, SimVascular rcrt.dat or an "
+                    "svZeroDSolver model .json)");
 }
 
 }  // namespace flowire::flow

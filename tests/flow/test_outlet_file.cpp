@@ -94,7 +94,7 @@ TEST(OutletFile, ADecksOutletsTakeTheirTablesInSiAtTheirEnds) {
   for (const OutletBC& o : named.outlets)
     if (o.node == right) {
       EXPECT_EQ(o.type, OutletBC::Type::Pressure);
-      EXPECT_EQ(o.pressure, 7.0);
+      EXPECT_EQ(o.pressure.value, 7.0);
     }
 }
 
@@ -124,6 +124,71 @@ TEST(OutletFile, AnRcrtDatGivesEachNamedOutletItsWindkessel) {
   const std::string msg = refused("{file: " + other + "}", net);
   EXPECT_NE(msg.find("flow.outlets.file"), std::string::npos) << msg;
   EXPECT_NE(msg.find("no branch named 'cap_aorta_2'"), std::string::npos) << msg;
+}
+
+TEST(OutletFile, AnSvZeroDModelGivesEachOutletItsConditionOfAnyKindInSi) {
+  // The Y of the rcrt.dat case; the model's vessels are SimVascular's `<branch>_seg<k>` pieces:
+  // `left_seg1` ends in a coronary bed named after nothing in the network (found through its
+  // vessel), `cap_right` names its branch; the inlet's FLOW is not an outlet.
+  const auto dir = flowire::testing::scratch_dir("outlet-file-svzerod");
+  const std::string net_file = write(dir / "y.yaml",
+                                     "length_unit: mm\nbranches:\n"
+                                     "  - name: trunk\n    points: [[0, 0, 0, 5], [0, 0, -40, 5]]\n"
+                                     "  - name: left\n    points: [[0, 0, -40, 3], [-10, 0, -60, 3]]\n"
+                                     "  - name: cap_right\n    points: [[0, 0, -40, 3], [10, 0, -60, 3]]\n");
+  const Network net = vessels::read_network(net_file);
+  const auto model = [&](const std::string& left_bc) {
+    return R"({"vessels": [
+  {"vessel_id": 0, "vessel_name": "trunk_seg0", "boundary_conditions": {"inlet": "INFLOW"}},
+  {"vessel_id": 1, "vessel_name": "left_seg0"},
+  {"vessel_id": 2, "vessel_name": "left_seg1", "boundary_conditions": {"outlet": "LCA_1"}},
+  {"vessel_id": 3, "vessel_name": "right_seg0", "boundary_conditions": {"outlet": "cap_right"}}],
+ "boundary_conditions": [
+  {"bc_name": "INFLOW", "bc_type": "FLOW", "bc_values": {"Q": [1.0, 2.0, 1.0], "t": [0.0, 0.5, 1.0]}},
+  )" + left_bc +
+           R"(,
+  {"bc_name": "cap_right", "bc_type": "RCR", "bc_values": {"Rp": 100.0, "C": 0.0004, "Rd": 1100.0, "Pd": 10.0}}]})";
+  };
+  const std::string good = write(
+      dir / "model.json",
+      model(R"({"bc_name": "LCA_1", "bc_type": "CORONARY", "bc_values": {"Ra1": 900.0, "Ra2": 1500.0, "Rv1": 400.0,
+            "Ca": 2e-5, "Cc": 1.5e-4, "P_v": 0.0, "Pim": [0.0, 120000.0, 0.0], "t": [0.0, 0.4, 1.0]}})"));
+  const FlowSpec s = spec_with("{file: " + good + "}", net);
+  ASSERT_EQ(s.outlets.size(), 2u);
+  for (const OutletBC& o : s.outlets) {
+    if (net.node(o.node).x() < 0.0) {
+      ASSERT_EQ(o.type, OutletBC::Type::Coronary);
+      EXPECT_DOUBLE_EQ(o.coronary.ra, 900.0 * 1e5);
+      EXPECT_DOUBLE_EQ(o.coronary.ram, 1500.0 * 1e5);
+      EXPECT_DOUBLE_EQ(o.coronary.rv, 400.0 * 1e5);
+      EXPECT_DOUBLE_EQ(o.coronary.ca, 2e-5 * 1e-5);
+      EXPECT_DOUBLE_EQ(o.coronary.cim, 1.5e-4 * 1e-5);
+      EXPECT_DOUBLE_EQ(o.coronary.pim(0.4), 12000.0);  // dyn/cm^2 -> Pa
+      EXPECT_DOUBLE_EQ(o.coronary.pim(0.2), 6000.0);
+    } else {
+      ASSERT_EQ(o.type, OutletBC::Type::Rcr);
+      EXPECT_DOUBLE_EQ(o.rp, 100.0 * 1e5);
+      EXPECT_DOUBLE_EQ(o.c, 0.0004 * 1e-5);
+      EXPECT_DOUBLE_EQ(o.rd, 1100.0 * 1e5);
+      EXPECT_DOUBLE_EQ(o.distal_pressure, 1.0);
+    }
+  }
+  // A negative value, and an outlet the network does not have: the file, the entry, the value.
+  const std::string negative =
+      write(dir / "negative.json",
+            model(R"({"bc_name": "LCA_1", "bc_type": "RESISTANCE", "bc_values": {"R": -5.0, "Pd": 0.0}})"));
+  std::string msg = refused("{file: " + negative + "}", net);
+  EXPECT_NE(msg.find("negative.json: boundary_conditions[1]: 'LCA_1': the resistance -5 must be positive"),
+            std::string::npos)
+      << msg;
+  const std::string elsewhere =
+      write(dir / "elsewhere.json", model(R"({"bc_name": "LCA_1", "bc_type": "RESISTANCE",
+      "bc_values": {"R": 5.0}})")
+                                        .replace(model("X").find("left_seg1"), 9, "lad_seg07"));
+  msg = refused("{file: " + elsewhere + "}", net);
+  EXPECT_NE(msg.find("elsewhere.json: boundary_conditions[1]: outlet 'LCA_1' of the file does not match the network"),
+            std::string::npos)
+      << msg;
 }
 
 TEST(OutletFile, BadFilesAreRefusedNamingFileAndLine) {
@@ -194,7 +259,7 @@ TEST(OutletFile, EachOutletOfARealDeckDrainsThroughItsOwnWindkessel) {
   double lo = 1e300, hi = 0.0;
   for (const auto& f : file) lo = std::min(lo, f.bc.rp + f.bc.rd), hi = std::max(hi, f.bc.rp + f.bc.rd);
   EXPECT_GT(hi / lo, 3.0);
-  EXPECT_TRUE(w.contains("total resistance Rp + Rd"));
+  EXPECT_TRUE(w.contains("steady resistance (Rp + Rd"));
 }
 
 }  // namespace flowire::flow
