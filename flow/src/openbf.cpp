@@ -332,15 +332,7 @@ nlohmann::json to_svzerod(const Model& m, const Options& o) {
                              {"outlet_vessels", {id - 1}}});
     }
     if (std::none_of(m.vessels.begin(), m.vessels.end(), [&](const Vessel& w) { return w.sn == v.tn; })) {
-      const flow::OutletBC bc = outlet_condition(m, v);
-      if (bc.type == flow::OutletBC::Type::Rcr)
-        bcs.push_back({{"bc_name", "OUT_" + v.label},
-                       {"bc_type", "RCR"},
-                       {"bc_values", {{"Rp", bc.rp}, {"C", bc.c}, {"Rd", bc.rd}, {"Pd", bc.distal_pressure}}}});
-      else
-        bcs.push_back({{"bc_name", "OUT_" + v.label},
-                       {"bc_type", "RESISTANCE"},
-                       {"bc_values", {{"R", bc.resistance}, {"Pd", bc.distal_pressure}}}});
+      bcs.push_back(outlet_condition(m, v).to_svzerod("OUT_" + v.label));
     }
   }
   // Junctions at the network's nodes (ids of the blocks by name).
