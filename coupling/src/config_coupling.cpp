@@ -83,7 +83,8 @@ std::shared_ptr<VesselForces> make_vessel_forces(const config::Config& c, const 
   if (!cp.enabled && dp.law == DragLaw::None) return nullptr;
   VelocityField vf;
   if (flow) vf = [flow](int seg_id, const vessels::Vec3& p) { return flow->velocity_at(seg_id, p); };
-  return std::make_shared<VesselForces>(index, spec.radius, cp, dp, vf);
+  // The radius per vertex comes from the rod; the largest sizes the surface neighbourhoods.
+  return std::make_shared<VesselForces>(index, std::max(spec.radius, spec.tip.radius), cp, dp, vf);
 }
 
 std::shared_ptr<TipForces> make_tip_forces(const config::Config& c, const vessels::Network* net) {

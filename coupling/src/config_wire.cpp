@@ -32,6 +32,10 @@ void declare_wire_keys(config::Schema& s) {
   s.add("wire.tip", Type::Section, "", D::None, "a softer, possibly pre-shaped tip");
   s.add("wire.tip.length", Type::Number, "3 cm", D::Length, "tip length").non_negative();
   s.add("wire.tip.youngs_modulus", Type::Number, "10 GPa", D::Pressure, "tip Young's modulus").positive();
+  s.add("wire.tip.radius", Type::Number, "", D::Length,
+        "tip radius (default: the shaft's; a tapered tip, e.g. 0.18 mm on a 0.45 mm shaft): the tip's bending and "
+        "twisting stiffness, mass, wall contact, blood drag and occlusion all take it")
+      .positive();
   s.add("wire.tip.shape", Type::Enum, "straight", D::None, "tip shape", {"straight", "angled", "j"});
   s.add("wire.tip.angle", Type::Number, "", D::Angle,
         "angled/j: total bend angle of the tip (default by shape: 45 deg angled, 180 deg j, the J of the published "
@@ -93,6 +97,7 @@ rod::WireSpec scene_wire_spec(const config::Config& c) {
   if (c.has_section("wire.tip")) {
     w.tip.length = c.number("wire.tip.length");
     w.tip.youngs_modulus = c.number("wire.tip.youngs_modulus");
+    w.tip.radius = c.number_or("wire.tip.radius", 0.0);  // 0: the shaft's (rod::TipSpec)
     const auto& shape = c.string("wire.tip.shape");
     w.tip.shape = shape == "j" ? rod::TipShape::J : shape == "angled" ? rod::TipShape::Angled : rod::TipShape::Straight;
     w.tip.angle = c.number_or("wire.tip.angle", -1.0);  // < 0: the shape's own default (rod::TipSpec)

@@ -176,7 +176,7 @@ namespace {
 
 DragForce cylinder_drag(const DragModel& m, const DragInput& in) {
   DragForce d;
-  const double a = m.wire_radius, eta = m.viscosity, rho = m.density;
+  const double a = in.wire_radius > 0.0 ? in.wire_radius : m.wire_radius, eta = m.viscosity, rho = m.density;
   const double R = std::max(in.vessel_radius, 2.0 * a);
   const Vec3& t = in.t;
   const Mat3 tt = t * t.transpose();
@@ -243,7 +243,8 @@ DragForce blood_drag(const DragModel& m, const DragInput& in) {
     case DragLaw::Cylinder:
       return cylinder_drag(m, in);
     case DragLaw::SlenderBody: {
-      auto d = slender_body_drag(in.u, in.v, in.t, m.viscosity, m.wire_length, m.wire_radius, m.scale * in.ell);
+      auto d = slender_body_drag(in.u, in.v, in.t, m.viscosity, m.wire_length,
+                                 in.wire_radius > 0.0 ? in.wire_radius : m.wire_radius, m.scale * in.ell);
       return d;
     }
     case DragLaw::VelocityOffset: {

@@ -59,14 +59,14 @@ bool VesselForces::surface_wall(int i, const Vec3& x, double* d, Vec3* n, Mat3* 
   return true;
 }
 
-bool VesselForces::wall_at(int i, const Vec3& x, double* d, Vec3* n, Mat3* H) {
+bool VesselForces::wall_at(int i, const Vec3& x, double a, double* d, Vec3* n, Mat3* H) {
   ++stats_.wall_queries;
   if (surface_) return surface_wall(i, x, d, n, H);
   const auto k = static_cast<size_t>(i);
   const auto& net = index_.network();
   const auto& seg = net.segment(segment_[k]);
   // The union's distance is at most the located capsule's: deep inside it, no wall is near.
-  if (capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + wire_radius_ +
+  if (capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + a +
           0.5 * contact_.onset <
       0.0)
     return false;
@@ -98,7 +98,6 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
 
   // 2) Wall contact and friction.
   t0 = Clock::now();
-  const double a = wire_radius_;
   const double tip_s = rod.arc_length.empty() ? 0.0 : rod.arc_length[0];
   for (int i = 0; i < free; ++i) {
     force_[static_cast<size_t>(i)].setZero();
@@ -107,6 +106,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     cur_normal_force_[static_cast<size_t>(i)] = 0.0;
     if (!contact_.enabled) continue;
     const Vec3& x = rod.position(i);
+    const double a = rod.vertex_radius(i, wire_radius_);
     // Stiffness per vertex of the feeding grid, scaled with the vertex's edges where the
     // rod is resampled (so the wall stays equally stiff per unit length).
     const double k_wall = contact_.stiffness * rod.cell_weight(i);
@@ -131,7 +131,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
     double d = 0.0;
     Vec3 n_wall;
     Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
-    if (!wall_at(i, x, &d, &n_wall, &H_wall)) continue;
+    if (!wall_at(i, x, a, &d, &n_wall, &H_wall)) continue;
     const auto pen = wall_penalty(d, n_wall, H_wall, a, k_wall, contact_.onset);
     if (!(pen.energy > 0.0)) continue;
     ++stats_.contacts;
@@ -215,7 +215,8 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
         // The normal Reynolds number of this iterate (what end_step records of the accepted one).
         if (drag_.law == DragLaw::Cylinder) {
           const Vec3 w = fluid_[k] - rod.velocity(i);
-          reynolds_[k] = drag_.density * (w - w.dot(lin.t) * lin.t).norm() * 2.0 * wire_radius_ / drag_.viscosity;
+          reynolds_[k] = drag_.density * (w - w.dot(lin.t) * lin.t).norm() * 2.0 * rod.vertex_radius(i, wire_radius_) /
+                         drag_.viscosity;
         }
         out.add_force(i, f);
         out.add_velocity_jacobian(i, lin.dfdv);
@@ -236,6 +237,7 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
       const double tn = t.norm();
       in.t = tn > 0.0 ? Vec3(t / tn) : Vec3::UnitX();
       in.v = rod.velocity(i);
+      in.wire_radius = rod.vertex_radius(i, wire_radius_);
       in.vessel_radius = s >= 0 ? net.segment(s).radius : 0.0;
       // Where the wire crosses the vessel the walls confine it as a channel (drag.hpp): the
       // law needs the vessel's axis and the vertex's offset from it.
@@ -261,9 +263,9 @@ void VesselForces::evaluate(const rod::RodView& rod, rod::ForceAccumulator& out)
   stats_.seconds_drag += since(t0);
 }
 
-double VesselForces::wall_normal_force(double d, double cell_weight) const {
+double VesselForces::wall_normal_force(double d, double a, double cell_weight) const {
   double d1 = 0.0;
-  (void)onset_quadratic(d + wire_radius_, contact_.onset, &d1);
+  (void)onset_quadratic(d + a, contact_.onset, &d1);
   return contact_.stiffness * cell_weight * d1;
 }
 
@@ -280,6 +282,7 @@ void VesselForces::end_step(const rod::RodView& rod) {
   for (int i = 0; i < rod.vertex_count(); ++i) lag_normal_force_[static_cast<size_t>(i)] = 0.0;
   for (int i = 0; i < free; ++i) {
     const auto k = static_cast<size_t>(i);
+    const double a = rod.vertex_radius(i, wire_radius_);
     Vec3 nrm;
     double d = 0.0;
     if (surface_) {
@@ -291,7 +294,7 @@ void VesselForces::end_step(const rod::RodView& rod) {
           surface_->smooth_distance(rod.position(i), smoothing_, surf_near_[k], surf_margin_, nullptr, surf_skip_);
       if (q.skipped) continue;
       nrm = q.gradient;
-      const double fn = wall_normal_force(q.distance, rod.cell_weight(i));
+      const double fn = wall_normal_force(q.distance, a, rod.cell_weight(i));
       if (fn > 0.0) {
         lag_normal_force_[k] = fn;
         lag_normal_[k] = nrm;
@@ -307,25 +310,25 @@ void VesselForces::end_step(const rod::RodView& rod) {
       // Deep inside the located capsule the union's wall is farther still: nothing to record.
       if (capsule_distance(rod.position(i), net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr,
                            nullptr) +
-              wire_radius_ + 0.5 * contact_.onset <
+              a + 0.5 * contact_.onset <
           0.0)
         continue;
       const auto loc = index_.locate(rod.position(i), s, near_[k]);
       d = index_.wall_distance(rod.position(i), loc, near_[k], &nrm);
-      const double fn = wall_normal_force(d, rod.cell_weight(i));
+      const double fn = wall_normal_force(d, a, rod.cell_weight(i));
       if (fn > 0.0) {
         lag_normal_force_[static_cast<size_t>(i)] = fn;
         lag_normal_[static_cast<size_t>(i)] = nrm;
       }
     }
     stats_.max_outside = std::max(stats_.max_outside, d);
-    if (d > wire_radius_ && stats_.outside_time < 0.0) {
+    if (d > a && stats_.outside_time < 0.0) {
       stats_.outside_time = rod.time;
       stats_.outside_arc_length = rod.arc_length.empty() ? 0.0 : rod.arc_length[k];
       stats_.outside_distance = d;
       stats_.outside_position = rod.position(i);
     }
-    stats_.max_penetration = std::max(stats_.max_penetration, d + wire_radius_);
+    stats_.max_penetration = std::max(stats_.max_penetration, d + a);
   }
   // The step's wall distances for friction and for the outside check are contact work too.
   stats_.seconds_contact += since(t0);

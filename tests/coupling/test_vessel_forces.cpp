@@ -194,6 +194,56 @@ TEST(VesselForces, WallStiffnessScalesWithTheVertexEdgesOfARefinedWire) {
   }
 }
 
+TEST(VesselForces, EachVertexTouchesTheWallAndFeelsTheBloodWithTheRodsOwnRadiusThere) {
+  // A wire whose distal edges are thinner (0.15 mm, a tapered tip) than its shaft (0.45 mm)
+  // lies along the wall of a 2 mm tube, every vertex centre 0.3 mm from the wall: the thin
+  // tip vertex does not reach the wall, the shaft vertices press into it by 0.15 mm, the
+  // vertex between them (radius 0.3 mm, the mean of its edges) just touches. The blood's
+  // drag on each vertex is the law's at that vertex's radius. One radius for the whole wire
+  // (the constructor's) would press every vertex alike.
+  const auto net =
+      vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = 2e-3}), {.max_segment_length = 5e-3});
+  const vessels::SpatialIndex index(net);
+  ContactParams cp;
+  cp.stiffness = 1e4;
+  cp.friction = 0.0;
+  cp.tip_friction = 0.0;
+  const DragModel drag{.law = DragLaw::Cylinder, .viscosity = 3.5e-3, .density = 1060.0};
+  const Vec3 blood(0.0, 0.0, 0.2);  // across the wire
+  VesselForces forces(index, 0.45e-3, cp, drag, [&](int, const Vec3&) { return blood; });
+  std::vector<Vec3> x, v(5, Vec3::Zero());
+  for (int i = 0; i < 5; ++i) x.emplace_back(0.05 + 0.001 * i, 1.7e-3, 0.0);
+  const std::vector<double> arc{5, 4, 3, 2, 1}, radius{0.15e-3, 0.15e-3, 0.45e-3, 0.45e-3};
+  rod::RodView view;
+  view.positions = x;
+  view.velocities = v;
+  view.arc_length = arc;
+  view.radius = radius;
+  view.first_clamped_vertex = 5;
+  view.dt = 1e-3;
+  rod::ForceAccumulator acc;
+  acc.reset(5);
+  forces.evaluate(view, acc);
+  const std::vector<double> a{0.15e-3, 0.15e-3, 0.3e-3, 0.45e-3, 0.45e-3};
+  for (int i = 0; i < 5; ++i) {
+    SCOPED_TRACE(i);
+    const double push = std::max(0.0, a[i] - 0.3e-3);  // into the wall
+    EXPECT_NEAR(-forces.contact_force()[i].y(), cp.stiffness * push, 1e-12);
+    DragModel own = drag;
+    own.wire_radius = a[i];
+    DragInput in;
+    in.u = blood;
+    in.t = Vec3(-1, 0, 0);
+    in.ell = i == 0 || i == 4 ? 0.5e-3 : 1e-3;
+    in.vessel_radius = 2e-3;
+    in.axis = Vec3(1, 0, 0);
+    in.axis_offset = Vec3(0, 1.7e-3, 0);
+    EXPECT_NEAR((forces.drag_force()[i] - blood_drag(own, in).force).norm(), 0.0,
+                1e-12 * blood_drag(own, in).force.norm());
+  }
+  EXPECT_GT(forces.drag_force()[4].norm(), forces.drag_force()[1].norm() * 1.05) << "the radius would not show";
+}
+
 TEST(VesselForces, AStepsDragIsTheLawAtItsGuessLinearizedInTheWireVelocity) {
   // coupling.drag_update: step. The first evaluation of a step (Newton's initial guess)
   // evaluates the cylinder law; every later iterate of the same step gets that force plus

@@ -141,6 +141,7 @@ struct DragInput {
   Vec3 axis = Vec3::Zero();
   /// The vertex minus its nearest point on the vessel's axis [m] (Cylinder, with `axis`).
   Vec3 axis_offset = Vec3::Zero();
+  double wire_radius = 0.0;  ///< the wire's radius at the vertex [m]; 0: the model's wire_radius
 };
 
 /// @brief Force on the vertex (per vertex, i.e. per unit length times ell) and its exact

@@ -66,7 +66,9 @@ inline double surface_skip_depth(double a, double sigma) { return a + std::max(0
 class VesselForces : public rod::ExternalForce {
  public:
   /// @param index  spatial index of the network (outlives this object)
-  /// @param wire_radius radius of the wire [m]
+  /// @param wire_radius the wire's largest radius [m]: it sizes the lumen-surface neighbourhoods
+  /// and skip depth; the contact and drag of each vertex take the rod's own radius there
+  /// (RodView::vertex_radius), this one only where the view carries none
   /// @param drag the blood drag law (its wire_radius is set to `wire_radius`)
   VesselForces(const vessels::SpatialIndex& index, double wire_radius, ContactParams contact, DragModel drag,
                VelocityField velocity = {});
@@ -140,8 +142,8 @@ class VesselForces : public rod::ExternalForce {
  private:
   std::vector<char> shielded_;
   void ensure_size(int n);
-  /// The wall's normal force on a vertex at wall distance @p d (wall_penalty's k φ′) [N].
-  [[nodiscard]] double wall_normal_force(double d, double cell_weight) const;
+  /// The wall's normal force on a vertex of radius @p a at wall distance @p d (wall_penalty's k φ′) [N].
+  [[nodiscard]] double wall_normal_force(double d, double a, double cell_weight) const;
   std::vector<int> remap_segments_;
   std::vector<vessels::Neighbourhood> remap_near_;
   std::vector<vessels::Location> location_;   ///< (vertices) at the last evaluation
@@ -177,9 +179,9 @@ class VesselForces : public rod::ExternalForce {
     bool lagged = false;
   } checkpoint_;
   InteractionStats stats_;
-  /// Wall distance and normal of vertex i at @p x (the lumen surface's smooth distance, or the
-  /// network's blended capsules); false where the vertex is deep inside (no wall near).
-  bool wall_at(int i, const Vec3& x, double* d, Vec3* n, Mat3* H);
+  /// Wall distance and normal of vertex i (radius @p a) at @p x (the lumen surface's smooth
+  /// distance, or the network's blended capsules); false where the vertex is deep inside (no wall near).
+  bool wall_at(int i, const Vec3& x, double a, double* d, Vec3* n, Mat3* H);
   /// Smooth wall distance of vertex i from the surface; false if it is deeper than surf_skip_.
   bool surface_wall(int i, const vessels::Vec3& x, double* d, vessels::Vec3* n, Mat3* H);
   const vessels::LumenSurface* surface_ = nullptr;

@@ -65,6 +65,14 @@ struct RodView {
   [[nodiscard]] int vertex_count() const { return static_cast<int>(positions.size()); }
   [[nodiscard]] const Eigen::Vector3d& position(int i) const { return positions[i]; }
   [[nodiscard]] const Eigen::Vector3d& velocity(int i) const { return velocities[i]; }
+  /// @brief The wire's radius at vertex @p i: the mean of its edges' radii (the one radius of
+  /// the wire wherever it is uniform); @p fallback where the view carries no (positive) radii.
+  [[nodiscard]] double vertex_radius(int i, double fallback) const {
+    const int ne = static_cast<int>(radius.size());
+    if (ne == 0) return fallback;
+    const double r = i <= 0 ? radius[0] : i >= ne ? radius[ne - 1] : 0.5 * (radius[i - 1] + radius[i]);
+    return r > 0.0 ? r : fallback;
+  }
   /// @brief Mean rest length of the edges at vertex @p i over the grid's segment length: 1 on
   /// a uniform grid. Per-vertex penalties scaled by it stay per unit length under refinement.
   [[nodiscard]] double cell_weight(int i) const {
