@@ -13,21 +13,16 @@ namespace flowire::rod {
 
 void RodSimulator::coupled_begin(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::coupled_begin: dt must be > 0");
-  if (settings_.integrator != Integrator::ImplicitEuler || push_force_ > 0.0)
+  if (settings_.integrator != Integrator::ImplicitEuler || drive_.force_driven())
     throw_usage_error("RodSimulator::coupled_begin: implicit Euler with kinematic feeding only");
   Work& w = *work_;
   RodState& s = state_;
   // step_once and step_at_feed: the feed speed, held at the force limit.
-  double speed = insertion_speed_;
-  if (speed > 0.0 && max_insertion_force_ > 0.0 && base_force_.dot(model_.base_direction) > max_insertion_force_) {
-    speed = 0.0;
-    ++held_steps_;
-  }
-  feed_speed_ = speed;
+  feed_speed_ = drive_.kinematic_speed(base_force_.dot(model_.base_direction));
   adapt_for(std::max(0.0, -feed_speed_ * dt));
   // step_euler up to its Newton solve.
   const double L_new = feed_vertex_set(dt);
-  coupled_angle_ = target_angle_ + rotation_speed_ * dt;
+  coupled_angle_ = drive_.angle_after(dt);
   const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feed_speed_ == w.feed_end;
   begin_step(dt, settings_.second_order_guess);
   w.h_newton = dt;

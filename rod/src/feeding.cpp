@@ -33,7 +33,7 @@ void RodSimulator::update_vertex_set(double new_inserted) {
       s.x.push_back(pb - db * (model_.u(k) - L));
       s.v.push_back(db * feed_speed_);
       s.theta.push_back(-angle);
-      s.omega.push_back(-rotation_speed_);
+      s.omega.push_back(-drive_.rotation_speed());
       s.frame.push_back(EdgeFrame{base_d1_, base_d2_});
       s.ref_twist.push_back(0.0);
     }
@@ -64,7 +64,7 @@ void RodSimulator::update_vertex_set(double new_inserted) {
     for (int j = fc; j < nv - 1; ++j) {
       s.frame[j] = EdgeFrame{base_d1_, base_d2_};
       s.theta[j] = -angle;
-      s.omega[j] = -rotation_speed_;
+      s.omega[j] = -drive_.rotation_speed();
     }
     // Re-transport the free edge that touches the clamp, then rebuild reference twists.
     if (fc >= 1) {
@@ -155,40 +155,22 @@ StepReport RodSimulator::step_at_feed(double dt, double speed) {
 
 StepReport RodSimulator::step_force_fed(double dt) {
   // The feed length of the step is the unknown: the step is taken again from its start until
-  // the clamp's axial force at its end, g(v) = base_force()·d, equals the applied force F.
-  // g grows with v (the step's inertia m/dt, damping, drag and friction, and the axial
-  // stiffness times dt against an obstacle); a secant iteration, started from the last
-  // step's speed and slope, solves it. The feed of one step is kept within half a segment.
+  // the clamp's axial force at its end, base_force()·d, equals the applied force (the drive's
+  // secant). The feed of one step is kept within half a segment.
   const Vec3& d = model_.base_direction;
   const int slot = std::max(settings_.max_subdivisions, 0) + 2;
-  const double tol = force_feed_tolerance_ * push_force_;
-  const double vmax = 0.5 * model_.h / dt;
-  if (!(force_feed_slope_ > 0.0)) {
-    double m = 0.0;
-    for (double mk : disc_.mass) m += mk;
-    force_feed_slope_ = std::max(m / dt + model_.damping * state_.inserted_length + model_.mass_damping * m, 1e-12);
-  }
+  double m = 0.0;
+  for (double mk : disc_.mass) m += mk;
+  const double slope_guess =
+      std::max(m / dt + model_.damping * state_.inserted_length + model_.mass_damping * m, 1e-12);
   save_state(slot);
-  double v = std::clamp(force_feed_speed_, -vmax, vmax);
-  StepReport rep = step_at_feed(dt, v);
+  StepReport rep = step_at_feed(dt, drive_.force_feed_begin(0.5 * model_.h / dt, slope_guess));
   if (!rep.converged()) return rep;
-  double g = base_force_.dot(d) - push_force_;
-  int it = 0;
-  for (; std::abs(g) > tol && it < kMaxForceFeedIterations; ++it) {
-    const double v_new = std::clamp(v - g / force_feed_slope_, -vmax, vmax);
-    if (v_new == v) break;  // at the per-step limit
+  while (const auto v = drive_.force_feed_next(base_force_.dot(d))) {
     restore_state(slot);
-    rep = step_at_feed(dt, v_new);
+    rep = step_at_feed(dt, *v);
     if (!rep.converged()) return rep;
-    const double g_new = base_force_.dot(d) - push_force_;
-    const double slope = (g_new - g) / (v_new - v);
-    if (slope > 0.0 && std::isfinite(slope)) force_feed_slope_ = slope;
-    v = v_new;
-    g = g_new;
   }
-  force_feed_iterations_ += it;
-  if (std::abs(g) > tol) ++force_feed_unbalanced_;
-  force_feed_speed_ = v;
   return rep;
 }
 

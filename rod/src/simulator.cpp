@@ -136,7 +136,7 @@ void RodSimulator::build_initial_state(double inserted) {
   s.base_angle = 0.0;
   s.time = 0.0;
   first_clamped_ = kc;
-  target_angle_ = 0.0;
+  drive_.set_base_angle(0.0);
   layout_rest_shape();
   record_trace_reset();
 }

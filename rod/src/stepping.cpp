@@ -61,8 +61,8 @@ void RodSimulator::save_state(int depth) {
   if (static_cast<int>(w.saved.size()) <= depth) w.saved.resize(static_cast<size_t>(depth) + 1);
   Work::Saved& v = w.saved[static_cast<size_t>(depth)];
   v.state = state_;
-  v.target_angle = target_angle_;
-  v.insertion_speed = insertion_speed_;
+  v.target_angle = drive_.base_angle();
+  v.insertion_speed = drive_.insertion_speed();
   v.first_clamped = first_clamped_;
   v.base_force = base_force_;
   v.base_torque = base_torque_;
@@ -72,8 +72,8 @@ void RodSimulator::save_state(int depth) {
 void RodSimulator::restore_state(int depth) {
   const Work::Saved& v = work_->saved[static_cast<size_t>(depth)];
   state_ = v.state;
-  target_angle_ = v.target_angle;
-  insertion_speed_ = v.insertion_speed;
+  drive_.set_base_angle(v.target_angle);
+  drive_.set_insertion_speed(v.insertion_speed);
   first_clamped_ = v.first_clamped;
   base_force_ = v.base_force;
   base_torque_ = v.base_torque;
@@ -83,13 +83,8 @@ void RodSimulator::restore_state(int depth) {
 }
 
 StepReport RodSimulator::step_once(double dt) {
-  if (push_force_ > 0.0) return step_force_fed(dt);
-  double speed = insertion_speed_;
-  if (speed > 0.0 && max_insertion_force_ > 0.0 && base_force_.dot(model_.base_direction) > max_insertion_force_) {
-    speed = 0.0;
-    ++held_steps_;
-  }
-  return step_at_feed(dt, speed);
+  if (drive_.force_driven()) return step_force_fed(dt);
+  return step_at_feed(dt, drive_.kinematic_speed(base_force_.dot(model_.base_direction)));
 }
 
 void RodSimulator::begin_step(double h, bool extrapolate) {
@@ -141,10 +136,10 @@ double RodSimulator::feed_vertex_set(double dt) {
   const double L_new = clamp_inserted(state_.inserted_length + feed_speed_ * dt, model_, clamped);
   if (clamped && feed_speed_ != 0.0) {
     warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
-    insertion_speed_ = 0.0;
+    drive_.set_insertion_speed(0.0);
     feed_speed_ = 0.0;
   }
-  state_.base_angle = target_angle_;
+  state_.base_angle = drive_.base_angle();
   update_vertex_set(L_new);
   return L_new;
 }
@@ -169,7 +164,7 @@ StepReport RodSimulator::step_euler(double dt) {
   Work& w = *work_;
   RodState& s = state_;
   const double L_new = feed_vertex_set(dt);
-  const double angle_new = target_angle_ + rotation_speed_ * dt;
+  const double angle_new = drive_.angle_after(dt);
 
   // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
   // While the wire is fed at the speed of the last step, the second-order inertial guess
@@ -202,7 +197,7 @@ void RodSimulator::end_euler_step(double dt, double angle_new) {
     s.v[k] = (s.x[k] - w.x0[k]) / dt;
     if (k < nv - 1) s.omega[k] = (s.theta[k] - w.theta0[k]) / dt;
   }
-  target_angle_ = angle_new;
+  drive_.set_base_angle(angle_new);
   s.base_angle = angle_new;
   // Where this step left the vertices, for the next step's predictor.
   w.x_end = s.x;
@@ -218,8 +213,8 @@ StepReport RodSimulator::step_midpoint(double dt) {
   const double L_new = feed_vertex_set(dt);
   const double hh = 0.5 * dt;
   const double L_half = 0.5 * (L_start + L_new);
-  const double angle_half = target_angle_ + rotation_speed_ * hh;
-  const double angle_new = target_angle_ + rotation_speed_ * dt;
+  const double angle_half = drive_.angle_after(hh);
+  const double angle_new = drive_.angle_after(dt);
 
   begin_step(hh, /*extrapolate=*/false);
   const int nv = s.vertex_count();
@@ -254,7 +249,7 @@ StepReport RodSimulator::step_midpoint(double dt) {
   s.time += hh;
   s.inserted_length = L_new;
   refresh_arc_lengths();
-  target_angle_ = angle_new;
+  drive_.set_base_angle(angle_new);
   s.base_angle = angle_new;
   return rep;
 }
@@ -280,8 +275,8 @@ void RodSimulator::save_checkpoint() {
   Work& w = *work_;
   Work::Checkpoint& c = w.checkpoint;
   c.at.state = state_;
-  c.at.target_angle = target_angle_;
-  c.at.insertion_speed = insertion_speed_;
+  c.at.target_angle = drive_.base_angle();
+  c.at.insertion_speed = drive_.insertion_speed();
   c.at.first_clamped = first_clamped_;
   c.at.base_force = base_force_;
   c.at.base_torque = base_torque_;
@@ -299,8 +294,8 @@ void RodSimulator::restore_checkpoint(bool guess_from_current) {
   w.guess_x.clear(), w.guess_theta.clear();
   if (guess_from_current) w.guess_x = state_.x, w.guess_theta = state_.theta;
   state_ = c.at.state;
-  target_angle_ = c.at.target_angle;
-  insertion_speed_ = c.at.insertion_speed;
+  drive_.set_base_angle(c.at.target_angle);
+  drive_.set_insertion_speed(c.at.insertion_speed);
   first_clamped_ = c.at.first_clamped;
   base_force_ = c.at.base_force;
   base_torque_ = c.at.base_torque;
@@ -323,8 +318,8 @@ double RodSimulator::step_imbalance() {
 
 StepReport RodSimulator::solve_static_once() {
   RodState& s = state_;
-  s.base_angle = target_angle_;
-  set_prescribed(s.inserted_length, target_angle_, s.x, s.theta);
+  s.base_angle = drive_.base_angle();
+  set_prescribed(s.inserted_length, drive_.base_angle(), s.x, s.theta);
   transport_frames_to(s.x, s.frame, s.ref_twist, s.frame, s.ref_twist);
   for (auto& v : s.v) v.setZero();
   for (auto& o : s.omega) o = 0.0;

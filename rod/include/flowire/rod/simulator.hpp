@@ -75,6 +75,7 @@
 #include <vector>
 
 #include "flowire/rod/banded.hpp"
+#include "flowire/rod/drive.hpp"
 #include "flowire/rod/energies.hpp"
 #include "flowire/rod/external.hpp"
 #include "flowire/rod/model.hpp"
@@ -252,11 +253,11 @@ class RodSimulator {
   // --- controls and loads ---------------------------------------------------------------
   void set_integrator(Integrator integrator) { settings_.integrator = integrator; }
   /// @brief Feeding speed [m/s], > 0 pushes in, < 0 pulls back.
-  void set_insertion_speed(double speed) { insertion_speed_ = speed; }
+  void set_insertion_speed(double speed) { drive_.set_insertion_speed(speed); }
   /// @brief Force-limited feeding: a step that starts with the clamp pushing the wire in
   /// harder than @p force [N] (base_force() along the insertion direction) feeds nothing,
   /// as a force-limited drive or an operator's hand would; 0 (default): no limit.
-  void set_max_insertion_force(double force) { max_insertion_force_ = force; }
+  void set_max_insertion_force(double force) { drive_.set_max_insertion_force(force); }
   /// @brief Force-driven feeding: the base is pushed along the insertion direction with a
   /// constant force @p force [N] (> 0; 0 returns to the kinematic feed) and the feed of each
   /// step is the one for which the clamp's axial force at the step's end, base_force()·d,
@@ -264,25 +265,24 @@ class RodSimulator {
   /// then advances at the speed the resisting forces (inertia, damping, drag, friction)
   /// allow, and stops where the wire's axial reaction against an obstacle reaches the force.
   /// Replaces set_insertion_speed while set; rotation_speed still turns the base.
-  void set_push_force(double force) {
-    push_force_ = force;
-    force_feed_slope_ = 0.0;
-  }
-  [[nodiscard]] double push_force() const { return push_force_; }
+  void set_push_force(double force) { drive_.set_push_force(force); }
+  [[nodiscard]] double push_force() const { return drive_.push_force(); }
   /// @brief Feed speed of the last force-driven step [m/s].
-  [[nodiscard]] double force_feed_speed() const { return force_feed_speed_; }
+  [[nodiscard]] double force_feed_speed() const { return drive_.force_feed_speed(); }
   /// @brief Secant iterations (extra step solves) spent by force-driven feeding so far.
-  [[nodiscard]] long force_feed_iterations() const { return force_feed_iterations_; }
+  [[nodiscard]] long force_feed_iterations() const { return drive_.force_feed_iterations(); }
   /// @brief Force-driven steps whose axial force stayed off F by more than the tolerance
   /// (the per-step feed limit of half a segment reached, or the iteration limit).
-  [[nodiscard]] long force_feed_unbalanced() const { return force_feed_unbalanced_; }
+  [[nodiscard]] long force_feed_unbalanced() const { return drive_.force_feed_unbalanced(); }
   /// @brief Steps in which feeding was held by the force limit.
-  [[nodiscard]] long held_steps() const { return held_steps_; }
+  [[nodiscard]] long held_steps() const { return drive_.held_steps(); }
   /// @brief Clamp rotation speed, right-handed about the insertion direction [rad/s].
-  void set_rotation_speed(double omega) { rotation_speed_ = omega; }
+  void set_rotation_speed(double omega) { drive_.set_rotation_speed(omega); }
   /// @brief Set the clamp rotation angle [rad], right-handed about the insertion direction
   /// (takes effect at the next step/solve).
-  void set_base_angle(double angle) { target_angle_ = angle; }
+  void set_base_angle(double angle) { drive_.set_base_angle(angle); }
+  /// @brief The clamp's drive (feeding and turning rules, what they did).
+  [[nodiscard]] const Drive& drive() const { return drive_; }
   /// @brief Dead force on the distal tip vertex [N].
   void set_tip_force(const Eigen::Vector3d& f) { tip_force_ = f; }
   /// @brief Moment on the distal edge [N m]: the component along the edge twists it, the
@@ -509,18 +509,8 @@ class RodSimulator {
   Eigen::Vector3d base_torque_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d base_d1_ = Eigen::Vector3d::Zero();  // clamp frame at zero rotation
   Eigen::Vector3d base_d2_ = Eigen::Vector3d::Zero();
-  double insertion_speed_ = 0.0;
-  double feed_speed_ = 0.0;  // this step's feeding speed (insertion_speed_ unless held)
-  double max_insertion_force_ = 0.0;
-  static constexpr int kMaxForceFeedIterations = 12;
-  double push_force_ = 0.0;             // force-driven feeding [N] (0: kinematic)
-  double force_feed_speed_ = 0.0;       // the last force-driven step's feed speed
-  double force_feed_slope_ = 0.0;       // d(axial clamp force)/d(feed speed), last secant
-  double force_feed_tolerance_ = 1e-4;  // relative to push_force_
-  long force_feed_iterations_ = 0, force_feed_unbalanced_ = 0;
-  long held_steps_ = 0;
-  double rotation_speed_ = 0.0;
-  double target_angle_ = 0.0;
+  Drive drive_;              // feeding and turning at the clamp
+  double feed_speed_ = 0.0;  // this step's feeding speed (the drive's, unless held at the wire's end)
   int first_clamped_ = 0;
   bool tip_clamped_ = false;
   Eigen::Vector3d tip_clamp_x0_ = Eigen::Vector3d::Zero();
