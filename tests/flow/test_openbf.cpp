@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <numbers>
+#include <set>
 
 #include "flowire/common/error.hpp"
 #include "flowire/flow/openbf.hpp"
@@ -208,4 +209,104 @@ TEST(Openbf, BadModelsNameTheFileTheLineAndTheVessel) {
 }
 
 }  // namespace
+}  // namespace flowire::flow::openbf
+
+namespace flowire::flow::openbf {
+namespace {
+
+double polyline_length(const vessels::Polyline& p) {
+  double s = 0.0;
+  for (size_t i = 1; i < p.points.size(); ++i) s += (p.points[i] - p.points[i - 1]).norm();
+  return s;
+}
+
+/// Every vessel of @p m laid out at its own length, Rp to Rd, from where its source node lies;
+/// the network's total length within @p network_tolerance of the model's (a bowed vessel's
+/// segments are chords of its arc within a tenth of its radius).
+void expect_faithful_layout(const Model& m, double network_tolerance = 1e-9) {
+  const vessels::Centerlines c = layout(m);
+  ASSERT_EQ(c.branches.size(), m.vessels.size());
+  std::map<int, vessels::Vec3> at;
+  for (size_t k = 0; k < m.vessels.size(); ++k) {
+    const Vessel& v = m.vessels[k];
+    const auto& p = c.branches[k];
+    SCOPED_TRACE(v.label);
+    EXPECT_EQ(p.name, v.label);
+    EXPECT_NEAR(polyline_length(p), v.length, 1e-9 * v.length);
+    EXPECT_DOUBLE_EQ(p.radii.front(), v.rp);
+    EXPECT_NEAR(p.radii.back(), v.rd, 1e-12 * v.rd);
+    for (const auto& [node, x] : {std::pair{v.sn, p.points.front()}, std::pair{v.tn, p.points.back()}}) {
+      if (at.count(node)) {
+        EXPECT_NEAR((at[node] - x).norm(), 0.0, 1e-12) << "node " << node << " in two places";
+      }
+      at[node] = x;
+    }
+  }
+  // The network joins the vessels at their nodes: one branch each, one end per model end.
+  const Network net = network(m, {.max_segment_length = 0.01});
+  EXPECT_EQ(net.counts().branches, static_cast<int>(m.vessels.size()));
+  std::set<int> sources, targets;
+  for (const auto& v : m.vessels) sources.insert(v.sn), targets.insert(v.tn);
+  int model_ends = 1;  // node 1
+  for (int t : targets) model_ends += sources.count(t) ? 0 : 1;
+  EXPECT_EQ(net.counts().ends, model_ends);
+  double total = 0.0;
+  for (const auto& v : m.vessels) total += v.length;
+  EXPECT_NEAR(net.counts().total_length, total, network_tolerance * total);
+}
+
+}  // namespace
+
+TEST(OpenbfLayout, EveryVesselLiesAtItsOwnLengthAndTaperInTheBodyOrInATree) {
+  FLOWIRE_REQUIRE_SHARED("peers/openbf-models/boileau2015/adan56/adan56.yaml");
+  const auto root = flowire::testing::shared_dir() / "peers/openbf-models";
+  for (const char* f : {"boileau2015/adan56/adan56.yaml", "matthys2007/invitro_model.yaml",
+                        "boileau2015/ibif/ibif.yaml", "boileau2015/uta/uta.yaml"}) {
+    SCOPED_TRACE(f);
+    expect_faithful_layout(read((root / f).string()));
+  }
+  // ADAN56 in the body: the aorta runs down from the arch, the legs end below the pelvis and
+  // the carotids above the arch.
+  const Model adan = read((root / "boileau2015/adan56/adan56.yaml").string());
+  const vessels::Centerlines c = layout(adan);
+  auto end_of = [&](const std::string& label) {
+    for (const auto& b : c.branches)
+      if (b.name == label) return b.points.back();
+    ADD_FAILURE() << label;
+    return vessels::Vec3(0, 0, 0);
+  };
+  EXPECT_LT(end_of("abdominal_aorta_V").z(), end_of("thoracic_aorta_I").z() - 0.2);
+  EXPECT_LT(end_of("posterior_tibial_R").z(), end_of("abdominal_aorta_V").z() - 0.5);
+  EXPECT_GT(end_of("internal_carotid_L").z(), end_of("aortic_arch_I").z() + 0.1);
+  EXPECT_LT(end_of("radial_R").x() * end_of("radial_L").x(), 0.0) << "the arms on both sides";
+}
+
+TEST(OpenbfLayout, ALoopClosesWithAnArcOfItsOwnLengthOrIsRefusedNamingTheVessel) {
+  // A ring: two vessels from node 2 to nodes 3 and 4, a third joining 3 to 4 (a loop) and an
+  // outlet from 4. Its closing vessel, longer than the chord, is an arc of its own length;
+  // shorter than the chord it cannot be placed.
+  auto ring = [](double closing_length) {
+    Model m;
+    m.file = "ring.yaml";
+    m.inlet_time = {0.0, 1.0};
+    m.inlet_flow = {1e-6, 1e-6};
+    auto vessel = [](std::string label, int sn, int tn, double L) {
+      Vessel v;
+      v.label = std::move(label);
+      v.sn = sn, v.tn = tn, v.length = L, v.youngs_modulus = 4e5, v.rp = v.rd = 2e-3, v.r1 = 1e8, v.cc = 1e-10;
+      return v;
+    };
+    m.vessels = {vessel("in", 1, 2, 0.05), vessel("a", 2, 3, 0.05), vessel("b", 2, 4, 0.05),
+                 vessel("closing", 3, 4, closing_length), vessel("out", 4, 5, 0.05)};
+    return m;
+  };
+  expect_faithful_layout(ring(0.2), 2e-3);
+  try {
+    (void)layout(ring(0.01));
+    ADD_FAILURE() << "a loop shorter than its chord was laid out";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("vessel `closing` closes a loop"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace flowire::flow::openbf

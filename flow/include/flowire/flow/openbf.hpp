@@ -101,6 +101,26 @@ struct Waveforms {
 /// @brief Simulate @p m (to_svzerod) and gather the waveforms per vessel.
 Waveforms simulate(const Model& m, const Options& options = {});
 
+/// @name A model as a network in space (openbf_network.cpp)
+///@{
+/// @brief The model's vessels as 3D centerlines, each of its own length, its radius linear
+/// from Rp to Rd, named by its label; node 1 at the origin. ADAN56's arteries (and any model
+/// with labels of that anatomy) take their directions in the body (x the patient's left, y
+/// anterior, z up); other models a tree spread around each parent's direction. A vessel that
+/// closes a loop is a circular arc of its own length between its two placed ends.
+/// @throws flowire::Error (input) naming the vessel where a loop's ends lie farther apart
+/// than its length.
+vessels::Centerlines layout(const Model& m);
+/// @brief The network of layout(@p m).
+vessels::Network network(const Model& m, const vessels::BuildOptions& options = {});
+/// @brief The model's flow on @p net (its network()): the compliant model, the inlet flow
+/// table at node 1's end, each outlet vessel's condition (outlet_condition) at its end, each
+/// vessel's wall (E; h0, or Avolio's law at its mean radius) as its branch's own, the blood's
+/// density and viscosity. A gamma_profile other than 2 is said in a warning: the network's
+/// friction is Poiseuille's.
+FlowSpec flow_spec(const Model& m, const vessels::Network& net);
+///@}
+
 /// @brief vessels.csv: `name,time,flow_in,flow_out,pressure_in,pressure_out`, SI, atomically.
 void write_vessels_csv(const Waveforms& w, const std::filesystem::path& path);
 
