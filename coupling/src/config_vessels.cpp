@@ -7,6 +7,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/scene.hpp"
+#include "flowire/flow/openbf.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/io.hpp"
 #include "flowire/vessels/sections.hpp"
@@ -125,6 +126,8 @@ vessels::Network build_centerline_network(const config::Config& c) {
   const bool has_gen = c.has_section("vessels.generator");
   if (has_file == has_gen)
     throw_input_error(c.where("vessels"), "give exactly one of vessels.file or vessels.generator");
+  if (has_file && flow::openbf::is_model(c.resolve_path(c.string("vessels.file"))))
+    return flow::openbf::network(flow::openbf::read(c.resolve_path(c.string("vessels.file"))), build);
   if (has_file) {
     vessels::ReadOptions ro;
     ro.length_unit = c.string_or("vessels.length_unit", "");
@@ -159,5 +162,42 @@ vessels::Network build_centerline_network(const config::Config& c) {
   }
 }
 }  // namespace
+
+flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) {
+  flow::FlowSpec spec = flow::from_config(c, net);
+  if (!c.has("vessels.file")) return spec;
+  const std::string path = c.resolve_path(c.string("vessels.file"));
+  if (!flow::openbf::is_model(path)) return spec;
+  // What the scene states itself (a value from the scene file or --set, not a default).
+  const auto stated = [&](const std::string& prefix) {
+    for (const auto& [key, value] : c.values())
+      if (key.rfind(prefix, 0) == 0 && value.where != "default") return true;
+    return false;
+  };
+  const flow::FlowSpec model = flow::openbf::flow_spec(flow::openbf::read(path), net);
+  if (!stated("flow.model")) spec.model = model.model;
+  if (!stated("flow.density")) spec.density = model.density;
+  if (!stated("flow.viscosity")) spec.viscosity = model.viscosity;
+  if (!stated("flow.inlet") && !stated("flow.inlets")) spec.inlets = model.inlets;
+  // Every end of the model's that is no inlet: the outlet the scene names there, else the
+  // model's own (the scene's default for the rest does not apply: the model has one for each).
+  std::vector<flow::OutletBC> outlets;
+  const auto is_inlet = [&](int node) {
+    return std::any_of(spec.inlets.begin(), spec.inlets.end(),
+                       [&](const flow::InletBC& in) { return in.node == node; });
+  };
+  for (const auto& m : model.outlets) {
+    if (is_inlet(m.node)) continue;
+    const auto named = std::find_if(spec.outlets.begin(), spec.outlets.end(),
+                                    [&](const flow::OutletBC& o) { return o.node == m.node && !o.defaulted; });
+    outlets.push_back(named != spec.outlets.end() ? *named : m);
+  }
+  spec.outlets = std::move(outlets);
+  for (const auto& w : model.branch_walls)
+    if (std::none_of(spec.branch_walls.begin(), spec.branch_walls.end(),
+                     [&](const flow::BranchWall& x) { return x.branch == w.branch; }))
+      spec.branch_walls.push_back(w);
+  return spec;
+}
 
 }  // namespace flowire::coupling

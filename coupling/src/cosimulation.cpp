@@ -81,8 +81,9 @@ void CoSimulation::build_network(nlohmann::json& s) {
 }
 
 void CoSimulation::build_flow(nlohmann::json& s) {
-  fsolver_ = flow::make_solver(*net_, flow::from_config(scene_, *net_));
-  s["flow"] = {{"solver", std::string(fsolver_->name())}, {"model", scene_.string("flow.model")}};
+  fsolver_ = flow::make_solver(*net_, scene_flow(scene_, *net_));
+  s["flow"] = {{"solver", std::string(fsolver_->name())},
+               {"model", std::string(flow::to_string(fsolver_->spec().model))}};
 }
 
 void CoSimulation::build_wire(nlohmann::json& s) {

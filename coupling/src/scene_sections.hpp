@@ -30,7 +30,8 @@
 
 namespace flowire::flow {
 class FlowSolver;
-}
+struct FlowSpec;
+}  // namespace flowire::flow
 
 namespace flowire::coupling {
 
@@ -45,6 +46,10 @@ class TipForces;
 
 // ---- vessels: (config_vessels.cpp)
 void declare_vessel_keys(config::Schema& schema);
+/// @brief The flow of the scene on @p net: flow::from_config, and where vessels.file is an
+/// openBF model, that model's own inlet, outlets, walls, blood and compliant model wherever
+/// the scene does not state them (openbf::flow_spec).
+flow::FlowSpec scene_flow(const config::Config& scene, const vessels::Network& net);
 
 // ---- wire:, loads: (config_wire.cpp)
 void declare_wire_keys(config::Schema& schema);
