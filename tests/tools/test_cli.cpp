@@ -272,6 +272,69 @@ TEST(Cli, RunsAnOpenbfModel) {
   EXPECT_FALSE(fs::exists(dir / "b"));
 }
 
+TEST(Cli, AnOpenbfModelIsLaidOutInSpaceAndPushedThroughAsAScenesVessels) {
+  // --network-out writes the model's layout (a network ParaView opens and flowire reads back,
+  // one branch per vessel); the model as vessels.file of a scene runs a wire through it with the
+  // model's own flow; a zero radius there, an outlet the model has not, or --network-out for a
+  // scene: one line, status 2, nothing written.
+  FLOWIRE_REQUIRE_SHARED("peers/openbf-models/boileau2015/adan56/adan56.yaml");
+  const auto dir = flowire::testing::scratch_dir("cli-openbf-network");
+  const auto model = (flowire::testing::shared_dir() / "peers/openbf-models/boileau2015/adan56/adan56.yaml").string();
+  const auto r =
+      run("run " + model + " --out " + (dir / "o").string() + " --network-out " + (dir / "adan56.vtp").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto info = run("network info " + (dir / "adan56.vtp").string());
+  ASSERT_EQ(info.status, 0) << info.err;
+  EXPECT_NE(info.out.find("branches:      77"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("loops:         0"), std::string::npos) << info.out;
+  int scenes = 0;
+  auto scene = [&](const std::string& vessels_file, const std::string& flow) {
+    const auto path = dir / ("scene" + std::to_string(++scenes) + ".yaml");
+    std::ofstream(path) << "vessels: {file: " << vessels_file << ", max_segment_length: 1 cm}\n"
+                        << "flow: " << flow << "\n"
+                        << "wire: {length: 0.5, segment_length: 2 mm, entry: profunda_femoris_R, tip: {length: 2 cm, "
+                           "shape: angled, angle: 30 deg, bend_radius: 5 mm}}\n"
+                        << "insertion: {speed: 5 cm/s, initial_length: 2 cm}\n"
+                        << "solve: {dt: 10 ms, duration: 1 s}\noutput: {vtk: false, png: false}\n";
+    return path.string();
+  };
+  const auto ok = run("run " + scene(model, "{}") + " --out " + (dir / "w").string());
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  std::ifstream in(dir / "w" / "summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["flow"]["model"], "rlc");
+  EXPECT_EQ(s["network"]["branches"].get<int>(), 77);
+  EXPECT_EQ(s["wire"]["unconverged_steps"].get<int>(), 0);
+  EXPECT_NEAR(s["wire"]["inserted_length"].get<double>(), 0.07, 1e-6);
+  // Bad input.
+  std::ifstream src(model);
+  std::stringstream text;
+  text << src.rdbuf();
+  std::string bad = text.str();
+  const auto at = bad.find("Rp: 0.00672809");
+  ASSERT_NE(at, std::string::npos);
+  bad.replace(at, std::string("Rp: 0.00672809").size(), "Rp: 0.0");
+  fs::copy_file(fs::path(model).parent_path() / "adan56_inlet.dat", dir / "adan56_inlet.dat",
+                fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "adan56.yaml") << bad;
+  for (const auto& [scene_file, message] : std::vector<std::pair<std::string, std::string>>{
+           {scene((dir / "adan56.yaml").string(), "{}"), "vessel `brachiocephalic_trunk`: Rp = 0 must be > 0"},
+           {scene(model, "{outlets: {nowhere: {resistance: 1e9}}}"), "flow.outlets.nowhere"}}) {
+    const auto b = run("run " + scene_file + " --out " + (dir / "b").string());
+    EXPECT_EQ(b.status, 2) << b.err;
+    EXPECT_NE(b.err.find(message), std::string::npos) << b.err;
+    EXPECT_EQ(std::count(b.err.begin(), b.err.end(), '\n'), 1) << b.err;
+    EXPECT_FALSE(fs::exists(dir / "b"));
+  }
+  const auto n = run("run " + scene(model, "{}") + " --out " + (dir / "n").string() + " --network-out " +
+                     (dir / "n.vtp").string());
+  EXPECT_EQ(n.status, 2) << n.err;
+  EXPECT_NE(n.err.find("--network-out writes the layout of an openBF model"), std::string::npos) << n.err;
+  EXPECT_FALSE(fs::exists(dir / "n"));
+  EXPECT_FALSE(fs::exists(dir / "n.vtp"));
+}
+
 TEST(Cli, AFlowSineWithoutAmplitudesIsRefusedNamingTheKey) {
   // A flow waveform has no default amplitude (the 120/80 mmHg of a pressure sine are not
   // m³/s): the key that is missing is named with the file and line of its section.

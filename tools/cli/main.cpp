@@ -76,7 +76,8 @@ int launcher_rank() {
   return 0;
 }
 
-int cmd_run(const std::string& scene, const std::string& out, const std::vector<std::string>& sets) {
+int cmd_run(const std::string& scene, const std::string& out, const std::vector<std::string>& sets,
+            const std::string& network_out) {
   namespace fs = std::filesystem;
   // Under mpirun every rank runs the scene and rank 0 alone writes it (and holds its folder),
   // from the start: PETSc, which also says so, may start only late in the run (the FEM).
@@ -84,8 +85,11 @@ int cmd_run(const std::string& scene, const std::string& out, const std::vector<
   const bool model = fs::path(scene).extension() == ".json";
   flowire::check_input_file(scene, model ? flowire::input_limit::kTable : flowire::input_limit::kScene,
                             model ? "an svZeroDSolver model (JSON)" : "a scene (YAML)");
+  const bool openbf_model = !model && flowire::flow::openbf::is_model(scene);
+  if (!network_out.empty() && !openbf_model)
+    flowire::throw_usage_error("--network-out writes the layout of an openBF model; " + scene + " is not one");
   if (model) return flowire::cli::run_svzerod(scene, out, sets);
-  if (flowire::flow::openbf::is_model(scene)) return flowire::cli::run_openbf(scene, out, sets);
+  if (openbf_model) return flowire::cli::run_openbf(scene, out, sets, network_out);
   const auto cfg = flowire::coupling::load_scene(scene, sets, out);
   flowire::coupling::RunOptions options;
   ProgressLine line;
@@ -198,6 +202,9 @@ int main(int argc, char** argv) {
   run->add_option("--out", out, "output folder (overrides output.dir)");
   run->add_option("--set", sets, "override a scene key: --set flow.solver=sparse (repeatable)")
       ->allow_extra_args(false);
+  std::string network_out;
+  run->add_option("--network-out", network_out,
+                  "openBF models: also write the model's network laid out in 3D (.vtp: radius, branch names)");
 
   auto* network = app.add_subcommand("network", "read, inspect and convert vessel networks");
   network->require_subcommand(1);
@@ -274,7 +281,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*run) return cmd_run(scene, out, sets);
+    if (*run) return cmd_run(scene, out, sets, network_out);
     if (*info) return cmd_info(file, unit, max_seg, json);
     if (*convert) return cmd_convert(in, outfile, unit, max_seg);
     if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows, cmp_plot);

@@ -19,6 +19,7 @@
 #include "flowire/common/output.hpp"
 #include "flowire/flow/openbf.hpp"
 #include "flowire/flow/svzerod.hpp"
+#include "flowire/vessels/io.hpp"
 
 namespace flowire::cli {
 
@@ -115,9 +116,17 @@ int run_svzerod(const std::string& model, const std::string& out, const std::vec
 }
 
 /// An openBF model: run as a compliant lumped network (openbf.hpp), vessels.csv per openBF label.
-int run_openbf(const std::string& model, const std::string& out, const std::vector<std::string>& sets) {
+int run_openbf(const std::string& model, const std::string& out, const std::vector<std::string>& sets,
+               const std::string& network_out) {
   namespace openbf = flowire::flow::openbf;
   openbf::Waveforms w;
+  if (!network_out.empty()) {
+    // The layout first (bad input stops the run before any output), written atomically.
+    if (std::filesystem::path(network_out).extension() != ".vtp")
+      flowire::throw_input_error("--network-out", fmt::format("'{}' must end in .vtp", network_out));
+    const openbf::Model m = openbf::read(model);
+    flowire::vessels::write_network_vtp(openbf::network(m), network_out);
+  }
   return run_model(
       model, out, sets, "openBF",
       [&] {

@@ -11,6 +11,8 @@ namespace flowire::cli {
 int run_svzerod(const std::string& model, const std::string& out, const std::vector<std::string>& sets);
 
 /// @brief Run an openBF model (flow/openbf.hpp) into `out`: vessels.csv and summary.json.
-int run_openbf(const std::string& model, const std::string& out, const std::vector<std::string>& sets);
+/// @p network_out: also write the model's layout (openbf::network) there as .vtp (empty: not).
+int run_openbf(const std::string& model, const std::string& out, const std::vector<std::string>& sets,
+               const std::string& network_out = {});
 
 }  // namespace flowire::cli
