@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -11,6 +12,7 @@
 #include <sstream>
 
 #include "flowire/common/error.hpp"
+#include "flowire/flow/openbf.hpp"
 
 namespace flowire::flow {
 
@@ -270,6 +272,21 @@ std::vector<FileOutlet> read_svzerod_outlets(const std::string& path) {
 }  // namespace
 
 std::vector<FileOutlet> read_outlet_file(const std::string& path, double length_factor) {
+  if (openbf::is_model(path)) {
+    // An openBF model: each outlet vessel's condition (SI, as openBF's files are), by its label.
+    const openbf::Model m = openbf::read(path);
+    std::vector<FileOutlet> out;
+    for (const auto& v : m.vessels) {
+      if (std::any_of(m.vessels.begin(), m.vessels.end(), [&](const openbf::Vessel& w) { return w.sn == v.tn; }))
+        continue;
+      FileOutlet o;
+      o.name = v.label;
+      o.where = fmt::format("{}:{}", path, v.line);
+      o.bc = openbf::outlet_condition(m, v);
+      out.push_back(std::move(o));
+    }
+    return out;
+  }
   const auto lines = lines_of(path);
   for (const auto& l : lines) {
     const auto first = l.find_first_not_of(" \t\r");
@@ -287,8 +304,8 @@ std::vector<FileOutlet> read_outlet_file(const std::string& path, double length_
   for (const auto& l : lines)
     if (l.rfind("SEGMENT ", 0) == 0) return read_deck(path, length_factor);
   throw_input_error(path,
-                    "not an outlet file flowire reads (an svOneDSolver deck .in, SimVascular rcrt.dat or an "
-                    "svZeroDSolver model .json)");
+                    "not an outlet file flowire reads (an svOneDSolver deck .in, SimVascular rcrt.dat, an "
+                    "svZeroDSolver model .json or an openBF model .yaml)");
 }
 
 }  // namespace flowire::flow

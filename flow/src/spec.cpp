@@ -504,13 +504,13 @@ void declare_scene_keys(config::Schema& s) {
   s.add("flow.outlets.resistance", Type::Number, "", D::Resistance, "outlet resistance to a distal pressure")
       .positive();
   s.add("flow.outlets.distal_pressure", Type::Number, "0", D::Pressure, "pressure behind the outlet resistance");
-  s.add(
-      "flow.outlets.file", Type::String, "", D::None,
-      "outlet conditions from a patient model's file: an svOneDSolver deck (.in: each outlet SEGMENT's RCR, "
-      "RESISTANCE or PRESSURE table, matched to the network end at its outlet node), SimVascular's rcrt.dat (an "
-      "RCR per name, a branch name or node id of the network) or an svZeroDSolver model (.json: the boundary condition "
-      "each vessel names as its outlet, any kind); CGS units as those tools write them; the outlets "
-      "named in the scene win (docs/flow-conditions.md)");
+  s.add("flow.outlets.file", Type::String, "", D::None,
+        "outlet conditions from a patient model's file: an svOneDSolver deck (.in: each outlet SEGMENT's RCR, "
+        "RESISTANCE or PRESSURE table, matched to the network end at its outlet node), SimVascular's rcrt.dat (an "
+        "RCR per name, a branch name or node id of the network), an svZeroDSolver model (.json: the boundary condition "
+        "each vessel names as its outlet, any kind), all three in the CGS units those tools write, or an openBF model "
+        "(.yaml, SI: each outlet vessel's condition by its label); the outlets named in the scene win "
+        "(docs/flow-conditions.md)");
   s.add("flow.outlets.scaling", Type::Enum, "none", D::None,
         "none: every outlet gets the values above; murray: they are the total of all outlets in parallel, split so "
         "each outlet flow is proportional to r^3",

@@ -12,6 +12,7 @@
 #include "flow_test_networks.hpp"
 #include "flowire/common/config.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/flow/openbf.hpp"
 #include "flowire/flow/outlet_file.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/flow/spec.hpp"
@@ -189,6 +190,31 @@ TEST(OutletFile, AnSvZeroDModelGivesEachOutletItsConditionOfAnyKindInSi) {
   EXPECT_NE(msg.find("elsewhere.json: boundary_conditions[1]: outlet 'LCA_1' of the file does not match the network"),
             std::string::npos)
       << msg;
+}
+
+TEST(OutletFile, AnOpenbfModelGivesEachOutletVesselItsWindkesselByLabel) {
+  // ADAN56's own network (its layout, whose branches are its labels) with its outlets from the
+  // model file: each of its 31 outlets the model's condition, in SI as openBF writes it.
+  FLOWIRE_REQUIRE_SHARED("peers/openbf-models/boileau2015/adan56/adan56.yaml");
+  const auto file = (flowire::testing::shared_dir() / "peers/openbf-models/boileau2015/adan56/adan56.yaml").string();
+  const openbf::Model m = openbf::read(file);
+  const Network net = openbf::network(m, {.max_segment_length = 0.02});
+  const FlowSpec s = spec_with("{file: " + file + "}", net);
+  EXPECT_EQ(s.outlets.size(), 31u);
+  for (const OutletBC& o : s.outlets) {
+    const auto& seg = net.segment(*net.node_segments(o.node).first);
+    const std::string& label = net.branches()[static_cast<size_t>(seg.branch)].name;
+    int found = 0;
+    for (const auto& v : m.vessels)
+      if (v.label == label) {
+        ++found;
+        const OutletBC expected = openbf::outlet_condition(m, v);
+        EXPECT_EQ(o.type, expected.type) << label;
+        EXPECT_EQ(o.steady_resistance(), expected.steady_resistance()) << label;
+        EXPECT_EQ(o.c, expected.c) << label;
+      }
+    EXPECT_EQ(found, 1) << label;
+  }
 }
 
 TEST(OutletFile, BadFilesAreRefusedNamingFileAndLine) {
