@@ -25,7 +25,7 @@ if(FLOWIRE_WITH_VTK)
   find_package(VTK 9.1 REQUIRED COMPONENTS
     CommonCore CommonDataModel IOXML IOLegacy IOGeometry FiltersCore FiltersSources
     FiltersGeneral RenderingCore RenderingOpenGL2 RenderingFreeType InteractionStyle
-    RenderingAnnotation IOImage)
+    RenderingAnnotation IOImage ChartsCore ViewsContext2D RenderingContext2D RenderingContextOpenGL2)
 endif()
 
 if(FLOWIRE_WITH_PETSC OR FLOWIRE_WITH_FEM)

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -429,6 +430,56 @@ void write_vessels_csv(const Waveforms& w, const std::filesystem::path& path) {
     out += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", w.names[i], w.times[i], w.flow_in[i], w.flow_out[i],
                        w.pressure_in[i], w.pressure_out[i]);
   write_text_atomically(path, out);
+}
+
+std::vector<WaveformSeries> path_waveforms(const Model& m, const Waveforms& w, int count) {
+  // Longest path (in length) from node 1 to an outlet: the tree's vessels by their source node.
+  std::map<int, std::vector<size_t>> from;
+  for (size_t k = 0; k < m.vessels.size(); ++k) from[m.vessels[k].sn].push_back(k);
+  std::vector<size_t> best, path;
+  double best_length = -1.0;
+  std::set<int> seen;
+  std::function<void(int, double)> walk = [&](int node, double length) {
+    if (!seen.insert(node).second) return;  // a loop: each node once
+    const auto it = from.find(node);
+    if (it == from.end() || it->second.empty()) {
+      if (length > best_length) best_length = length, best = path;
+    } else {
+      for (size_t k : it->second) {
+        path.push_back(k);
+        walk(m.vessels[k].tn, length + m.vessels[k].length);
+        path.pop_back();
+      }
+    }
+    seen.erase(node);
+  };
+  walk(1, 0.0);
+  // count vessels evenly spaced in length along it, the first and the last included.
+  std::vector<size_t> chosen;
+  double s = 0.0;
+  std::vector<double> start;
+  for (size_t k : best) start.push_back(s), s += m.vessels[k].length;
+  for (int i = 0; i < count && !best.empty(); ++i) {
+    const double target = count > 1 ? best_length * i / (count - 1) : 0.0;
+    size_t pick = 0;
+    for (size_t j = 0; j < best.size(); ++j)
+      if (start[j] <= target + 1e-12) pick = j;
+    if (i == count - 1) pick = best.size() - 1;
+    if (chosen.empty() || chosen.back() != best[pick]) chosen.push_back(best[pick]);
+  }
+  std::vector<WaveformSeries> out;
+  for (size_t k : chosen) {
+    WaveformSeries ser;
+    ser.name = m.vessels[k].label;
+    for (size_t r = 0; r < w.names.size(); ++r)
+      if (w.names[r] == ser.name) {
+        ser.time.push_back(w.times[r]);
+        ser.pressure.push_back(w.pressure_in[r]);
+        ser.flow.push_back(w.flow_in[r]);
+      }
+    out.push_back(std::move(ser));
+  }
+  return out;
 }
 
 }  // namespace flowire::flow::openbf

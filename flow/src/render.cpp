@@ -10,17 +10,27 @@
 #ifdef FLOWIRE_FLOW_HAVE_VTK
 #include <X11/Xlib.h>
 #include <vtkActor.h>
+#include <vtkAxis.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
+#include <vtkChartLegend.h>
+#include <vtkChartXY.h>
+#include <vtkContextScene.h>
+#include <vtkContextView.h>
 #include <vtkDoubleArray.h>
+#include <vtkFloatArray.h>
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
+#include <vtkPen.h>
+#include <vtkPlot.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
+#include <vtkTable.h>
+#include <vtkTextProperty.h>
 #undef Status
 #undef None
 #undef Bool
@@ -240,6 +250,77 @@ void render_network_png(const Network& net, std::span<const double> node_values,
       throw_input_error(path.string(), "the PNG could not be written");
   });
   win->Finalize();  // release the window's X resources before the connection closes
+#endif
+}
+
+void render_waveforms_png(const std::vector<WaveformSeries>& series, const std::string& title,
+                          const std::filesystem::path& path, int width, int height) {
+#ifndef FLOWIRE_FLOW_HAVE_VTK
+  (void)series, (void)title, (void)width, (void)height;
+  throw_input_error(path.string(), "PNG rendering needs VTK (this build has FLOWIRE_WITH_VTK=OFF)");
+#else
+  if (series.empty()) throw_usage_error("render_waveforms_png: no series");
+  const XConnection x = connect_display(path.string());
+  // Two charts one above the other in one image: pressure (mmHg) and flow (mL/s) over time,
+  // a line per series in a colour of its own (the 1D papers' figure of a model's waveforms).
+  vtkNew<vtkContextView> view;
+  view->GetRenderWindow()->SetDisplayId(x.d);
+  view->GetRenderWindow()->SetOffScreenRendering(1);
+  view->GetRenderWindow()->SetSize(width, height);
+  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  static const unsigned char colours[][3] = {{31, 119, 180},  {255, 127, 14}, {44, 160, 44},   {214, 39, 40},
+                                             {148, 103, 189}, {140, 86, 75},  {227, 119, 194}, {127, 127, 127}};
+  std::vector<vtkSmartPointer<vtkTable> > tables;
+  for (int panel = 0; panel < 2; ++panel) {
+    vtkNew<vtkChartXY> chart;
+    const bool pressure = panel == 0;
+    const float lo = pressure ? 0.52f : 0.04f;
+    chart->SetAutoSize(false);
+    chart->SetSize(
+        vtkRectf(0.0f, lo * static_cast<float>(height), static_cast<float>(width), 0.44f * static_cast<float>(height)));
+    chart->SetTitle(pressure ? title + ": pressure" : "flow");
+    chart->GetAxis(vtkAxis::BOTTOM)->SetTitle("time in the last cycle (s)");
+    chart->GetAxis(vtkAxis::LEFT)->SetTitle(pressure ? "pressure (mmHg)" : "flow (mL/s)");
+    chart->SetShowLegend(pressure);
+    if (pressure) chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::RIGHT);
+    for (size_t k = 0; k < series.size(); ++k) {
+      const auto& s = series[k];
+      if (s.time.size() != s.pressure.size() || s.time.size() != s.flow.size() || s.time.size() < 2)
+        throw_usage_error(fmt::format("render_waveforms_png: series '{}' has mismatched or too few samples", s.name));
+      auto t = vtkSmartPointer<vtkTable>::New();
+      vtkNew<vtkFloatArray> xs, ys;
+      xs->SetName("t");
+      ys->SetName(s.name.c_str());
+      t->AddColumn(xs);
+      t->AddColumn(ys);
+      t->SetNumberOfRows(static_cast<vtkIdType>(s.time.size()));
+      for (size_t i = 0; i < s.time.size(); ++i) {
+        t->SetValue(static_cast<vtkIdType>(i), 0, s.time[i]);
+        t->SetValue(static_cast<vtkIdType>(i), 1, pressure ? s.pressure[i] / 133.322387415 : s.flow[i] * 1e6);
+      }
+      tables.push_back(t);
+      vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+      line->SetInputData(t, 0, 1);
+      const auto* c = colours[k % (sizeof(colours) / sizeof(colours[0]))];
+      line->SetColor(c[0], c[1], c[2], 255);
+      line->SetWidth(2.0f);
+    }
+    view->GetScene()->AddItem(chart);
+  }
+  view->GetRenderWindow()->Render();
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(view->GetRenderWindow());
+  grab->ReadFrontBufferOff();
+  grab->Update();
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    vtkNew<vtkPNGWriter> png;
+    png->SetFileName(tmp.string().c_str());
+    png->SetInputConnection(grab->GetOutputPort());
+    png->Write();
+    if (png->GetErrorCode() != 0 || !std::filesystem::exists(tmp) || std::filesystem::file_size(tmp) == 0)
+      throw_input_error(path.string(), "the PNG could not be written");
+  });
+  view->GetRenderWindow()->Finalize();
 #endif
 }
 

@@ -253,6 +253,14 @@ TEST(Cli, RunsAnOpenbfModel) {
   EXPECT_EQ(s["openbf"]["vessels"].get<int>(), 77);
   EXPECT_EQ(s["openbf"]["cycles"].get<int>(), 10);
   EXPECT_LT(s["openbf"]["periodicity"].get<double>(), 0.01);
+  // The waveforms along the aorta to the periphery, drawn where a display is.
+  if (const char* display = std::getenv("DISPLAY"); display && *display) {
+    EXPECT_EQ(s["openbf"]["waveforms_png"], "waveforms.png");
+    ASSERT_TRUE(fs::exists(dir / "o" / "waveforms.png"));
+    EXPECT_GT(fs::file_size(dir / "o" / "waveforms.png"), 10000u);
+  } else {
+    EXPECT_NE(s["openbf"]["waveforms_png"].get<std::string>().find("no X display"), std::string::npos);
+  }
   // The same model with a vessel of zero radius.
   std::ifstream src(model);
   std::stringstream text;

@@ -34,7 +34,10 @@ ModelKind model_run(int argc, char** argv, std::string& model, std::string& out)
   const std::string ext = fs::path(model).extension().string();
   ModelKind kind = ModelKind::None;
   if (ext == ".json") kind = ModelKind::Svzerod;
-  if ((ext == ".yaml" || ext == ".yml") && flowire::flow::openbf::is_model(model)) kind = ModelKind::Openbf;
+  // An openBF model is run here where no display is; with one, flowire-full draws its waveforms too.
+  const char* display = std::getenv("DISPLAY");
+  if ((ext == ".yaml" || ext == ".yml") && flowire::flow::openbf::is_model(model) && !(display && *display))
+    kind = ModelKind::Openbf;
   if (kind == ModelKind::None) return kind;
   for (int i = 3; i < argc;) {
     const std::string_view a = argv[i];

@@ -22,6 +22,7 @@
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
 #include "flowire/flow/openbf.hpp"
+#include "flowire/flow/output.hpp"
 #include "flowire/vessels/io.hpp"
 #include "study_command.hpp"
 #include "study_file.hpp"
@@ -89,7 +90,11 @@ int cmd_run(const std::string& scene, const std::string& out, const std::vector<
   if (!network_out.empty() && !openbf_model)
     flowire::throw_usage_error("--network-out writes the layout of an openBF model; " + scene + " is not one");
   if (model) return flowire::cli::run_svzerod(scene, out, sets);
-  if (openbf_model) return flowire::cli::run_openbf(scene, out, sets, network_out);
+  if (openbf_model)
+    return flowire::cli::run_openbf(
+        scene, out, sets, network_out,
+        [](const std::vector<flowire::flow::WaveformSeries>& series, const std::string& title,
+           const std::filesystem::path& png) { flowire::flow::render_waveforms_png(series, title, png); });
   const auto cfg = flowire::coupling::load_scene(scene, sets, out);
   flowire::coupling::RunOptions options;
   ProgressLine line;

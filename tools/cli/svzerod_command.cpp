@@ -117,7 +117,7 @@ int run_svzerod(const std::string& model, const std::string& out, const std::vec
 
 /// An openBF model: run as a compliant lumped network (openbf.hpp), vessels.csv per openBF label.
 int run_openbf(const std::string& model, const std::string& out, const std::vector<std::string>& sets,
-               const std::string& network_out) {
+               const std::string& network_out, const DrawWaveforms& draw) {
   namespace openbf = flowire::flow::openbf;
   openbf::Waveforms w;
   if (!network_out.empty()) {
@@ -151,6 +151,15 @@ int run_openbf(const std::string& model, const std::string& out, const std::vect
       [&](const std::filesystem::path& dir, ModelRun& r) {
         r.result = (dir / "vessels.csv").string();
         openbf::write_vessels_csv(w, r.result);
+        // The waveforms along the longest path from the inlet to an outlet, as the 1D papers
+        // draw them: where a display is (xvfb-run), waveforms.png; else said in the summary.
+        if (const char* display = std::getenv("DISPLAY"); draw && display && *display) {
+          const openbf::Model m = openbf::read(model);
+          draw(openbf::path_waveforms(m, w, 6), m.name, dir / "waveforms.png");
+          r.section["openbf"]["waveforms_png"] = "waveforms.png";
+        } else {
+          r.section["openbf"]["waveforms_png"] = "not drawn: no X display (run under xvfb-run -a)";
+        }
       });
 }
 

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "flowire/flow/output.hpp"
 #include "flowire/flow/spec.hpp"
 
 namespace flowire::flow::openbf {
@@ -120,6 +121,11 @@ vessels::Network network(const Model& m, const vessels::BuildOptions& options = 
 /// friction is Poiseuille's.
 FlowSpec flow_spec(const Model& m, const vessels::Network& net);
 ///@}
+
+/// @brief The waveforms of @p count vessels along the longest path from the inlet to an outlet
+/// (its first and last vessel and others evenly spaced in length between), each at its inlet:
+/// along the aorta to the periphery in ADAN56, as the 1D papers draw them.
+std::vector<WaveformSeries> path_waveforms(const Model& m, const Waveforms& w, int count);
 
 /// @brief vessels.csv: `name,time,flow_in,flow_out,pressure_in,pressure_out`, SI, atomically.
 void write_vessels_csv(const Waveforms& w, const std::filesystem::path& path);

@@ -85,4 +85,18 @@ void check_can_render(const std::string& where);
 void render_network_png(const Network& net, std::span<const double> node_values, const std::filesystem::path& path,
                         const RenderOptions& options = {});
 
+/// @brief One vessel's pressure (Pa) and flow (m³/s) over a cycle, for render_waveforms_png.
+struct WaveformSeries {
+  std::string name;
+  std::vector<double> time, pressure, flow;
+};
+
+/// @brief Draw @p series as two charts in one PNG (offscreen, needs an X display as
+/// render_network_png): pressure in mmHg above, flow in mL/s below, over time, one coloured line
+/// and legend entry per series. Written atomically.
+/// @throws flowire::Error (input) without VTK or a display, or if the file cannot be written;
+/// (usage) for an empty list or a series whose samples do not match.
+void render_waveforms_png(const std::vector<WaveformSeries>& series, const std::string& title,
+                          const std::filesystem::path& path, int width = 1000, int height = 800);
+
 }  // namespace flowire::flow
