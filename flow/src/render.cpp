@@ -95,6 +95,22 @@ XConnection connect_display(const std::string& where) {
   return x;
 }
 
+/// The rendered window as a PNG at @p path, written atomically.
+void write_window_png(vtkRenderWindow* win, const std::filesystem::path& path) {
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(win);
+  grab->ReadFrontBufferOff();
+  grab->Update();
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    vtkNew<vtkPNGWriter> png;
+    png->SetFileName(tmp.string().c_str());
+    png->SetInputConnection(grab->GetOutputPort());
+    png->Write();
+    if (png->GetErrorCode() != 0 || !std::filesystem::exists(tmp) || std::filesystem::file_size(tmp) == 0)
+      throw_input_error(path.string(), "the PNG could not be written");
+  });
+}
+
 }  // namespace
 #endif
 
@@ -237,18 +253,7 @@ void render_network_png(const Network& net, std::span<const double> node_values,
   win->SetSize(opt.width, opt.height);
   win->AddRenderer(ren);
   win->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(win);
-  grab->ReadFrontBufferOff();
-  grab->Update();
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    vtkNew<vtkPNGWriter> png;
-    png->SetFileName(tmp.string().c_str());
-    png->SetInputConnection(grab->GetOutputPort());
-    png->Write();
-    if (png->GetErrorCode() != 0 || !std::filesystem::exists(tmp) || std::filesystem::file_size(tmp) == 0)
-      throw_input_error(path.string(), "the PNG could not be written");
-  });
+  write_window_png(win, path);
   win->Finalize();  // release the window's X resources before the connection closes
 #endif
 }
@@ -308,18 +313,7 @@ void render_waveforms_png(const std::vector<WaveformSeries>& series, const std::
     view->GetScene()->AddItem(chart);
   }
   view->GetRenderWindow()->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(view->GetRenderWindow());
-  grab->ReadFrontBufferOff();
-  grab->Update();
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    vtkNew<vtkPNGWriter> png;
-    png->SetFileName(tmp.string().c_str());
-    png->SetInputConnection(grab->GetOutputPort());
-    png->Write();
-    if (png->GetErrorCode() != 0 || !std::filesystem::exists(tmp) || std::filesystem::file_size(tmp) == 0)
-      throw_input_error(path.string(), "the PNG could not be written");
-  });
+  write_window_png(view->GetRenderWindow(), path);
   view->GetRenderWindow()->Finalize();
 #endif
 }

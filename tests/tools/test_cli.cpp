@@ -231,6 +231,22 @@ TEST(Cli, RunsAnSvZeroDSolverModel) {
   EXPECT_FALSE(fs::exists(dir / "b" / "svzerod_result.csv"));
 }
 
+namespace {
+/// ADAN56 with the brachiocephalic trunk's Rp set to 0, as dir/adan56.yaml beside its inlet table.
+void write_adan56_with_a_zero_radius(const std::string& model, const fs::path& dir) {
+  std::ifstream src(model);
+  std::stringstream text;
+  text << src.rdbuf();
+  std::string bad = text.str();
+  const auto at = bad.find("Rp: 0.00672809");
+  ASSERT_NE(at, std::string::npos);
+  bad.replace(at, std::string("Rp: 0.00672809").size(), "Rp: 0.0");
+  fs::copy_file(fs::path(model).parent_path() / "adan56_inlet.dat", dir / "adan56_inlet.dat",
+                fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "adan56.yaml") << bad;
+}
+}  // namespace
+
 TEST(Cli, RunsAnOpenbfModel) {
   // `flowire run MODEL.yaml` on openBF's ADAN56: vessels.csv per openBF label, one period of
   // 101 samples, and the summary; a broken model is one line, status 2, and no folder.
@@ -262,16 +278,7 @@ TEST(Cli, RunsAnOpenbfModel) {
     EXPECT_NE(s["openbf"]["waveforms_png"].get<std::string>().find("no X display"), std::string::npos);
   }
   // The same model with a vessel of zero radius.
-  std::ifstream src(model);
-  std::stringstream text;
-  text << src.rdbuf();
-  std::string bad = text.str();
-  const auto at = bad.find("Rp: 0.00672809");
-  ASSERT_NE(at, std::string::npos);
-  bad.replace(at, std::string("Rp: 0.00672809").size(), "Rp: 0.0");
-  fs::copy_file(fs::path(model).parent_path() / "adan56_inlet.dat", dir / "adan56_inlet.dat",
-                fs::copy_options::overwrite_existing);
-  std::ofstream(dir / "adan56.yaml") << bad;
+  write_adan56_with_a_zero_radius(model, dir);
   const auto b = run("run " + (dir / "adan56.yaml").string() + " --out " + (dir / "b").string());
   EXPECT_EQ(b.status, 2) << b.err;
   EXPECT_NE(b.err.find("adan56.yaml:"), std::string::npos) << b.err;
@@ -316,16 +323,7 @@ TEST(Cli, AnOpenbfModelIsLaidOutInSpaceAndPushedThroughAsAScenesVessels) {
   EXPECT_EQ(s["wire"]["unconverged_steps"].get<int>(), 0);
   EXPECT_NEAR(s["wire"]["inserted_length"].get<double>(), 0.07, 1e-6);
   // Bad input.
-  std::ifstream src(model);
-  std::stringstream text;
-  text << src.rdbuf();
-  std::string bad = text.str();
-  const auto at = bad.find("Rp: 0.00672809");
-  ASSERT_NE(at, std::string::npos);
-  bad.replace(at, std::string("Rp: 0.00672809").size(), "Rp: 0.0");
-  fs::copy_file(fs::path(model).parent_path() / "adan56_inlet.dat", dir / "adan56_inlet.dat",
-                fs::copy_options::overwrite_existing);
-  std::ofstream(dir / "adan56.yaml") << bad;
+  write_adan56_with_a_zero_radius(model, dir);
   for (const auto& [scene_file, message] : std::vector<std::pair<std::string, std::string>>{
            {scene((dir / "adan56.yaml").string(), "{}"), "vessel `brachiocephalic_trunk`: Rp = 0 must be > 0"},
            {scene(model, "{outlets: {nowhere: {resistance: 1e9}}}"), "flow.outlets.nowhere"}}) {
