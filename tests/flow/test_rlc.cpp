@@ -8,6 +8,7 @@
 #include <complex>
 #include <cstdio>
 
+#include "exact_network.hpp"
 #include "flow_test_networks.hpp"
 #include "flowire/flow/profile.hpp"
 #include "flowire/flow/rlc.hpp"
@@ -221,17 +222,14 @@ flow:
     q1 += sign * solver->segment_flow(inlet_seg) * std::exp(std::complex<double>(0.0, -2.0 * M_PI * k / n));
   }
   q1 /= static_cast<double>(n);
-  // The sine's first harmonic: (P1 − P2)/2 sin(ωt) = −i (P1 − P2)/4 e^{iωt} + c.c.
-  const std::complex<double> p1(0.0, -(1100.0 - 900.0) / 4.0);
-  const double w = 2.0 * M_PI / T, r = 5e-3, mu = spec.viscosity, rho = spec.density;
-  auto line = [&](double E, double h, double l, std::complex<double> load) {
-    const std::complex<double> z(8.0 * mu / (M_PI * std::pow(r, 4)), w * rho / (M_PI * r * r));
-    const std::complex<double> y(0.0, w * 3.0 * M_PI * r * r * r / (2.0 * E * h));
-    const auto zc = std::sqrt(z / y), th = std::tanh(std::sqrt(z * y) * l);
-    return zc * (load + zc * th) / (zc + load * th);
-  };
-  const auto exact = p1 / line(0.4e6, 0.5e-3, 0.15, line(2e6, 1e-3, 0.15, 1.5e8));
-  const auto uniform = p1 / line(0.4e6, 0.5e-3, 0.15, line(0.4e6, 0.5e-3, 0.15, 1.5e8));
+  // The exact inlet flow of the two lines in series (exact_network.hpp), with the distal
+  // branch's own wall and with the network's wall everywhere.
+  const std::vector<ExactBranch> lines = {{"proximal", Vec3(0, 0, 0), Vec3(0.15, 0, 0), 5e-3},
+                                          {"distal", Vec3(0.15, 0, 0), Vec3(0.3, 0, 0), 5e-3}};
+  FlowSpec network_wall = spec;
+  network_wall.branch_walls.clear();
+  const auto exact = ExactNetwork(lines, spec, net, T, 1).flow_at(0, 0.0);
+  const auto uniform = ExactNetwork(lines, network_wall, net, T, 1).flow_at(0, 0.0);
   EXPECT_LT(std::abs(q1 / exact - 1.0), 0.01) << "simulated " << q1 << " exact " << exact;
   EXPECT_GT(std::abs(uniform / exact - 1.0), 0.1) << "the override would not show";
   // A wall for a branch the network does not have.

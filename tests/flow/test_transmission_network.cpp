@@ -6,13 +6,13 @@
 // network's harmonics converge to the exact ones at second order as its segments shrink.
 #include <gtest/gtest.h>
 
-#include <Eigen/Dense>
 #include <cmath>
 #include <complex>
 #include <filesystem>
 #include <fstream>
 #include <map>
 
+#include "exact_network.hpp"
 #include "flowire/common/config.hpp"
 #include "flowire/flow/rlc.hpp"
 #include "flowire/flow/solver.hpp"
@@ -22,135 +22,15 @@
 namespace flowire::flow {
 namespace {
 
-using cd = std::complex<double>;
+using namespace flowire::flow::test;
 constexpr double kPeriod = 0.5;
-
-/// A straight branch of the test networks, in the network's frame.
-struct Line {
-  std::string name;
-  Vec3 a, b;
-  double radius;
-};
-
-/// The exact periodic solution of the linearized 1D model on the branch graph at angular
-/// frequency ω: node pressures P̂ and, per branch, the flows at its two ends (into it at a,
-/// out of it at b). Nodes are the branches' end points; pressure inlets are known potentials,
-/// flow inlets injected currents, outlets their impedance to ground (distal pressures drive
-/// the mean only).
-struct Exact {
-  std::vector<Vec3> nodes;
-  std::vector<std::pair<int, int>> ends;  // per branch
-  std::vector<cd> pressure;
-  std::vector<std::pair<cd, cd>> flow;  // per branch: into it at a, out of it at b
-};
-
-int node_of(std::vector<Vec3>& nodes, const Vec3& x) {
-  for (size_t i = 0; i < nodes.size(); ++i)
-    if ((nodes[i] - x).norm() < 1e-9) return static_cast<int>(i);
-  nodes.push_back(x);
-  return static_cast<int>(nodes.size()) - 1;
-}
-
-Exact exact_solution(const std::vector<Line>& lines, const FlowSpec& spec, const Network& net, int harmonic,
-                     const std::map<int, cd>& inlet_values) {
-  Exact ex;
-  for (const auto& l : lines) ex.ends.emplace_back(node_of(ex.nodes, l.a), node_of(ex.nodes, l.b));
-  const int n = static_cast<int>(ex.nodes.size());
-  const double w = 2.0 * M_PI * harmonic / kPeriod;
-  const double mu = spec.viscosity, rho = spec.density;
-  // The network node at an exact node (the same point).
-  auto net_node = [&](int i) {
-    for (int k = 0; k < net.num_nodes(); ++k)
-      if ((net.node(k) - ex.nodes[static_cast<size_t>(i)]).norm() < 1e-9) return k;
-    ADD_FAILURE() << "no network node at exact node " << i;
-    return -1;
-  };
-  Eigen::MatrixXcd Y = Eigen::MatrixXcd::Zero(n, n);
-  Eigen::VectorXcd J = Eigen::VectorXcd::Zero(n);
-  std::vector<std::array<cd, 3>> line_y;  // per branch: y_aa, y_ab, y_bb
-  for (size_t k = 0; k < lines.size(); ++k) {
-    const auto& l = lines[k];
-    const double r = l.radius, len = (l.b - l.a).norm();
-    double E = spec.wall_youngs_modulus, h = spec.wall_thickness_ratio * r;
-    for (const auto& bw : spec.branch_walls)
-      if (net.branches()[static_cast<size_t>(bw.branch)].name == l.name) {
-        E = bw.youngs_modulus;
-        h = bw.thickness > 0.0 ? bw.thickness : bw.thickness_ratio * r;
-      }
-    const cd z(8.0 * mu / (M_PI * std::pow(r, 4)), w * rho / (M_PI * r * r));  // series, per length
-    std::array<cd, 3> y;
-    if (harmonic == 0) {
-      y = {1.0 / (z * len), -1.0 / (z * len), 1.0 / (z * len)};
-    } else {
-      const cd sh(0.0, w * 3.0 * M_PI * r * r * r / (2.0 * E * h));  // shunt, per length
-      const cd zc = std::sqrt(z / sh), gl = std::sqrt(z * sh) * len;
-      y = {1.0 / (zc * std::tanh(gl)), -1.0 / (zc * std::sinh(gl)), 1.0 / (zc * std::tanh(gl))};
-    }
-    line_y.push_back(y);
-    const auto [a, b] = ex.ends[k];
-    Y(a, a) += y[0], Y(a, b) += y[1], Y(b, a) += y[1], Y(b, b) += y[2];
-  }
-  std::vector<bool> known(static_cast<size_t>(n), false);
-  Eigen::VectorXcd P = Eigen::VectorXcd::Zero(n);
-  for (int i = 0; i < n; ++i) {
-    const int m = net_node(i);
-    for (const auto& o : spec.outlets)
-      if (o.node == m) {
-        Y(i, i) += 1.0 / o.impedance(w);
-        if (harmonic == 0) J(i) += o.steady_pressure() / o.steady_resistance();
-      }
-    for (const auto& in : spec.inlets)
-      if (in.node == m) {
-        const cd v = inlet_values.at(m);
-        if (in.type == InletBC::Type::Pressure) {
-          known[static_cast<size_t>(i)] = true;
-          P(i) = v;
-        } else {
-          J(i) += v;
-        }
-      }
-  }
-  // Eliminate the known pressures, solve for the rest.
-  std::vector<int> unknown;
-  for (int i = 0; i < n; ++i)
-    if (!known[static_cast<size_t>(i)]) unknown.push_back(i);
-  const auto nu = static_cast<Eigen::Index>(unknown.size());
-  Eigen::MatrixXcd A(nu, nu);
-  Eigen::VectorXcd rhs(nu);
-  for (Eigen::Index r = 0; r < nu; ++r) {
-    rhs(r) = J(unknown[static_cast<size_t>(r)]);
-    for (int c = 0; c < n; ++c)
-      if (known[static_cast<size_t>(c)]) rhs(r) -= Y(unknown[static_cast<size_t>(r)], c) * P(c);
-    for (Eigen::Index c = 0; c < nu; ++c) A(r, c) = Y(unknown[static_cast<size_t>(r)], unknown[static_cast<size_t>(c)]);
-  }
-  const Eigen::VectorXcd x = A.partialPivLu().solve(rhs);
-  for (Eigen::Index r = 0; r < nu; ++r) P(unknown[static_cast<size_t>(r)]) = x(r);
-  ex.pressure.assign(P.data(), P.data() + n);
-  for (size_t k = 0; k < lines.size(); ++k) {
-    const auto [a, b] = ex.ends[k];
-    const auto& y = line_y[k];
-    ex.flow.emplace_back(y[0] * P(a) + y[1] * P(b), -(y[1] * P(a) + y[2] * P(b)));
-  }
-  return ex;
-}
-
-/// Harmonic @p k of f over one period, sampled @p n times: f(t) = Σ Re(2 ĉ_k e^{iωkt}) for k > 0.
-cd harmonic_of(const std::function<double(double)>& f, int k, int n = 4096) {
-  cd c = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double t = kPeriod * i / n;
-    c += f(t) * std::exp(cd(0.0, -2.0 * M_PI * k * i / n));
-  }
-  return c / static_cast<double>(n);
-}
 
 /// Largest relative error, over harmonics 1 and 2, of the simulated inlet flows and pressures
 /// and outlet flows of the scene at segments of @p h, against the exact solution; the mean's
 /// relative error in @p mean_error.
-double network_error(const std::vector<Line>& lines, const std::string& flow_yaml, double h, double* mean_error) {
-  vessels::Centerlines c;
-  for (const auto& l : lines) c.branches.push_back({l.name, {l.a, l.b}, {l.radius, l.radius}});
-  const Network net = Network::build(c, {.max_segment_length = h});
+double network_error(const std::vector<ExactBranch>& lines, const std::string& flow_yaml, double h,
+                     double* mean_error) {
+  const Network net = Network::build(centerlines_of(lines), {.max_segment_length = h});
   config::Schema schema;
   declare_scene_keys(schema);
   const auto cfg = config::load_config_text(flow_yaml, "net.yaml", schema);
@@ -175,31 +55,19 @@ double network_error(const std::vector<Line>& lines, const std::string& flow_yam
     solver->advance(t0 + kPeriod * i / n);
     for (int e : ends) p[e].push_back(solver->node_pressure(e)), q[e].push_back(end_flow(e));
   }
-  auto coef = [&](const std::vector<double>& v, int k) {
-    cd sum = 0.0;
-    for (int i = 0; i < n; ++i) sum += v[static_cast<size_t>(i)] * std::exp(cd(0.0, -2.0 * M_PI * k * i / n));
-    return sum / static_cast<double>(n);
-  };
+  auto coef = [](const std::vector<double>& v, int k) { return sampled_harmonic(v, k); };
   // The flow through an end node: its segment's flow (staggered, between nodes) plus what the
   // node's own compliance (half its segment's) takes, C dP/dt; without it the comparison would
   // be off by that current, O(h).
   auto end_compliance = [&](int e) { return 0.5 * spec.segment_compliance(net, *net.node_segments(e).first); };
   double worst = 0.0;
   for (int k = 0; k <= 2; ++k) {
-    std::map<int, cd> inlet_values;  // the harmonic of each inlet's own waveform
-    for (const auto& in : spec.inlets) inlet_values[in.node] = harmonic_of([&](double t) { return in.waveform(t); }, k);
-    const Exact ex = exact_solution(lines, spec, net, k, inlet_values);
+    const ExactNetwork ex(lines, spec, net, kPeriod, k);
     for (int e : ends) {
-      // The exact node at this end and the branch ending there.
-      int xi = -1;
-      for (size_t i = 0; i < ex.nodes.size(); ++i)
-        if ((ex.nodes[i] - net.node(e)).norm() < 1e-9) xi = static_cast<int>(i);
-      cd qx = 0.0;
-      for (size_t b = 0; b < lines.size(); ++b) {
-        if (ex.ends[b].first == xi) qx += ex.flow[b].first;
-        if (ex.ends[b].second == xi) qx -= ex.flow[b].second;
-      }
-      const cd px = ex.pressure[static_cast<size_t>(xi)];
+      // The exact flow into the network at this end, and its pressure.
+      const int s = *net.node_segments(e).first;
+      const cd qx = net.segment(s).node_from == e ? ex.segment_flow_at_node(s, e) : -ex.segment_flow_at_node(s, e);
+      const cd px = ex.node_pressure(e);
       // What an inlet prescribes is not compared: a pressure inlet's pressure, a flow inlet's flow.
       bool pressure_given = false, flow_given = false;
       for (const auto& in : spec.inlets)
@@ -218,7 +86,7 @@ double network_error(const std::vector<Line>& lines, const std::string& flow_yam
 }
 
 /// The errors at segments of 4, 2 and 1 cm: second order, and the finest below @p bound.
-void expect_second_order(const std::vector<Line>& lines, const std::string& yaml, double bound) {
+void expect_second_order(const std::vector<ExactBranch>& lines, const std::string& yaml, double bound) {
   std::vector<double> hs = {0.04, 0.02, 0.01}, errors;
   for (double h : hs) {
     double mean = 0.0;
@@ -252,7 +120,7 @@ TEST(TransmissionNetwork, ARingFedByTwoInletsConvergesToTheExactSolutionAtSecond
   // the two other corners through 4 cm outlets (r = 1.5 mm) into an RCR and a coronary bed,
   // one outlet with a stiffer wall of its own.
   const double L = 0.08, l = 0.04;
-  const std::vector<Line> lines = {
+  const std::vector<ExactBranch> lines = {
       {"ring_ab", Vec3(0, 0, 0), Vec3(L, 0, 0), 2e-3},  {"ring_bc", Vec3(L, 0, 0), Vec3(L, L, 0), 2e-3},
       {"ring_cd", Vec3(L, L, 0), Vec3(0, L, 0), 2e-3},  {"ring_da", Vec3(0, L, 0), Vec3(0, 0, 0), 2e-3},
       {"in_a", Vec3(-l, 0, 0), Vec3(0, 0, 0), 3e-3},    {"in_c", Vec3(L + l, L, 0), Vec3(L, L, 0), 3e-3},
@@ -279,7 +147,7 @@ flow:
 TEST(TransmissionNetwork, ATreeWithThreeKindsOfOutletConvergesToTheExactSolutionAtSecondOrder) {
   // A trunk (r = 4 mm) into two daughters, one of which divides again: a resistance, an RCR
   // and a coronary bed at the three ends, the first daughter stiffer; fed a flow table.
-  const std::vector<Line> lines = {
+  const std::vector<ExactBranch> lines = {
       {"trunk", Vec3(0, 0, 0), Vec3(0.08, 0, 0), 4e-3},
       {"left", Vec3(0.08, 0, 0), Vec3(0.16, 0.04, 0), 3e-3},
       {"right", Vec3(0.08, 0, 0), Vec3(0.16, -0.04, 0), 2.5e-3},

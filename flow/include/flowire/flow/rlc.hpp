@@ -24,7 +24,8 @@
 /// svzerod::System, E and F (written again only when an occlusion changes a segment) and the
 /// boundary values c(t), so the matrix \f$ \alpha_m E + \alpha_f\gamma\Delta t F \f$ is factored
 /// (KLU) once for the fixed step `dt` and again only after an occlusion change. The initial state is the steady
-/// solution at t = 0. With a periodic inlet, setup runs whole cycles until two consecutive cycle starts differ by less
+/// solution at t = 0. With a periodic inlet, setup runs whole cycles (the period after which every periodic inlet
+/// repeats: T for inlets of periods T and T/2) until two consecutive cycle starts differ by less
 /// than `periodic_tolerance` (relative), at most `max_cycles`, and that periodic state becomes t = 0. `advance(t)`
 /// steps the grid k·dt to t and interpolates linearly between steps.
 #include "flowire/flow/solver.hpp"
