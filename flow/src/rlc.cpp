@@ -45,25 +45,6 @@ double segment_compliance(double youngs_modulus, double thickness_ratio, double 
 namespace detail {
 namespace {
 
-/// The period after which every periodic inlet repeats together: the least common multiple of
-/// their periods (sought among the first 64 multiples of the longest, to 1e-9), so that inlets
-/// of periods T and T/2 give T whichever is listed first; the first inlet's period where there
-/// is no such multiple, and 0 when every inlet is constant.
-double inlet_period(const FlowSpec& spec) {
-  double longest = 0.0;
-  for (const auto& in : spec.inlets) longest = std::max(longest, in.waveform.cycle());
-  if (!(longest > 0.0)) return 0.0;
-  for (int m = 1; m <= 64; ++m) {
-    const double t = m * longest;
-    const bool common = std::all_of(spec.inlets.begin(), spec.inlets.end(), [t](const InletBC& in) {
-      const double c = in.waveform.cycle();
-      return !(c > 0.0) || std::abs(t / c - std::round(t / c)) <= 1e-9 * (t / c);
-    });
-    if (common) return t;
-  }
-  return spec.cycle();
-}
-
 /// E and F of the network: rows [node balances and pressures (num_nodes) | segments], over
 /// the unknowns [p (num_nodes) | Q (num_segments) | per outlet block its outflow and its own
 /// unknowns]: constant within a phase, rewritten only when a wire changes a segment.
@@ -300,7 +281,7 @@ class RlcSolver final : public FlowSolver {
   }
 
   void settle() {
-    const double period = inlet_period(spec_);
+    const double period = spec_.cycle();
     if (!(period > 0.0)) return;
     const long steps = step_count(period, spec_.dt, "flow (rlc)", "the inlet period / solve.dt");
     if (std::abs(steps * spec_.dt - period) > 1e-9 * period)

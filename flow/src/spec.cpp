@@ -146,9 +146,26 @@ std::string_view to_string(SolverKind s) {
 }
 
 double FlowSpec::cycle() const {
-  for (const auto& in : inlets)
-    if (const double c = in.waveform.cycle(); c > 0.0) return c;
-  return 0.0;
+  // The period after which every periodic inlet repeats together: the least common multiple of
+  // their periods, sought among the first 64 multiples of the longest (to 1e-9), so that inlets
+  // of periods T and T/2 give T whichever is listed first; the first inlet's period where there
+  // is no such multiple.
+  double longest = 0.0, first = 0.0;
+  for (const auto& in : inlets) {
+    const double c = in.waveform.cycle();
+    longest = std::max(longest, c);
+    if (first == 0.0 && c > 0.0) first = c;
+  }
+  if (!(longest > 0.0)) return 0.0;
+  for (int m = 1; m <= 64; ++m) {
+    const double t = m * longest;
+    const bool common = std::all_of(inlets.begin(), inlets.end(), [t](const InletBC& in) {
+      const double c = in.waveform.cycle();
+      return !(c > 0.0) || std::abs(t / c - std::round(t / c)) <= 1e-9 * (t / c);
+    });
+    if (common) return t;
+  }
+  return first;
 }
 
 double FlowSpec::segment_compliance(const Network& net, int s) const {

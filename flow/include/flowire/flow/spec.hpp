@@ -186,7 +186,8 @@ struct FlowSpec {
   /// @brief rlc: the compliance of segment @p s (its branch's own wall, else the network's):
   /// \f$ \int 3\pi r^3 / (2 E h)\,dx \f$ over the segment, r linear between its ends.
   [[nodiscard]] double segment_compliance(const Network& net, int s) const;
-  /// @brief Period of the first periodic inlet waveform, or 0 if all are constant.
+  /// @brief The period after which every periodic inlet repeats (the least common multiple of
+  /// their periods: T for inlets of T and T/2), or 0 if all are constant.
   [[nodiscard]] double cycle() const;
 };
 
