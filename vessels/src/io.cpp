@@ -20,7 +20,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/input.hpp"
 #include "flowire/common/units.hpp"
-#include "io_internal.hpp"
+#include "polydata_internal.hpp"
 
 namespace flowire::vessels {
 namespace {

@@ -15,7 +15,7 @@
 #include <unordered_map>
 
 #include "flowire/common/error.hpp"
-#include "io_internal.hpp"
+#include "polydata_internal.hpp"
 
 namespace flowire::vessels::detail {
 namespace {

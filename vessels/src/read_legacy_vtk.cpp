@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "flowire/common/error.hpp"
-#include "io_internal.hpp"
+#include "polydata_internal.hpp"
 
 namespace flowire::vessels::detail {
 namespace {

@@ -1,4 +1,4 @@
-// .vtp (VTK XML, read with VTK) and .vtk (legacy, see io_legacy.cpp) poly data into PolyData.
+// .vtp (VTK XML, read with VTK) and .vtk (legacy, see read_legacy_vtk.cpp) poly data into PolyData.
 // VTK reports problems through its output window and error events; while a file is read
 // both are captured, nothing reaches stderr, and the first error becomes one flowire::Error.
 #include <fmt/format.h>
@@ -15,7 +15,7 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/common/input.hpp"
-#include "io_internal.hpp"
+#include "polydata_internal.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
 #include <vtkAbstractArray.h>
