@@ -14,6 +14,7 @@
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/fem/compare.hpp"
+#include "flowire/fem/network_mesh.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire_test.hpp"
 

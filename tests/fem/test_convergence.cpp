@@ -11,6 +11,7 @@
 #include "fem_test_cases.hpp"
 #include "flowire/fem/element.hpp"
 #include "flowire/fem/mesh.hpp"
+#include "flowire/fem/network_mesh.hpp"
 #include "flowire/fem/stokes.hpp"
 #include "flowire_test.hpp"
 

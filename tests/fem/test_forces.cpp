@@ -11,6 +11,7 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/fem/mesh.hpp"
+#include "flowire/fem/shape_domain.hpp"
 #include "flowire/fem/stokes.hpp"
 #include "flowire_test.hpp"
 

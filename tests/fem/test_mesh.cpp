@@ -9,6 +9,7 @@
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/fem/mesh.hpp"
+#include "flowire/fem/network_mesh.hpp"
 #include "flowire_test.hpp"
 
 namespace flowire::fem {

@@ -15,6 +15,7 @@
 #include "flowire/fem/compare.hpp"
 #include "flowire/fem/element.hpp"
 #include "flowire/fem/mesh.hpp"
+#include "flowire/fem/network_mesh.hpp"
 #include "flowire/fem/stokes.hpp"
 #include "flowire_test.hpp"
 

@@ -3,6 +3,7 @@
 // annulus π(R² − a²)L, the wire's surface 2πaL, the tube's 2πRL) and a wire across one, and
 // fem_forces.csv read back.
 #include "flowire/fem/obstacle.hpp"
+#include "flowire/fem/shape_domain.hpp"
 
 #include <gtest/gtest.h>
 

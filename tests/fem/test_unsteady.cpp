@@ -13,6 +13,7 @@
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/fem/mesh.hpp"
+#include "flowire/fem/network_mesh.hpp"
 #include "flowire/fem/stokes.hpp"
 #include "flowire_test.hpp"
 

@@ -13,6 +13,7 @@
 
 #include "flowire/coupling/occlusion.hpp"
 #include "flowire/fem/mesh.hpp"
+#include "flowire/fem/shape_domain.hpp"
 #include "flowire/fem/obstacle.hpp"
 #include "flowire/fem/stokes.hpp"
 #include "flowire/flow/annulus.hpp"

@@ -21,6 +21,7 @@
 #include "flowire/common/output.hpp"
 #include "flowire/fem/element.hpp"
 #include "flowire/fem/lumen.hpp"
+#include "flowire/fem/network_mesh.hpp"
 #include "flowire/fem/obstacle.hpp"
 #include "flowire/fem/sample.hpp"
 #include "flowire/flow/petsc_runtime.hpp"

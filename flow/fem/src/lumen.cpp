@@ -20,7 +20,9 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/input.hpp"
 #include "flowire/fem/element.hpp"
-#include "mesh_detail.hpp"
+#include "gmsh_session.hpp"
+#include "mesh_broadcast.hpp"
+#include "mesh_extract.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
 #include <vtkAlgorithm.h>

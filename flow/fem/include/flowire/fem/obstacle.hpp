@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "flowire/fem/mesh.hpp"
+#include "flowire/fem/shape_domain.hpp"
 #include "flowire/fem/stokes.hpp"
 
 namespace flowire::fem {

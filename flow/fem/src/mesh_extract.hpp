@@ -1,0 +1,21 @@
+#pragma once
+// The meshed gmsh model read into a TetMesh (nodes, positively oriented 10-node tetrahedra in
+// our local node order, outward boundary triangles by group), shared by every mesh builder.
+// Not installed.
+#include <gmsh.h>
+
+#include <string>
+#include <vector>
+
+#include "flowire/fem/mesh.hpp"
+
+namespace flowire::fem::detail {
+
+/// Nodes, tetrahedra and boundary triangles (by group: `surf_group[k]` for surface
+/// `surfs[k]`) of the meshed model into `mesh`.
+/// @throws flowire::Error (numerical) naming `at` when gmsh produced no tetrahedra or a
+/// boundary triangle that belongs to none.
+void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
+                  const std::string& at);
+
+}  // namespace flowire::fem::detail
