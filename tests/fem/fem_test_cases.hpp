@@ -1,8 +1,11 @@
 #pragma once
-// Networks shared by the fem tests: a straight tube and small Y bifurcations.
+// Cases shared by the fem tests: a straight tube and small Y bifurcations as networks, a
+// tube with a wire as a domain built in code, and Womersley's Bessel function.
 #include <cmath>
 #include <complex>
 
+#include "flowire/fem/mesh.hpp"
+#include "flowire/fem/shape_domain.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/network.hpp"
 
@@ -38,6 +41,26 @@ inline vessels::Network y_small(double asymmetry = 0.0) {
   p.child_length = 10e-3;
   p.asymmetry = asymmetry;
   return vessels::Network::build(vessels::y_bifurcation(p));
+}
+
+/// A tube along x (radius r, length l) with a coaxial wire of radius a through all of it
+/// (none when a = 0): groups wall, obstacle (the wire), inlet (x = 0), outlet (x = l).
+inline ShapeDomain tube_with_wire(double r, double l, double a, double h, double h_wire) {
+  using Kind = BoundaryGroup::Kind;
+  ShapeDomain d;
+  d.name = "tube with a wire";
+  d.groups = {{Kind::Wall, -1, "wall"}, {Kind::Inlet, -1, "inlet"}, {Kind::Outlet, -1, "outlet"}};
+  d.outer = Solid::cylinder(Vec3(0, 0, 0), Vec3(l, 0, 0), r);
+  d.outer.face_group = {0, 1, 2, -1, -1, -1};
+  d.mesh_size = h;
+  if (a > 0.0) {
+    d.groups.push_back({Kind::Wall, -1, "obstacle"});
+    Solid wire = Solid::cylinder(Vec3(-0.1 * l, 0, 0), Vec3(1.1 * l, 0, 0), a);
+    wire.face_group = {3, -1, -1, -1, -1, -1};
+    wire.mesh_size = h_wire;
+    d.holes.push_back(wire);
+  }
+  return d;
 }
 
 }  // namespace flowire::fem::test

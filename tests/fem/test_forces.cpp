@@ -9,6 +9,7 @@
 #include <numbers>
 #include <vector>
 
+#include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/shape_domain.hpp"
@@ -22,25 +23,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kEta = 3.5e-3;
 
 using Kind = BoundaryGroup::Kind;
-
-/// A tube along x (radius r, length l) with a coaxial wire of radius a through all of it
-/// (none when a = 0): groups wall, obstacle (the wire), inlet (x = 0), outlet (x = l).
-ShapeDomain tube_with_wire(double r, double l, double a, double h, double h_wire) {
-  ShapeDomain d;
-  d.name = "tube with a wire";
-  d.groups = {{Kind::Wall, -1, "wall"}, {Kind::Inlet, -1, "inlet"}, {Kind::Outlet, -1, "outlet"}};
-  d.outer = Solid::cylinder(Vec3(0, 0, 0), Vec3(l, 0, 0), r);
-  d.outer.face_group = {0, 1, 2, -1, -1, -1};
-  d.mesh_size = h;
-  if (a > 0.0) {
-    d.groups.push_back({Kind::Wall, -1, "obstacle"});
-    Solid wire = Solid::cylinder(Vec3(-0.1 * l, 0, 0), Vec3(1.1 * l, 0, 0), a);
-    wire.face_group = {3, -1, -1, -1, -1, -1};
-    wire.mesh_size = h_wire;
-    d.holes.push_back(wire);
-  }
-  return d;
-}
+using test::tube_with_wire;
 
 /// Exact axial force per length on the inner cylinder of annular Poiseuille flow
 /// (a ≤ r ≤ R, u(a) = u(R) = 0, pressure gradient −G):
@@ -123,23 +106,6 @@ TEST(FemForces, CoaxialWireMatchesAnnularPoiseuille) {
   EXPECT_GT(order, 1.5);
   EXPECT_GT(order_s, 1.0);
   EXPECT_LT(10.0 * std::abs(fine.wire_error), std::abs(fine.wire_surface_error));
-}
-
-TEST(FemForces, DomainErrorsNameTheDomain) {
-  ShapeDomain d = tube_with_wire(1e-3, 4e-3, 0.0, 0.5e-3, 0.0);
-  d.groups[0].kind = Kind::Inlet;
-  EXPECT_THROW(build_mesh(d), Error);
-  d = tube_with_wire(1e-3, 4e-3, 0.0, 0.5e-3, 0.0);
-  d.outer.face_group[2] = 7;
-  try {
-    build_mesh(d);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("tube with a wire"), std::string::npos) << e.what();
-  }
-  d = tube_with_wire(1e-3, 4e-3, 0.0, 0.5e-3, 0.0);
-  d.groups.push_back({Kind::Wall, -1, "unused"});
-  EXPECT_THROW(build_mesh(d), Error);  // a group without a face
 }
 
 }  // namespace
