@@ -1,20 +1,20 @@
-// .vtp (VTK XML, read with VTK) and .vtk (legacy, see read_legacy_vtk.cpp) poly data into PolyData.
+// VTK XML poly data (.vtp, ASCII, binary or appended, compressed or not) read with VTK's
+// vtkXMLPolyDataReader into PolyData: points, line cells, and the numeric point, cell (of the
+// line cells only: VTK numbers vertex cells first) and field arrays, with string field arrays.
+// Before VTK sees a file its declared counts are checked against its size (check_declared_sizes).
 // VTK reports problems through its output window and error events; while a file is read
 // both are captured, nothing reaches stderr, and the first error becomes one flowire::Error.
+// Without VTK (FLOWIRE_WITH_VTK=OFF) reading a .vtp is an error saying so.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <mutex>
 #include <string>
 
 #include "flowire/common/error.hpp"
-#include "flowire/common/input.hpp"
 #include "polydata_internal.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
@@ -39,17 +39,6 @@
 #endif
 
 namespace flowire::vessels::detail {
-
-namespace {
-
-/// The file's bytes (at most `limit`), for checks made before VTK sees the file.
-std::string head_of(const std::string& path, size_t limit) {
-  std::ifstream in = open_input(path, input_limit::kGeometry, "a VTK file");
-  std::string s(limit, '\0');
-  in.read(s.data(), static_cast<std::streamsize>(limit));
-  s.resize(static_cast<size_t>(in.gcount()));
-  return s;
-}
 
 /// Counts declared in an XML file (NumberOfPoints, NumberOfLines, NumberOfTuples, ...) must fit
 /// in it: a corrupt header must not make VTK allocate gigabytes. Compressed data can be small
@@ -76,8 +65,6 @@ void check_declared_sizes(const std::string& path, const std::string& text, uint
                                           name, value, size));
   }
 }
-
-}  // namespace
 
 #ifdef FLOWIRE_HAVE_VTK
 namespace {
@@ -223,28 +210,7 @@ PolyData run_reader(Reader* reader, const std::string& path, const char* what) {
 }  // namespace
 #endif
 
-PolyData read_vtk_polydata(const std::string& path) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) throw_input_error(path, "cannot open the file for reading");
-  if (size == 0) throw_input_error(path, "the file is empty");
-  const std::string head = head_of(path, 1 << 20);
-  const bool xml = head.find("<VTKFile") != std::string::npos;
-  const bool legacy = head.rfind("# vtk DataFile", 0) == 0;
-  if (!xml && !legacy)
-    throw_input_error(path, "not a VTK file (neither VTK XML '<VTKFile' nor legacy '# vtk DataFile' header)");
-  if (xml && head.find("type=\"PolyData\"") == std::string::npos)
-    throw_input_error(path, "the VTK XML file does not hold PolyData (centerlines are poly data)");
-  if (legacy && head.find("POLYDATA") == std::string::npos)
-    throw_input_error(path, "the legacy VTK file does not hold POLYDATA (centerlines are poly data)");
-  if (xml) check_declared_sizes(path, head, size);
-  if (xml && head.find("</VTKFile>") == std::string::npos && size <= head.size())
-    throw_input_error(path, "the XML ends before </VTKFile> (truncated file)");
-  if (legacy) {
-    std::ifstream in(path, std::ios::binary);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return read_legacy_polydata(path, text);
-  }
+PolyData read_vtk_xml_polydata(const std::string& path) {
 #ifdef FLOWIRE_HAVE_VTK
   vtkNew<vtkXMLPolyDataReader> reader;
   return run_reader(reader.GetPointer(), path, "VTK XML poly data");
