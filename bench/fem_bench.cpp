@@ -10,7 +10,9 @@
 #include <numbers>
 #include <vector>
 
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
+#include "flowire/fem/pulsatile.hpp"
 #include "flowire/vessels/generators.hpp"
 
 namespace {

@@ -14,9 +14,11 @@
 #include "flowire/flow/solver.hpp"
 #include "scene_sections.hpp"
 #ifdef FLOWIRE_HAVE_FEM
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
 #include "flowire/fem/lumen.hpp"
 #include "flowire/fem/obstacle.hpp"
+#include "flowire/fem/pulsatile.hpp"
 #endif
 
 namespace flowire::coupling {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
 #include "flowire/flow/solver.hpp"
 

@@ -13,7 +13,9 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
+#include "flowire/fem/pulsatile.hpp"
 #include "flowire/fem/network_mesh.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire_test.hpp"

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "fem_test_cases.hpp"
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
 #include "flowire_test.hpp"
 

@@ -25,6 +25,7 @@
 #include <string>
 
 #include "flowire/common/error.hpp"
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
 #include "flowire/fem/lumen.hpp"
 #include "flowire/vessels/generators.hpp"

@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/compare.hpp"
 #include "flowire/fem/element.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/network_mesh.hpp"

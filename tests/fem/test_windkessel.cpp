@@ -13,7 +13,9 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
+#include "flowire/fem/pulsatile.hpp"
 #include "flowire_test.hpp"
 
 namespace flowire::fem {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "flowire/common/diagnostics.hpp"
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/compare.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/flow/spec.hpp"

@@ -9,7 +9,7 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
-#include "flowire/fem/compare.hpp"
+#include "flowire/fem/compare_output.hpp"
 #include "flowire/fem/sample.hpp"
 #include "flowire/flow/petsc_runtime.hpp"
 

@@ -1,11 +1,10 @@
 #pragma once
 /// @file compare.hpp
-/// @brief The network model against the 3D finite-element solution on the same lumen.
+/// @brief The network model against the 3D finite-element solution on the same lumen, at
+/// one instant (the steady comparison; a series over a period is pulsatile.hpp).
 ///
-/// Both are driven by the same boundary conditions, the network's own: a pressure or a
-/// flow at the inlet end, and at every outlet end a pressure or a resistance to a distal
-/// pressure (see BoundaryValues; the FEM enforces them through its affine structure, see
-/// stokes.hpp). Compared are
+/// Both are driven by the same boundary conditions, the network's own (BoundaryValues,
+/// boundary_values.hpp). Compared are
 /// - the pressure at `samples_per_branch` points along every branch centerline, equally
 ///   spaced in arc length from the first to the last node of the branch: the network's
 ///   value (linear along each segment, as in the Poiseuille model) against the FEM
@@ -20,28 +19,19 @@
 /// *near a junction* when it lies within two junction radii of a node where three or
 /// more vessels meet.
 ///
-/// Output files (`write_outputs`, rank 0 only): fem_compare.csv
-/// (`branch,s,x,y,z,pressure_network,pressure_fem,rel_diff` then `pressure_fem_centre,
-/// rel_diff_drop,path_distance,near_junction,flow_network,flow_fem,rel_diff_flow,radius_network,
-/// radius_fem`), fem_outlets.csv
-/// (`outlet,flow_network,flow_fem` then `rel_diff,pressure_network,pressure_fem`), fem_compare.md (tables like the
-/// paper's Table 1, flows, branch drops, timings), fem.vtu (quadratic tetrahedra, point
-/// data `velocity` and `pressure`), fem_forces.csv (`boundary,fx,fy,fz`: the force of the
-/// fluid on the wall, boundary_forces), fem_compare.png (network vs FEM pressure along the
-/// path from the inlet, drawn by flow/fem/scripts/plot_fem_compare.py with matplotlib;
-/// a warning, not an error, when python3/matplotlib is missing).
-#include <functional>
-#include <span>
+/// The files a comparison writes are those of compare_output.hpp.
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/stokes.hpp"
-#include "flowire/flow/spec.hpp"
 
 namespace flowire::fem {
 
+/// @brief Options of a comparison: the mesh, the equations and solver, the samples and the
+/// files (compare_output.hpp).
 struct FemOptions {
   double mesh_size = 0.0;  ///< m; <= 0: size_factor × local radius
   double size_factor = 0.3;
@@ -58,40 +48,6 @@ struct FemOptions {
   double surface_length_factor = 1.0;  ///< metres per unit of the surface file
   bool write_png = true;
   bool write_vtu = true;
-};
-
-/// @brief Condition at one outlet end of the network.
-struct OutletValue {
-  enum class Type { Pressure, Resistance };
-  int node = -1;  ///< network end node
-  Type type = Type::Pressure;
-  double pressure = 0.0;    ///< Pressure: Pa; Resistance: the distal pressure P_d (Pa)
-  double resistance = 0.0;  ///< Resistance: p = P_d + R·Q, Q the flow out (Pa·s/m³)
-};
-
-/// @brief The network's boundary conditions at one instant, imposed on both models.
-///
-/// Inlet: a pressure or a flow (into the network). Outlets: listed in `outlets`, else in
-/// `outlet_pressures`, else `outlet_pressure`. An RCR outlet is steady (quasi-steady
-/// frames too) a resistance Rp + Rd to its distal pressure, as in the network's
-/// Poiseuille model.
-struct BoundaryValues {
-  enum class Inlet { Pressure, Flow };
-  int inlet_node = -1;  ///< -1: Network::widest_end()
-  Inlet inlet_type = Inlet::Pressure;
-  double inlet_pressure = 0.0;                           ///< Pa (Inlet::Pressure)
-  double inlet_flow = 0.0;                               ///< m³/s into the network (Inlet::Flow)
-  double outlet_pressure = 0.0;                          ///< Pa, every outlet not listed below
-  std::vector<std::pair<int, double>> outlet_pressures;  ///< (end node, Pa)
-  std::vector<OutletValue> outlets;                      ///< take precedence over the two above
-  double viscosity = 3.5e-3;                             ///< Pa·s
-  double density = 1060.0;                               ///< kg/m³
-};
-
-/// @brief Network solution the FEM is compared with (any network solver can supply it).
-struct NetworkFlow {
-  std::vector<double> node_pressure;  ///< (num_nodes) Pa
-  std::vector<double> segment_flow;   ///< (num_segments) m³/s, node_from -> node_to
 };
 
 struct SamplePoint {
@@ -146,86 +102,26 @@ struct CompareResult {
   double mesh_seconds = 0.0, assemble_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
 };
 
-/// @brief The boundary values of a flow spec at time t: its (single) inlet and its
-/// outlets (RCR as Rp + Rd); ends of the network without an outlet condition are an error.
-/// @throws flowire::Error (input) for several inlets or an end without a condition.
-BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, double t);
-
-/// @brief Network pressures and flows for the boundary values (flowire::flow quasi-steady
-/// Poiseuille model, sparse solver).
-NetworkFlow network_flow(const Network& net, const BoundaryValues& bv);
-
-/// @brief Condition of each mesh group (wall: ignored) for the boundary values.
-std::vector<GroupCondition> group_conditions(const TetMesh& mesh, const BoundaryValues& bv);
-
 /// @brief Compare a FEM solution with a network solution (see the file comment).
 CompareResult compare_fields(const Network& net, const TetMesh& mesh, const StokesSolution& sol,
                              const NetworkFlow& flow, int inlet_node, int samples_per_branch);
 
-/// @brief Write a solution as quadratic tetrahedra (.vtu, point data `velocity` and
-/// `pressure`; edge nodes take the mean pressure of their vertices).
-void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolution& sol);
-/// @brief Write the output files into `out_dir` (created if needed), fem_forces.csv
-/// (`boundary,fx,fy,fz`: the `forces`) too. Only rank 0 writes.
-void write_outputs(const std::string& out_dir, const Network& net, const TetMesh& mesh, const StokesSolution& sol,
-                   const CompareResult& result, const FemOptions& opt);
-
 /// @brief The whole comparison: mesh, FEM solve, network solve, compare, and write the
-/// files when `out_dir` is not empty. Collective under MPI.
+/// files when `out_dir` is not empty (write_outputs). Collective under MPI.
 /// @throws flowire::Error as build_mesh, solve_stokes and the flow solver do.
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir);
 
-/// @brief Time integration of a pulsatile FEM series (see compare_pulsatile).
-struct DynamicOptions {
-  /// Boundary values at any time of the period (inlet waveform; the outlets listed in
-  /// `windkessels` are replaced by their windkessels).
-  std::function<BoundaryValues(double)> values_at;
-  /// The network solution at a time of the period, in its periodic state (e.g. the rlc
-  /// model run over enough periods); empty: the quasi-steady Poiseuille network of the
-  /// frame's boundary values.
-  std::function<NetworkFlow(double)> network_at;
-  /// RCR outlets of the catalogue (flow::OutletBC::Type::Rcr, with C > 0) at their ends:
-  /// C dP_c/dt = Q − (P_c − P_d)/R_d, outlet pressure P_c + R_p·Q (Q the flow out).
-  std::vector<flow::OutletBC> windkessels;
-  double period = 0.0;          ///< s, > 0; the frame times are k·period/N
-  bool time_dependent = false;  ///< time-dependent Stokes (UnsteadyStokes) instead of quasi-steady frames
-  int steps_per_period = 200;   ///< at least; rounded up to a multiple of the frames
-  int max_periods = 40;
-  double periodic_tolerance = 1e-5;  ///< max change of the frames' outlet flows over a period / max flow
-};
+/// @brief The mesh a comparison solves on: the network's own lumen, or the real lumen of
+/// `opt.surface` tagged by the network's ends (lumen.hpp); the inlet is `bv.inlet_node`.
+/// Collective under MPI (build_mesh).
+TetMesh comparison_mesh(const Network& net, const FemOptions& opt, const BoundaryValues& bv);
 
-/// @brief A pulsatile series of quasi-steady comparisons.
-struct PulsatileResult {
-  CompareResult steady;               ///< the comparison at `steady_time` (the fem_compare.* files)
-  std::vector<CompareResult> frames;  ///< one per time
-  double max_rel_diff_drop_away = 0.0, max_rel_diff_drop_junction = 0.0;  ///< over all frames
-  double max_flow_split_error = 0.0, max_flow_error = 0.0;                ///< over all frames
-  int factorizations = 0;                                                 ///< FEM matrix factorizations (1 for Stokes)
-  double basis_seconds = 0.0;                                             ///< assembly, factorization and unit solves
-  double frames_seconds = 0.0;                                            ///< combining the frames and comparing them
-  int periods = 0;               ///< dynamic: periods integrated until periodic
-  int steps_per_period = 0;      ///< dynamic: time steps per period
-  double periodic_change = 0.0;  ///< dynamic: the last period's change (see DynamicOptions)
-};
+/// @brief The solver options of a comparison: the blood of `bv`, the equations, solver and
+/// stabilization of `opt`.
+StokesOptions comparison_stokes_options(const FemOptions& opt, const BoundaryValues& bv);
 
-/// @brief Quasi-steady FEM frames at `times` with the boundary values `frames[i]`, and the
-/// steady comparison `steady` (at time `steady_time`), all compared with the network.
-/// Stokes: one factorization and one unit solve per open boundary (StokesBasis); every
-/// frame is a linear combination. Navier–Stokes: every frame is solved on its own.
-/// Every frame must have the same inlet node and the same kinds of conditions.
-/// Writes, besides the steady files of `compare`: fem_pulsatile.csv (`time`, then the
-/// columns of fem_compare.csv), fem_pulsatile_outlets.csv (`time`, then the columns of
-/// fem_outlets.csv), and with `write_vtu` fem.pvd + fem_NNNN.vtu.
-/// @throws flowire::Error (usage) for inconsistent frames, and as `compare`.
-/// With `dyn` (Stokes only), the frames come from a time integration instead: BDF2 with
-/// `steps_per_period` steps, each outlet in `dyn->windkessels` carrying its capacitor
-/// (BDF2 too: at each step a resistance R_p + 1/(C·D) to a pressure set by the history,
-/// D = 3/(2Δt) + 1/(R_d C)), quasi-steady 3D fields or, with `time_dependent`,
-/// UnsteadyStokes; period after period until the frames' outlet flows change by less than
-/// `periodic_tolerance` (else a numerical error). The frames are those of the last period.
-PulsatileResult compare_pulsatile(const Network& net, std::span<const double> times,
-                                  std::span<const BoundaryValues> frames, const BoundaryValues& steady,
-                                  double steady_time, const FemOptions& opt, const std::string& out_dir,
-                                  const DynamicOptions* dyn = nullptr);
+/// @brief A branch as the comparison's messages and files name it: its name, or
+/// `branch_<index>` when it has none.
+std::string branch_label(const Network& net, int branch);
 
 }  // namespace flowire::fem
