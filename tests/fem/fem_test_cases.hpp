@@ -1,11 +1,14 @@
 #pragma once
-// Cases shared by the fem tests: a straight tube and small Y bifurcations as networks, a
-// tube with a wire as a domain built in code, and Womersley's Bessel function.
+// Cases shared by the fem tests: a straight tube and small Y bifurcations as networks,
+// boundary values on them, a tube with a wire as a domain built in code, and Womersley's
+// Bessel function.
 #include <cmath>
 #include <complex>
 
+#include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/shape_domain.hpp"
+#include "flowire/flow/solver.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/network.hpp"
 
@@ -41,6 +44,33 @@ inline vessels::Network y_small(double asymmetry = 0.0) {
   p.child_length = 10e-3;
   p.asymmetry = asymmetry;
   return vessels::Network::build(vessels::y_bifurcation(p));
+}
+
+/// The published section's inlet and outlet pressures on every outlet.
+inline BoundaryValues paper_like() {
+  BoundaryValues bv;
+  bv.inlet_pressure = 12850.0;  // the published section's inlet and outlet pressures (Pa)
+  bv.outlet_pressure = 12800.0;
+  return bv;
+}
+
+/// The small symmetric Y (y_small(0)) with a 200 Pa inlet and outlet resistances 1 and 4
+/// times a daughter's Poiseuille resistance, to a distal 10 Pa.
+inline BoundaryValues y_resistances() {
+  BoundaryValues bv;
+  bv.inlet_pressure = 200.0;
+  const auto net = test::y_small(0.0);
+  // Outlet resistances 1x and 4x the Poiseuille resistance of a daughter branch.
+  double r_branch = 0.0;
+  const int out0 = net.ends()[1] == net.widest_end() ? net.ends()[0] : net.ends()[1];
+  const auto [b, e] = net.node_segments(out0);
+  r_branch = flow::poiseuille_resistance(bv.viscosity, 10e-3, net.segment(*b).radius);
+  int k = 0;
+  for (int end : net.ends()) {
+    if (end == net.widest_end()) continue;
+    bv.outlets.push_back({end, OutletValue::Type::Resistance, 10.0, (k++ == 0 ? 1.0 : 4.0) * r_branch});
+  }
+  return bv;
 }
 
 /// A tube along x (radius r, length l) with a coaxial wire of radius a through all of it

@@ -1,13 +1,10 @@
-// The network model against the FEM on Y bifurcations at low Reynolds number: outlet
-// flow split, pressures along the centerlines away from and near the junction, and the
-// comparison files.
+// The steady comparison (flow/fem/src/compare.cpp): the network model against the FEM on Y
+// bifurcations and a bent tube at low Reynolds number: outlet flow split, pressures along
+// the centerlines away from and near the junction.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <string>
 
 #include "fem_test_cases.hpp"
 #include "flowire/fem/boundary_values.hpp"
@@ -17,12 +14,7 @@
 namespace flowire::fem {
 namespace {
 
-BoundaryValues paper_like() {
-  BoundaryValues bv;
-  bv.inlet_pressure = 12850.0;  // the published section's inlet and outlet pressures (Pa)
-  bv.outlet_pressure = 12800.0;
-  return bv;
-}
+using test::paper_like;
 
 void report(const char* name, const CompareResult& r) {
   std::printf(
@@ -69,28 +61,6 @@ TEST(FemCompare, BentTubeWithASphereAtTheBendMatchesTheNetwork) {
   report("bent tube (46 deg)", r);
   EXPECT_LT(r.max_flow_error, testing::tol(1e-2));
   EXPECT_LT(r.max_rel_diff_drop_away, testing::tol(1e-2));
-}
-
-TEST(FemCompare, WritesTheComparisonFiles) {
-  const auto dir = testing::scratch_dir("fem_compare");
-  const auto net = test::y_small(0.2);
-  FemOptions opt;
-  opt.size_factor = 0.5;
-  opt.samples_per_branch = 6;
-  const CompareResult r = compare(net, paper_like(), opt, dir.string());
-  for (const char* f : {"fem_compare.csv", "fem_outlets.csv", "fem_compare.md", "fem.vtu", "fem_compare.png"})
-    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
-  std::ifstream csv(dir / "fem_compare.csv");
-  std::string header;
-  std::getline(csv, header);
-  EXPECT_EQ(header.rfind("branch,s,x,y,z,pressure_network,pressure_fem,rel_diff", 0), 0u) << header;
-  int rows = 0;
-  for (std::string line; std::getline(csv, line);) ++rows;
-  EXPECT_EQ(rows, static_cast<int>(r.samples.size()));
-  EXPECT_EQ(rows, 3 * 6);
-  std::ifstream outlets(dir / "fem_outlets.csv");
-  std::getline(outlets, header);
-  EXPECT_EQ(header.rfind("outlet,flow_network,flow_fem", 0), 0u);
 }
 
 }  // namespace

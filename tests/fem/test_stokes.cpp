@@ -1,12 +1,17 @@
-// Stokes accuracy on a straight tube against Hagen–Poiseuille: flow for a given
-// pressure drop, the axial velocity on the axis, both linear solvers, and the observed
-// order of convergence over three mesh sizes.
+// Stokes (flow/fem/src/stokes.cpp) on a straight tube against Hagen–Poiseuille: flow for a
+// given pressure drop, the axial velocity on the axis, both linear solvers; and the
+// conditions of the open boundaries: an outlet resistance (against Hagen–Poiseuille in
+// series), a flow inlet, the basis combination against a direct solve, and conditions
+// that leave the pressure level free refused.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
@@ -14,6 +19,7 @@
 #include "flowire/fem/network_mesh.hpp"
 #include "flowire/fem/sample.hpp"
 #include "flowire/fem/stokes.hpp"
+#include "flowire/flow/solver.hpp"
 #include "flowire_test.hpp"
 
 namespace flowire::fem {
@@ -97,6 +103,109 @@ TEST(FemStokes, NavierStokesRefusesTheIterativeSolver) {
     EXPECT_EQ(e.kind(), ErrorKind::Usage);
     EXPECT_NE(std::string(e.what()).find("mumps"), std::string::npos) << e.what();
   }
+}
+
+double tube_resistance() { return flow::poiseuille_resistance(kEta, kL, kR); }
+
+/// Mesh of the standard tube (about 5.5k tets), groups: 0 wall, 1 inlet, 2 outlet.
+const TetMesh& tube_mesh() {
+  static const TetMesh mesh = [] {
+    MeshOptions mo;
+    mo.size_factor = 0.35;
+    return build_mesh(test::tube(kR, kL), mo);
+  }();
+  return mesh;
+}
+
+StokesOptions stokes() {
+  StokesOptions so;
+  so.viscosity = kEta;
+  return so;
+}
+
+TEST(FemBoundary, TubeWithOutletResistanceCarriesDropOverSeriesResistance) {
+  const TetMesh& mesh = tube_mesh();
+  const double rt = tube_resistance(), r_out = 1.5 * rt, p_in = 20.0, p_d = 2.0;
+  std::vector<GroupCondition> c(mesh.groups.size());
+  c[1] = GroupCondition::at_pressure(p_in);
+  c[2] = GroupCondition::with_resistance(r_out, p_d);
+  const StokesSolution sol = solve_stokes(mesh, std::span<const GroupCondition>(c), stokes());
+  const double q_exact = (p_in - p_d) / (rt + r_out);
+  const double q = sol.group_flow[2];
+  std::printf("tube + outlet resistance: Q = %.6e m^3/s, (R_tube + R) formula %.6e, error %.3e; outlet p %.5f Pa\n", q,
+              q_exact, q / q_exact - 1.0, sol.group_pressure[2]);
+  EXPECT_LT(std::abs(q / q_exact - 1.0), testing::tol(5e-3));
+  // The outlet pressure is the one of the resistance law, to round-off.
+  EXPECT_NEAR(sol.group_pressure[2], p_d + r_out * q, 1e-9 * p_in);
+  EXPECT_NEAR(sol.group_pressure[1], p_in, 1e-12);
+  EXPECT_LT(std::abs(sol.group_flow[1] + sol.group_flow[2]) / q_exact, 1e-8);
+}
+
+TEST(FemBoundary, TubeWithFlowInletHasTheHagenPoiseuilleDrop) {
+  const TetMesh& mesh = tube_mesh();
+  const double q_in = 4e-7, p_out = 100.0;  // 0.4 mL/s into the tube
+  std::vector<GroupCondition> c(mesh.groups.size());
+  c[1] = GroupCondition::with_flow(-q_in);  // outward flow through the inlet face is -Q
+  c[2] = GroupCondition::at_pressure(p_out);
+  const StokesSolution sol = solve_stokes(mesh, std::span<const GroupCondition>(c), stokes());
+  const double drop = sol.group_pressure[1] - p_out, drop_exact = q_in * tube_resistance();
+  std::printf("tube with flow inlet: drop %.6f Pa, Hagen–Poiseuille %.6f Pa, error %.3e\n", drop, drop_exact,
+              drop / drop_exact - 1.0);
+  EXPECT_LT(std::abs(drop / drop_exact - 1.0), testing::tol(5e-3));
+  EXPECT_NEAR(-sol.group_flow[1], q_in, 1e-9 * q_in);  // the imposed flow, to round-off
+  EXPECT_NEAR(sol.group_flow[2], q_in, 1e-8 * q_in);   // mass conservation
+}
+
+TEST(FemBoundary, BasisCombinationEqualsDirectSolveToRoundOff) {
+  const TetMesh& mesh = tube_mesh();
+  const StokesBasis basis(mesh, stokes());
+  ASSERT_EQ(basis.open_groups().size(), 2u);
+  // Symmetry of the flux matrix (reciprocity of Stokes) and zero flow for equal pressures.
+  const auto& f = basis.unit_flux();
+  EXPECT_NEAR(f[0][2], f[1][1], 1e-9 * std::abs(f[0][2]));
+  EXPECT_NEAR(f[0][1] + f[1][1], 0.0, 1e-9 * std::abs(f[0][1]));
+  for (int k = 0; k < 3; ++k) {
+    std::vector<GroupCondition> c(mesh.groups.size());
+    if (k == 1)
+      c[1] = GroupCondition::with_flow(-3e-7);
+    else
+      c[1] = GroupCondition::at_pressure(10.0 + 7.0 * k);
+    c[2] = k == 0 ? GroupCondition::at_pressure(1.5) : GroupCondition::with_resistance(tube_resistance() * k, 0.5 * k);
+    const StokesSolution a = basis.solve(c);
+    const StokesSolution b = solve_stokes(mesh, std::span<const GroupCondition>(c), stokes());
+    double du = 0.0, umax = 0.0, dp = 0.0, pmax = 0.0;
+    for (size_t n = 0; n < a.velocity.size(); ++n) {
+      du = std::max(du, (a.velocity[n] - b.velocity[n]).norm());
+      umax = std::max(umax, b.velocity[n].norm());
+    }
+    for (size_t v = 0; v < a.pressure.size(); ++v) {
+      dp = std::max(dp, std::abs(a.pressure[v] - b.pressure[v]));
+      pmax = std::max(pmax, std::abs(b.pressure[v]));
+    }
+    std::printf("frame %d: basis vs direct: velocity %.2e, pressure %.2e (relative)\n", k, du / umax, dp / pmax);
+    EXPECT_LT(du / umax, 1e-9);
+    EXPECT_LT(dp / pmax, 1e-9);
+    for (size_t g = 1; g < 3; ++g) {
+      EXPECT_NEAR(a.group_flow[g], b.group_flow[g], 1e-9 * std::abs(b.group_flow[2]));
+      EXPECT_NEAR(a.group_pressure[g], b.group_pressure[g], 1e-9 * pmax);
+    }
+  }
+}
+
+TEST(FemBoundary, ConditionsThatDoNotFixThePressureAreUsageErrors) {
+  const TetMesh& mesh = tube_mesh();
+  std::vector<GroupCondition> c(mesh.groups.size());
+  c[1] = GroupCondition::with_flow(-1e-7);
+  c[2] = GroupCondition::with_flow(1e-7);
+  try {
+    (void)solve_stokes(mesh, std::span<const GroupCondition>(c), stokes());
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Usage);
+    EXPECT_NE(std::string(e.what()).find("pressure level"), std::string::npos) << e.what();
+  }
+  c[2] = GroupCondition::with_resistance(-1.0, 0.0);
+  EXPECT_THROW((void)solve_stokes(mesh, std::span<const GroupCondition>(c), stokes()), Error);
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
-// Time-dependent Stokes against Womersley's exact solution: a straight tube driven by a
-// sinusoidal pressure drop. Fully developed oscillating flow satisfies the traction
-// conditions exactly (∂_n u = 0, uniform pressure on the end faces), so the outlet flow
-// must follow Womersley's amplitude and phase; BDF2 must converge at order 2 in Δt.
+// Time-dependent Stokes (flow/fem/src/unsteady_stokes.cpp) against Womersley's exact
+// solution: a straight tube driven by a sinusoidal pressure drop. Fully developed
+// oscillating flow satisfies the traction conditions exactly (∂_n u = 0, uniform pressure on
+// the end faces), so the outlet flow must follow Womersley's amplitude and phase; BDF2 must
+// converge at order 2 in Δt.
 #include <gtest/gtest.h>
 
 #include <cmath>

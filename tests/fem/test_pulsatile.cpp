@@ -1,5 +1,7 @@
-// Windkessel (RCR) outlets in the dynamic FEM series against the exact steady-periodic
-// solution of the circuit. A straight tube with a sinusoidal inlet pressure P̂ e^{iωt} and
+// Pulsatile series (flow/fem/src/pulsatile.cpp). Quasi-steady frames from one factorization
+// equal direct solves at each frame's boundary values and follow the network, and the series
+// files are written. Windkessel (RCR) outlets in the dynamic FEM series against the exact
+// steady-periodic solution of the circuit. A straight tube with a sinusoidal inlet pressure P̂ e^{iωt} and
 // one RCR outlet: with the tube a resistance R_t (Hagen–Poiseuille) the outlet flow is
 // Q̂ = P̂ / Z, Z = R_t + R_p + R_d/(1 + iωR_dC) (the capacitor in parallel with R_d). With
 // time-dependent Stokes the tube is Womersley's impedance instead: Z_t = 8ηL/(πR⁴) divided
@@ -9,7 +11,10 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "fem_test_cases.hpp"
@@ -22,9 +27,62 @@ namespace flowire::fem {
 namespace {
 
 using cd = std::complex<double>;
+using test::y_resistances;
 constexpr double kPi = std::numbers::pi;
 constexpr double kR = 2e-3, kL = 10e-3, kEta = 3.5e-3, kRho = 1060.0;
 constexpr double kP0 = 200.0, kAmp = 100.0, kPeriod = 0.8;
+
+TEST(FemBoundary, PulsatileFramesEqualDirectSolvesAndFollowTheNetwork) {
+  const auto net = test::y_small(0.3);
+  FemOptions opt;
+  opt.write_png = false;
+  opt.size_factor = 0.5;
+  const BoundaryValues base = y_resistances();
+  // Inlet pressure of the published sine (P1 = 300 Pa, P2 = 100 Pa above the distal pressure).
+  const double period = 0.8;
+  std::vector<double> times;
+  std::vector<BoundaryValues> frames;
+  for (int i = 0; i < 4; ++i) {
+    times.push_back(period * i / 4.0);
+    BoundaryValues bv = base;
+    bv.inlet_pressure = 200.0 + 100.0 * std::sin(2.0 * std::numbers::pi * times.back() / period);
+    frames.push_back(bv);
+  }
+  const auto dir = testing::scratch_dir("fem_pulsatile");
+  const PulsatileResult p = compare_pulsatile(net, times, frames, base, 0.0, opt, dir.string());
+  ASSERT_EQ(p.frames.size(), 4u);
+  EXPECT_EQ(p.factorizations, 1);
+  std::printf(
+      "pulsatile Y (4 frames): max split error %.3e, max drop difference away %.3e; basis %.2f s, "
+      "frames %.2f s\n",
+      p.max_flow_split_error, p.max_rel_diff_drop_away, p.basis_seconds, p.frames_seconds);
+  EXPECT_LT(p.max_flow_split_error, testing::tol(1e-2));
+  EXPECT_LT(p.max_rel_diff_drop_away, testing::tol(2e-2));
+  // Frame 1 (systole) against the steady comparison solved directly at its boundary values.
+  const CompareResult direct = compare(net, frames[1], opt, "");
+  ASSERT_EQ(direct.outlets.size(), p.frames[1].outlets.size());
+  for (size_t k = 0; k < direct.outlets.size(); ++k) {
+    EXPECT_NEAR(p.frames[1].outlets[k].flow_fem, direct.outlets[k].flow_fem,
+                1e-9 * std::abs(direct.outlets[k].flow_fem));
+    EXPECT_NEAR(p.frames[1].outlets[k].pressure_fem, direct.outlets[k].pressure_fem, 1e-9 * 300.0);
+  }
+  ASSERT_EQ(direct.samples.size(), p.frames[1].samples.size());
+  for (size_t k = 0; k < direct.samples.size(); ++k)
+    EXPECT_NEAR(p.frames[1].samples[k].pressure_fem, direct.samples[k].pressure_fem, 1e-9 * 300.0);
+  // Files: a leading time column, one block of rows per frame.
+  std::ifstream csv(dir / "fem_pulsatile.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("time,branch,s,x,y,z,pressure_network,pressure_fem,rel_diff", 0), 0u) << header;
+  int rows = 0;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, static_cast<int>(4 * p.frames[0].samples.size()));
+  std::ifstream outlets(dir / "fem_pulsatile_outlets.csv");
+  std::getline(outlets, header);
+  EXPECT_EQ(header, "time,outlet,flow_network,flow_fem,rel_diff,pressure_network,pressure_fem");
+  for (const char* f : {"fem.pvd", "fem_0000.vtu", "fem_0003.vtu", "fem_compare.csv", "fem_outlets.csv"})
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+}
 
 struct TubeWindkessel {
   vessels::Network net = test::tube(kR, kL);
