@@ -17,8 +17,8 @@
 
 #include "flowire/coupling/drag.hpp"
 #include "flowire/fem/mesh.hpp"
-#include "flowire/fem/shape_domain.hpp"
 #include "flowire/fem/obstacle.hpp"
+#include "flowire/fem/shape_domain.hpp"
 #include "flowire/fem/stokes.hpp"
 #include "flowire_test.hpp"
 

@@ -13,8 +13,8 @@
 
 #include "flowire/coupling/occlusion.hpp"
 #include "flowire/fem/mesh.hpp"
-#include "flowire/fem/shape_domain.hpp"
 #include "flowire/fem/obstacle.hpp"
+#include "flowire/fem/shape_domain.hpp"
 #include "flowire/fem/stokes.hpp"
 #include "flowire/flow/annulus.hpp"
 #include "flowire/flow/solver.hpp"
