@@ -78,22 +78,26 @@ namespace {
 
 #ifdef FLOWIRE_HAVE_FEM
 nlohmann::json fem_result_json(const fem::CompareResult& r) {
-  return {{"tets", r.tets},
-          {"unknowns", r.unknowns},
-          {"reynolds", r.reynolds},
-          {"newton_iterations", r.newton_iterations},
-          {"max_rel_diff_away_from_junctions", r.max_rel_diff_drop_away},
-          {"max_rel_diff_near_junctions", r.max_rel_diff_drop_junction},
-          {"max_flow_split_error", r.max_flow_split_error},
-          {"max_flow_error", r.max_flow_error},
-          {"inlet",
-           {{"pressure_network", r.inlet_pressure_network},
-            {"pressure_fem", r.inlet_pressure_fem},
-            {"flow_network", r.inlet_flow_network},
-            {"flow_fem", r.inlet_flow_fem}}},
-          {"mesh_seconds", r.mesh_seconds},
-          {"assemble_seconds", r.assemble_seconds},
-          {"solve_seconds", r.solve_seconds}};
+  nlohmann::json j = {{"tets", r.tets},
+                      {"unknowns", r.unknowns},
+                      {"reynolds", r.reynolds},
+                      {"newton_iterations", r.newton_iterations},
+                      {"max_rel_diff_away_from_junctions", r.max_rel_diff_drop_away},
+                      {"max_rel_diff_near_junctions", r.max_rel_diff_drop_junction},
+                      {"max_flow_split_error", r.max_flow_split_error},
+                      {"max_flow_error", r.max_flow_error},
+                      {"inlet",
+                       {{"pressure_network", r.inlet_pressure_network},
+                        {"pressure_fem", r.inlet_pressure_fem},
+                        {"flow_network", r.inlet_flow_network},
+                        {"flow_fem", r.inlet_flow_fem}}},
+                      {"mesh_seconds", r.mesh_seconds},
+                      {"assemble_seconds", r.assemble_seconds},
+                      {"solve_seconds", r.solve_seconds}};
+  // A real lumen: the length of centerline cut beyond each cap (m, network end order; < 0: the
+  // network was lengthened to reach the cap), so that both models end at the caps.
+  if (!r.cut_length.empty()) j["network_cut_at_caps"] = r.cut_length;
+  return j;
 }
 #endif
 

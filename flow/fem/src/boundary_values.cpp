@@ -78,6 +78,21 @@ BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, d
   return bv;
 }
 
+BoundaryValues renumbered(const BoundaryValues& bv, const Network& net, std::span<const int> node) {
+  if (node.size() != static_cast<size_t>(net.num_nodes()))
+    throw_usage_error(fmt::format("fem: a node map of {} entries for {} nodes", node.size(), net.num_nodes()));
+  auto map = [&](int n) {
+    const int m = n >= 0 && static_cast<size_t>(n) < node.size() ? node[static_cast<size_t>(n)] : -1;
+    if (m < 0) throw_usage_error(fmt::format("fem: boundary node {} is not in the renumbered network", n));
+    return m;
+  };
+  BoundaryValues out = bv;
+  out.inlet_node = map(inlet_of(net, bv));
+  for (auto& [n, p] : out.outlet_pressures) n = map(n);
+  for (auto& o : out.outlets) o.node = map(o.node);
+  return out;
+}
+
 NetworkFlow network_flow(const Network& net, const BoundaryValues& bv) {
   flow::FlowSpec spec;
   spec.solver = flow::SolverKind::Sparse;

@@ -10,12 +10,14 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <queue>
 #include <span>
 #include <tuple>
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/fem/cap_cut.hpp"
 #include "flowire/fem/compare_output.hpp"
 #include "flowire/fem/lumen.hpp"
 #include "flowire/fem/network_mesh.hpp"
@@ -257,11 +259,26 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
   return res;
 }
 
-/// The network's own lumen, or the real lumen of `opt.surface` tagged by the network's ends.
-TetMesh comparison_mesh(const Network& net, const FemOptions& opt, const BoundaryValues& bv) {
-  if (opt.surface.empty()) return build_mesh(net, mesh_options(opt, bv));
-  return build_mesh(net, prepare_lumen(net, read_surface(opt.surface, opt.surface_length_factor)),
-                    mesh_options(opt, bv));
+ComparisonDomain comparison_domain(const Network& net, const FemOptions& opt, const BoundaryValues& bv) {
+  ComparisonDomain d;
+  if (opt.surface.empty()) {
+    d.mesh = build_mesh(net, mesh_options(opt, bv));
+    d.network = net;
+    d.node.resize(static_cast<size_t>(net.num_nodes()));
+    std::iota(d.node.begin(), d.node.end(), 0);
+    d.bv = bv;
+    return d;
+  }
+  const LumenSurface lumen = prepare_lumen(net, read_surface(opt.surface, opt.surface_length_factor));
+  d.mesh = build_mesh(net, lumen, mesh_options(opt, bv));
+  CapCut cut = cut_at_caps(net, lumen.caps, opt.surface);
+  d.network = std::move(cut.network);
+  d.node = std::move(cut.node);
+  d.cut_length = std::move(cut.cut_length);
+  for (auto& g : d.mesh.groups)
+    if (g.node >= 0) g.node = d.node[static_cast<size_t>(g.node)];
+  d.bv = renumbered(bv, net, d.node);
+  return d;
 }
 
 StokesOptions comparison_stokes_options(const FemOptions& opt, const BoundaryValues& bv) {
@@ -280,15 +297,16 @@ StokesOptions comparison_stokes_options(const FemOptions& opt, const BoundaryVal
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir) {
   const auto t0 = std::chrono::steady_clock::now();
   initialize();  // MPI up before meshing, so that rank 0 meshes for everyone
-  const TetMesh mesh = comparison_mesh(net, opt, bv);
-  const auto cond = group_conditions(mesh, bv);
+  const ComparisonDomain d = comparison_domain(net, opt, bv);
+  const auto cond = group_conditions(d.mesh, d.bv);
   const StokesSolution sol =
-      solve_stokes(mesh, std::span<const GroupCondition>(cond), comparison_stokes_options(opt, bv));
-  const NetworkFlow nf = network_flow(net, bv);
-  CompareResult res = compare_fields(net, mesh, sol, nf, inlet_of(net, bv), opt.samples_per_branch);
-  res.forces = named_forces(mesh, sol, comparison_stokes_options(opt, bv));
+      solve_stokes(d.mesh, std::span<const GroupCondition>(cond), comparison_stokes_options(opt, d.bv));
+  const NetworkFlow nf = network_flow(d.network, d.bv);
+  CompareResult res = compare_fields(d.network, d.mesh, sol, nf, d.bv.inlet_node, opt.samples_per_branch);
+  res.forces = named_forces(d.mesh, sol, comparison_stokes_options(opt, d.bv));
+  res.cut_length = d.cut_length;
   res.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!out_dir.empty()) write_outputs(out_dir, net, mesh, sol, res, opt);
+  if (!out_dir.empty()) write_outputs(out_dir, d.network, d.mesh, sol, res, opt);
   return res;
 }
 

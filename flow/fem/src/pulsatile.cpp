@@ -124,7 +124,23 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
     if (inlet_of(net, f) != inlet) throw_usage_error("fem: every frame must have the same inlet node");
   const auto t_start = std::chrono::steady_clock::now();
   initialize();
-  const TetMesh mesh = comparison_mesh(net, opt, steady);
+  const ComparisonDomain domain = comparison_domain(net, opt, steady);
+  const TetMesh& mesh = domain.mesh;
+  const Network& dnet = domain.network;  // the network on the mesh's domain, numbered as its groups
+  auto on_domain = [&](const BoundaryValues& bv) { return domain.cut() ? renumbered(bv, net, domain.node) : bv; };
+  // A dynamic series on a cut network: its boundary values and windkessels on the cut network's
+  // nodes; a network series computed elsewhere is on the input network and cannot be compared.
+  std::optional<DynamicOptions> dyn_domain;
+  if (dyn && domain.cut()) {
+    if (dyn->network_at)
+      throw_input_error(opt.surface,
+                        "fem: a dynamic network series (flow.model: rlc) is compared on the network's "
+                        "own lumen only; on a real lumen use the quasi-steady frames");
+    dyn_domain = *dyn;
+    dyn_domain->values_at = [&, values_at = dyn->values_at](double t) { return on_domain(values_at(t)); };
+    for (auto& w : dyn_domain->windkessels) w.node = domain.node[static_cast<size_t>(w.node)];
+    dyn = &*dyn_domain;
+  }
   const StokesOptions so = comparison_stokes_options(opt, steady);
   PulsatileResult out;
   std::optional<StokesBasis> basis;
@@ -146,11 +162,12 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
       out.factorizations += sol.factorizations;
       out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
     }
-    return compare_fields(net, mesh, sol, network_flow(net, bv), inlet, opt.samples_per_branch);
+    return compare_fields(dnet, mesh, sol, network_flow(dnet, bv), domain.bv.inlet_node, opt.samples_per_branch);
   };
   const auto t_frames = std::chrono::steady_clock::now();
   StokesSolution steady_sol;
-  out.steady = solve(steady, steady_sol);
+  out.steady = solve(domain.bv, steady_sol);
+  out.steady.cut_length = domain.cut_length;
   out.steady.time = steady_time;
   const bool vtu = opt.write_vtu && !out_dir.empty();
   std::vector<StokesSolution> sols(vtu ? frames.size() : 0);
@@ -163,11 +180,11 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
   for (size_t i = 0; i < frames.size(); ++i) {
     CompareResult r;
     if (dyn) {
-      const NetworkFlow nf = dyn->network_at ? dyn->network_at(times[i]) : network_flow(net, frames[i]);
-      r = compare_fields(net, mesh, dynamic[i], nf, inlet, opt.samples_per_branch);
+      const NetworkFlow nf = dyn->network_at ? dyn->network_at(times[i]) : network_flow(dnet, on_domain(frames[i]));
+      r = compare_fields(dnet, mesh, dynamic[i], nf, domain.bv.inlet_node, opt.samples_per_branch);
       if (vtu) sols[i] = std::move(dynamic[i]);
     } else {
-      r = solve(frames[i], vtu ? sols[i] : scratch);
+      r = solve(on_domain(frames[i]), vtu ? sols[i] : scratch);
     }
     r.time = times[i];
     accumulate(out, r);
@@ -181,8 +198,8 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
     out.steady.solve_seconds = basis->solve_seconds();
   }
   if (out_dir.empty()) return out;
-  write_outputs(out_dir, net, mesh, steady_sol, out.steady, opt);  // rank 0 only
-  write_pulsatile_outputs(out_dir, net, mesh, out.frames, sols);   // rank 0 only
+  write_outputs(out_dir, dnet, mesh, steady_sol, out.steady, opt);  // rank 0 only
+  write_pulsatile_outputs(out_dir, dnet, mesh, out.frames, sols);   // rank 0 only
   return out;
 }
 

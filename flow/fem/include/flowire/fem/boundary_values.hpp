@@ -8,6 +8,7 @@
 /// a flow at the inlet end, and at every outlet end a pressure or a resistance to a distal
 /// pressure. The FEM enforces them through its affine structure (stokes.hpp); the network
 /// solves them with its quasi-steady Poiseuille model (flowire::flow, sparse solver).
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -59,6 +60,12 @@ int inlet_of(const Network& net, const BoundaryValues& bv);
 /// outlets (RCR as Rp + Rd); ends of the network without an outlet condition are an error.
 /// @throws flowire::Error (input) for several inlets or an end without a condition.
 BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, double t);
+
+/// @brief `bv` on a renumbered network (cap_cut.hpp): the inlet (resolved on `net` when it was
+/// not set, so that it stays the end the mesh opened as the inlet) and every outlet node taken
+/// through `node` (one entry per node of `net`).
+/// @throws flowire::Error (usage) for a node that `node` drops.
+BoundaryValues renumbered(const BoundaryValues& bv, const Network& net, std::span<const int> node);
 
 /// @brief Network pressures and flows for the boundary values (flowire::flow quasi-steady
 /// Poiseuille model, sparse solver).

@@ -100,6 +100,9 @@ struct CompareResult {
   double reynolds = 0.0;      ///< inlet Reynolds number of the FEM flow (ρ ū D / η)
   int newton_iterations = 0;  ///< Navier–Stokes: Newton steps (0 for Stokes)
   double mesh_seconds = 0.0, assemble_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
+  /// real lumen: per cap (network end order), the length of centerline cut beyond it (m; < 0:
+  /// the network was lengthened to reach it; ComparisonDomain)
+  std::vector<double> cut_length;
 };
 
 /// @brief Compare a FEM solution with a network solution (see the file comment).
@@ -111,10 +114,23 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
 /// @throws flowire::Error as build_mesh, solve_stokes and the flow solver do.
 CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOptions& opt, const std::string& out_dir);
 
-/// @brief The mesh a comparison solves on: the network's own lumen, or the real lumen of
-/// `opt.surface` tagged by the network's ends (lumen.hpp); the inlet is `bv.inlet_node`.
-/// Collective under MPI (build_mesh).
-TetMesh comparison_mesh(const Network& net, const FemOptions& opt, const BoundaryValues& bv);
+/// @brief What a comparison solves on: the mesh, and the network of the same domain with the
+/// boundary values on its nodes.
+struct ComparisonDomain {
+  TetMesh mesh;  ///< its groups name the nodes of `network`
+  /// The input network, or, on a real lumen, the network cut at the lumen's caps (cap_cut.hpp):
+  /// both models then impose the boundary values at the same places.
+  Network network;
+  std::vector<int> node;           ///< (input nodes) the node of `network` each became, -1 cut away
+  std::vector<double> cut_length;  ///< real lumen: per cap (network end order), the length cut (m)
+  BoundaryValues bv;               ///< the input boundary values on `network`
+  [[nodiscard]] bool cut() const { return !cut_length.empty(); }
+};
+
+/// @brief The domain a comparison solves on: the network's own lumen, or the real lumen of
+/// `opt.surface` tagged by the network's ends (lumen.hpp) and the network cut at its caps; the
+/// inlet is `bv.inlet_node`. Collective under MPI (build_mesh).
+ComparisonDomain comparison_domain(const Network& net, const FemOptions& opt, const BoundaryValues& bv);
 
 /// @brief The solver options of a comparison: the blood of `bv`, the equations, solver and
 /// stabilization of `opt`.
