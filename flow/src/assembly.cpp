@@ -25,12 +25,22 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
   const auto ne = static_cast<size_t>(net.num_segments());
   if (!(spec.viscosity > 0.0) || !std::isfinite(spec.viscosity))
     throw_usage_error(fmt::format("flow: viscosity {} must be positive", spec.viscosity));
+  if (!spec.segment_laws.empty() && spec.segment_laws.size() != ne)
+    throw_usage_error(fmt::format("flow: {} segment laws for a network of {} segments", spec.segment_laws.size(), ne));
+  for (size_t s = 0; s < spec.segment_laws.size(); ++s) {
+    const auto& law = spec.segment_laws[s];
+    if (!(law.resistance_factor > 0.0) || !std::isfinite(law.resistance_factor) || !(law.quadratic >= 0.0) ||
+        !std::isfinite(law.quadratic))
+      throw_usage_error(fmt::format("flow: segment {}: resistance factor {} must be > 0 and quadratic {} >= 0", s,
+                                    law.resistance_factor, law.quadratic));
+  }
   Assembly a;
   resistance.resize(ne);
   a.conductance.resize(ne);
   for (size_t s = 0; s < ne; ++s) {
     const auto& seg = net.segment(static_cast<int>(s));
-    resistance[s] = segment_resistance(spec.viscosity, seg);
+    resistance[s] = segment_resistance(spec.viscosity, seg) *
+                    (spec.segment_laws.empty() ? 1.0 : spec.segment_laws[s].resistance_factor);
     if (!(resistance[s] > 0.0) || !std::isfinite(resistance[s]))
       throw_input_error(net.source(),
                         fmt::format("segment {}: resistance {} is not positive and finite (r = {} to {}, l = {})", s,

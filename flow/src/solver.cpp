@@ -377,37 +377,6 @@ class SuperpositionSolver final : public ResponseSolver {
   Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
 };
 
-/// Base of the solvers that compute full arrays every frame.
-class FrameSolver : public FlowSolver {
- public:
-  [[nodiscard]] double node_pressure(int node) const override { return p_[static_cast<size_t>(node)]; }
-  [[nodiscard]] double segment_flow(int segment) const override { return q_[static_cast<size_t>(segment)]; }
-  [[nodiscard]] double segment_flow_at(int segment, double t) const override {
-    if (t == time_) return q_[static_cast<size_t>(segment)];
-    if (scratch_time_ != t || scratch_q_.empty()) {
-      scratch_p_.resize(p_.size());
-      scratch_q_.resize(q_.size());
-      compute(t, scratch_p_.data(), scratch_q_.data());
-      scratch_time_ = t;
-    }
-    return scratch_q_[static_cast<size_t>(segment)];
-  }
-
- protected:
-  FrameSolver(const Network& net, FlowSpec spec) : FlowSolver(net, std::move(spec)) {}
-  void do_advance(double t) override { compute(t, p_.data(), q_.data()); }
-  /// Full node pressures and segment flows at time t.
-  virtual void compute(double t, double* p, double* q) const = 0;
-  void init_arrays() {
-    p_.assign(static_cast<size_t>(net_.num_nodes()), 0.0);
-    q_.assign(static_cast<size_t>(net_.num_segments()), 0.0);
-    compute(0.0, p_.data(), q_.data());
-  }
-  std::vector<double> p_, q_;
-  mutable std::vector<double> scratch_p_, scratch_q_;
-  mutable double scratch_time_ = 0.0;
-};
-
 /// Sparse direct reference: the full right-hand side solved every frame (Eigen LDLᵀ).
 class SparseSolver final : public FrameSolver {
  public:
@@ -564,7 +533,18 @@ std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec) {
   resolve_nodes(spec, net);
   std::unique_ptr<FlowSolver> s;
   if (spec.model == Model::Rlc) {
+    if (spec.has_quadratic_losses())
+      throw_input_error("flow",
+                        "quadratic segment losses (a calibration) are for the quasi-steady poiseuille model; "
+                        "the rlc model takes their resistance factors only");
     s = detail::make_rlc_solver(net, std::move(spec));
+  } else if (spec.has_quadratic_losses()) {
+    // Superposition does not hold for a nonlinear network: every frame is solved by Newton.
+    if (spec.solver == SolverKind::DenseInverse || spec.solver == SolverKind::Petsc)
+      throw_input_error("flow", fmt::format("quadratic segment losses (a calibration) need the superposition or "
+                                            "sparse solver (solved by Newton's method every frame), not {}",
+                                            to_string(spec.solver)));
+    s = detail::make_newton_solver(net, std::move(spec));
   } else {
     switch (spec.solver) {
       case SolverKind::Superposition:

@@ -40,12 +40,46 @@ class ResponseSolver : public FlowSolver {
   std::vector<std::complex<double>> source_harmonic_;  // (k x kHarmonics) of each waveform, once
 };
 
+/// Base of the solvers that compute full arrays every frame.
+class FrameSolver : public FlowSolver {
+ public:
+  [[nodiscard]] double node_pressure(int node) const override { return p_[static_cast<size_t>(node)]; }
+  [[nodiscard]] double segment_flow(int segment) const override { return q_[static_cast<size_t>(segment)]; }
+  [[nodiscard]] double segment_flow_at(int segment, double t) const override {
+    if (t == time_) return q_[static_cast<size_t>(segment)];
+    if (scratch_time_ != t || scratch_q_.empty()) {
+      scratch_p_.resize(p_.size());
+      scratch_q_.resize(q_.size());
+      compute(t, scratch_p_.data(), scratch_q_.data());
+      scratch_time_ = t;
+    }
+    return scratch_q_[static_cast<size_t>(segment)];
+  }
+
+ protected:
+  FrameSolver(const Network& net, FlowSpec spec) : FlowSolver(net, std::move(spec)) {}
+  void do_advance(double t) override { compute(t, p_.data(), q_.data()); }
+  /// Full node pressures and segment flows at time t.
+  virtual void compute(double t, double* p, double* q) const = 0;
+  void init_arrays() {
+    p_.assign(static_cast<size_t>(net_.num_nodes()), 0.0);
+    q_.assign(static_cast<size_t>(net_.num_segments()), 0.0);
+    compute(0.0, p_.data(), q_.data());
+  }
+  std::vector<double> p_, q_;
+  mutable std::vector<double> scratch_p_, scratch_q_;
+  mutable double scratch_time_ = 0.0;
+};
+
 /// Bytes the dense_inverse solver needs for K and K⁻¹.
 double dense_inverse_bytes(int nodes, int segments);
 /// Physical memory of the machine (bytes).
 double physical_memory_bytes();
 /// The rlc (resistance–inertance–compliance) model, rlc.cpp.
 std::unique_ptr<FlowSolver> make_rlc_solver(const Network& net, FlowSpec spec);
+/// The quasi-steady network with quadratic losses (FlowSpec::segment_laws), Newton's method
+/// every frame (newton_solver.cpp).
+std::unique_ptr<FlowSolver> make_newton_solver(const Network& net, FlowSpec spec);
 /// PETSc solver (petsc_solver.cpp), or an input error when PETSc is not built in.
 std::unique_ptr<FlowSolver> make_petsc_solver(const Network& net, FlowSpec spec);
 

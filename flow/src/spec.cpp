@@ -145,6 +145,10 @@ std::string_view to_string(SolverKind s) {
   return "?";
 }
 
+bool FlowSpec::has_quadratic_losses() const {
+  return std::any_of(segment_laws.begin(), segment_laws.end(), [](const SegmentLaw& l) { return l.quadratic > 0.0; });
+}
+
 double FlowSpec::cycle() const {
   // The period after which every periodic inlet repeats together: the least common multiple of
   // their periods, sought among the first 64 multiples of the longest (to 1e-9), so that inlets

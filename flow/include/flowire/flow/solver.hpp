@@ -20,6 +20,9 @@
 ///   CHOLMOD) and solved for the full right-hand side every frame (reference).
 /// - `petsc`: the nodal system distributed with PETSc (KSPCG + GAMG or hypre), solved once
 ///   per source like superposition; every MPI rank ends with the whole answer.
+/// - `newton` (chosen when a segment law has a quadratic term, FlowSpec::segment_laws):
+///   Δp = R Q + K|Q|Q per segment, Newton's method on the node balances every frame, the
+///   tangent conductance matrix refactored by CHOLMOD on the pattern analysed once.
 /// Model::Rlc: segments also carry inertance and nodes compliance; `advance` integrates
 /// in time (see rlc.hpp); it has its own sparse LU and ignores `spec.solver`.
 #include <chrono>
@@ -100,7 +103,8 @@ class FlowSolver {
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p) const;
   [[nodiscard]] Vec3 velocity_at(int segment, const Vec3& p, double t) const;
 
-  /// @brief Poiseuille resistance of each segment without occlusion (Pa·s/m³).
+  /// @brief Linear resistance of each segment without occlusion (Pa·s/m³): Poiseuille's, times the
+  /// segment law's factor where the spec has one (FlowSpec::segment_laws).
   [[nodiscard]] double resistance(int segment) const { return resistance_[static_cast<size_t>(segment)]; }
   /// @brief The resistance with the segment's occlusion, resistance × resistance_factor.
   [[nodiscard]] double effective_resistance(int segment) const {

@@ -10,6 +10,7 @@
 /// 47, 131–141). An RCR outlet has state, so it is only dynamic
 /// in `Model::Rlc`; the quasi-steady Poiseuille model replaces it by its total
 /// resistance Rp + Rd to Pd and reports that with a warning.
+#include <cmath>
 #include <complex>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
@@ -135,6 +136,26 @@ struct BranchWall {
   double thickness_ratio = 0.0;  ///< h / r where thickness is 0
 };
 
+/// @brief A segment's pressure–flow law where it departs from Poiseuille's (a calibration to the
+/// 3D solution, calibration.hpp): \f$ \Delta p = f R_P Q + K |Q| Q \f$ with R_P the segment's
+/// Poiseuille (frustum) resistance, f its `resistance_factor` and K its `quadratic` coefficient
+/// (Pa·s²/m⁶: the losses that grow with the square of the flow, junctions, bends and developing
+/// flow at arterial Reynolds numbers, in the form of svZeroDSolver's stenosis coefficient).
+struct SegmentLaw {
+  double resistance_factor = 1.0;  ///< > 0
+  double quadratic = 0.0;          ///< ≥ 0, Pa·s²/m⁶
+  /// @brief The flow through the segment under the pressure difference @p dp with the linear
+  /// resistance @p r (f R_P, times an occlusion's factor): the root of r Q + K|Q|Q = Δp,
+  /// \f$ Q = 2\Delta p / (r + \sqrt{r^2 + 4K|\Delta p|}) \f$ (no cancellation as K → 0).
+  [[nodiscard]] double flow(double dp, double r) const {
+    return 2.0 * dp / (r + std::sqrt(r * r + 4.0 * quadratic * std::abs(dp)));
+  }
+  /// @brief dQ/dΔp of `flow`: \f$ 1 / \sqrt{r^2 + 4K|\Delta p|} \f$ (= 1/(r + 2K|Q|)).
+  [[nodiscard]] double conductance(double dp, double r) const {
+    return 1.0 / std::sqrt(r * r + 4.0 * quadratic * std::abs(dp));
+  }
+};
+
 enum class Model { Poiseuille, Rlc };
 enum class SolverKind { Superposition, DenseInverse, Sparse, Petsc };
 /// @brief Inertance per segment in the rlc model.
@@ -171,10 +192,14 @@ struct FlowSpec {
   double wall_youngs_modulus = 0.4e6;    ///< Pa
   double wall_thickness_ratio = 0.1;     ///< h / r
   std::vector<BranchWall> branch_walls;  ///< branches with a wall of their own
-  double dt = 1e-3;                      ///< rlc time step (s)
-  double rho_infinity = 0.5;             ///< rlc generalized-α spectral radius (1: trapezoidal-like, 0: most damping)
-  double periodic_tolerance = 1e-6;      ///< rlc: relative change between cycles taken as periodic
-  int max_cycles = 50;                   ///< rlc: cycles run at most when looking for the periodic state
+  /// (num_segments) each segment's law (`vessels.calibration`), or empty: Poiseuille everywhere.
+  /// The factors scale the resistances of every model; a quadratic term makes the quasi-steady
+  /// network nonlinear (solved by Newton's method each frame, solver "newton").
+  std::vector<SegmentLaw> segment_laws;
+  double dt = 1e-3;                  ///< rlc time step (s)
+  double rho_infinity = 0.5;         ///< rlc generalized-α spectral radius (1: trapezoidal-like, 0: most damping)
+  double periodic_tolerance = 1e-6;  ///< rlc: relative change between cycles taken as periodic
+  int max_cycles = 50;               ///< rlc: cycles run at most when looking for the periodic state
 
   /// dense_inverse refuses when K and K⁻¹ (2·8·(N+E)² bytes) exceed this many bytes;
   /// 0: half of the machine's physical memory.
@@ -189,6 +214,8 @@ struct FlowSpec {
   /// @brief The period after which every periodic inlet repeats (the least common multiple of
   /// their periods: T for inlets of T and T/2), or 0 if all are constant.
   [[nodiscard]] double cycle() const;
+  /// @brief Whether a segment law has a quadratic term.
+  [[nodiscard]] bool has_quadratic_losses() const;
 };
 
 /// @brief Inlet at the widest end with `inlet_pressure`, every other end at 0 Pa.

@@ -1,0 +1,150 @@
+// The quasi-steady network with quadratic losses: every segment obeys
+//   Δp = R Q + K |Q| Q     (R = f·R_P × the occlusion's factor, K ≥ 0; FlowSpec::segment_laws),
+// mass is conserved at every node, and the boundary values are those of the linear model. The
+// flow of a segment as a function of its pressure difference is the root of that quadratic,
+//   Q(Δp) = 2 Δp / (R + √(R² + 4K|Δp|)),   dQ/dΔp = 1 / √(R² + 4K|Δp|),
+// increasing in Δp, so the node balance F(p) = Σ Q − injections is the gradient of a convex
+// function of the unknown pressures and its Jacobian is the nodal conductance matrix of the
+// tangent conductances dQ/dΔp: symmetric positive definite, with the pattern of the linear one.
+// Newton's method from the last frame's pressures (the Poiseuille solution at the first), the
+// Jacobian refactored by CHOLMOD on the pattern analysed once, and a backtracking line search on
+// |F| converge to the tolerance in a few iterations; the superposition of unit responses does not
+// hold for a nonlinear network, so every frame is solved.
+#include <fmt/format.h>
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
+#include <cmath>
+
+#include "flowire/common/error.hpp"
+#include "solvers.hpp"
+
+namespace flowire::flow::detail {
+namespace {
+
+class NewtonSolver final : public FrameSolver {
+ public:
+  NewtonSolver(const Network& net, FlowSpec spec) : FrameSolver(net, std::move(spec)) {
+    Stopwatch sw;
+    a_ = assemble(net_, spec_, resistance_);
+    tangent_ = a_;
+    const int nu = a_.num_unknowns();
+    x_ = Eigen::VectorXd::Zero(nu);
+    f_ = Eigen::VectorXd::Zero(nu);
+    inj_ = Eigen::VectorXd::Zero(nu);
+    coef_.resize(static_cast<size_t>(a_.num_sources()));
+    dq_.resize(static_cast<size_t>(net_.num_segments()));
+    if (nu > 0) chol_.analyzePattern(nodal_matrix(net_, a_));
+    timings_.assemble = sw.seconds();
+    // The first guess: the linear network (K = 0) at t = 0.
+    Stopwatch sf;
+    init_arrays();
+    timings_.factor = sf.seconds();
+  }
+  [[nodiscard]] std::string_view name() const override { return "newton"; }
+  [[nodiscard]] bool supports_occlusion() const override { return true; }
+  /// Newton iterations over all frames so far.
+  [[nodiscard]] long iterations() const { return iterations_; }
+
+ protected:
+  void apply_occlusion() override {
+    scratch_q_.clear();
+    compute(time_, p_.data(), q_.data());
+  }
+
+  void compute(double t, double* p, double* q) const override {
+    const int nn = net_.num_nodes(), nu = a_.num_unknowns();
+    a_.coefficients(t, coef_.data());
+    // Prescribed pressures and the flows injected at the unknown nodes.
+    std::fill(p, p + nn, 0.0);
+    inj_.setZero();
+    for (size_t k = 0; k < coef_.size(); ++k) {
+      add_dirichlet(a_, a_.sources[k], coef_[k], p);
+      for (const auto& [node, value] : a_.sources[k].node_values)
+        if (!a_.dirichlet[static_cast<size_t>(node)])
+          inj_[a_.unknown_of_node[static_cast<size_t>(node)]] += coef_[k] * value;
+    }
+    const double inj_scale = inj_.size() > 0 ? inj_.cwiseAbs().maxCoeff() : 0.0;
+    auto set_unknowns = [&](const Eigen::VectorXd& x) {
+      for (int u = 0; u < nu; ++u) p[a_.node_of_unknown[static_cast<size_t>(u)]] = x[u];
+    };
+    // Segment flows and tangent conductances at p, and the node balance F (flow out − in).
+    auto balance = [&]() {
+      double qmax = 0.0;
+      for (int s = 0; s < net_.num_segments(); ++s) {
+        const auto& seg = net_.segment(s);
+        const double dp = p[seg.node_from] - p[seg.node_to];
+        const double r = effective_resistance(s);
+        const SegmentLaw& law = spec_.segment_laws[static_cast<size_t>(s)];
+        q[s] = law.flow(dp, r);
+        dq_[static_cast<size_t>(s)] = law.conductance(dp, r);
+        qmax = std::max(qmax, std::abs(q[s]));
+      }
+      f_ = -inj_;
+      for (int u = 0; u < nu; ++u) {
+        const int i = a_.node_of_unknown[static_cast<size_t>(u)];
+        f_[u] += a_.outlet_conductance[static_cast<size_t>(i)] * p[i];
+      }
+      for (int s = 0; s < net_.num_segments(); ++s) {
+        const auto& seg = net_.segment(s);
+        const int uf = a_.unknown_of_node[static_cast<size_t>(seg.node_from)];
+        const int ut = a_.unknown_of_node[static_cast<size_t>(seg.node_to)];
+        if (uf >= 0) f_[uf] += q[s];
+        if (ut >= 0) f_[ut] -= q[s];
+      }
+      return qmax;
+    };
+    if (nu == 0) {
+      (void)balance();
+      return;
+    }
+    set_unknowns(x_);
+    double scale = std::max(balance(), inj_scale);
+    double norm = f_.norm();
+    constexpr int kMaxIterations = 50;
+    int it = 0;
+    for (; it < kMaxIterations; ++it) {
+      if (!(f_.lpNorm<Eigen::Infinity>() > kTolerance * scale)) break;
+      for (size_t s = 0; s < dq_.size(); ++s) tangent_.conductance[s] = dq_[s];
+      chol_.factorize(nodal_matrix(net_, tangent_));
+      if (chol_.info() != Eigen::Success)
+        throw_numerical_error(fmt::format("flow: the tangent conductance matrix is singular at t = {} s", t));
+      const Eigen::VectorXd step = -chol_.solve(f_);
+      const Eigen::VectorXd x0 = x_;
+      double alpha = 1.0;
+      for (int cut = 0;; ++cut) {
+        x_ = x0 + alpha * step;
+        set_unknowns(x_);
+        scale = std::max(balance(), inj_scale);
+        const double trial = f_.norm();
+        if (trial <= (1.0 - 1e-4 * alpha) * norm || cut == 30) {
+          norm = trial;
+          break;
+        }
+        alpha *= 0.5;
+      }
+    }
+    iterations_ += it;
+    if (f_.lpNorm<Eigen::Infinity>() > kTolerance * scale || !std::isfinite(norm))
+      throw_numerical_error(
+          fmt::format("flow: Newton's method on the quadratic losses did not converge at t = {} s ({} iterations, node "
+                      "imbalance {:.3g} of the largest flow {:.3g} m³/s)",
+                      t, it, f_.lpNorm<Eigen::Infinity>() / scale, scale));
+  }
+
+ private:
+  static constexpr double kTolerance = 1e-12;  ///< node imbalance / the largest flow
+  Assembly a_;
+  mutable Assembly tangent_;  // a_ with the tangent conductances dQ/dΔp
+  mutable Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
+  mutable Eigen::VectorXd x_, f_, inj_;  // unknown pressures (the last frame's), balance, injections
+  mutable std::vector<double> coef_, dq_;
+  mutable long iterations_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<FlowSolver> make_newton_solver(const Network& net, FlowSpec spec) {
+  return std::make_unique<NewtonSolver>(net, std::move(spec));
+}
+
+}  // namespace flowire::flow::detail
