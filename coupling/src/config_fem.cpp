@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -10,11 +11,14 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
 #include "flowire/common/units.hpp"
+#include "flowire/coupling/scene.hpp"
 #include "flowire/flow/solver.hpp"
 #include "scene_sections.hpp"
 #ifdef FLOWIRE_HAVE_FEM
 #include "flowire/fem/boundary_values.hpp"
+#include "flowire/fem/calibrate.hpp"
 #include "flowire/fem/compare.hpp"
 #include "flowire/fem/lumen.hpp"
 #include "flowire/fem/obstacle.hpp"
@@ -98,6 +102,27 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
   // network was lengthened to reach the cap), so that both models end at the caps.
   if (!r.cut_length.empty()) j["network_cut_at_caps"] = r.cut_length;
   return j;
+}
+
+/// The comparison's options from the scene's fem: section (and the lumen of vessels.surface).
+fem::FemOptions fem_options(const config::Config& c) {
+  fem::FemOptions fo;
+  if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
+  fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
+  fo.solver = c.string("fem.solver") == "fieldsplit" ? fem::LinearSolver::Fieldsplit : fem::LinearSolver::Mumps;
+  fo.stabilization = c.string("fem.stabilization") == "none" ? fem::Stabilization::None : fem::Stabilization::Supg;
+  fo.inlet = c.string("fem.inlet") == "traction" ? fem::InletCondition::Traction : fem::InletCondition::Profile;
+  fo.backflow = c.number("fem.backflow");
+  fo.samples_per_branch = c.integer("fem.samples_per_branch");
+  fo.size_factor = c.number("fem.size_factor");
+  if (c.string("fem.geometry") == "lumen") {  // the real lumen of vessels.surface (checked by check_fem)
+    fo.surface = c.resolve_path(c.string("vessels.surface"));
+    const std::string unit = c.string_or("vessels.length_unit", "m");
+    fo.surface_length_factor = units::length_unit_factor(unit, c.where("vessels.length_unit"));
+  }
+  fo.write_vtu = c.boolean("output.vtk");
+  fo.write_png = c.boolean("output.png");
+  return fo;
 }
 #endif
 
@@ -198,22 +223,8 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
     warn(
         "fem: RCR outlets are compared quasi-steadily, as the resistance Rp + Rd to Pd (the poiseuille flow model "
         "has no capacitor; use flow.model: rlc with fem.frames for the windkessel dynamics)");
-  fem::FemOptions fo;
-  if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
-  fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
-  fo.solver = c.string("fem.solver") == "fieldsplit" ? fem::LinearSolver::Fieldsplit : fem::LinearSolver::Mumps;
-  fo.stabilization = c.string("fem.stabilization") == "none" ? fem::Stabilization::None : fem::Stabilization::Supg;
-  fo.inlet = c.string("fem.inlet") == "traction" ? fem::InletCondition::Traction : fem::InletCondition::Profile;
-  fo.backflow = c.number("fem.backflow");
-  fo.samples_per_branch = c.integer("fem.samples_per_branch");
-  fo.size_factor = c.number("fem.size_factor");
-  if (c.string("fem.geometry") == "lumen") {  // the real lumen of vessels.surface (checked by check_fem)
-    fo.surface = c.resolve_path(c.string("vessels.surface"));
-    const std::string unit = c.string_or("vessels.length_unit", "m");
-    fo.surface_length_factor = units::length_unit_factor(unit, c.where("vessels.length_unit"));
-  }
-  fo.write_vtu = c.boolean("output.vtk");
-  fo.write_png = c.boolean("output.png");
+  fem::FemOptions fo = fem_options(c);
+  fo.segment_laws = spec.segment_laws;
   const long frames = c.integer("fem.frames");  // checked by check_fem
   if (frames == 0) {
     auto j = fem_result_json(fem::compare(net, bv, fo, out.string()));
@@ -271,6 +282,67 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   return j;
 #else
   (void)net, (void)fs, (void)out;
+  throw_input_error(c.where("fem"),
+                    "this flowire was built without the FEM path (FLOWIRE_WITH_FEM needs gmsh and PETSc)");
+#endif
+}
+
+nlohmann::json calibrate_scene(const config::Config& c, const CalibrateOptions& options) {
+  if (!c.has_section("fem"))
+    throw_input_error(c.file(),
+                      "calibrate fits the network to the 3D solution of the scene's fem: section, and the "
+                      "scene has none (fem: {geometry: lumen, equations: navier_stokes})");
+  if (!fem_on_network(c))
+    throw_input_error(c.where("fem.geometry"),
+                      "calibrate needs the network's own lumen or a real one (network, lumen)");
+  if (!c.has_section("flow"))
+    throw_input_error(c.file(), "calibrate needs a flow: section (the inlet and the outlets)");
+#ifdef FLOWIRE_HAVE_FEM
+  const auto t0 = std::chrono::steady_clock::now();
+  (void)take_warnings();
+  const vessels::Network net = build_scene_network(c);
+  flow::FlowSpec spec = scene_flow(c, net);
+  if (!spec.segment_laws.empty()) {
+    warn("calibrate: the scene's vessels.calibration is set aside; the fit starts from Poiseuille segments");
+    spec.segment_laws.clear();
+  }
+  const auto fs = flow::make_solver(net, spec);
+  check_fem(c, fs.get(), &net);
+  if (c.integer("fem.frames") != 0)
+    warn("calibrate: fem.frames is set aside; the fit uses steady solutions at scaled inlet values");
+  const fem::BoundaryValues bv = fem::boundary_values(fs->spec(), net, 0.0);
+  const fem::FemOptions fo = fem_options(c);
+  const std::filesystem::path out(c.string("output.dir"));
+  const OutputFolder folder(out);
+  const fem::CalibrationResult r = fem::calibrate(net, bv, fo, {options.factors, options.check_factor});
+  flow::write_calibration((out / "calibration.json").string(), r.calibration);
+  fem::write_calibration_report(out.string(), net, r);
+  nlohmann::json runs = nlohmann::json::array();
+  for (const auto& run : r.runs)
+    runs.push_back({{"inlet_flow", run.inlet_flow},
+                    {"factor", run.factor},
+                    {"fitted", run.fitted},
+                    {"before", fem_result_json(run.before)},
+                    {"after", fem_result_json(run.after)}});
+  int bounded = 0;
+  for (const auto& f : r.calibration.fits) bounded += f.bounded ? 1 : 0;
+  nlohmann::json s = {{"status", "ok"},
+                      {"scene", c.file()},
+                      {"calibration",
+                       {{"file", "calibration.json"},
+                        {"equations", r.calibration.equations},
+                        {"branches", r.calibration.fits.size()},
+                        {"bounded_branches", bounded},
+                        {"runs", runs}}},
+                      {"timings",
+                       {{"mesh", r.mesh_seconds},
+                        {"fem", r.solve_seconds},
+                        {"total", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}}}};
+  s["warnings"] = take_warnings();
+  write_text_atomically(out / "summary.json", s.dump(2) + "\n");
+  return s;
+#else
+  (void)options;
   throw_input_error(c.where("fem"),
                     "this flowire was built without the FEM path (FLOWIRE_WITH_FEM needs gmsh and PETSc)");
 #endif

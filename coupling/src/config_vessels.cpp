@@ -7,6 +7,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/scene.hpp"
+#include "flowire/flow/calibration.hpp"
 #include "flowire/flow/openbf.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/io.hpp"
@@ -38,6 +39,10 @@ void declare_vessel_keys(config::Schema& s) {
       "ratio); inscribed: the centerline file's (maximum inscribed sphere) radii; auto: surface where vessels.surface "
       "is given",
       {"auto", "surface", "inscribed"});
+  s.add("vessels.calibration", Type::String, "", D::None,
+        "a calibration file written by `flowire calibrate` for this network (calibration.json): each segment's "
+        "pressure drop dp = f R_P Q + K|Q|Q fitted to the 3D solution (the quasi-steady flow is then solved by "
+        "Newton's method every frame; rlc takes the factors f only when K = 0)");
   s.add("vessels.max_segment_length", Type::Number, "5 mm", D::Length,
         "branches are split into cylinders no longer than this")
       .positive();
@@ -163,7 +168,10 @@ vessels::Network build_centerline_network(const config::Config& c) {
 }
 }  // namespace
 
-flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) {
+namespace {
+
+/// The flow: section, with an openBF model's own conditions where the scene states none.
+flow::FlowSpec scene_flow_conditions(const config::Config& c, const vessels::Network& net) {
   flow::FlowSpec spec = flow::from_config(c, net);
   if (!c.has("vessels.file")) return spec;
   const std::string path = c.resolve_path(c.string("vessels.file"));
@@ -197,6 +205,17 @@ flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) 
     if (std::none_of(spec.branch_walls.begin(), spec.branch_walls.end(),
                      [&](const flow::BranchWall& x) { return x.branch == w.branch; }))
       spec.branch_walls.push_back(w);
+  return spec;
+}
+
+}  // namespace
+
+flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) {
+  flow::FlowSpec spec = scene_flow_conditions(c, net);
+  if (c.has("vessels.calibration"))
+    spec.segment_laws =
+        flow::read_calibration(c.resolve_path(c.string("vessels.calibration")), net, c.where("vessels.calibration"))
+            .laws;
   return spec;
 }
 

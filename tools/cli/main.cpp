@@ -110,6 +110,23 @@ int cmd_run(const std::string& scene, const std::string& out, const std::vector<
   return 0;
 }
 
+int cmd_calibrate(const std::string& scene, const std::string& out, const std::vector<std::string>& sets,
+                  const std::vector<double>& factors, double check) {
+  if (launcher_rank() != 0) flowire::set_writes_outputs(false);
+  flowire::check_input_file(scene, flowire::input_limit::kScene, "a scene (YAML)");
+  const auto cfg = flowire::coupling::load_scene(scene, sets, out);
+  flowire::coupling::CalibrateOptions options;
+  if (!factors.empty()) options.factors = factors;
+  options.check_factor = check;
+  const auto s = flowire::coupling::calibrate_scene(cfg, options);
+  print_warnings();
+  if (!flowire::writes_outputs()) return 0;
+  std::printf("flowire: calibrate %s: ok in %.3f s, %zu 3D solutions; %s/calibration.json, calibration.md\n",
+              scene.c_str(), s["timings"].value("total", 0.0), s["calibration"]["runs"].size(),
+              cfg.string("output.dir").c_str());
+  return 0;
+}
+
 int cmd_info(const std::string& file, const std::string& unit, double max_seg, bool json) {
   const auto net = flowire::vessels::read_network(file, read_options(unit, max_seg));
   const auto n = net.counts();
@@ -258,6 +275,25 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   fit->add_option("--seed", fit_opts.seed, "random seed of the search (equal seeds give equal fits; default 1)");
 
+  std::string cal_scene, cal_out;
+  std::vector<std::string> cal_sets;
+  std::vector<double> cal_factors;
+  double cal_check = 0.75;
+  auto* calibrate = app.add_subcommand(
+      "calibrate",
+      "fit the network's segments to the 3D solution of the scene's fem: section (docs/fem-real-lumens.md)");
+  calibrate->add_option("scene", cal_scene, "scene file (.yaml) with vessels:, flow: and fem: sections")->required();
+  calibrate->add_option("--out", cal_out, "output folder (overrides output.dir): calibration.json, calibration.md");
+  calibrate->add_option("--set", cal_sets, "override a scene key: --set fem.size_factor=0.4 (repeatable)")
+      ->allow_extra_args(false);
+  calibrate
+      ->add_option("--flows", cal_factors,
+                   "the scene's inlet value times these factors are the 3D solutions fitted (default 0.5 1 1.5)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  calibrate->add_option("--check", cal_check, "one more solution at this factor, not fitted (default 0.75; 0: none)")
+      ->check(CLI::NonNegativeNumber);
+
   flowire::cli::StudyOptions study_opts;
   auto* study = app.add_subcommand(
       "study", "run a study: cases x a product of scene values, collected into tables and plots (docs/study.md)");
@@ -291,6 +327,7 @@ int main(int argc, char** argv) {
     if (*convert) return cmd_convert(in, outfile, unit, max_seg);
     if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows, cmp_plot);
     if (*fit) return flowire::cli::run_fit(fit_opts);
+    if (*calibrate) return cmd_calibrate(cal_scene, cal_out, cal_sets, cal_factors, cal_check);
     if (*study) return flowire::cli::run_study(study_opts);
     if (*help) {
       if (help_topic.empty()) {
@@ -302,12 +339,13 @@ int main(int argc, char** argv) {
         std::cout << app.get_subcommand("study")->help() << "\nStudy file keys (docs/study.md):\n\n"
                   << flowire::cli::study_keys_markdown();
       } else if (help_topic[0] == "run" || help_topic[0] == "network" || help_topic[0] == "compare" ||
-                 help_topic[0] == "fit") {
+                 help_topic[0] == "fit" || help_topic[0] == "calibrate") {
         std::cout << app.get_subcommand(help_topic[0])->help();
       } else {
         return error_exit(
-            fmt::format("help: unknown command '{}' (commands: run, network, compare, fit, study, help scene)",
-                        help_topic[0]),
+            fmt::format(
+                "help: unknown command '{}' (commands: run, network, compare, fit, calibrate, study, help scene)",
+                help_topic[0]),
             2);
       }
       return 0;

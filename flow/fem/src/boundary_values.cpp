@@ -93,9 +93,10 @@ BoundaryValues renumbered(const BoundaryValues& bv, const Network& net, std::spa
   return out;
 }
 
-NetworkFlow network_flow(const Network& net, const BoundaryValues& bv) {
+NetworkFlow network_flow(const Network& net, const BoundaryValues& bv, std::span<const flow::SegmentLaw> laws) {
   flow::FlowSpec spec;
   spec.solver = flow::SolverKind::Sparse;
+  spec.segment_laws.assign(laws.begin(), laws.end());
   spec.viscosity = bv.viscosity;
   spec.density = bv.density;
   const int inlet = inlet_of(net, bv);

@@ -105,7 +105,8 @@ CapCut cut_at_caps(const Network& net, std::span<const LumenCap> caps, const std
       out.node[i] = static_cast<int>(kept_nodes.size());
       kept_nodes.push_back(nodes[i]);
     }
-  std::vector<int> segment_index(segments.size(), -1);
+  std::vector<int>& segment_index = out.segment;
+  segment_index.assign(segments.size(), -1);
   std::vector<Segment> kept_segments;
   for (size_t s = 0; s < segments.size(); ++s)
     if (!segment_cut[s]) {

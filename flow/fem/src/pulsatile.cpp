@@ -127,6 +127,7 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
   const ComparisonDomain domain = comparison_domain(net, opt, steady);
   const TetMesh& mesh = domain.mesh;
   const Network& dnet = domain.network;  // the network on the mesh's domain, numbered as its groups
+  const std::vector<flow::SegmentLaw> laws = domain.laws(net, opt.segment_laws);
   auto on_domain = [&](const BoundaryValues& bv) { return domain.cut() ? renumbered(bv, net, domain.node) : bv; };
   // A dynamic series on a cut network: its boundary values and windkessels on the cut network's
   // nodes; a network series computed elsewhere is on the input network and cannot be compared.
@@ -162,7 +163,7 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
       out.factorizations += sol.factorizations;
       out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
     }
-    return compare_fields(dnet, mesh, sol, network_flow(dnet, bv), domain.bv.inlet_node, opt.samples_per_branch);
+    return compare_fields(dnet, mesh, sol, network_flow(dnet, bv, laws), domain.bv.inlet_node, opt.samples_per_branch);
   };
   const auto t_frames = std::chrono::steady_clock::now();
   StokesSolution steady_sol;
@@ -180,7 +181,8 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
   for (size_t i = 0; i < frames.size(); ++i) {
     CompareResult r;
     if (dyn) {
-      const NetworkFlow nf = dyn->network_at ? dyn->network_at(times[i]) : network_flow(dnet, on_domain(frames[i]));
+      const NetworkFlow nf =
+          dyn->network_at ? dyn->network_at(times[i]) : network_flow(dnet, on_domain(frames[i]), laws);
       r = compare_fields(dnet, mesh, dynamic[i], nf, domain.bv.inlet_node, opt.samples_per_branch);
       if (vtu) sols[i] = std::move(dynamic[i]);
     } else {

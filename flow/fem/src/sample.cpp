@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numbers>
+#include <tuple>
 
 #include "flowire/fem/element.hpp"
 
@@ -121,6 +124,32 @@ std::optional<PointValue> FieldSampler::at(const Vec3& x, double tolerance) cons
     v.pressure +=
         psi[l] * sol_.pressure[static_cast<size_t>(mesh_.vertex_index[static_cast<size_t>(t[static_cast<size_t>(l)])])];
   return v;
+}
+
+std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r) {
+  const Vec3 t = axis.normalized();
+  const Vec3 a = (std::abs(t.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(t).normalized();
+  const Vec3 b = t.cross(a);
+  // Equal-area rings (midpoints in ρ²) times 12 angles, plus the centre.
+  constexpr int kRings = 4, kAngles = 12;
+  const double rmax = 0.95 * r;
+  double sum = 0.0, weight = 0.0, centre = std::numeric_limits<double>::quiet_NaN();
+  const double tol = 1e-6;
+  if (auto v = fs.at(c, tol)) centre = v->pressure;
+  for (int i = 0; i < kRings; ++i) {
+    const double rho = rmax * std::sqrt((i + 0.5) / kRings);
+    for (int k = 0; k < kAngles; ++k) {
+      const double phi = 2.0 * std::numbers::pi * (k + 0.5 * (i % 2)) / kAngles;
+      const Vec3 x = c + rho * (std::cos(phi) * a + std::sin(phi) * b);
+      if (auto v = fs.at(x, tol)) {
+        sum += v->pressure;
+        weight += 1.0;
+      }
+    }
+  }
+  if (weight == 0.0 && std::isnan(centre)) return {0.0, 0.0, false};
+  const double mean = weight > 0.0 ? sum / weight : centre;
+  return {mean, std::isnan(centre) ? mean : centre, true};
 }
 
 }  // namespace flowire::fem

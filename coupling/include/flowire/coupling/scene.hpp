@@ -88,6 +88,20 @@ struct RunOptions {
 /// @throws flowire::Error; a numerical error still leaves summary.json with status "error".
 RunResult run_scene(const config::Config& scene, const RunOptions& options = {});
 
+/// @brief What `flowire calibrate` fits: the 3D solutions at the scene's inlet value times each
+/// factor, and one more not fitted to check the calibrated network against.
+struct CalibrateOptions {
+  std::vector<double> factors{0.5, 1.0, 1.5};
+  double check_factor = 0.75;  ///< 0: no check
+};
+
+/// @brief Fit the scene's network to the 3D solution of its `fem:` section (fem/calibrate.hpp,
+/// docs/fem-real-lumens.md): writes calibration.json (for `vessels.calibration`),
+/// calibration.md (the before/after table), calibration.csv and summary.json in output.dir.
+/// @throws flowire::Error: input (no fem: or flow: section, a built-in fem geometry, a network
+/// that is not a tree, the FEM not built), numerical (a 3D solve that fails).
+nlohmann::json calibrate_scene(const config::Config& scene, const CalibrateOptions& options = {});
+
 /// @brief A network's counts as summary.json and `flowire info --json` write them.
 nlohmann::json counts_json(const vessels::NetworkCounts& counts);
 

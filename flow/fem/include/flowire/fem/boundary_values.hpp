@@ -68,8 +68,9 @@ BoundaryValues boundary_values(const flow::FlowSpec& spec, const Network& net, d
 BoundaryValues renumbered(const BoundaryValues& bv, const Network& net, std::span<const int> node);
 
 /// @brief Network pressures and flows for the boundary values (flowire::flow quasi-steady
-/// Poiseuille model, sparse solver).
-NetworkFlow network_flow(const Network& net, const BoundaryValues& bv);
+/// Poiseuille model, sparse solver; Newton's method where `laws`, one per segment, have quadratic
+/// terms).
+NetworkFlow network_flow(const Network& net, const BoundaryValues& bv, std::span<const flow::SegmentLaw> laws = {});
 
 /// @brief Condition of each mesh group (wall: ignored) for the boundary values.
 /// @throws flowire::Error (usage) for a negative outlet resistance.

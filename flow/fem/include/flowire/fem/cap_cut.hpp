@@ -27,6 +27,8 @@ struct CapCut {
   /// (input num_nodes) the node of `network` an input node became, -1 for a node cut away; the
   /// ends keep their identity (an end moves to its cap's plane)
   std::vector<int> node;
+  /// (input num_segments) the segment of `network` an input segment became, -1 for one cut away
+  std::vector<int> segment;
   /// (caps) the length cut from the end's branch: > 0 the centerline ran beyond the cap, < 0 the
   /// branch was lengthened to reach it (m)
   std::vector<double> cut_length;

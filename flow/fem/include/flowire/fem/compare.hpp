@@ -20,6 +20,7 @@
 /// more vessels meet.
 ///
 /// The files a comparison writes are those of compare_output.hpp.
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,6 +28,7 @@
 #include "flowire/fem/boundary_values.hpp"
 #include "flowire/fem/mesh.hpp"
 #include "flowire/fem/stokes.hpp"
+#include "flowire/flow/spec.hpp"
 
 namespace flowire::fem {
 
@@ -46,6 +48,9 @@ struct FemOptions {
   /// network's ends, instead of the network's cylinders. Empty: the network's own lumen.
   std::string surface;
   double surface_length_factor = 1.0;  ///< metres per unit of the surface file
+  /// The network's segment laws (a calibration, flow::FlowSpec::segment_laws), one per segment of
+  /// the input network, or empty: Poiseuille. The network side of the comparison obeys them.
+  std::vector<flow::SegmentLaw> segment_laws;
   bool write_png = true;
   bool write_vtu = true;
 };
@@ -90,7 +95,8 @@ struct CompareResult {
   double inlet_flow_network = 0.0, inlet_flow_fem = 0.0;
   double inlet_pressure_network = 0.0, inlet_pressure_fem = 0.0;
   std::vector<BranchDrop> branches;
-  double max_rel_diff_drop_away = 0.0;      ///< max |rel_diff_drop| away from junctions
+  /// max |rel_diff_drop| away from junctions (samples on an open end, the cap, are not counted)
+  double max_rel_diff_drop_away = 0.0;
   double max_rel_diff_drop_junction = 0.0;  ///< max |rel_diff_drop| near junctions
   double max_flow_split_error = 0.0;        ///< max |Q_fem/ΣQ_fem − Q_net/ΣQ_net| over outlets
   double max_flow_error = 0.0;              ///< max |Q_fem/Q_net − 1| over outlets
@@ -122,9 +128,14 @@ struct ComparisonDomain {
   /// both models then impose the boundary values at the same places.
   Network network;
   std::vector<int> node;           ///< (input nodes) the node of `network` each became, -1 cut away
+  std::vector<int> segment;        ///< (input segments) the segment of `network` each became, -1 cut away
   std::vector<double> cut_length;  ///< real lumen: per cap (network end order), the length cut (m)
   BoundaryValues bv;               ///< the input boundary values on `network`
   [[nodiscard]] bool cut() const { return !cut_length.empty(); }
+  /// @brief Segment laws of the input network (one per input segment, or empty) on `network`: a
+  /// segment keeps its resistance factor, and its quadratic coefficient in proportion to its
+  /// Poiseuille resistance where it was shortened.
+  [[nodiscard]] std::vector<flow::SegmentLaw> laws(const Network& input, std::span<const flow::SegmentLaw> laws) const;
 };
 
 /// @brief The domain a comparison solves on: the network's own lumen, or the real lumen of

@@ -6,6 +6,7 @@
 /// the straight (vertex) barycentric coordinates, then refined by Newton iterations on
 /// the quadratic map of the element, so points near the curved wall are found too.
 #include <optional>
+#include <tuple>
 #include <vector>
 
 #include "flowire/fem/mesh.hpp"
@@ -36,5 +37,10 @@ class FieldSampler {
   std::array<int, 3> dims_{};
   std::vector<int> offset_, items_;  // CSR: bucket -> tetrahedra
 };
+
+/// @brief The pressure of a cross-section: the mean over a disk of 0.95 r normal to `axis` at `c`
+/// (4 equal-area rings × 12 angles, the points inside the mesh), and the value at `c`; found is
+/// false when no point of the disk lies in the mesh. Returns (mean, centre, found).
+std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r);
 
 }  // namespace flowire::fem

@@ -1,0 +1,352 @@
+// The network fitted to the 3D solution (calibrate.hpp).
+#include "flowire/fem/calibrate.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+#include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
+#include "flowire/fem/sample.hpp"
+#include "flowire/flow/solver.hpp"
+
+namespace flowire::fem {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+BoundaryValues scaled(const BoundaryValues& bv, double f) {
+  BoundaryValues b = bv;
+  if (b.inlet_type == BoundaryValues::Inlet::Flow)
+    b.inlet_flow *= f;
+  else
+    b.inlet_pressure *= f;
+  return b;
+}
+
+/// Each branch oriented away from the inlet (upstream and downstream end node), the branches in
+/// an order where every branch comes before those downstream of it.
+struct Tree {
+  std::vector<int> up, down, order;
+};
+
+Tree branch_tree(const Network& net, int inlet) {
+  const auto nb = static_cast<size_t>(net.num_branches());
+  std::vector<std::vector<int>> at(static_cast<size_t>(net.num_nodes()));
+  for (int b = 0; b < net.num_branches(); ++b) {
+    at[static_cast<size_t>(net.branch(b).nodes.front())].push_back(b);
+    at[static_cast<size_t>(net.branch(b).nodes.back())].push_back(b);
+  }
+  Tree t;
+  t.up.assign(nb, -1);
+  t.down.assign(nb, -1);
+  std::vector<char> seen_node(static_cast<size_t>(net.num_nodes()), 0);
+  std::vector<int> stack{inlet};
+  seen_node[static_cast<size_t>(inlet)] = 1;
+  while (!stack.empty()) {
+    const int u = stack.back();
+    stack.pop_back();
+    for (int b : at[static_cast<size_t>(u)]) {
+      if (t.up[static_cast<size_t>(b)] >= 0) continue;  // the branch we came along
+      const auto& br = net.branch(b);
+      const int v = br.nodes.front() == u ? br.nodes.back() : br.nodes.front();
+      if (seen_node[static_cast<size_t>(v)])
+        throw_input_error(net.source(), fmt::format("the calibration needs a tree: the branch '{}' closes a loop",
+                                                    br.name.empty() ? fmt::format("branch_{}", b) : br.name));
+      t.up[static_cast<size_t>(b)] = u;
+      t.down[static_cast<size_t>(b)] = v;
+      t.order.push_back(b);
+      seen_node[static_cast<size_t>(v)] = 1;
+      stack.push_back(v);
+    }
+  }
+  if (t.order.size() != nb) throw_input_error(net.source(), "the calibration needs one connected network");
+  return t;
+}
+
+/// The 3D solution reduced to the network: a flow per branch (the outlets' 3D flows summed
+/// downstream) and a pressure per node (NaN where the section falls outside the mesh).
+struct Reduced {
+  std::vector<double> branch_flow;    // (branches) downstream
+  std::vector<double> node_pressure;  // (nodes)
+};
+
+Reduced reduce(const Network& net, const Tree& t, const TetMesh& mesh, const StokesSolution& sol,
+               const CompareResult& r, int inlet) {
+  Reduced red;
+  const auto nn = static_cast<size_t>(net.num_nodes());
+  red.node_pressure.assign(nn, kNaN);
+  std::vector<double> out_flow(nn, 0.0), sum(nn, 0.0);
+  std::vector<int> count(nn, 0);
+  // Every node but the ends: the section normal to the branch there (at a junction, the mean
+  // over the branches that meet there).
+  const FieldSampler fs(mesh, sol);
+  for (int b = 0; b < net.num_branches(); ++b) {
+    const auto& br = net.branch(b);
+    const size_t n = br.nodes.size();
+    for (size_t k = 0; k < n; ++k) {
+      const int node = br.nodes[k];
+      if (net.degree(node) < 2) continue;
+      const Vec3 axis = net.node(br.nodes[std::min(k + 1, n - 1)]) - net.node(br.nodes[k > 0 ? k - 1 : 0]);
+      const double radius = k == 0 ? net.segment(br.segments.front()).radius_from
+                            : k == n - 1
+                                ? net.segment(br.segments.back()).radius_to
+                                : 0.5 * (net.segment(br.segments[k - 1]).radius + net.segment(br.segments[k]).radius);
+      const auto [mean, centre, found] = section_pressure(fs, net.node(node), axis, radius);
+      (void)centre;
+      if (!found) continue;
+      sum[static_cast<size_t>(node)] += mean;
+      ++count[static_cast<size_t>(node)];
+    }
+  }
+  for (size_t n = 0; n < nn; ++n)
+    if (count[n] > 0) red.node_pressure[n] = sum[n] / count[n];
+  red.node_pressure[static_cast<size_t>(inlet)] = r.inlet_pressure_fem;
+  for (const auto& o : r.outlets) {
+    red.node_pressure[static_cast<size_t>(o.node)] = o.pressure_fem;
+    out_flow[static_cast<size_t>(o.node)] = o.flow_fem;
+  }
+  red.branch_flow.assign(static_cast<size_t>(net.num_branches()), 0.0);
+  for (auto it = t.order.rbegin(); it != t.order.rend(); ++it) {
+    const auto b = static_cast<size_t>(*it);
+    red.branch_flow[b] = out_flow[static_cast<size_t>(t.down[b])];
+    out_flow[static_cast<size_t>(t.up[b])] += red.branch_flow[b];
+  }
+  for (int b : t.order)
+    for (int n : {t.up[static_cast<size_t>(b)], t.down[static_cast<size_t>(b)]})
+      if (!std::isfinite(red.node_pressure[static_cast<size_t>(n)]))
+        throw_numerical_error(
+            fmt::format("calibrate: no 3D pressure at node {} (a junction whose sections all "
+                        "fall outside the mesh)",
+                        n));
+  return red;
+}
+
+/// Least squares of Δp = a Q + K|Q|Q with a ≥ a_min, K ≥ 0, relative to each drop (weights 1/Δp²,
+/// so that every fitted flow is matched to the same fraction, not the largest best).
+void fit(flow::BranchFit& f, double a_min) {
+  const size_t n = f.flows.size();
+  double pmax = 0.0;
+  for (double p : f.drops) pmax = std::max(pmax, std::abs(p));
+  std::vector<double> w(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double p = std::max(std::abs(f.drops[i]), 1e-3 * pmax);
+    w[i] = p > 0.0 ? 1.0 / (p * p) : 1.0;
+  }
+  auto sse = [&](double a, double k) {
+    double e = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      const double q = f.flows[i], r = a * q + k * std::abs(q) * q - f.drops[i];
+      e += w[i] * r * r;
+    }
+    return e;
+  };
+  double sqq = 0, sqg = 0, sgg = 0, sqp = 0, sgp = 0, sp = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double q = f.flows[i], g = std::abs(q) * q, p = f.drops[i];
+    sqq += w[i] * q * q, sqg += w[i] * q * g, sgg += w[i] * g * g, sqp += w[i] * q * p, sgp += w[i] * g * p;
+    sp += w[i] * p * p;
+  }
+  double a = kNaN, k = 0.0;
+  const double det = sqq * sgg - sqg * sqg;
+  if (n >= 2 && det > 1e-12 * sqq * sgg) {
+    a = (sgg * sqp - sqg * sgp) / det;
+    k = (sqq * sgp - sqg * sqp) / det;
+  }
+  const bool interior = a >= a_min && k >= 0.0;
+  const double sse_free = std::isfinite(a) ? sse(a, k) : sp;
+  if (!interior) {
+    // On the bounds: K = 0 with a free, or a at its floor with K free; the better of the two.
+    const double a0 = sqq > 0.0 ? std::max(a_min, sqp / sqq) : a_min;
+    const double k1 = n >= 2 && sgg > 0.0 ? std::max(0.0, (sgp - a_min * sqg) / sgg) : 0.0;
+    if (sse(a0, 0.0) <= sse(a_min, k1)) {
+      a = a0, k = 0.0;
+    } else {
+      a = a_min, k = k1;
+    }
+  }
+  // A bound counts as active where it costs the fit more than round-off: a linear law fitted to
+  // linear data (Stokes) leaves K a little either side of 0.
+  f.bounded = !interior && sse(a, k) - sse_free > 1e-8 * sp;
+  f.linear = a;
+  f.quadratic = k;
+  f.residual = sp > 0.0 ? std::sqrt(sse(a, k) / sp) : 0.0;
+}
+
+}  // namespace
+
+CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const FemOptions& opt,
+                            const CalibrateOptions& co) {
+  if (co.factors.empty()) throw_input_error("calibrate", "needs at least one inlet factor");
+  for (double f : co.factors)
+    if (!(f > 0.0) || !std::isfinite(f)) throw_input_error("calibrate", fmt::format("inlet factor {} must be > 0", f));
+  if (!(co.check_factor >= 0.0) || !std::isfinite(co.check_factor))
+    throw_input_error("calibrate", fmt::format("check factor {} must be >= 0", co.check_factor));
+  const double inlet_value = bv.inlet_type == BoundaryValues::Inlet::Flow ? bv.inlet_flow : bv.inlet_pressure;
+  if (!(std::abs(inlet_value) > 0.0))
+    throw_input_error("calibrate", "the inlet value is 0: there is no flow to calibrate at");
+  initialize();
+  CalibrationResult res;
+  const ComparisonDomain d = comparison_domain(net, opt, bv);
+  res.mesh_seconds = d.mesh.mesh_seconds;
+  const Network& dn = d.network;
+  const int inlet = d.bv.inlet_node;
+  const Tree tree = branch_tree(dn, inlet);
+  // The solutions in increasing order (Navier–Stokes: each from the last), the check last.
+  std::vector<double> factors = co.factors;
+  std::sort(factors.begin(), factors.end());
+  factors.erase(std::unique(factors.begin(), factors.end()), factors.end());
+  const size_t fitted = factors.size();
+  if (co.check_factor > 0.0) factors.push_back(co.check_factor);
+  std::vector<StokesSolution> sols(factors.size());
+  std::vector<BoundaryValues> values(factors.size());
+  const StokesSolution* previous = nullptr;
+  for (size_t i = 0; i < factors.size(); ++i) {
+    values[i] = scaled(d.bv, factors[i]);
+    StokesOptions so = comparison_stokes_options(opt, values[i]);
+    if (previous) so.initial_guess = previous;
+    const auto cond = group_conditions(d.mesh, values[i]);
+    sols[i] = solve_stokes(d.mesh, std::span<const GroupCondition>(cond), so);
+    previous = &sols[i];
+    CalibrationRun run;
+    run.factor = factors[i];
+    run.fitted = i < fitted;
+    run.before = compare_fields(dn, d.mesh, sols[i], network_flow(dn, values[i]), inlet, opt.samples_per_branch);
+    run.inlet_flow = run.before.inlet_flow_fem;
+    res.runs.push_back(std::move(run));
+  }
+  // The fit, branch by branch, on the domain's network.
+  flow::Calibration& cal = res.calibration;
+  flow::identify(cal, net);
+  cal.equations = opt.equations == Equations::NavierStokes ? "navier_stokes" : "stokes";
+  std::vector<Reduced> reduced;
+  for (size_t i = 0; i < fitted; ++i) {
+    reduced.push_back(reduce(dn, tree, d.mesh, sols[i], res.runs[i].before, inlet));
+    cal.inlet_flows.push_back(res.runs[i].inlet_flow);
+  }
+  if (co.check_factor > 0.0) cal.check_inlet_flow = res.runs.back().inlet_flow;
+  // Per branch: the branch as a whole (reported; the law of its segments beyond a cap), and its
+  // pieces between the nodes that have a 3D pressure, a piece merged with its neighbour while a
+  // bound of its fit is active (a pressure that recovers, or noise over a short piece).
+  const auto nseg = static_cast<size_t>(dn.num_segments());
+  std::vector<double> factor(nseg, 1.0), kappa(nseg, 0.0);  // a/R_P and K/R_P of each domain segment
+  for (int b = 0; b < dn.num_branches(); ++b) {
+    const auto& br = dn.branch(b);
+    std::vector<int> nodes = br.nodes, segs = br.segments;
+    if (nodes.front() != tree.up[static_cast<size_t>(b)]) {
+      std::reverse(nodes.begin(), nodes.end());
+      std::reverse(segs.begin(), segs.end());
+    }
+    auto piece = [&](size_t k0, size_t k1) {  // nodes[k0] .. nodes[k1]
+      flow::BranchFit f;
+      f.branch = b;
+      f.name = branch_label(dn, b);
+      for (size_t k = k0; k < k1; ++k)
+        f.poiseuille_resistance += flow::segment_resistance(bv.viscosity, dn.segment(segs[k]));
+      for (const auto& red : reduced) {
+        f.flows.push_back(red.branch_flow[static_cast<size_t>(b)]);
+        f.drops.push_back(red.node_pressure[static_cast<size_t>(nodes[k0])] -
+                          red.node_pressure[static_cast<size_t>(nodes[k1])]);
+      }
+      fit(f, 0.1 * f.poiseuille_resistance);
+      return f;
+    };
+    std::vector<size_t> cuts{0};
+    for (size_t k = 1; k + 1 < nodes.size(); ++k)
+      if (std::all_of(reduced.begin(), reduced.end(), [&](const Reduced& red) {
+            return std::isfinite(red.node_pressure[static_cast<size_t>(nodes[k])]);
+          }))
+        cuts.push_back(k);
+    cuts.push_back(nodes.size() - 1);
+    for (bool merged = true; merged && cuts.size() > 2;) {
+      merged = false;
+      for (size_t j = 0; j + 1 < cuts.size(); ++j)
+        if (piece(cuts[j], cuts[j + 1]).bounded) {
+          cuts.erase(cuts.begin() + static_cast<std::ptrdiff_t>(j + 2 < cuts.size() ? j + 1 : j));
+          merged = true;
+          break;
+        }
+    }
+    for (size_t j = 0; j + 1 < cuts.size(); ++j) {
+      const flow::BranchFit f = piece(cuts[j], cuts[j + 1]);
+      for (size_t k = cuts[j]; k < cuts[j + 1]; ++k) {
+        factor[static_cast<size_t>(segs[k])] = f.linear / f.poiseuille_resistance;
+        kappa[static_cast<size_t>(segs[k])] = f.quadratic / f.poiseuille_resistance;
+      }
+    }
+    flow::BranchFit whole = piece(0, nodes.size() - 1);
+    whole.pieces = static_cast<int>(cuts.size()) - 1;
+    cal.fits.push_back(std::move(whole));
+  }
+  // The laws of the input network: K_s = (K/R_P) R_P,s of its segment in the domain (a segment
+  // cut away beyond a cap: its branch's as a whole).
+  cal.laws.resize(static_cast<size_t>(net.num_segments()));
+  for (int b = 0; b < net.num_branches(); ++b) {
+    const auto& whole = cal.fits[static_cast<size_t>(b)];
+    for (int s : net.branch(b).segments) {
+      const int c = d.segment[static_cast<size_t>(s)];
+      const double rp = flow::segment_resistance(bv.viscosity, net.segment(s));
+      cal.laws[static_cast<size_t>(s)] =
+          c >= 0 ? flow::SegmentLaw{factor[static_cast<size_t>(c)], kappa[static_cast<size_t>(c)] * rp}
+                 : flow::SegmentLaw{whole.linear / whole.poiseuille_resistance,
+                                    whole.quadratic / whole.poiseuille_resistance * rp};
+    }
+  }
+  const std::vector<flow::SegmentLaw> on_domain = d.laws(net, cal.laws);
+  for (size_t i = 0; i < factors.size(); ++i)
+    res.runs[i].after =
+        compare_fields(dn, d.mesh, sols[i], network_flow(dn, values[i], on_domain), inlet, opt.samples_per_branch);
+  for (const auto& s : sols) res.solve_seconds += s.assemble_seconds + s.solve_seconds;
+  return res;
+}
+
+void write_calibration_report(const std::string& dir, const Network& net, const CalibrationResult& r) {
+  const auto& cal = r.calibration;
+  std::ostringstream md;
+  md << fmt::format("# Calibration of {} to the 3D solution ({})\n\n", cal.network_source, cal.equations);
+  md << "Largest differences over the sample points, as fractions of the network's driving pressure drop, and of "
+        "the outlet flows; before: Poiseuille segments, after: the calibrated laws.\n\n";
+  md << "| inlet flow (mL/s) | fitted | Re | drop, away from junctions: before / after | near junctions: before / "
+        "after | outlet flow: before / after | flow split: before / after |\n";
+  md << "|---|---|---|---|---|---|---|\n";
+  for (const auto& run : r.runs)
+    md << fmt::format(
+        "| {:.4g} | {} | {:.0f} | {:.2f}% / {:.2f}% | {:.2f}% / {:.2f}% | {:.2f}% / {:.2f}% | {:.2f}% / {:.2f}% |\n",
+        run.inlet_flow * 1e6, run.fitted ? "yes" : "check", run.before.reynolds,
+        100 * run.before.max_rel_diff_drop_away, 100 * run.after.max_rel_diff_drop_away,
+        100 * run.before.max_rel_diff_drop_junction, 100 * run.after.max_rel_diff_drop_junction,
+        100 * run.before.max_flow_error, 100 * run.after.max_flow_error, 100 * run.before.max_flow_split_error,
+        100 * run.after.max_flow_split_error);
+  md << "\nPer branch: Δp = a Q + K|Q|Q fitted to the 3D drops between the branch's end nodes (R_P: its Poiseuille "
+        "resistance in the 3D domain); the segments take the laws of the pieces between the nodes with a 3D section "
+        "pressure, merged where a bound was active.\n\n";
+  md << "| branch | a / R_P | K (Pa·s²/m⁶) | K Q / a at the largest flow | residual | bound active | pieces fitted "
+        "|\n|---|---|---|---|---|---|---|\n";
+  for (const auto& f : cal.fits) {
+    const double qmax = f.flows.empty() ? 0.0 : *std::max_element(f.flows.begin(), f.flows.end());
+    md << fmt::format("| {} | {:.3f} | {:.4g} | {:.3f} | {:.2e} | {} | {} |\n", f.name,
+                      f.linear / f.poiseuille_resistance, f.quadratic,
+                      f.linear > 0.0 ? f.quadratic * qmax / f.linear : 0.0, f.residual, f.bounded ? "yes" : "no",
+                      f.pieces);
+  }
+  md << fmt::format("\nMesh {:.1f} s, 3D solves {:.1f} s ({} solutions).\n", r.mesh_seconds, r.solve_seconds,
+                    r.runs.size());
+  write_text_atomically(std::filesystem::path(dir) / "calibration.md", md.str());
+  std::ostringstream csv;
+  csv << "inlet_flow,fitted,branch,s,pressure_fem,pressure_before,pressure_after,near_junction\n";
+  for (const auto& run : r.runs)
+    for (size_t i = 0; i < run.before.samples.size() && i < run.after.samples.size(); ++i) {
+      const auto& b = run.before.samples[i];
+      const auto& a = run.after.samples[i];
+      csv << fmt::format("{:.9g},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{}\n", run.inlet_flow, run.fitted ? 1 : 0,
+                         branch_label(net, b.branch), b.s, b.pressure_fem, b.pressure_network, a.pressure_network,
+                         b.near_junction ? 1 : 0);
+    }
+  write_text_atomically(std::filesystem::path(dir) / "calibration.csv", csv.str());
+}
+
+}  // namespace flowire::fem
