@@ -225,6 +225,7 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
         "has no capacitor; use flow.model: rlc with fem.frames for the windkessel dynamics)");
   fem::FemOptions fo = fem_options(c);
   fo.segment_laws = spec.segment_laws;
+  fo.total_pressure = spec.total_pressure;
   const long frames = c.integer("fem.frames");  // checked by check_fem
   if (frames == 0) {
     auto j = fem_result_json(fem::compare(net, bv, fo, out.string()));

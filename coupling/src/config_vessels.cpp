@@ -212,10 +212,12 @@ flow::FlowSpec scene_flow_conditions(const config::Config& c, const vessels::Net
 
 flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) {
   flow::FlowSpec spec = scene_flow_conditions(c, net);
-  if (c.has("vessels.calibration"))
-    spec.segment_laws =
-        flow::read_calibration(c.resolve_path(c.string("vessels.calibration")), net, c.where("vessels.calibration"))
-            .laws;
+  if (c.has("vessels.calibration")) {
+    flow::Calibration cal =
+        flow::read_calibration(c.resolve_path(c.string("vessels.calibration")), net, c.where("vessels.calibration"));
+    spec.segment_laws = std::move(cal.laws);
+    spec.total_pressure = cal.pressure == "total";
+  }
   return spec;
 }
 

@@ -84,6 +84,9 @@ void CoSimulation::build_flow(nlohmann::json& s) {
   fsolver_ = flow::make_solver(*net_, scene_flow(scene_, *net_));
   s["flow"] = {{"solver", std::string(fsolver_->name())},
                {"model", std::string(flow::to_string(fsolver_->spec().model))}};
+  // A calibration in total pressure: the network's nodes hold p + ½ρū² (its outlets their static values).
+  if (!fsolver_->spec().segment_laws.empty())
+    s["flow"]["pressure"] = fsolver_->spec().total_pressure ? "total" : "static";
 }
 
 void CoSimulation::build_wire(nlohmann::json& s) {

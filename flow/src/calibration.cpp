@@ -44,19 +44,22 @@ void write_calibration(const std::string& path, const Calibration& c) {
                     {"pieces", f.pieces}});
   json segs = json::array();
   for (const auto& l : c.laws) segs.push_back({{"resistance_factor", l.resistance_factor}, {"quadratic", l.quadratic}});
-  const json j = {
-      {"format", "flowire-calibration"},
-      {"version", 1},
-      {"network",
-       {{"source", c.network_source},
-        {"nodes", c.nodes},
-        {"segments", c.segments},
-        {"branches", c.branches},
-        {"total_length", c.total_length},
-        {"resistance_sum", c.resistance_sum}}},
-      {"fem", {{"equations", c.equations}, {"inlet_flows", c.inlet_flows}, {"check_inlet_flow", c.check_inlet_flow}}},
-      {"branches", fits},
-      {"segments", segs}};
+  const json j = {{"format", "flowire-calibration"},
+                  {"version", 1},
+                  {"network",
+                   {{"source", c.network_source},
+                    {"nodes", c.nodes},
+                    {"segments", c.segments},
+                    {"branches", c.branches},
+                    {"total_length", c.total_length},
+                    {"resistance_sum", c.resistance_sum}}},
+                  {"fem",
+                   {{"equations", c.equations},
+                    {"pressure", c.pressure},
+                    {"inlet_flows", c.inlet_flows},
+                    {"check_inlet_flow", c.check_inlet_flow}}},
+                  {"branches", fits},
+                  {"segments", segs}};
   write_text_atomically(path, j.dump(2) + "\n");
 }
 
@@ -86,6 +89,9 @@ Calibration read_calibration(const std::string& path, const Network& net, const 
     c.resistance_sum = n.at("resistance_sum").get<double>();
     const json& f = j.at("fem");
     c.equations = f.value("equations", std::string());
+    c.pressure = f.value("pressure", std::string("static"));
+    if (c.pressure != "static" && c.pressure != "total")
+      throw_input_error(place, fmt::format("fem.pressure '{}' (static or total)", c.pressure));
     c.inlet_flows = f.value("inlet_flows", std::vector<double>{});
     c.check_inlet_flow = f.value("check_inlet_flow", 0.0);
     for (const json& b : j.at("branches")) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include "flowire/common/error.hpp"
@@ -68,22 +69,43 @@ Tree branch_tree(const Network& net, int inlet) {
   return t;
 }
 
+/// ½ρ(Q/πr²)²: the dynamic pressure of a flow Q through a section of radius r (flat profile).
+double dynamic_pressure(double rho, double q, double r) {
+  const double u = q / (std::numbers::pi * r * r);
+  return 0.5 * rho * u * u;
+}
+
+/// The radius of the network at an end node (of its one segment).
+double end_radius(const Network& net, int e) {
+  const auto& seg = net.segment(*net.node_segments(e).first);
+  return seg.node_from == e ? seg.radius_from : seg.radius_to;
+}
+
 /// The 3D solution reduced to the network: a flow per branch (the outlets' 3D flows summed
-/// downstream) and a pressure per node (NaN where the section falls outside the mesh).
+/// downstream) and a pressure per node (NaN where the section falls outside the mesh): static, or,
+/// with `rho` > 0, total: each section's mean pressure plus the dynamic pressure of its branch's
+/// flow through the network's section there (at a junction, the section of the branch that flows
+/// into it; at the ends the group pressure plus the dynamic pressure through the end).
 struct Reduced {
   std::vector<double> branch_flow;    // (branches) downstream
   std::vector<double> node_pressure;  // (nodes)
 };
 
 Reduced reduce(const Network& net, const Tree& t, const TetMesh& mesh, const StokesSolution& sol,
-               const CompareResult& r, int inlet) {
+               const CompareResult& r, int inlet, double rho) {
   Reduced red;
   const auto nn = static_cast<size_t>(net.num_nodes());
   red.node_pressure.assign(nn, kNaN);
   std::vector<double> out_flow(nn, 0.0), sum(nn, 0.0);
   std::vector<int> count(nn, 0);
-  // Every node but the ends: the section normal to the branch there (at a junction, the mean
-  // over the branches that meet there).
+  for (const auto& o : r.outlets) out_flow[static_cast<size_t>(o.node)] = o.flow_fem;
+  red.branch_flow.assign(static_cast<size_t>(net.num_branches()), 0.0);
+  for (auto it = t.order.rbegin(); it != t.order.rend(); ++it) {
+    const auto b = static_cast<size_t>(*it);
+    red.branch_flow[b] = out_flow[static_cast<size_t>(t.down[b])];
+    out_flow[static_cast<size_t>(t.up[b])] += red.branch_flow[b];
+  }
+  // Every node but the ends: the section normal to the branch there.
   const FieldSampler fs(mesh, sol);
   for (int b = 0; b < net.num_branches(); ++b) {
     const auto& br = net.branch(b);
@@ -91,6 +113,9 @@ Reduced reduce(const Network& net, const Tree& t, const TetMesh& mesh, const Sto
     for (size_t k = 0; k < n; ++k) {
       const int node = br.nodes[k];
       if (net.degree(node) < 2) continue;
+      // A junction takes the pressure of the branch that flows into it: each branch leaving it
+      // then carries the junction's loss into it in its first piece.
+      if (net.degree(node) > 2 && t.down[static_cast<size_t>(b)] != node) continue;
       const Vec3 axis = net.node(br.nodes[std::min(k + 1, n - 1)]) - net.node(br.nodes[k > 0 ? k - 1 : 0]);
       const double radius = k == 0 ? net.segment(br.segments.front()).radius_from
                             : k == n - 1
@@ -99,30 +124,22 @@ Reduced reduce(const Network& net, const Tree& t, const TetMesh& mesh, const Sto
       const auto [mean, centre, found] = section_pressure(fs, net.node(node), axis, radius);
       (void)centre;
       if (!found) continue;
-      sum[static_cast<size_t>(node)] += mean;
+      sum[static_cast<size_t>(node)] += mean + dynamic_pressure(rho, red.branch_flow[static_cast<size_t>(b)], radius);
       ++count[static_cast<size_t>(node)];
     }
   }
   for (size_t n = 0; n < nn; ++n)
     if (count[n] > 0) red.node_pressure[n] = sum[n] / count[n];
-  red.node_pressure[static_cast<size_t>(inlet)] = r.inlet_pressure_fem;
-  for (const auto& o : r.outlets) {
-    red.node_pressure[static_cast<size_t>(o.node)] = o.pressure_fem;
-    out_flow[static_cast<size_t>(o.node)] = o.flow_fem;
-  }
-  red.branch_flow.assign(static_cast<size_t>(net.num_branches()), 0.0);
-  for (auto it = t.order.rbegin(); it != t.order.rend(); ++it) {
-    const auto b = static_cast<size_t>(*it);
-    red.branch_flow[b] = out_flow[static_cast<size_t>(t.down[b])];
-    out_flow[static_cast<size_t>(t.up[b])] += red.branch_flow[b];
-  }
+  red.node_pressure[static_cast<size_t>(inlet)] =
+      r.inlet_pressure_fem + dynamic_pressure(rho, r.inlet_flow_fem, end_radius(net, inlet));
+  for (const auto& o : r.outlets)
+    red.node_pressure[static_cast<size_t>(o.node)] =
+        o.pressure_fem + dynamic_pressure(rho, o.flow_fem, end_radius(net, o.node));
   for (int b : t.order)
     for (int n : {t.up[static_cast<size_t>(b)], t.down[static_cast<size_t>(b)]})
       if (!std::isfinite(red.node_pressure[static_cast<size_t>(n)]))
-        throw_numerical_error(
-            fmt::format("calibrate: no 3D pressure at node {} (a junction whose sections all "
-                        "fall outside the mesh)",
-                        n));
+        throw_numerical_error(fmt::format(
+            "calibrate: no 3D pressure at node {} (a junction whose sections all fall outside the mesh)", n));
   return red;
 }
 
@@ -223,18 +240,34 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
   flow::Calibration& cal = res.calibration;
   flow::identify(cal, net);
   cal.equations = opt.equations == Equations::NavierStokes ? "navier_stokes" : "stokes";
+  // Total pressure for Navier–Stokes where the inlet is a flow (the network's nodes then hold
+  // p + ½ρū²; a pressure inlet's value is static, and its dynamic pressure would need a law of
+  // negative resistance; Stokes flow has no dynamic pressure).
+  const double rho =
+      co.total_pressure && bv.inlet_type == BoundaryValues::Inlet::Flow && opt.equations == Equations::NavierStokes
+          ? bv.density
+          : 0.0;
+  cal.pressure = rho > 0.0 ? "total" : "static";
   std::vector<Reduced> reduced;
   for (size_t i = 0; i < fitted; ++i) {
-    reduced.push_back(reduce(dn, tree, d.mesh, sols[i], res.runs[i].before, inlet));
+    reduced.push_back(reduce(dn, tree, d.mesh, sols[i], res.runs[i].before, inlet, rho));
     cal.inlet_flows.push_back(res.runs[i].inlet_flow);
   }
   if (co.check_factor > 0.0) cal.check_inlet_flow = res.runs.back().inlet_flow;
-  // Per branch: the branch as a whole (reported; the law of its segments beyond a cap), and its
-  // pieces between the nodes that have a 3D pressure, a piece merged with its neighbour while a
-  // bound of its fit is active (a pressure that recovers, or noise over a short piece).
+  // Branch by branch from the inlet (tree order), each branch piece by piece downstream: a piece
+  // runs from a node to the next node with a 3D pressure, merged with the following piece while a
+  // bound of its fit is active (a drop that falls, or noise over a short piece). Each fit starts
+  // from the pressure the fitted network will have there (the 3D one at the inlet, then the
+  // upstream node's less the fitted law's drop), so that what one fit misses the next takes up and
+  // the drops along every path from the inlet to an outlet stay the 3D solution's: a branch whose
+  // 3D drop is negative (its end section's pressure above its start's, as at the arch's branch
+  // ostia) gets the floor, and the branches after it the rest.
   const auto nseg = static_cast<size_t>(dn.num_segments());
   std::vector<double> factor(nseg, 1.0), kappa(nseg, 0.0);  // a/R_P and K/R_P of each domain segment
-  for (int b = 0; b < dn.num_branches(); ++b) {
+  std::vector<std::vector<double>> start(reduced.size());   // (solutions × nodes) the fitted network's pressures
+  for (size_t i = 0; i < reduced.size(); ++i) start[i] = reduced[i].node_pressure;
+  cal.fits.resize(static_cast<size_t>(dn.num_branches()));
+  for (int b : tree.order) {
     const auto& br = dn.branch(b);
     std::vector<int> nodes = br.nodes, segs = br.segments;
     if (nodes.front() != tree.up[static_cast<size_t>(b)]) {
@@ -247,43 +280,62 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
       f.name = branch_label(dn, b);
       for (size_t k = k0; k < k1; ++k)
         f.poiseuille_resistance += flow::segment_resistance(bv.viscosity, dn.segment(segs[k]));
-      for (const auto& red : reduced) {
-        f.flows.push_back(red.branch_flow[static_cast<size_t>(b)]);
-        f.drops.push_back(red.node_pressure[static_cast<size_t>(nodes[k0])] -
-                          red.node_pressure[static_cast<size_t>(nodes[k1])]);
+      for (size_t i = 0; i < reduced.size(); ++i) {
+        f.flows.push_back(reduced[i].branch_flow[static_cast<size_t>(b)]);
+        f.drops.push_back(start[i][static_cast<size_t>(nodes[k0])] -
+                          reduced[i].node_pressure[static_cast<size_t>(nodes[k1])]);
       }
       fit(f, 0.1 * f.poiseuille_resistance);
       return f;
     };
-    std::vector<size_t> cuts{0};
-    for (size_t k = 1; k + 1 < nodes.size(); ++k)
-      if (std::all_of(reduced.begin(), reduced.end(), [&](const Reduced& red) {
+    // The branch as a whole, from the fitted network's pressure at its start (reported; the law of
+    // its segments beyond a cap).
+    flow::BranchFit whole = piece(0, nodes.size() - 1);
+    std::vector<size_t> cuts;  // the nodes with a 3D pressure, after the first
+    for (size_t k = 1; k < nodes.size(); ++k)
+      if (k + 1 == nodes.size() || std::all_of(reduced.begin(), reduced.end(), [&](const Reduced& red) {
             return std::isfinite(red.node_pressure[static_cast<size_t>(nodes[k])]);
           }))
         cuts.push_back(k);
-    cuts.push_back(nodes.size() - 1);
-    for (bool merged = true; merged && cuts.size() > 2;) {
-      merged = false;
-      for (size_t j = 0; j + 1 < cuts.size(); ++j)
-        if (piece(cuts[j], cuts[j + 1]).bounded) {
-          cuts.erase(cuts.begin() + static_cast<std::ptrdiff_t>(j + 2 < cuts.size() ? j + 1 : j));
-          merged = true;
-          break;
-        }
-    }
-    for (size_t j = 0; j + 1 < cuts.size(); ++j) {
-      const flow::BranchFit f = piece(cuts[j], cuts[j + 1]);
-      for (size_t k = cuts[j]; k < cuts[j + 1]; ++k) {
+    size_t k0 = 0;
+    int pieces = 0;
+    for (size_t j = 0; j < cuts.size(); ++j) {
+      flow::BranchFit f = piece(k0, cuts[j]);
+      if (f.bounded && j + 1 < cuts.size()) continue;  // merged with the next piece
+      for (size_t k = k0; k < cuts[j]; ++k) {
         factor[static_cast<size_t>(segs[k])] = f.linear / f.poiseuille_resistance;
         kappa[static_cast<size_t>(segs[k])] = f.quadratic / f.poiseuille_resistance;
       }
+      for (size_t i = 0; i < reduced.size(); ++i) {
+        const double q = f.flows[i];
+        start[i][static_cast<size_t>(nodes[cuts[j]])] =
+            start[i][static_cast<size_t>(nodes[k0])] - (f.linear * q + f.quadratic * std::abs(q) * q);
+      }
+      k0 = cuts[j];
+      ++pieces;
     }
-    flow::BranchFit whole = piece(0, nodes.size() - 1);
-    whole.pieces = static_cast<int>(cuts.size()) - 1;
-    cal.fits.push_back(std::move(whole));
+    whole.pieces = pieces;
+    cal.fits[static_cast<size_t>(b)] = std::move(whole);
   }
-  // The laws of the input network: K_s = (K/R_P) R_P,s of its segment in the domain (a segment
-  // cut away beyond a cap: its branch's as a whole).
+  // The laws: K_s = (K/R_P) R_P,s, on the domain's network and on the input network (a segment
+  // cut away beyond a cap: its branch's as a whole). In total pressure the segment that ends at an
+  // outlet also carries the dynamic pressure through the outlet, ½ρ/A² (its node holds the static
+  // outlet value).
+  auto outlet_law = [&](const Network& n, int s, flow::SegmentLaw law) {
+    const auto& seg = n.segment(s);
+    for (int e : {seg.node_from, seg.node_to})
+      if (rho > 0.0 && n.degree(e) == 1 &&
+          e != (&n == &dn            ? inlet
+                : bv.inlet_node >= 0 ? bv.inlet_node
+                                     : n.widest_end()))
+        law.quadratic += dynamic_pressure(rho, 1.0, end_radius(n, e));
+    return law;
+  };
+  std::vector<flow::SegmentLaw> on_domain(nseg);
+  for (size_t c = 0; c < nseg; ++c)
+    on_domain[c] =
+        outlet_law(dn, static_cast<int>(c),
+                   {factor[c], kappa[c] * flow::segment_resistance(bv.viscosity, dn.segment(static_cast<int>(c)))});
   cal.laws.resize(static_cast<size_t>(net.num_segments()));
   for (int b = 0; b < net.num_branches(); ++b) {
     const auto& whole = cal.fits[static_cast<size_t>(b)];
@@ -291,15 +343,17 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
       const int c = d.segment[static_cast<size_t>(s)];
       const double rp = flow::segment_resistance(bv.viscosity, net.segment(s));
       cal.laws[static_cast<size_t>(s)] =
-          c >= 0 ? flow::SegmentLaw{factor[static_cast<size_t>(c)], kappa[static_cast<size_t>(c)] * rp}
-                 : flow::SegmentLaw{whole.linear / whole.poiseuille_resistance,
-                                    whole.quadratic / whole.poiseuille_resistance * rp};
+          outlet_law(net, s,
+                     c >= 0 ? flow::SegmentLaw{factor[static_cast<size_t>(c)], kappa[static_cast<size_t>(c)] * rp}
+                            : flow::SegmentLaw{whole.linear / whole.poiseuille_resistance,
+                                               whole.quadratic / whole.poiseuille_resistance * rp});
     }
   }
-  const std::vector<flow::SegmentLaw> on_domain = d.laws(net, cal.laws);
-  for (size_t i = 0; i < factors.size(); ++i)
-    res.runs[i].after =
-        compare_fields(dn, d.mesh, sols[i], network_flow(dn, values[i], on_domain), inlet, opt.samples_per_branch);
+  for (size_t i = 0; i < factors.size(); ++i) {
+    NetworkFlow nf = network_flow(dn, values[i], on_domain);
+    nf.kinetic_density = rho;
+    res.runs[i].after = compare_fields(dn, d.mesh, sols[i], nf, inlet, opt.samples_per_branch);
+  }
   for (const auto& s : sols) res.solve_seconds += s.assemble_seconds + s.solve_seconds;
   return res;
 }

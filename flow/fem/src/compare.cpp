@@ -111,10 +111,34 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
   res.newton_iterations = sol.newton_iterations;
   const FieldSampler fs(mesh, sol);
   const std::vector<double> dist = path_distances(net, inlet);
+  // A network in total pressure (NetworkFlow::kinetic_density): every node's total pressure
+  // (the outlets' static values plus their dynamic pressure), and the static pressure at a point
+  // of a segment its total less ½ρ(Q/πr²)².
+  const double rho = flow.kinetic_density;
+  auto dynamic_pressure = [&](double q, double r) {
+    const double u = q / (std::numbers::pi * r * r);
+    return 0.5 * rho * u * u;
+  };
+  auto end_flow_radius = [&](int e) {
+    const auto& seg = net.segment(*net.node_segments(e).first);
+    return std::pair{flow.segment_flow[static_cast<size_t>(*net.node_segments(e).first)],
+                     seg.node_from == e ? seg.radius_from : seg.radius_to};
+  };
+  std::vector<double> total = flow.node_pressure;
+  if (rho > 0.0)
+    for (int e : net.ends())
+      if (e != inlet) {
+        const auto [q, r] = end_flow_radius(e);
+        total[static_cast<size_t>(e)] += dynamic_pressure(q, r);
+      }
+  const double inlet_static = rho > 0.0
+                                  ? total[static_cast<size_t>(inlet)] -
+                                        dynamic_pressure(end_flow_radius(inlet).first, end_flow_radius(inlet).second)
+                                  : flow.node_pressure[static_cast<size_t>(inlet)];
   double pmin_out = std::numeric_limits<double>::infinity();
   for (int e : net.ends())
     if (e != inlet) pmin_out = std::min(pmin_out, flow.node_pressure[static_cast<size_t>(e)]);
-  const double drive = std::abs(flow.node_pressure[static_cast<size_t>(inlet)] - pmin_out);
+  const double drive = std::abs(inlet_static - pmin_out);
   const double pscale = drive > 0.0 ? drive : 1.0;
   // Junctions: nodes with three or more segments, and their largest radius.
   std::vector<std::pair<Vec3, double>> junctions;
@@ -141,9 +165,16 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       sp.branch = b;
       sp.s = s;
       sp.x = a + w * (c - a);
-      const double pa = flow.node_pressure[static_cast<size_t>(br.nodes[k])];
-      const double pc = flow.node_pressure[static_cast<size_t>(br.nodes[k + 1])];
+      const double pa = total[static_cast<size_t>(br.nodes[k])];
+      const double pc = total[static_cast<size_t>(br.nodes[k + 1])];
       sp.pressure_network = pa + w * (pc - pa);
+      if (rho > 0.0) {
+        const auto& sg = net.segment(br.segments[k]);
+        const bool along = sg.node_from == br.nodes[k];
+        const double ra = along ? sg.radius_from : sg.radius_to, rc = along ? sg.radius_to : sg.radius_from;
+        sp.pressure_network -=
+            dynamic_pressure(flow.segment_flow[static_cast<size_t>(br.segments[k])], ra + w * (rc - ra));
+      }
       const double da = dist[static_cast<size_t>(br.nodes[k])], dc = dist[static_cast<size_t>(br.nodes[k + 1])];
       sp.path_distance = da + w * (dc - da);
       const double r = net.segment(br.segments[k]).radius;
@@ -217,7 +248,7 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
     const int s = *net.node_segments(inlet).first;
     res.inlet_flow_network = net.segment(s).node_from == inlet ? flow.segment_flow[static_cast<size_t>(s)]
                                                                : -flow.segment_flow[static_cast<size_t>(s)];
-    res.inlet_pressure_network = flow.node_pressure[static_cast<size_t>(inlet)];
+    res.inlet_pressure_network = inlet_static;
     const int g = mesh.group_of_node(inlet);
     if (g >= 0) {
       res.inlet_flow_fem = -sol.group_flow[static_cast<size_t>(g)];
@@ -302,7 +333,8 @@ CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOpt
   const auto cond = group_conditions(d.mesh, d.bv);
   const StokesSolution sol =
       solve_stokes(d.mesh, std::span<const GroupCondition>(cond), comparison_stokes_options(opt, d.bv));
-  const NetworkFlow nf = network_flow(d.network, d.bv, d.laws(net, opt.segment_laws));
+  NetworkFlow nf = network_flow(d.network, d.bv, d.laws(net, opt.segment_laws));
+  if (opt.total_pressure) nf.kinetic_density = d.bv.density;
   CompareResult res = compare_fields(d.network, d.mesh, sol, nf, d.bv.inlet_node, opt.samples_per_branch);
   res.forces = named_forces(d.mesh, sol, comparison_stokes_options(opt, d.bv));
   res.cut_length = d.cut_length;

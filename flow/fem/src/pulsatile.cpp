@@ -163,7 +163,9 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
       out.factorizations += sol.factorizations;
       out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
     }
-    return compare_fields(dnet, mesh, sol, network_flow(dnet, bv, laws), domain.bv.inlet_node, opt.samples_per_branch);
+    NetworkFlow nf = network_flow(dnet, bv, laws);
+    if (opt.total_pressure) nf.kinetic_density = bv.density;
+    return compare_fields(dnet, mesh, sol, nf, domain.bv.inlet_node, opt.samples_per_branch);
   };
   const auto t_frames = std::chrono::steady_clock::now();
   StokesSolution steady_sol;
@@ -181,8 +183,8 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
   for (size_t i = 0; i < frames.size(); ++i) {
     CompareResult r;
     if (dyn) {
-      const NetworkFlow nf =
-          dyn->network_at ? dyn->network_at(times[i]) : network_flow(dnet, on_domain(frames[i]), laws);
+      NetworkFlow nf = dyn->network_at ? dyn->network_at(times[i]) : network_flow(dnet, on_domain(frames[i]), laws);
+      if (opt.total_pressure && !dyn->network_at) nf.kinetic_density = frames[i].density;
       r = compare_fields(dnet, mesh, dynamic[i], nf, domain.bv.inlet_node, opt.samples_per_branch);
       if (vtu) sols[i] = std::move(dynamic[i]);
     } else {

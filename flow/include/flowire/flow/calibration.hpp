@@ -37,7 +37,10 @@ struct Calibration {
   double total_length = 0.0;  ///< m
   /// Σ of the segments' Poiseuille resistances at unit viscosity (m⁻³): the radii's share of the identity
   double resistance_sum = 0.0;
-  std::string equations;            ///< of the 3D solution: "stokes" or "navier_stokes"
+  std::string equations;  ///< of the 3D solution: "stokes" or "navier_stokes"
+  /// "total": the calibrated network's nodes hold total pressures p + ½ρū² (its outlets their
+  /// static values); "static": static pressures (fem/calibrate.hpp)
+  std::string pressure = "static";
   std::vector<double> inlet_flows;  ///< m³/s of the fitted solutions
   double check_inlet_flow = 0.0;    ///< m³/s of the solution not fitted (0: none)
   std::vector<BranchFit> fits;

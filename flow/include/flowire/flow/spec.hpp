@@ -196,6 +196,10 @@ struct FlowSpec {
   /// The factors scale the resistances of every model; a quadratic term makes the quasi-steady
   /// network nonlinear (solved by Newton's method each frame, solver "newton").
   std::vector<SegmentLaw> segment_laws;
+  /// The segment laws are a calibration in total pressure (flow/calibration.hpp): the nodes hold
+  /// p + ½ρū², but for the outlets (static values), and the laws of the segments that end at an
+  /// outlet carry its dynamic pressure.
+  bool total_pressure = false;
   double dt = 1e-3;                  ///< rlc time step (s)
   double rho_infinity = 0.5;         ///< rlc generalized-α spectral radius (1: trapezoidal-like, 0: most damping)
   double periodic_tolerance = 1e-6;  ///< rlc: relative change between cycles taken as periodic

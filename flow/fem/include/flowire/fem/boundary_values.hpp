@@ -50,6 +50,10 @@ struct BoundaryValues {
 struct NetworkFlow {
   std::vector<double> node_pressure;  ///< (num_nodes) Pa
   std::vector<double> segment_flow;   ///< (num_segments) m³/s, node_from -> node_to
+  /// > 0: the network is in total pressure (a calibration, calibrate.hpp) with this density: its
+  /// nodes hold p + ½ρū² but for the outlets, which hold their static values; the comparison
+  /// takes the static pressure of a point as its total less ½ρ(Q/πr²)²
+  double kinetic_density = 0.0;
 };
 
 /// @brief The inlet end node of the boundary values: `bv.inlet_node`, or

@@ -8,12 +8,20 @@
 /// factor, on one mesh (Navier–Stokes: each solve starts from the last, in increasing order).
 /// From each solution every branch gets a flow and a drop: the flow from the outlets' 3D flows
 /// summed over the tree downstream of it (mass conservation, exact), the drop between the 3D
-/// pressures at its two end nodes (the inlet's and outlets' group pressures, at a junction the
-/// mean of the section-mean pressures of the branches that meet there, each normal to its
-/// branch). The two coefficients are the least-squares fit over the solutions, with K ≥ 0 and
-/// a ≥ a tenth of the branch's Poiseuille resistance (a bound that is active is reported): a
-/// branch whose 3D drop falls below that, as where the flow decelerates into a wider lumen and
-/// recovers pressure, is not represented by the law. With one solution, K = 0.
+/// pressures at its two end nodes (the inlet's and outlets' group pressures, elsewhere the mean
+/// pressure of the section normal to the branch; at a junction the section of the branch that
+/// flows into it, so that the junction's loss falls to the branches leaving it). The two coefficients are the
+/// least-squares fit over the solutions, with K ≥ 0 and a ≥ a tenth of the branch's Poiseuille resistance (a bound that
+/// is active is reported): a branch whose 3D drop falls below that, as where the flow decelerates into a wider lumen
+/// and recovers pressure, is not represented by the law. With one solution, K = 0.
+///
+/// In total pressure (Navier–Stokes with a flow inlet; `CalibrateOptions::total_pressure`) the pressures fitted are
+/// the 3D section's mean pressure plus the dynamic pressure ½ρ(Q/πr²)² of the flow through the
+/// network's section there: the drops are then those of the energy the flow loses, which a law of
+/// positive coefficients can hold, where the static pressure also rises and falls as the flow
+/// slows and speeds up (it recovers downstream of a junction). The network's nodes then hold total
+/// pressures, but for the outlets, whose last segment carries the dynamic pressure through the
+/// outlet (½ρ/A² added to its K) so that the outlet keeps its static value.
 ///
 /// The laws go to every segment of the branch in proportion to its Poiseuille resistance (the
 /// factor a/R_P uniform, K_s = K R_P,s / R_P), on the input network (its segments beyond a cap
@@ -32,6 +40,8 @@ namespace flowire::fem {
 struct CalibrateOptions {
   std::vector<double> factors{0.5, 1.0, 1.5};  ///< of the inlet value, the solutions fitted (> 0)
   double check_factor = 0.75;                  ///< a solution not fitted, compared after (0: none)
+  /// Fit total pressures where the inlet is a flow (see the file comment); false: static.
+  bool total_pressure = true;
 };
 
 /// @brief One 3D solution and the network before and after the calibration against it.

@@ -51,6 +51,8 @@ struct FemOptions {
   /// The network's segment laws (a calibration, flow::FlowSpec::segment_laws), one per segment of
   /// the input network, or empty: Poiseuille. The network side of the comparison obeys them.
   std::vector<flow::SegmentLaw> segment_laws;
+  /// The laws are a calibration in total pressure (NetworkFlow::kinetic_density).
+  bool total_pressure = false;
   bool write_png = true;
   bool write_vtu = true;
 };
