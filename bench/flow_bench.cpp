@@ -6,7 +6,9 @@
 //    and a sparse direct solve per frame. BM_FrameRatio measures both in one run.
 // 2. Setup (assembly + CHOLMOD factorization + per-source solves) of binary trees from
 //    10³ to 10⁶ segments with superposition: time, retained memory, full-frame cost.
-// 3. flow.model: rlc on binary trees of 2^(depth+1) − 1 segments: one time step, and one
+// 3. A calibrated network (quadratic segment laws, the newton solver) against Poiseuille,
+//    full frames in one run (BM_CalibratedFrameRatio).
+// 4. flow.model: rlc on binary trees of 2^(depth+1) − 1 segments: one time step, and one
 //    change of the occlusion (refactorization of the step matrix) followed by a step.
 //
 // Run: build-flow/bench/bench_flow --benchmark_counters_tabular=true
@@ -188,6 +190,44 @@ void BM_FrameRatio(benchmark::State& state) {
   state.counters["ratio_100seg"] = dense_s / lazy_s;
 }
 BENCHMARK(BM_FrameRatio)->Unit(benchmark::kMillisecond)->Iterations(20);
+
+/// A calibrated network (vessels.calibration, the newton solver) against Poiseuille
+/// (superposition), full frames, in one run: every segment's quadratic term equal to its linear
+/// one at its mean Poiseuille flow (K = R/|Q̄|), a strongly nonlinear network; frames 1 ms apart
+/// over the pulsatile inlet (each Newton starts from the last frame).
+void BM_CalibratedFrameRatio(benchmark::State& state) {
+  auto& sup = solver(flow::SolverKind::Superposition);
+  static std::unique_ptr<flow::FlowSolver> cal;
+  if (!cal) {
+    FlowSpec spec = spec_for(published(), flow::SolverKind::Superposition);
+    std::vector<double> p(static_cast<size_t>(published().num_nodes())),
+        q(static_cast<size_t>(published().num_segments()));
+    sup.solve_at(0.25, p, q);
+    for (int k = 0; k < published().num_segments(); ++k)
+      spec.segment_laws.push_back({1.0, sup.resistance(k) / std::max(std::abs(q[static_cast<size_t>(k)]), 1e-12)});
+    cal = flow::make_solver(published(), spec);
+  }
+  std::vector<double> p(static_cast<size_t>(published().num_nodes())),
+      q(static_cast<size_t>(published().num_segments()));
+  double poiseuille_s = 0.0, calibrated_s = 0.0, t = 0.0;
+  long n = 0;
+  for (auto _ : state) {
+    const double a = cpu_seconds();
+    for (int r = 0; r < 20; ++r) full_frame(sup, t + 1e-3 * r, p, q);
+    const double b = cpu_seconds();
+    for (int r = 0; r < 20; ++r) full_frame(*cal, t + 1e-3 * r, p, q);
+    const double c = cpu_seconds();
+    poiseuille_s += (b - a) / 20.0;
+    calibrated_s += (c - b) / 20.0;
+    t += 0.02;
+    ++n;
+  }
+  state.SetLabel(std::string(cal->name()) + " vs " + std::string(sup.name()));
+  state.counters["poiseuille_us"] = 1e6 * poiseuille_s / static_cast<double>(n);
+  state.counters["calibrated_us"] = 1e6 * calibrated_s / static_cast<double>(n);
+  state.counters["ratio"] = calibrated_s / poiseuille_s;
+}
+BENCHMARK(BM_CalibratedFrameRatio)->Unit(benchmark::kMillisecond)->Iterations(10);
 
 double rss_mb() {
   std::ifstream in("/proc/self/statm");

@@ -69,10 +69,11 @@ Tree branch_tree(const Network& net, int inlet) {
   return t;
 }
 
-/// ½ρ(Q/πr²)²: the dynamic pressure of a flow Q through a section of radius r (flat profile).
-double dynamic_pressure(double rho, double q, double r) {
-  const double u = q / (std::numbers::pi * r * r);
-  return 0.5 * rho * u * u;
+/// ½ρ/A² of an end of radius r: the dynamic pressure of a flat profile per Q², which the last
+/// segment of a network in total pressure carries so that its outlet node keeps the static value.
+double outlet_dynamic_pressure(double rho, double r) {
+  const double area = std::numbers::pi * r * r;
+  return 0.5 * rho / (area * area);
 }
 
 /// The radius of the network at an end node (of its one segment).
@@ -89,6 +90,7 @@ double end_radius(const Network& net, int e) {
 struct Reduced {
   std::vector<double> branch_flow;    // (branches) downstream
   std::vector<double> node_pressure;  // (nodes)
+  std::vector<double> alpha;          // (nodes) at an outlet in total pressure: the energy's α, else 1
 };
 
 Reduced reduce(const Network& net, const Tree& t, const TetMesh& mesh, const StokesSolution& sol,
@@ -121,20 +123,49 @@ Reduced reduce(const Network& net, const Tree& t, const TetMesh& mesh, const Sto
                             : k == n - 1
                                 ? net.segment(br.segments.back()).radius_to
                                 : 0.5 * (net.segment(br.segments[k - 1]).radius + net.segment(br.segments[k]).radius);
-      const auto [mean, centre, found] = section_pressure(fs, net.node(node), axis, radius);
-      (void)centre;
-      if (!found) continue;
-      sum[static_cast<size_t>(node)] += mean + dynamic_pressure(rho, red.branch_flow[static_cast<size_t>(b)], radius);
+      double value = 0.0;
+      if (rho > 0.0) {
+        const auto total = section_total_pressure(fs, net.node(node), axis, radius, rho);
+        if (!total) continue;
+        value = *total;
+      } else {
+        const auto [mean, centre, found] = section_pressure(fs, net.node(node), axis, radius);
+        (void)centre;
+        if (!found) continue;
+        value = mean;
+      }
+      sum[static_cast<size_t>(node)] += value;
       ++count[static_cast<size_t>(node)];
     }
   }
   for (size_t n = 0; n < nn; ++n)
     if (count[n] > 0) red.node_pressure[n] = sum[n] / count[n];
-  red.node_pressure[static_cast<size_t>(inlet)] =
-      r.inlet_pressure_fem + dynamic_pressure(rho, r.inlet_flow_fem, end_radius(net, inlet));
-  for (const auto& o : r.outlets)
-    red.node_pressure[static_cast<size_t>(o.node)] =
-        o.pressure_fem + dynamic_pressure(rho, o.flow_fem, end_radius(net, o.node));
+  // The inlet: its group pressure, and in total pressure the energy its section carries (the
+  // section through the inlet node, where the imposed profile enters); the outlets: their static
+  // values, plus in total pressure ½ρ(Q/A)², which the outlet's segment carries in its law.
+  red.node_pressure[static_cast<size_t>(inlet)] = r.inlet_pressure_fem;
+  if (rho > 0.0) {
+    const auto& seg = net.segment(*net.node_segments(inlet).first);
+    const int next = seg.node_from == inlet ? seg.node_to : seg.node_from;
+    const auto total =
+        section_total_pressure(fs, net.node(inlet), net.node(next) - net.node(inlet), end_radius(net, inlet), rho);
+    if (total) red.node_pressure[static_cast<size_t>(inlet)] = *total;
+  }
+  // An outlet: its static value, and in total pressure the energy leaving through its section,
+  // p + α½ρ(Q/A)² (α of the 3D profile there, between 1 and 3), which its last segment carries.
+  red.alpha.assign(nn, 1.0);
+  for (const auto& o : r.outlets) {
+    const auto e = static_cast<size_t>(o.node);
+    red.node_pressure[e] = o.pressure_fem;
+    if (!(rho > 0.0)) continue;
+    const double kinetic = outlet_dynamic_pressure(rho, end_radius(net, o.node)) * o.flow_fem * o.flow_fem;
+    const auto& seg = net.segment(*net.node_segments(o.node).first);
+    const int prev = seg.node_from == o.node ? seg.node_to : seg.node_from;
+    const auto total =
+        section_total_pressure(fs, net.node(o.node), net.node(o.node) - net.node(prev), end_radius(net, o.node), rho);
+    if (total && kinetic > 0.0) red.alpha[e] = std::clamp((*total - o.pressure_fem) / kinetic, 1.0, 3.0);
+    red.node_pressure[e] += red.alpha[e] * kinetic;
+  }
   for (int b : t.order)
     for (int n : {t.up[static_cast<size_t>(b)], t.down[static_cast<size_t>(b)]})
       if (!std::isfinite(red.node_pressure[static_cast<size_t>(n)]))
@@ -318,24 +349,33 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
     cal.fits[static_cast<size_t>(b)] = std::move(whole);
   }
   // The laws: K_s = (K/R_P) R_P,s, on the domain's network and on the input network (a segment
-  // cut away beyond a cap: its branch's as a whole). In total pressure the segment that ends at an
-  // outlet also carries the dynamic pressure through the outlet, ½ρ/A² (its node holds the static
-  // outlet value).
-  auto outlet_law = [&](const Network& n, int s, flow::SegmentLaw law) {
-    const auto& seg = n.segment(s);
-    for (int e : {seg.node_from, seg.node_to})
-      if (rho > 0.0 && n.degree(e) == 1 &&
-          e != (&n == &dn            ? inlet
-                : bv.inlet_node >= 0 ? bv.inlet_node
-                                     : n.widest_end()))
-        law.quadratic += dynamic_pressure(rho, 1.0, end_radius(n, e));
+  // cut away beyond a cap: its branch's as a whole).
+  // In total pressure, a segment that ends at an outlet also carries α½ρ/A² of the outlet (α the
+  // mean over the fitted solutions; an end of the input network takes its domain end's).
+  std::vector<double> alpha(static_cast<size_t>(dn.num_nodes()), 1.0);
+  for (int e = 0; e < dn.num_nodes(); ++e) {
+    double sum = 0.0;
+    for (const auto& red : reduced) sum += red.alpha[static_cast<size_t>(e)];
+    if (!reduced.empty()) alpha[static_cast<size_t>(e)] = sum / static_cast<double>(reduced.size());
+  }
+  auto alpha_of = [&](const Network& n, int e) {
+    if (&n == &dn) return alpha[static_cast<size_t>(e)];
+    const int de = d.node[static_cast<size_t>(e)];
+    return de >= 0 ? alpha[static_cast<size_t>(de)] : 1.0;
+  };
+  res.outlet_alpha = alpha;
+  auto with_outlet = [&](const Network& n, int n_inlet, int s, flow::SegmentLaw law) {
+    for (int e : {n.segment(s).node_from, n.segment(s).node_to})
+      if (n.degree(e) == 1 && e != n_inlet)
+        law.quadratic += alpha_of(n, e) * outlet_dynamic_pressure(rho, end_radius(n, e));
     return law;
   };
+  const int net_inlet = inlet_of(net, bv);
   std::vector<flow::SegmentLaw> on_domain(nseg);
   for (size_t c = 0; c < nseg; ++c)
     on_domain[c] =
-        outlet_law(dn, static_cast<int>(c),
-                   {factor[c], kappa[c] * flow::segment_resistance(bv.viscosity, dn.segment(static_cast<int>(c)))});
+        with_outlet(dn, inlet, static_cast<int>(c),
+                    {factor[c], kappa[c] * flow::segment_resistance(bv.viscosity, dn.segment(static_cast<int>(c)))});
   cal.laws.resize(static_cast<size_t>(net.num_segments()));
   for (int b = 0; b < net.num_branches(); ++b) {
     const auto& whole = cal.fits[static_cast<size_t>(b)];
@@ -343,15 +383,16 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
       const int c = d.segment[static_cast<size_t>(s)];
       const double rp = flow::segment_resistance(bv.viscosity, net.segment(s));
       cal.laws[static_cast<size_t>(s)] =
-          outlet_law(net, s,
-                     c >= 0 ? flow::SegmentLaw{factor[static_cast<size_t>(c)], kappa[static_cast<size_t>(c)] * rp}
-                            : flow::SegmentLaw{whole.linear / whole.poiseuille_resistance,
-                                               whole.quadratic / whole.poiseuille_resistance * rp});
+          with_outlet(net, net_inlet, s,
+                      c >= 0 ? flow::SegmentLaw{factor[static_cast<size_t>(c)], kappa[static_cast<size_t>(c)] * rp}
+                             : flow::SegmentLaw{whole.linear / whole.poiseuille_resistance,
+                                                whole.quadratic / whole.poiseuille_resistance * rp});
     }
   }
   for (size_t i = 0; i < factors.size(); ++i) {
     NetworkFlow nf = network_flow(dn, values[i], on_domain);
     nf.kinetic_density = rho;
+    if (rho > 0.0) nf.end_alpha = alpha;
     res.runs[i].after = compare_fields(dn, d.mesh, sols[i], nf, inlet, opt.samples_per_branch);
   }
   for (const auto& s : sols) res.solve_seconds += s.assemble_seconds + s.solve_seconds;
@@ -391,14 +432,14 @@ void write_calibration_report(const std::string& dir, const Network& net, const 
                     r.runs.size());
   write_text_atomically(std::filesystem::path(dir) / "calibration.md", md.str());
   std::ostringstream csv;
-  csv << "inlet_flow,fitted,branch,s,pressure_fem,pressure_before,pressure_after,near_junction\n";
+  csv << "inlet_flow,fitted,branch,s,pressure_fem,pressure_before,pressure_fem_after,pressure_after,near_junction\n";
   for (const auto& run : r.runs)
     for (size_t i = 0; i < run.before.samples.size() && i < run.after.samples.size(); ++i) {
       const auto& b = run.before.samples[i];
       const auto& a = run.after.samples[i];
-      csv << fmt::format("{:.9g},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{}\n", run.inlet_flow, run.fitted ? 1 : 0,
-                         branch_label(net, b.branch), b.s, b.pressure_fem, b.pressure_network, a.pressure_network,
-                         b.near_junction ? 1 : 0);
+      csv << fmt::format("{:.9g},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{}\n", run.inlet_flow, run.fitted ? 1 : 0,
+                         branch_label(net, b.branch), b.s, b.pressure_fem, b.pressure_network, a.pressure_fem,
+                         a.pressure_network, b.near_junction ? 1 : 0);
     }
   write_text_atomically(std::filesystem::path(dir) / "calibration.csv", csv.str());
 }

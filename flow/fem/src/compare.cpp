@@ -111,30 +111,23 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
   res.newton_iterations = sol.newton_iterations;
   const FieldSampler fs(mesh, sol);
   const std::vector<double> dist = path_distances(net, inlet);
-  // A network in total pressure (NetworkFlow::kinetic_density): every node's total pressure
-  // (the outlets' static values plus their dynamic pressure), and the static pressure at a point
-  // of a segment its total less ½ρ(Q/πr²)².
+  // A network in total pressure (NetworkFlow::kinetic_density) is compared in total pressure: the
+  // FEM's section carries p + ½ρ|u|² weighted by the flux (section_total_pressure), the network's
+  // nodes hold it (its outlets their static values, to which their flat-profile ½ρ(Q/A)² is added).
   const double rho = flow.kinetic_density;
-  auto dynamic_pressure = [&](double q, double r) {
-    const double u = q / (std::numbers::pi * r * r);
-    return 0.5 * rho * u * u;
-  };
-  auto end_flow_radius = [&](int e) {
-    const auto& seg = net.segment(*net.node_segments(e).first);
-    return std::pair{flow.segment_flow[static_cast<size_t>(*net.node_segments(e).first)],
-                     seg.node_from == e ? seg.radius_from : seg.radius_to};
-  };
-  std::vector<double> total = flow.node_pressure;
+  res.total_pressure = rho > 0.0;
+  const double inlet_static = flow.node_pressure[static_cast<size_t>(inlet)];
+  std::vector<double> node_value = flow.node_pressure;  // the outlets' total: static + ½ρ(Q/A)²
   if (rho > 0.0)
-    for (int e : net.ends())
-      if (e != inlet) {
-        const auto [q, r] = end_flow_radius(e);
-        total[static_cast<size_t>(e)] += dynamic_pressure(q, r);
-      }
-  const double inlet_static = rho > 0.0
-                                  ? total[static_cast<size_t>(inlet)] -
-                                        dynamic_pressure(end_flow_radius(inlet).first, end_flow_radius(inlet).second)
-                                  : flow.node_pressure[static_cast<size_t>(inlet)];
+    for (int e : net.ends()) {
+      if (e == inlet) continue;
+      const int s = *net.node_segments(e).first;
+      const auto& seg = net.segment(s);
+      const double r = seg.node_from == e ? seg.radius_from : seg.radius_to;
+      const double u = flow.segment_flow[static_cast<size_t>(s)] / (std::numbers::pi * r * r);
+      const double alpha = flow.end_alpha.empty() ? 1.0 : flow.end_alpha[static_cast<size_t>(e)];
+      node_value[static_cast<size_t>(e)] += alpha * 0.5 * rho * u * u;
+    }
   double pmin_out = std::numeric_limits<double>::infinity();
   for (int e : net.ends())
     if (e != inlet) pmin_out = std::min(pmin_out, flow.node_pressure[static_cast<size_t>(e)]);
@@ -165,21 +158,16 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       sp.branch = b;
       sp.s = s;
       sp.x = a + w * (c - a);
-      const double pa = total[static_cast<size_t>(br.nodes[k])];
-      const double pc = total[static_cast<size_t>(br.nodes[k + 1])];
+      const double pa = node_value[static_cast<size_t>(br.nodes[k])];
+      const double pc = node_value[static_cast<size_t>(br.nodes[k + 1])];
       sp.pressure_network = pa + w * (pc - pa);
-      if (rho > 0.0) {
-        const auto& sg = net.segment(br.segments[k]);
-        const bool along = sg.node_from == br.nodes[k];
-        const double ra = along ? sg.radius_from : sg.radius_to, rc = along ? sg.radius_to : sg.radius_from;
-        sp.pressure_network -=
-            dynamic_pressure(flow.segment_flow[static_cast<size_t>(br.segments[k])], ra + w * (rc - ra));
-      }
       const double da = dist[static_cast<size_t>(br.nodes[k])], dc = dist[static_cast<size_t>(br.nodes[k + 1])];
       sp.path_distance = da + w * (dc - da);
       const double r = net.segment(br.segments[k]).radius;
       auto [mean, centre, found] = section_pressure(fs, sp.x, c - a, r);
       sp.found = found;
+      if (rho > 0.0 && found)
+        if (const auto t = section_total_pressure(fs, sp.x, c - a, r, rho)) mean = *t;
       sp.pressure_fem = mean;
       sp.pressure_fem_centre = centre;
       const double diff = mean - sp.pressure_network;
@@ -255,6 +243,13 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       res.inlet_pressure_fem = static_cast<size_t>(g) < sol.group_pressure.size()
                                    ? sol.group_pressure[static_cast<size_t>(g)]
                                    : std::numeric_limits<double>::quiet_NaN();
+      if (rho > 0.0) {  // the energy the inlet section carries
+        const auto& seg = net.segment(s);
+        const int next = seg.node_from == inlet ? seg.node_to : seg.node_from;
+        const double r_in = seg.node_from == inlet ? seg.radius_from : seg.radius_to;
+        if (const auto t = section_total_pressure(fs, net.node(inlet), net.node(next) - net.node(inlet), r_in, rho))
+          res.inlet_pressure_fem = *t;
+      }
     }
   }
   for (const auto& o : res.outlets) {

@@ -152,4 +152,26 @@ std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const 
   return {mean, std::isnan(centre) ? mean : centre, true};
 }
 
+std::optional<double> section_total_pressure(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r,
+                                             double density) {
+  const Vec3 t = axis.normalized();
+  const Vec3 a = (std::abs(t.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(t).normalized();
+  const Vec3 b = t.cross(a);
+  constexpr int kRings = 8, kAngles = 24;  // equal-area rings: every point weighs the same
+  double energy = 0.0, flux = 0.0;
+  for (int i = 0; i < kRings; ++i) {
+    const double rho = r * std::sqrt((i + 0.5) / kRings);
+    for (int k = 0; k < kAngles; ++k) {
+      const double phi = 2.0 * std::numbers::pi * (k + 0.5 * (i % 2)) / kAngles;
+      const auto v = fs.at(c + rho * (std::cos(phi) * a + std::sin(phi) * b), 1e-6);
+      if (!v) continue;
+      const double un = v->velocity.dot(t);
+      energy += (v->pressure + 0.5 * density * v->velocity.squaredNorm()) * un;
+      flux += un;
+    }
+  }
+  if (!(std::abs(flux) > 0.0)) return std::nullopt;
+  return energy / flux;
+}
+
 }  // namespace flowire::fem

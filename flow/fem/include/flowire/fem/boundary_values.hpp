@@ -51,9 +51,12 @@ struct NetworkFlow {
   std::vector<double> node_pressure;  ///< (num_nodes) Pa
   std::vector<double> segment_flow;   ///< (num_segments) m³/s, node_from -> node_to
   /// > 0: the network is in total pressure (a calibration, calibrate.hpp) with this density: its
-  /// nodes hold p + ½ρū² but for the outlets, which hold their static values; the comparison
-  /// takes the static pressure of a point as its total less ½ρ(Q/πr²)²
+  /// nodes hold the energy per unit flow, p + ½ρ|u|² weighted by the flux, but for the outlets,
+  /// which hold their static values; the comparison is then one of total pressures
   double kinetic_density = 0.0;
+  /// (nodes, or empty: 1) in total pressure, the kinetic energy factor α of each outlet: its total
+  /// is its static value plus α½ρ(Q/A)²
+  std::vector<double> end_alpha;
 };
 
 /// @brief The inlet end node of the boundary values: `bv.inlet_node`, or

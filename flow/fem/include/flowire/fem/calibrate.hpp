@@ -6,26 +6,32 @@
 /// The 3D problem (the scene's `fem:` geometry, equations and mesh; a real lumen's network cut at
 /// its caps, cap_cut.hpp) is solved at a few steady inlet values, the scene's scaled by each
 /// factor, on one mesh (Navier–Stokes: each solve starts from the last, in increasing order).
-/// From each solution every branch gets a flow and a drop: the flow from the outlets' 3D flows
-/// summed over the tree downstream of it (mass conservation, exact), the drop between the 3D
-/// pressures at its two end nodes (the inlet's and outlets' group pressures, elsewhere the mean
-/// pressure of the section normal to the branch; at a junction the section of the branch that
-/// flows into it, so that the junction's loss falls to the branches leaving it). The two coefficients are the
-/// least-squares fit over the solutions, with K ≥ 0 and a ≥ a tenth of the branch's Poiseuille resistance (a bound that
-/// is active is reported): a branch whose 3D drop falls below that, as where the flow decelerates into a wider lumen
-/// and recovers pressure, is not represented by the law. With one solution, K = 0.
+/// From each solution every branch gets a flow, the outlets' 3D flows summed over the tree
+/// downstream of it (mass conservation, exact), and every node a pressure: the inlet's and the
+/// outlets' group pressures, elsewhere the mean pressure of the section normal to the branch (at a
+/// junction the section of the branch that flows into it, so that the junction's loss falls to the
+/// branches leaving it). The branches are fitted from the inlet down, each piece by piece: a piece
+/// runs to the next node with a 3D pressure, and is merged with the following one while a bound of
+/// its fit is active; its two coefficients are the least-squares fit over the solutions relative
+/// to each drop, with K ≥ 0 and a ≥ a tenth of its Poiseuille resistance; and its drop is taken
+/// from the pressure the fitted network will have at its start, so that what one fit misses the
+/// next takes up and the drops along every path from the inlet to an outlet stay the 3D
+/// solution's. A branch whose 3D drop is negative (a pressure that recovers over it) gets the floor
+/// and is reported as bounded. With one solution, K = 0.
 ///
-/// In total pressure (Navier–Stokes with a flow inlet; `CalibrateOptions::total_pressure`) the pressures fitted are
-/// the 3D section's mean pressure plus the dynamic pressure ½ρ(Q/πr²)² of the flow through the
-/// network's section there: the drops are then those of the energy the flow loses, which a law of
-/// positive coefficients can hold, where the static pressure also rises and falls as the flow
-/// slows and speeds up (it recovers downstream of a junction). The network's nodes then hold total
-/// pressures, but for the outlets, whose last segment carries the dynamic pressure through the
-/// outlet (½ρ/A² added to its K) so that the outlet keeps its static value.
+/// In total pressure (Navier–Stokes with a flow inlet; `CalibrateOptions::total_pressure`) the
+/// pressures fitted are the energy each section carries per unit flow, ∫(p + ½ρ|u|²) u·n dA / Q
+/// over the disk of the network's radius (section_total_pressure: the kinetic energy of the real
+/// velocity profile included), at the inlet too; at an outlet its static value plus α½ρ(Q/A)²
+/// (α that of the 3D profile through the outlet), which the outlet's last segment carries in its
+/// law so that the outlet node keeps the static value. The drops are then those of the energy the flow loses, which a
+/// law of positive coefficients holds, where the static pressure rises and falls as the flow slows and speeds up (it
+/// recovers downstream of a junction, and the arch's jet stagnates at the branch ostia). The calibrated network's nodes
+/// hold total pressures, and it is compared in total pressure.
 ///
-/// The laws go to every segment of the branch in proportion to its Poiseuille resistance (the
-/// factor a/R_P uniform, K_s = K R_P,s / R_P), on the input network (its segments beyond a cap
-/// take the branch's law too). The comparison is then repeated with the calibrated network on
+/// Each segment takes its piece's law in proportion to its Poiseuille resistance (the factor a/R_P
+/// uniform over the piece, K_s = K R_P,s / R_P), on the input network too (its segments beyond a
+/// cap take their branch's law as a whole). The comparison is then repeated with the calibrated network on
 /// every fitted solution, and on one more not fitted (`check_factor`), beside the uncalibrated
 /// comparison: the before/after table.
 #include <string>
@@ -55,6 +61,8 @@ struct CalibrationRun {
 struct CalibrationResult {
   flow::Calibration calibration;  ///< the laws of the input network and the fits (calibration.hpp)
   std::vector<CalibrationRun> runs;
+  /// (domain nodes) in total pressure, the kinetic energy factor α of each outlet (1 elsewhere)
+  std::vector<double> outlet_alpha;
   double mesh_seconds = 0.0, solve_seconds = 0.0;
 };
 
@@ -65,8 +73,9 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
                             const CalibrateOptions& co = {});
 
 /// @brief `calibration.md` (the before/after table per solution and the fits per branch) and
-/// `calibration.csv` (every sample point of every solution, network before and after and 3D) in
-/// `dir`. Rank 0 only.
+/// `calibration.csv` (every sample point of every solution: the 3D static pressure and the
+/// network's before; the 3D pressure the calibrated network is compared with, total in total
+/// pressure, and the network's after) in `dir`. Rank 0 only.
 void write_calibration_report(const std::string& dir, const Network& net, const CalibrationResult& r);
 
 }  // namespace flowire::fem

@@ -102,6 +102,10 @@ struct CompareResult {
   double max_rel_diff_drop_junction = 0.0;  ///< max |rel_diff_drop| near junctions
   double max_flow_split_error = 0.0;        ///< max |Q_fem/ΣQ_fem − Q_net/ΣQ_net| over outlets
   double max_flow_error = 0.0;              ///< max |Q_fem/Q_net − 1| over outlets
+  /// The pressures compared are total pressures (a network in total pressure,
+  /// NetworkFlow::kinetic_density): the FEM's the flux-weighted p + ½ρ|u|² of each section, the
+  /// network's its node values (its outlets' static)
+  bool total_pressure = false;
   int tets = 0, unknowns = 0;
   /// Force of the fluid on each no-slip group (boundary_forces; `compare` only), N.
   std::vector<std::pair<std::string, Vec3>> forces;

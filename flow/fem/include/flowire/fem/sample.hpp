@@ -43,4 +43,12 @@ class FieldSampler {
 /// false when no point of the disk lies in the mesh. Returns (mean, centre, found).
 std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r);
 
+/// @brief The mechanical energy a section carries per unit of flow: the flux-weighted total
+/// pressure ∫(p + ½ρ|u|²) u·t dA / ∫ u·t dA over a disk of radius `r` normal to `axis` at `c`
+/// (8 equal-area rings × 24 angles, the points inside the mesh): the total pressure of the 1D
+/// energy balance, the kinetic energy correction of the velocity profile included. Nothing where
+/// no flow crosses the points found.
+std::optional<double> section_total_pressure(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r,
+                                             double density);
+
 }  // namespace flowire::fem
