@@ -132,7 +132,7 @@ class NewtonSolver final : public FrameSolver {
   }
 
  private:
-  static constexpr double kTolerance = 1e-12;  ///< node imbalance / the largest flow
+  static constexpr double kTolerance = 1e-10;  ///< node imbalance / the largest flow (round-off reaches 1e-12)
   Assembly a_;
   mutable Assembly tangent_;  // a_ with the tangent conductances dQ/dΔp
   mutable Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
