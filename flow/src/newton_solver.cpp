@@ -7,12 +7,14 @@
 // function of the unknown pressures and its Jacobian is the nodal conductance matrix of the
 // tangent conductances dQ/dΔp: symmetric positive definite, with the pattern of the linear one.
 // Newton's method from the last frame's pressures (the Poiseuille solution at the first), the
-// Jacobian refactored by CHOLMOD on the pattern analysed once, and a backtracking line search on
-// |F| converge to the tolerance in a few iterations; the superposition of unit responses does not
-// hold for a nonlinear network, so every frame is solved.
+// Jacobian refilled in place and refactored by CHOLMOD on the pattern analysed once, and a
+// backtracking line search on |F| converge to the tolerance in a few iterations; between frames
+// the last factorization is reused (chord steps, one solve each) while it still converges fast; the superposition of
+// unit responses does not hold for a nonlinear network, so every frame is solved.
 #include <fmt/format.h>
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
+#include <array>
 #include <cmath>
 
 #include "flowire/common/error.hpp"
@@ -26,14 +28,33 @@ class NewtonSolver final : public FrameSolver {
   NewtonSolver(const Network& net, FlowSpec spec) : FrameSolver(net, std::move(spec)) {
     Stopwatch sw;
     a_ = assemble(net_, spec_, resistance_);
-    tangent_ = a_;
     const int nu = a_.num_unknowns();
     x_ = Eigen::VectorXd::Zero(nu);
     f_ = Eigen::VectorXd::Zero(nu);
     inj_ = Eigen::VectorXd::Zero(nu);
     coef_.resize(static_cast<size_t>(a_.num_sources()));
     dq_.resize(static_cast<size_t>(net_.num_segments()));
-    if (nu > 0) chol_.analyzePattern(nodal_matrix(net_, a_));
+    if (nu > 0) {
+      jac_ = nodal_matrix(net_, a_);
+      chol_.analyzePattern(jac_);
+      // Where each conductance goes among the matrix's values: refilled in place every factorization.
+      auto slot = [&](int r, int c) {
+        for (Eigen::Index k = jac_.outerIndexPtr()[c]; k < jac_.outerIndexPtr()[c + 1]; ++k)
+          if (jac_.innerIndexPtr()[k] == r) return static_cast<int>(k);
+        return -1;
+      };
+      diag_slot_.resize(static_cast<size_t>(nu));
+      for (int u = 0; u < nu; ++u) diag_slot_[static_cast<size_t>(u)] = slot(u, u);
+      segment_slot_.resize(static_cast<size_t>(net_.num_segments()));
+      for (int k = 0; k < net_.num_segments(); ++k) {
+        const auto& seg = net_.segment(k);
+        const int uf = a_.unknown_of_node[static_cast<size_t>(seg.node_from)];
+        const int ut = a_.unknown_of_node[static_cast<size_t>(seg.node_to)];
+        segment_slot_[static_cast<size_t>(k)] = {uf >= 0 ? slot(uf, uf) : -1, ut >= 0 ? slot(ut, ut) : -1,
+                                                 uf >= 0 && ut >= 0 ? slot(uf, ut) : -1,
+                                                 uf >= 0 && ut >= 0 ? slot(ut, uf) : -1};
+      }
+    }
     timings_.assemble = sw.seconds();
     // The first guess: the linear network (K = 0) at t = 0.
     Stopwatch sf;
@@ -47,6 +68,7 @@ class NewtonSolver final : public FrameSolver {
 
  protected:
   void apply_occlusion() override {
+    factored_ = false;
     scratch_q_.clear();
     compute(time_, p_.data(), q_.data());
   }
@@ -102,13 +124,20 @@ class NewtonSolver final : public FrameSolver {
     double norm = f_.norm();
     constexpr int kMaxIterations = 50;
     int it = 0;
+    // The last factorization is kept (a chord step, one solve) while it still cuts the imbalance
+    // at least fourfold a step; otherwise the tangent is refactored (a Newton step).
+    bool refactor = !factored_, stalled = false;
     for (; it < kMaxIterations; ++it) {
       if (!(f_.lpNorm<Eigen::Infinity>() > kTolerance * scale)) break;
-      for (size_t s = 0; s < dq_.size(); ++s) tangent_.conductance[s] = dq_[s];
-      chol_.factorize(nodal_matrix(net_, tangent_));
-      if (chol_.info() != Eigen::Success)
-        throw_numerical_error(fmt::format("flow: the tangent conductance matrix is singular at t = {} s", t));
+      // Round-off: a Newton step that no longer halves an imbalance already below the floor.
+      if (stalled && !(f_.lpNorm<Eigen::Infinity>() > kFloor * scale)) break;
+      const bool newton = refactor;
+      if (refactor) {
+        factorize_tangent(t);
+        refactor = false;
+      }
       const Eigen::VectorXd step = -chol_.solve(f_);
+      const double before = norm;
       const Eigen::VectorXd x0 = x_;
       double alpha = 1.0;
       for (int cut = 0;; ++cut) {
@@ -122,9 +151,11 @@ class NewtonSolver final : public FrameSolver {
         }
         alpha *= 0.5;
       }
+      if (norm > 0.25 * before) refactor = true;
+      stalled = newton && norm > 0.5 * before;
     }
     iterations_ += it;
-    if (f_.lpNorm<Eigen::Infinity>() > kTolerance * scale || !std::isfinite(norm))
+    if (f_.lpNorm<Eigen::Infinity>() > kFloor * scale || !std::isfinite(norm))
       throw_numerical_error(
           fmt::format("flow: Newton's method on the quadratic losses did not converge at t = {} s ({} iterations, node "
                       "imbalance {:.3g} of the largest flow {:.3g} m³/s)",
@@ -132,9 +163,35 @@ class NewtonSolver final : public FrameSolver {
   }
 
  private:
-  static constexpr double kTolerance = 1e-10;  ///< node imbalance / the largest flow (round-off reaches 1e-12)
+  /// The tangent conductance matrix at the current dq_, refilled in place and factored.
+  void factorize_tangent(double t) const {
+    double* v = jac_.valuePtr();
+    std::fill(v, v + jac_.nonZeros(), 0.0);
+    for (size_t u = 0; u < diag_slot_.size(); ++u)
+      v[diag_slot_[u]] += a_.outlet_conductance[static_cast<size_t>(a_.node_of_unknown[u])];
+    for (size_t k = 0; k < segment_slot_.size(); ++k) {
+      const auto& sl = segment_slot_[k];
+      const double c = dq_[k];
+      if (sl[0] >= 0) v[sl[0]] += c;
+      if (sl[1] >= 0) v[sl[1]] += c;
+      if (sl[2] >= 0) v[sl[2]] -= c;
+      if (sl[3] >= 0) v[sl[3]] -= c;
+    }
+    chol_.factorize(jac_);
+    if (chol_.info() != Eigen::Success)
+      throw_numerical_error(fmt::format("flow: the tangent conductance matrix is singular at t = {} s", t));
+    factored_ = true;
+    ++factorizations_;
+  }
+
+  static constexpr double kTolerance = 1e-10;  ///< node imbalance / the largest flow: converged
+  static constexpr double kFloor = 1e-9;       ///< ... accepted where round-off stalls Newton above kTolerance
   Assembly a_;
-  mutable Assembly tangent_;  // a_ with the tangent conductances dQ/dΔp
+  mutable Eigen::SparseMatrix<double> jac_;       // the nodal pattern; values: the tangent conductances
+  std::vector<int> diag_slot_;                    // (unknowns) index of the diagonal among jac_'s values
+  std::vector<std::array<int, 4>> segment_slot_;  // (segments) from-from, to-to, from-to, to-from; -1: none
+  mutable bool factored_ = false;                 // chol_ holds a tangent of this network
+  mutable long factorizations_ = 0;
   mutable Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
   mutable Eigen::VectorXd x_, f_, inj_;  // unknown pressures (the last frame's), balance, injections
   mutable std::vector<double> coef_, dq_;

@@ -42,9 +42,10 @@ TEST(NewtonSolver, TwoSegmentsInSeriesMatchTheRootOfTheirSummedLaw) {
   EXPECT_EQ(solver->name(), "newton");
   // 3Q + 8Q² = 10
   const double q = (-3.0 + std::sqrt(9.0 + 320.0)) / 16.0;
-  EXPECT_NEAR(solver->segment_flow(0), q, 1e-12 * q);
-  EXPECT_NEAR(solver->segment_flow(2), q, 1e-12 * q);
-  EXPECT_NEAR(solver->node_pressure(1), 10.0 - (q + 3.0 * q * q), 1e-11);
+  // The solver converges to a node imbalance of 1e-10 of the largest flow.
+  EXPECT_NEAR(solver->segment_flow(0), q, 1e-9 * q);
+  EXPECT_NEAR(solver->segment_flow(2), q, 1e-9 * q);
+  EXPECT_NEAR(solver->node_pressure(1), 10.0 - (q + 3.0 * q * q), 1e-8);
   // The quadratic losses lower the flow below Poiseuille's 10/3.
   EXPECT_LT(q, 10.0 / 3.0 * 0.5);
 }
@@ -70,10 +71,10 @@ TEST(NewtonSolver, AYSplitsItsFlowWhereBothDaughtersDropTheSamePressure) {
     ((2.0 * m + m * m) - (q2 + 6.0 * q2 * q2) < 0.0 ? lo : hi) = m;
   }
   const double q1 = 0.5 * (lo + hi), q2 = 3.0 - q1;
-  EXPECT_NEAR(solver->segment_flow(1), q1, 1e-10);
-  EXPECT_NEAR(solver->segment_flow(2), q2, 1e-10);
-  EXPECT_NEAR(solver->node_pressure(1), 2.0 * q1 + q1 * q1, 1e-9);
-  EXPECT_NEAR(solver->node_pressure(0), solver->node_pressure(1) + 3.0 + 2.0 * 9.0, 1e-9);
+  EXPECT_NEAR(solver->segment_flow(1), q1, 1e-9);
+  EXPECT_NEAR(solver->segment_flow(2), q2, 1e-9);
+  EXPECT_NEAR(solver->node_pressure(1), 2.0 * q1 + q1 * q1, 1e-8);
+  EXPECT_NEAR(solver->node_pressure(0), solver->node_pressure(1) + 3.0 + 2.0 * 9.0, 1e-8);
 }
 
 TEST(NewtonSolver, ResistanceFactorsAloneKeepTheLinearSolverAndScaleItsResistances) {
@@ -116,9 +117,9 @@ TEST(NewtonSolver, AnOcclusionScalesTheLinearPartAndATimeDependentInletIsSolvedP
     const double dp = 10.0 + 5.0 * std::sin(2.0 * std::numbers::pi * t);
     // (1 + 3) Q + 2 Q² = Δp
     const double q = (-4.0 + std::sqrt(16.0 + 8.0 * dp)) / 4.0;
-    EXPECT_NEAR(solver->segment_flow(0), q, 1e-11) << t;
+    EXPECT_NEAR(solver->segment_flow(0), q, 1e-9) << t;
     EXPECT_NEAR(solver->segment_flow_at(1, 0.1),
-                (-4.0 + std::sqrt(16.0 + 8.0 * (10.0 + 5.0 * std::sin(0.2 * std::numbers::pi)))) / 4.0, 1e-11);
+                (-4.0 + std::sqrt(16.0 + 8.0 * (10.0 + 5.0 * std::sin(0.2 * std::numbers::pi)))) / 4.0, 1e-9);
   }
 }
 
