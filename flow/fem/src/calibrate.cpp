@@ -161,11 +161,9 @@ Reduced reduce(const Network& net, const Tree& t, const TetMesh& mesh, const Sto
     const double kinetic = outlet_dynamic_pressure(rho, end_radius(net, o.node)) * o.flow_fem * o.flow_fem;
     const auto& seg = net.segment(*net.node_segments(o.node).first);
     const int prev = seg.node_from == o.node ? seg.node_to : seg.node_from;
-    // The section half an end radius inside the cap (on the cap plane part of the disk leaves the mesh).
-    const Vec3 dir = net.node(o.node) - net.node(prev);
-    const double back = std::min(0.5 * end_radius(net, o.node), 0.5 * dir.norm());
+    // The section through the outlet node, on the cap plane (the points of the disk inside the mesh).
     const auto total =
-        section_total_pressure(fs, net.node(o.node) - back * dir.normalized(), dir, end_radius(net, o.node), rho);
+        section_total_pressure(fs, net.node(o.node), net.node(o.node) - net.node(prev), end_radius(net, o.node), rho);
     if (total && kinetic > 0.0) red.alpha[e] = std::clamp((*total - o.pressure_fem) / kinetic, 1.0, 3.0);
     red.node_pressure[e] += red.alpha[e] * kinetic;
   }

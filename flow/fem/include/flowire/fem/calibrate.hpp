@@ -23,7 +23,7 @@
 /// pressures fitted are the energy each section carries per unit flow, ∫(p + ½ρ|u|²) u·n dA / Q
 /// over the disk of the network's radius (section_total_pressure: the kinetic energy of the real
 /// velocity profile included), at the inlet too; at an outlet its static value plus α½ρ(Q/A)²
-/// (α that of the 3D profile through the outlet), which the outlet's last segment carries in its
+/// (α that of the 3D profile through the outlet's section), which the outlet's last segment carries in its
 /// law so that the outlet node keeps the static value. The drops are then those of the energy the flow loses, which a
 /// law of positive coefficients holds, where the static pressure rises and falls as the flow slows and speeds up (it
 /// recovers downstream of a junction, and the arch's jet stagnates at the branch ostia). The calibrated network's nodes
