@@ -14,6 +14,7 @@
 #include "flowire/common/output.hpp"
 #include "flowire/common/units.hpp"
 #include "flowire/coupling/scene.hpp"
+#include "flowire/flow/calibration.hpp"
 #include "flowire/flow/solver.hpp"
 #include "scene_sections.hpp"
 #ifdef FLOWIRE_HAVE_FEM
@@ -226,6 +227,10 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   fem::FemOptions fo = fem_options(c);
   fo.segment_laws = spec.segment_laws;
   fo.total_pressure = spec.total_pressure;
+  if (spec.total_pressure && c.has("vessels.calibration"))  // each outlet's α, from the same file
+    fo.end_alpha =
+        flow::read_calibration(c.resolve_path(c.string("vessels.calibration")), net, c.where("vessels.calibration"))
+            .end_alpha;
   const long frames = c.integer("fem.frames");  // checked by check_fem
   if (frames == 0) {
     auto j = fem_result_json(fem::compare(net, bv, fo, out.string()));

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -42,6 +43,9 @@ void write_calibration(const std::string& path, const Calibration& c) {
                     {"residual", f.residual},
                     {"bounded", f.bounded},
                     {"pieces", f.pieces}});
+  json alpha = json::array();  // [node, α] of the outlets whose α is not 1
+  for (size_t n = 0; n < c.end_alpha.size(); ++n)
+    if (c.end_alpha[n] != 1.0) alpha.push_back({n, c.end_alpha[n]});
   json segs = json::array();
   for (const auto& l : c.laws) segs.push_back({{"resistance_factor", l.resistance_factor}, {"quadratic", l.quadratic}});
   const json j = {{"format", "flowire-calibration"},
@@ -59,6 +63,7 @@ void write_calibration(const std::string& path, const Calibration& c) {
                     {"inlet_flows", c.inlet_flows},
                     {"check_inlet_flow", c.check_inlet_flow}}},
                   {"branches", fits},
+                  {"end_alpha", alpha},
                   {"segments", segs}};
   write_text_atomically(path, j.dump(2) + "\n");
 }
@@ -107,6 +112,16 @@ Calibration read_calibration(const std::string& path, const Network& net, const 
       fit.bounded = b.value("bounded", false);
       fit.pieces = b.value("pieces", 1);
       c.fits.push_back(std::move(fit));
+    }
+    if (j.contains("end_alpha") && !j.at("end_alpha").empty()) {
+      c.end_alpha.assign(static_cast<size_t>(std::max(c.nodes, 0)), 1.0);
+      for (const json& a : j.at("end_alpha")) {
+        const int node = a.at(0).get<int>();
+        const double v = a.at(1).get<double>();
+        if (node < 0 || node >= c.nodes || !(v >= 1.0) || !std::isfinite(v))
+          throw_input_error(place, fmt::format("end_alpha [{}, {}]: a node of the network and α >= 1", node, v));
+        c.end_alpha[static_cast<size_t>(node)] = v;
+      }
     }
     const json& segs = j.at("segments");
     for (size_t s = 0; s < segs.size(); ++s) {

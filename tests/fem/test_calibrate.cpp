@@ -107,6 +107,9 @@ TEST(FemCalibrate, TheFileIsReadBackForItsNetworkAndRefusedForAnother) {
   c.equations = "stokes";
   c.inlet_flows = {1e-6};
   for (int s = 0; s < net.num_segments(); ++s) c.laws.push_back({1.0 + 0.01 * s, 1e9 * s});
+  c.pressure = "total";
+  c.end_alpha.assign(static_cast<size_t>(net.num_nodes()), 1.0);
+  c.end_alpha[static_cast<size_t>(net.ends().back())] = 1.7;
   flow::BranchFit f;
   f.branch = 0;
   f.name = "parent";
@@ -126,6 +129,10 @@ TEST(FemCalibrate, TheFileIsReadBackForItsNetworkAndRefusedForAnother) {
     EXPECT_DOUBLE_EQ(back.laws[s].quadratic, c.laws[s].quadratic);
   }
   EXPECT_EQ(back.fits.front().name, "parent");
+  EXPECT_EQ(back.pressure, "total");
+  ASSERT_EQ(back.end_alpha.size(), c.end_alpha.size());
+  EXPECT_DOUBLE_EQ(back.end_alpha[static_cast<size_t>(net.ends().back())], 1.7);
+  EXPECT_DOUBLE_EQ(back.end_alpha.front(), 1.0);
   try {
     (void)flow::read_calibration(path, test::y_small(0.0), "vessels.calibration");
     FAIL() << "another network was accepted";

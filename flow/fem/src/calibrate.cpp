@@ -365,6 +365,11 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
     return de >= 0 ? alpha[static_cast<size_t>(de)] : 1.0;
   };
   res.outlet_alpha = alpha;
+  if (rho > 0.0) {
+    cal.end_alpha.assign(static_cast<size_t>(net.num_nodes()), 1.0);
+    for (int e : net.ends())
+      if (d.node[static_cast<size_t>(e)] >= 0) cal.end_alpha[static_cast<size_t>(e)] = alpha_of(net, e);
+  }
   auto with_outlet = [&](const Network& n, int n_inlet, int s, flow::SegmentLaw law) {
     for (int e : {n.segment(s).node_from, n.segment(s).node_to})
       if (n.degree(e) == 1 && e != n_inlet)

@@ -282,6 +282,14 @@ std::vector<flow::SegmentLaw> ComparisonDomain::laws(const Network& input,
   return out;
 }
 
+std::vector<double> ComparisonDomain::nodal(std::span<const double> values, double fill) const {
+  if (values.empty()) return {};
+  std::vector<double> out(static_cast<size_t>(network.num_nodes()), fill);
+  for (size_t i = 0; i < node.size() && i < values.size(); ++i)
+    if (node[i] >= 0) out[static_cast<size_t>(node[i])] = values[i];
+  return out;
+}
+
 ComparisonDomain comparison_domain(const Network& net, const FemOptions& opt, const BoundaryValues& bv) {
   ComparisonDomain d;
   if (opt.surface.empty()) {
@@ -329,7 +337,10 @@ CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOpt
   const StokesSolution sol =
       solve_stokes(d.mesh, std::span<const GroupCondition>(cond), comparison_stokes_options(opt, d.bv));
   NetworkFlow nf = network_flow(d.network, d.bv, d.laws(net, opt.segment_laws));
-  if (opt.total_pressure) nf.kinetic_density = d.bv.density;
+  if (opt.total_pressure) {
+    nf.kinetic_density = d.bv.density;
+    nf.end_alpha = d.nodal(opt.end_alpha, 1.0);
+  }
   CompareResult res = compare_fields(d.network, d.mesh, sol, nf, d.bv.inlet_node, opt.samples_per_branch);
   res.forces = named_forces(d.mesh, sol, comparison_stokes_options(opt, d.bv));
   res.cut_length = d.cut_length;

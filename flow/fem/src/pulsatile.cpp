@@ -164,7 +164,10 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
       out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
     }
     NetworkFlow nf = network_flow(dnet, bv, laws);
-    if (opt.total_pressure) nf.kinetic_density = bv.density;
+    if (opt.total_pressure) {
+      nf.kinetic_density = bv.density;
+      nf.end_alpha = domain.nodal(opt.end_alpha, 1.0);
+    }
     return compare_fields(dnet, mesh, sol, nf, domain.bv.inlet_node, opt.samples_per_branch);
   };
   const auto t_frames = std::chrono::steady_clock::now();
@@ -184,7 +187,10 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
     CompareResult r;
     if (dyn) {
       NetworkFlow nf = dyn->network_at ? dyn->network_at(times[i]) : network_flow(dnet, on_domain(frames[i]), laws);
-      if (opt.total_pressure && !dyn->network_at) nf.kinetic_density = frames[i].density;
+      if (opt.total_pressure && !dyn->network_at) {
+        nf.kinetic_density = frames[i].density;
+        nf.end_alpha = domain.nodal(opt.end_alpha, 1.0);
+      }
       r = compare_fields(dnet, mesh, dynamic[i], nf, domain.bv.inlet_node, opt.samples_per_branch);
       if (vtu) sols[i] = std::move(dynamic[i]);
     } else {

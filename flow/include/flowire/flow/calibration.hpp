@@ -45,6 +45,9 @@ struct Calibration {
   double check_inlet_flow = 0.0;    ///< m³/s of the solution not fitted (0: none)
   std::vector<BranchFit> fits;
   std::vector<SegmentLaw> laws;  ///< (segments)
+  /// (nodes, or empty) in total pressure, the kinetic energy factor α of each outlet's 3D profile
+  /// (the outlet's total pressure is its static value plus α½ρ(Q/A)²); 1 elsewhere
+  std::vector<double> end_alpha;
 };
 
 /// @brief Fill the identification of `net` (source, counts, total length) into `c`.

@@ -53,6 +53,8 @@ struct FemOptions {
   std::vector<flow::SegmentLaw> segment_laws;
   /// The laws are a calibration in total pressure (NetworkFlow::kinetic_density).
   bool total_pressure = false;
+  /// (input nodes, or empty) in total pressure, each outlet's α (flow::Calibration::end_alpha)
+  std::vector<double> end_alpha;
   bool write_png = true;
   bool write_vtu = true;
 };
@@ -142,6 +144,8 @@ struct ComparisonDomain {
   /// segment keeps its resistance factor, and its quadratic coefficient in proportion to its
   /// Poiseuille resistance where it was shortened.
   [[nodiscard]] std::vector<flow::SegmentLaw> laws(const Network& input, std::span<const flow::SegmentLaw> laws) const;
+  /// @brief Per-node values of the input network (or empty) on `network` (`fill` where none).
+  [[nodiscard]] std::vector<double> nodal(std::span<const double> values, double fill) const;
 };
 
 /// @brief The domain a comparison solves on: the network's own lumen, or the real lumen of
