@@ -14,7 +14,6 @@
 #include "flowire/common/output.hpp"
 #include "flowire/common/units.hpp"
 #include "flowire/coupling/scene.hpp"
-#include "flowire/flow/calibration.hpp"
 #include "flowire/flow/solver.hpp"
 #include "scene_sections.hpp"
 #ifdef FLOWIRE_HAVE_FEM
@@ -227,10 +226,7 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
   fem::FemOptions fo = fem_options(c);
   fo.segment_laws = spec.segment_laws;
   fo.total_pressure = spec.total_pressure;
-  if (spec.total_pressure && c.has("vessels.calibration"))  // each outlet's α, from the same file
-    fo.end_alpha =
-        flow::read_calibration(c.resolve_path(c.string("vessels.calibration")), net, c.where("vessels.calibration"))
-            .end_alpha;
+  fo.end_alpha = spec.end_alpha;
   const long frames = c.integer("fem.frames");  // checked by check_fem
   if (frames == 0) {
     auto j = fem_result_json(fem::compare(net, bv, fo, out.string()));
@@ -311,6 +307,8 @@ nlohmann::json calibrate_scene(const config::Config& c, const CalibrateOptions& 
   if (!spec.segment_laws.empty()) {
     warn("calibrate: the scene's vessels.calibration is set aside; the fit starts from Poiseuille segments");
     spec.segment_laws.clear();
+    spec.total_pressure = false;
+    spec.end_alpha.clear();
   }
   const auto fs = flow::make_solver(net, spec);
   check_fem(c, fs.get(), &net);

@@ -217,6 +217,7 @@ flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) 
         flow::read_calibration(c.resolve_path(c.string("vessels.calibration")), net, c.where("vessels.calibration"));
     spec.segment_laws = std::move(cal.laws);
     spec.total_pressure = cal.pressure == "total";
+    spec.end_alpha = std::move(cal.end_alpha);
   }
   return spec;
 }

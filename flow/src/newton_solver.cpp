@@ -136,12 +136,12 @@ class NewtonSolver final : public FrameSolver {
         factorize_tangent(t);
         refactor = false;
       }
-      const Eigen::VectorXd step = -chol_.solve(f_);
+      step_ = chol_.solve(f_);
       const double before = norm;
-      const Eigen::VectorXd x0 = x_;
+      x0_ = x_;
       double alpha = 1.0;
       for (int cut = 0;; ++cut) {
-        x_ = x0 + alpha * step;
+        x_ = x0_ - alpha * step_;
         set_unknowns(x_);
         scale = std::max(balance(), inj_scale);
         const double trial = f_.norm();
@@ -193,7 +193,7 @@ class NewtonSolver final : public FrameSolver {
   mutable bool factored_ = false;                 // chol_ holds a tangent of this network
   mutable long factorizations_ = 0;
   mutable Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
-  mutable Eigen::VectorXd x_, f_, inj_;  // unknown pressures (the last frame's), balance, injections
+  mutable Eigen::VectorXd x_, f_, inj_, step_, x0_;  // unknown pressures (the last frame's), balance, injections
   mutable std::vector<double> coef_, dq_;
   mutable long iterations_ = 0;
 };

@@ -701,7 +701,7 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
       const auto [b, e] = net.node_segments(node);
       if (b == e) return 0.0;
       const auto& seg = net.segment(*b);
-      return seg.node_from == node ? seg.radius_from : seg.radius_to;  // the vessel's radius at the outlet
+      return seg.radius_at(node);  // the vessel's radius at the outlet
     };
     double sum = 0.0;
     for (const auto& x : s.outlets)

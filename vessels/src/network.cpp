@@ -305,7 +305,7 @@ int Network::widest_end() const {
   double rbest = -1.0;
   for (int i : ends()) {
     const auto& seg = segment(*node_segments(i).first);
-    const double r = seg.node_from == i ? seg.radius_from : seg.radius_to;  // the radius at the end itself
+    const double r = seg.radius_at(i);  // the radius at the end itself
     if (r > rbest) rbest = r, best = i;
   }
   return best;

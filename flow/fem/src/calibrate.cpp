@@ -77,10 +77,7 @@ double outlet_dynamic_pressure(double rho, double r) {
 }
 
 /// The radius of the network at an end node (of its one segment).
-double end_radius(const Network& net, int e) {
-  const auto& seg = net.segment(*net.node_segments(e).first);
-  return seg.node_from == e ? seg.radius_from : seg.radius_to;
-}
+double end_radius(const Network& net, int e) { return net.segment(*net.node_segments(e).first).radius_at(e); }
 
 /// The 3D solution reduced to the network: a flow per branch (the outlets' 3D flows summed
 /// downstream) and a pressure per node (NaN where the section falls outside the mesh): static, or,
@@ -364,7 +361,6 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
     const int de = d.node[static_cast<size_t>(e)];
     return de >= 0 ? alpha[static_cast<size_t>(de)] : 1.0;
   };
-  res.outlet_alpha = alpha;
   if (rho > 0.0) {
     cal.end_alpha.assign(static_cast<size_t>(net.num_nodes()), 1.0);
     for (int e : net.ends())

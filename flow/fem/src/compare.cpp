@@ -116,14 +116,13 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
   // nodes hold it (its outlets their static values, to which their flat-profile ½ρ(Q/A)² is added).
   const double rho = flow.kinetic_density;
   res.total_pressure = rho > 0.0;
-  const double inlet_static = flow.node_pressure[static_cast<size_t>(inlet)];
   std::vector<double> node_value = flow.node_pressure;  // the outlets' total: static + ½ρ(Q/A)²
   if (rho > 0.0)
     for (int e : net.ends()) {
       if (e == inlet) continue;
       const int s = *net.node_segments(e).first;
       const auto& seg = net.segment(s);
-      const double r = seg.node_from == e ? seg.radius_from : seg.radius_to;
+      const double r = seg.radius_at(e);
       const double u = flow.segment_flow[static_cast<size_t>(s)] / (std::numbers::pi * r * r);
       const double alpha = flow.end_alpha.empty() ? 1.0 : flow.end_alpha[static_cast<size_t>(e)];
       node_value[static_cast<size_t>(e)] += alpha * 0.5 * rho * u * u;
@@ -131,7 +130,7 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
   double pmin_out = std::numeric_limits<double>::infinity();
   for (int e : net.ends())
     if (e != inlet) pmin_out = std::min(pmin_out, flow.node_pressure[static_cast<size_t>(e)]);
-  const double drive = std::abs(inlet_static - pmin_out);
+  const double drive = std::abs(flow.node_pressure[static_cast<size_t>(inlet)] - pmin_out);
   const double pscale = drive > 0.0 ? drive : 1.0;
   // Junctions: nodes with three or more segments, and their largest radius.
   std::vector<std::pair<Vec3, double>> junctions;
@@ -236,7 +235,7 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
     const int s = *net.node_segments(inlet).first;
     res.inlet_flow_network = net.segment(s).node_from == inlet ? flow.segment_flow[static_cast<size_t>(s)]
                                                                : -flow.segment_flow[static_cast<size_t>(s)];
-    res.inlet_pressure_network = inlet_static;
+    res.inlet_pressure_network = flow.node_pressure[static_cast<size_t>(inlet)];
     const int g = mesh.group_of_node(inlet);
     if (g >= 0) {
       res.inlet_flow_fem = -sol.group_flow[static_cast<size_t>(g)];
@@ -246,7 +245,7 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       if (rho > 0.0) {  // the energy the inlet section carries
         const auto& seg = net.segment(s);
         const int next = seg.node_from == inlet ? seg.node_to : seg.node_from;
-        const double r_in = seg.node_from == inlet ? seg.radius_from : seg.radius_to;
+        const double r_in = seg.radius_at(inlet);
         if (const auto t = section_total_pressure(fs, net.node(inlet), net.node(next) - net.node(inlet), r_in, rho))
           res.inlet_pressure_fem = *t;
       }

@@ -200,6 +200,9 @@ struct FlowSpec {
   /// p + ½ρū², but for the outlets (static values), and the laws of the segments that end at an
   /// outlet carry its dynamic pressure.
   bool total_pressure = false;
+  /// (nodes, or empty) in total pressure, each outlet's kinetic energy factor α (its total is its
+  /// static value plus α½ρ(Q/A)²); read by the finite-element comparison
+  std::vector<double> end_alpha;
   double dt = 1e-3;                  ///< rlc time step (s)
   double rho_infinity = 0.5;         ///< rlc generalized-α spectral radius (1: trapezoidal-like, 0: most damping)
   double periodic_tolerance = 1e-6;  ///< rlc: relative change between cycles taken as periodic

@@ -62,6 +62,8 @@ struct Segment {
   int branch = -1;
   double radius_from = 0.0;  ///< m, at node_from; <= 0 on input: `radius` (a cylinder)
   double radius_to = 0.0;    ///< m, at node_to; <= 0 on input: `radius`
+  /// @brief The radius at one of its two nodes.
+  [[nodiscard]] double radius_at(int node) const { return node == node_from ? radius_from : radius_to; }
 };
 
 struct Branch {

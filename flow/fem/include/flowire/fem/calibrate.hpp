@@ -61,8 +61,6 @@ struct CalibrationRun {
 struct CalibrationResult {
   flow::Calibration calibration;  ///< the laws of the input network and the fits (calibration.hpp)
   std::vector<CalibrationRun> runs;
-  /// (domain nodes) in total pressure, the kinetic energy factor α of each outlet (1 elsewhere)
-  std::vector<double> outlet_alpha;
   double mesh_seconds = 0.0, solve_seconds = 0.0;
 };
 
