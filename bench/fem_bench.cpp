@@ -10,9 +10,9 @@
 #include <numbers>
 #include <vector>
 
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
-#include "flowire/fem/pulsatile.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
+#include "flowire/flow/fem/pulsatile.hpp"
 #include "flowire/vessels/generators.hpp"
 
 namespace {
@@ -20,15 +20,15 @@ namespace {
 void BM_FemYBifurcation(benchmark::State& state) {
   using namespace flowire;
   const auto net = vessels::Network::build(vessels::y_bifurcation({}));
-  fem::FemOptions opt;
+  flow::fem::FemOptions opt;
   opt.mesh_size = 1.05e-3;
-  opt.solver = state.range(0) == 0 ? fem::LinearSolver::Mumps : fem::LinearSolver::Fieldsplit;
-  fem::BoundaryValues bv;
+  opt.solver = state.range(0) == 0 ? flow::fem::LinearSolver::Mumps : flow::fem::LinearSolver::Fieldsplit;
+  flow::fem::BoundaryValues bv;
   bv.inlet_pressure = 12850.0;
   bv.outlet_pressure = 12800.0;
-  fem::CompareResult r;
+  flow::fem::CompareResult r;
   for (auto _ : state) {
-    r = fem::compare(net, bv, opt, "");
+    r = flow::fem::compare(net, bv, opt, "");
     benchmark::DoNotOptimize(r);
   }
   state.counters["tets"] = r.tets;
@@ -48,25 +48,25 @@ BENCHMARK(BM_FemYBifurcation)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kS
 void BM_FemPulsatileFrames(benchmark::State& state) {
   using namespace flowire;
   const auto net = vessels::Network::build(vessels::y_bifurcation({}));
-  fem::FemOptions opt;
+  flow::fem::FemOptions opt;
   opt.mesh_size = 1.05e-3;
   opt.write_png = false;
-  fem::BoundaryValues base;
+  flow::fem::BoundaryValues base;
   base.inlet_pressure = 12850.0;
   for (int e : net.ends())
-    if (e != net.widest_end()) base.outlets.push_back({e, fem::OutletValue::Type::Resistance, 12800.0, 2e6});
+    if (e != net.widest_end()) base.outlets.push_back({e, flow::fem::OutletValue::Type::Resistance, 12800.0, 2e6});
   const auto n = static_cast<int>(state.range(0));
   std::vector<double> times;
-  std::vector<fem::BoundaryValues> frames;
+  std::vector<flow::fem::BoundaryValues> frames;
   for (int i = 0; i < n; ++i) {
     times.push_back(0.8 * i / n);
-    fem::BoundaryValues bv = base;
+    flow::fem::BoundaryValues bv = base;
     bv.inlet_pressure = 12850.0 + 25.0 * std::sin(2.0 * 3.141592653589793 * i / n);  // always above P_d
     frames.push_back(bv);
   }
-  fem::PulsatileResult r;
+  flow::fem::PulsatileResult r;
   for (auto _ : state) {
-    r = fem::compare_pulsatile(net, times, frames, base, 0.0, opt, "");
+    r = flow::fem::compare_pulsatile(net, times, frames, base, 0.0, opt, "");
     benchmark::DoNotOptimize(r);
   }
   state.counters["tets"] = r.steady.tets;
@@ -88,17 +88,17 @@ namespace {
 void BM_FemNavierStokesY(benchmark::State& state) {
   using namespace flowire;
   const auto net = vessels::Network::build(vessels::y_bifurcation({}));
-  fem::FemOptions opt;
+  flow::fem::FemOptions opt;
   opt.mesh_size = static_cast<double>(state.range(0)) * 1e-4;
-  opt.equations = fem::Equations::NavierStokes;
-  fem::BoundaryValues bv;
-  bv.inlet_type = fem::BoundaryValues::Inlet::Flow;
+  opt.equations = flow::fem::Equations::NavierStokes;
+  flow::fem::BoundaryValues bv;
+  bv.inlet_type = flow::fem::BoundaryValues::Inlet::Flow;
   const double r = 5e-3, eta = 3.5e-3, rho = 1060.0;
   bv.inlet_flow = 600.0 * eta / (rho * 2 * r) * std::numbers::pi * r * r;
   bv.outlet_pressure = 12800.0;
-  fem::CompareResult res;
+  flow::fem::CompareResult res;
   for (auto _ : state) {
-    res = fem::compare(net, bv, opt, "");
+    res = flow::fem::compare(net, bv, opt, "");
     benchmark::DoNotOptimize(res);
   }
   state.counters["tets"] = res.tets;

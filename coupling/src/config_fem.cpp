@@ -17,12 +17,12 @@
 #include "flowire/flow/solver.hpp"
 #include "scene_sections.hpp"
 #ifdef FLOWIRE_HAVE_FEM
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/calibrate.hpp"
-#include "flowire/fem/compare.hpp"
-#include "flowire/fem/lumen.hpp"
-#include "flowire/fem/obstacle.hpp"
-#include "flowire/fem/pulsatile.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/calibrate.hpp"
+#include "flowire/flow/fem/compare.hpp"
+#include "flowire/flow/fem/lumen.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
+#include "flowire/flow/fem/pulsatile.hpp"
 #endif
 
 namespace flowire::coupling {
@@ -81,7 +81,7 @@ bool fem_on_network(const config::Config& c) {
 namespace {
 
 #ifdef FLOWIRE_HAVE_FEM
-nlohmann::json fem_result_json(const fem::CompareResult& r) {
+nlohmann::json fem_result_json(const flow::fem::CompareResult& r) {
   nlohmann::json j = {{"tets", r.tets},
                       {"unknowns", r.unknowns},
                       {"reynolds", r.reynolds},
@@ -105,13 +105,17 @@ nlohmann::json fem_result_json(const fem::CompareResult& r) {
 }
 
 /// The comparison's options from the scene's fem: section (and the lumen of vessels.surface).
-fem::FemOptions fem_options(const config::Config& c) {
-  fem::FemOptions fo;
+flow::fem::FemOptions fem_options(const config::Config& c) {
+  flow::fem::FemOptions fo;
   if (c.has("fem.mesh_size")) fo.mesh_size = c.number("fem.mesh_size");
-  fo.equations = c.string("fem.equations") == "navier_stokes" ? fem::Equations::NavierStokes : fem::Equations::Stokes;
-  fo.solver = c.string("fem.solver") == "fieldsplit" ? fem::LinearSolver::Fieldsplit : fem::LinearSolver::Mumps;
-  fo.stabilization = c.string("fem.stabilization") == "none" ? fem::Stabilization::None : fem::Stabilization::Supg;
-  fo.inlet = c.string("fem.inlet") == "traction" ? fem::InletCondition::Traction : fem::InletCondition::Profile;
+  fo.equations =
+      c.string("fem.equations") == "navier_stokes" ? flow::fem::Equations::NavierStokes : flow::fem::Equations::Stokes;
+  fo.solver =
+      c.string("fem.solver") == "fieldsplit" ? flow::fem::LinearSolver::Fieldsplit : flow::fem::LinearSolver::Mumps;
+  fo.stabilization =
+      c.string("fem.stabilization") == "none" ? flow::fem::Stabilization::None : flow::fem::Stabilization::Supg;
+  fo.inlet =
+      c.string("fem.inlet") == "traction" ? flow::fem::InletCondition::Traction : flow::fem::InletCondition::Profile;
   fo.backflow = c.number("fem.backflow");
   fo.samples_per_branch = c.integer("fem.samples_per_branch");
   fo.size_factor = c.number("fem.size_factor");
@@ -140,13 +144,14 @@ void check_fem_geometry(const config::Config& c) {
 /// The DFG benchmark 3D-1Z (fem.geometry: dfg_3d_1z): forces, c_D, c_L, Δp.
 nlohmann::json run_fem_geometry(const config::Config& c, const std::filesystem::path& out) {
 #ifdef FLOWIRE_HAVE_FEM
-  fem::ObstacleMesh sizes;
+  flow::fem::ObstacleMesh sizes;
   sizes.mesh_size = c.has("fem.mesh_size") ? c.number("fem.mesh_size") : 0.08;
   sizes.obstacle_mesh_size =
       c.has("fem.obstacle_mesh_size") ? c.number("fem.obstacle_mesh_size") : 0.25 * sizes.mesh_size;
   sizes.growth = c.number("fem.mesh_growth");
-  const auto stab = c.string("fem.stabilization") == "none" ? fem::Stabilization::None : fem::Stabilization::Supg;
-  const fem::ObstacleResult r = fem::dfg_3d_1z(sizes, stab, out.string(), c.boolean("output.vtk"));
+  const auto stab =
+      c.string("fem.stabilization") == "none" ? flow::fem::Stabilization::None : flow::fem::Stabilization::Supg;
+  const flow::fem::ObstacleResult r = flow::fem::dfg_3d_1z(sizes, stab, out.string(), c.boolean("output.vtk"));
   nlohmann::json forces = nlohmann::json::object();
   for (const auto& [name, f] : r.forces) forces[name] = {f.x(), f.y(), f.z()};
   return {{"geometry", "dfg_3d_1z"},
@@ -179,9 +184,9 @@ void check_fem(const config::Config& c, const flow::FlowSolver* fs, const vessel
 #ifdef FLOWIRE_HAVE_FEM
     // Read it and match its open ends now (cheap), so that bad input stops the run before any output.
     if (net)
-      (void)fem::prepare_lumen(
-          *net, fem::read_surface(surface, units::length_unit_factor(c.string_or("vessels.length_unit", "m"),
-                                                                     c.where("vessels.length_unit"))));
+      (void)flow::fem::prepare_lumen(
+          *net, flow::fem::read_surface(surface, units::length_unit_factor(c.string_or("vessels.length_unit", "m"),
+                                                                           c.where("vessels.length_unit"))));
 #endif
   }
   // frames, backflow, steps_per_period and size_factor have declared ranges.
@@ -208,7 +213,7 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
                        const std::filesystem::path& out) {
 #ifdef FLOWIRE_HAVE_FEM
   const flow::FlowSpec& spec = fs.spec();
-  const fem::BoundaryValues bv = fem::boundary_values(spec, net, fs.time());
+  const flow::fem::BoundaryValues bv = flow::fem::boundary_values(spec, net, fs.time());
   const bool has_rcr = std::any_of(spec.outlets.begin(), spec.outlets.end(),
                                    [](const flow::OutletBC& o) { return o.type == flow::OutletBC::Type::Rcr; });
   if (std::any_of(spec.outlets.begin(), spec.outlets.end(),
@@ -223,31 +228,31 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
     warn(
         "fem: RCR outlets are compared quasi-steadily, as the resistance Rp + Rd to Pd (the poiseuille flow model "
         "has no capacitor; use flow.model: rlc with fem.frames for the windkessel dynamics)");
-  fem::FemOptions fo = fem_options(c);
+  flow::fem::FemOptions fo = fem_options(c);
   fo.segment_laws = spec.segment_laws;
   fo.total_pressure = spec.total_pressure;
   fo.end_alpha = spec.end_alpha;
   const long frames = c.integer("fem.frames");  // checked by check_fem
   if (frames == 0) {
-    auto j = fem_result_json(fem::compare(net, bv, fo, out.string()));
+    auto j = fem_result_json(flow::fem::compare(net, bv, fo, out.string()));
     j["time"] = fs.time();
     return j;
   }
   const double period = spec.cycle();
   std::vector<double> times;
-  std::vector<fem::BoundaryValues> values;
+  std::vector<flow::fem::BoundaryValues> values;
   for (long i = 0; i < frames; ++i) {
     times.push_back(period * static_cast<double>(i) / static_cast<double>(frames));
-    values.push_back(fem::boundary_values(spec, net, times.back()));
+    values.push_back(flow::fem::boundary_values(spec, net, times.back()));
   }
-  fem::DynamicOptions dyn;
+  flow::fem::DynamicOptions dyn;
   std::unique_ptr<flow::FlowSolver> periodic;  // the network over enough periods to be periodic
   const bool dynamic = dynamic_rcr || time_dependent;
   if (dynamic) {
     dyn.period = period;
     dyn.time_dependent = time_dependent;
     dyn.steps_per_period = static_cast<int>(c.integer("fem.steps_per_period"));
-    dyn.values_at = [&spec, &net](double t) { return fem::boundary_values(spec, net, t); };
+    dyn.values_at = [&spec, &net](double t) { return flow::fem::boundary_values(spec, net, t); };
     if (dynamic_rcr)
       for (const auto& o : spec.outlets)
         if (o.type == flow::OutletBC::Type::Rcr) dyn.windkessels.push_back(o);
@@ -255,7 +260,7 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
       periodic = flow::make_solver(net, spec);
       const double start = 30.0 * period;
       dyn.network_at = [&periodic, &net, start](double t) {
-        fem::NetworkFlow nf;
+        flow::fem::NetworkFlow nf;
         nf.node_pressure.resize(static_cast<size_t>(net.num_nodes()));
         nf.segment_flow.resize(static_cast<size_t>(net.num_segments()));
         periodic->solve_at(start + t, nf.node_pressure, nf.segment_flow);
@@ -263,7 +268,8 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
       };
     }
   }
-  const auto p = fem::compare_pulsatile(net, times, values, bv, fs.time(), fo, out.string(), dynamic ? &dyn : nullptr);
+  const auto p =
+      flow::fem::compare_pulsatile(net, times, values, bv, fs.time(), fo, out.string(), dynamic ? &dyn : nullptr);
   auto j = fem_result_json(p.steady);
   j["time"] = fs.time();
   j["pulsatile"] = {{"frames", frames},
@@ -314,13 +320,13 @@ nlohmann::json calibrate_scene(const config::Config& c, const CalibrateOptions& 
   check_fem(c, fs.get(), &net);
   if (c.integer("fem.frames") != 0)
     warn("calibrate: fem.frames is set aside; the fit uses steady solutions at scaled inlet values");
-  const fem::BoundaryValues bv = fem::boundary_values(fs->spec(), net, 0.0);
-  const fem::FemOptions fo = fem_options(c);
+  const flow::fem::BoundaryValues bv = flow::fem::boundary_values(fs->spec(), net, 0.0);
+  const flow::fem::FemOptions fo = fem_options(c);
   const std::filesystem::path out(c.string("output.dir"));
   const OutputFolder folder(out);
-  const fem::CalibrationResult r = fem::calibrate(net, bv, fo, {options.factors, options.check_factor});
+  const flow::fem::CalibrationResult r = flow::fem::calibrate(net, bv, fo, {options.factors, options.check_factor});
   flow::write_calibration((out / "calibration.json").string(), r.calibration);
-  fem::write_calibration_report(out.string(), net, r);
+  flow::fem::write_calibration_report(out.string(), net, r);
   nlohmann::json runs = nlohmann::json::array();
   for (const auto& run : r.runs)
     runs.push_back({{"inlet_flow", run.inlet_flow},

@@ -20,7 +20,7 @@
 #include "flowire/common/output.hpp"
 #include "flowire/common/union_find.hpp"
 #include "flowire/flow/solver.hpp"
-#include "flowire/flow/svzerod.hpp"
+#include "flowire/flow/svzerod/simulate.hpp"
 
 namespace flowire::flow::openbf {
 

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
 #include "flowire/flow/solver.hpp"
 
 int main(int argc, char** argv) {
@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   int failures = 0;
   try {
-    using namespace flowire::fem;
+    using namespace flowire::flow::fem;
     if (argc < 2) throw std::runtime_error("usage: fem_mpi OUT [REFERENCE]");
     const auto net = test::y_small(0.3);
     BoundaryValues bv;

@@ -5,14 +5,14 @@
 #include <cmath>
 #include <complex>
 
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/shape_domain.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/network.hpp"
 
-namespace flowire::fem::test {
+namespace flowire::flow::fem::test {
 
 /// Bessel function J_n of a complex argument by its power series (|z| ≤ 10 here), for
 /// Womersley's exact solution.
@@ -93,4 +93,4 @@ inline ShapeDomain tube_with_wire(double r, double l, double a, double h, double
   return d;
 }
 
-}  // namespace flowire::fem::test
+}  // namespace flowire::flow::fem::test

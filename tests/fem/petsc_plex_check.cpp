@@ -25,10 +25,10 @@
 #include <string>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/element.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/element.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire/flow/solver.hpp"
 
 namespace {
@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
   int status = 1;
   try {
     if (argc < 2) throw std::runtime_error("usage: fem_petsc_plex_check DIR");
-    using namespace flowire::fem;
+    using namespace flowire::flow::fem;
     std::filesystem::create_directories(argv[1]);
     const std::string msh = (std::filesystem::path(argv[1]) / "tube.msh").string();
     MeshOptions mo;

@@ -9,12 +9,12 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
 #include "flowire/flow/spec.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using test::y_resistances;
@@ -73,4 +73,4 @@ TEST(FemBoundary, NetworkBoundaryValuesFromAFlowSpec) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -12,11 +12,11 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/calibrate.hpp"
 #include "flowire/flow/calibration.hpp"
+#include "flowire/flow/fem/calibrate.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kEta = 3.5e-3, kRho = 1060.0;
@@ -147,4 +147,4 @@ TEST(FemCalibrate, TheFileIsReadBackForItsNetworkAndRefusedForAnother) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "flowire/common/error.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/cap_cut.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/cap_cut.hpp"
 #include "flowire/flow/solver.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using vessels::Branch;
@@ -205,4 +205,4 @@ TEST(CapCut, RenumberedRefusesABoundaryNodeThatWasCutAway) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

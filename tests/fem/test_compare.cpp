@@ -7,11 +7,11 @@
 #include <cstdio>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using test::paper_like;
@@ -64,4 +64,4 @@ TEST(FemCompare, BentTubeWithASphereAtTheBendMatchesTheNetwork) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

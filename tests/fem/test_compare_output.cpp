@@ -8,11 +8,11 @@
 #include <string>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using test::paper_like;
@@ -40,4 +40,4 @@ TEST(FemCompare, WritesTheComparisonFiles) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -9,13 +9,13 @@
 #include <numbers>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/element.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/element.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kR = 2e-3, kL = 30e-3, kEta = 3.5e-3, kDp = 20.0;
@@ -74,4 +74,4 @@ TEST(FemConvergence, StraightTubeObservedOrder) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

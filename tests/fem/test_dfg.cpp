@@ -5,10 +5,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include "flowire/fem/obstacle.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 ObstacleResult dfg(double h, double h_cyl) {
@@ -59,4 +59,4 @@ TEST(FemDfgSlow, FinerMeshStaysInsideTheBenchmarkIntervals) {
 #endif
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

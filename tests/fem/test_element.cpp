@@ -1,7 +1,7 @@
 // The reference elements (flow/fem/src/element.cpp): quadrature exact to its degree against
 // the closed-form monomial integrals, P2/P1 bases nodal and reproducing every quadratic /
 // linear field, gradients and second derivatives against finite differences.
-#include "flowire/fem/element.hpp"
+#include "flowire/flow/fem/element.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 double factorial(int n) { return n <= 1 ? 1.0 : n * factorial(n - 1); }
@@ -195,4 +195,4 @@ TEST(FemElement, QuadraturePointsLieInsideWithPositiveWeights) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

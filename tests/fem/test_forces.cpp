@@ -11,12 +11,12 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/shape_domain.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -109,4 +109,4 @@ TEST(FemForces, CoaxialWireMatchesAnnularPoiseuille) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -8,11 +8,11 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 TEST(FemGmshSession, AFailedBuildLeavesTheSessionClean) {
@@ -38,4 +38,4 @@ TEST(FemGmshSession, AFailedBuildLeavesTheSessionClean) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

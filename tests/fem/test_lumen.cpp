@@ -25,14 +25,14 @@
 #include <string>
 
 #include "flowire/common/error.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
-#include "flowire/fem/lumen.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
+#include "flowire/flow/fem/lumen.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire/vessels/io.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 namespace fs = std::filesystem;
@@ -301,4 +301,4 @@ TEST(FemLumen, FacetedTubeSurfaceMatchesHagenPoiseuille) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

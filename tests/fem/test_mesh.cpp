@@ -6,11 +6,11 @@
 #include <numbers>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 TEST(FemMesh, StraightTubeVolumeAreaAndGroups) {
@@ -30,4 +30,4 @@ TEST(FemMesh, StraightTubeVolumeAreaAndGroups) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -12,12 +12,12 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
-#include "flowire/fem/shape_domain.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 void expect_extracted_well(const TetMesh& m) {
@@ -75,4 +75,4 @@ TEST(FemMeshExtract, DomainWithAWireIsClosedOutwardAndNumbered) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -12,13 +12,13 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/element.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/element.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -369,4 +369,4 @@ TEST(FemNavierStokesSlow, YBifurcationAtRe600MeshConvergence) {
 #endif
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

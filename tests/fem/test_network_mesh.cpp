@@ -7,10 +7,10 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/network_mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 TEST(FemMesh, SameNetworkGivesTheSameMesh) {
@@ -49,4 +49,4 @@ TEST(FemMesh, SelfIntersectingBranchesAreAnInputError) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

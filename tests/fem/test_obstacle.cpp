@@ -2,8 +2,8 @@
 // forms: the DFG 3D-1Z channel (box minus the cylinder), a wire along a tube, off axis (the
 // annulus π(R² − a²)L, the wire's surface 2πaL, the tube's 2πRL) and a wire across one, and
 // fem_forces.csv read back.
-#include "flowire/fem/obstacle.hpp"
-#include "flowire/fem/shape_domain.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,7 +17,7 @@
 
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -123,4 +123,4 @@ TEST(FemObstacle, ForcesFileReadsBack) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -18,12 +18,12 @@
 #include <vector>
 
 #include "fem_test_cases.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
-#include "flowire/fem/pulsatile.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
+#include "flowire/flow/fem/pulsatile.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using cd = std::complex<double>;
@@ -177,4 +177,4 @@ TEST(FemWindkessel, TimeDependentTubeFollowsWomersleyAndTheCircuit) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -3,7 +3,7 @@
 // quadratic and a linear field exactly anywhere inside, points outside are refused, and on a
 // bulged (curved) face every point of the quadratic map is found in its own element at its
 // own reference coordinates, including those beyond the straight face.
-#include "flowire/fem/sample.hpp"
+#include "flowire/flow/fem/sample.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,10 +12,10 @@
 #include <map>
 #include <random>
 
-#include "flowire/fem/element.hpp"
+#include "flowire/flow/fem/element.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 /// The box [0, 2] × [0, 1.5] × [0, 1] in n³ cells, each cut into six tetrahedra around its
@@ -161,4 +161,4 @@ TEST(FemSample, EveryPointOfACurvedElementIsFoundAtItsOwnReferenceCoordinates) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

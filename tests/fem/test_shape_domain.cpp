@@ -6,10 +6,10 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/shape_domain.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using Kind = BoundaryGroup::Kind;
@@ -33,4 +33,4 @@ TEST(FemForces, DomainErrorsNameTheDomain) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

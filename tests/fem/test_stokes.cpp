@@ -15,14 +15,14 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
-#include "flowire/fem/sample.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
+#include "flowire/flow/fem/sample.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -209,4 +209,4 @@ TEST(FemBoundary, ConditionsThatDoNotFixThePressureAreUsageErrors) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

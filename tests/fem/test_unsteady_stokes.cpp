@@ -13,12 +13,12 @@
 
 #include "fem_test_cases.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/network_mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using cd = std::complex<double>;
@@ -104,4 +104,4 @@ TEST(FemUnsteady, NavierStokesAndBadStepsAreUsageErrors) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

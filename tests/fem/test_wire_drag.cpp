@@ -16,13 +16,13 @@
 #include <vector>
 
 #include "flowire/coupling/drag.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/obstacle.hpp"
-#include "flowire/fem/shape_domain.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -181,4 +181,4 @@ TEST(FemWireDragSlow, CrossWireAtReynolds1To100) {
 #endif
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -12,15 +12,15 @@
 #include <vector>
 
 #include "flowire/coupling/occlusion.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/obstacle.hpp"
-#include "flowire/fem/shape_domain.hpp"
-#include "flowire/fem/stokes.hpp"
 #include "flowire/flow/annulus.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire_test.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using flowire::testing::tol;
@@ -104,4 +104,4 @@ TEST(FemWireOcclusion, TubeWithAWireAgainstTheAnnulusAndTheNetwork) {
 }
 
 }  // namespace
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

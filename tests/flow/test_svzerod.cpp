@@ -10,7 +10,7 @@
 #include <set>
 
 #include "flowire/common/error.hpp"
-#include "flowire/flow/svzerod.hpp"
+#include "flowire/flow/svzerod/simulate.hpp"
 #include "flowire_test.hpp"
 
 namespace flowire::flow {

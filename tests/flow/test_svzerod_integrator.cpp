@@ -10,9 +10,9 @@
 #include <random>
 
 #include "flowire/common/error.hpp"
-#include "flowire/flow/svzerod.hpp"
 #include "flowire/flow/svzerod/integrator.hpp"
 #include "flowire/flow/svzerod/model.hpp"
+#include "flowire/flow/svzerod/simulate.hpp"
 #include "flowire_test.hpp"
 
 namespace flowire::flow {

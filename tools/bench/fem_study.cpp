@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "flowire/common/diagnostics.hpp"
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/flow/spec.hpp"
 #include "flowire/vessels/generators.hpp"
@@ -77,17 +77,17 @@ double flow_error(const std::vector<double>& q, const std::vector<double>& ref) 
 
 int flow_fem_work_precision(const Options& o) {
   const vessels::Network net = y_network(5e-3);
-  fem::BoundaryValues bv;
+  flow::fem::BoundaryValues bv;
   bv.inlet_pressure = kInletPressure;
   bv.outlet_pressure = kOutletPressure;
-  fem::FemOptions opt;
+  flow::fem::FemOptions opt;
   opt.write_png = false;
   opt.write_vtu = false;
   const double ref_factor = o.reduced ? 0.4 : 0.2;
   const std::vector<double> factors =
       o.reduced ? std::vector<double>{0.9, 0.6} : std::vector<double>{0.9, 0.6, 0.45, 0.3};
   opt.size_factor = ref_factor;
-  const fem::CompareResult ref = fem::compare(net, bv, opt, "");
+  const flow::fem::CompareResult ref = flow::fem::compare(net, bv, opt, "");
   std::vector<vessels::Vec3> ends_at;
   std::vector<double> q_ref;
   for (const auto& out : ref.outlets) {
@@ -98,7 +98,7 @@ int flow_fem_work_precision(const Options& o) {
   csv += fmt::format("fem_reference,{:g},{},0,{:.6e}\n", ref_factor, ref.tets, ref.total_seconds);
   for (double f : factors) {
     opt.size_factor = f;
-    const fem::CompareResult r = fem::compare(net, bv, opt, "");
+    const flow::fem::CompareResult r = flow::fem::compare(net, bv, opt, "");
     std::vector<double> q;
     for (const auto& out : r.outlets) q.push_back(out.flow_fem);
     csv += fmt::format("fem,{:g},{},{:.6e},{:.6e}\n", f, r.tets, flow_error(q, q_ref), r.total_seconds);

@@ -18,7 +18,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/flow/openbf.hpp"
-#include "flowire/flow/svzerod.hpp"
+#include "flowire/flow/svzerod/simulate.hpp"
 #include "flowire/vessels/io.hpp"
 
 namespace flowire::cli {

@@ -2,7 +2,7 @@
 // what each model of the comparison makes of them: the network's quasi-steady Poiseuille
 // solution (network_flow) and the condition of every open group of the FEM mesh
 // (group_conditions).
-#include "flowire/fem/boundary_values.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
 
 #include <fmt/format.h>
 
@@ -11,7 +11,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/flow/solver.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 /// The condition of the outlet at end `node`: its entry in `outlets`, else its pressure in
@@ -146,4 +146,4 @@ std::vector<GroupCondition> group_conditions(const TetMesh& mesh, const Boundary
   return c;
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

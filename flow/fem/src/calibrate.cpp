@@ -1,5 +1,5 @@
 // The network fitted to the 3D solution (calibrate.hpp).
-#include "flowire/fem/calibrate.hpp"
+#include "flowire/flow/fem/calibrate.hpp"
 
 #include <fmt/format.h>
 
@@ -12,10 +12,10 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
-#include "flowire/fem/sample.hpp"
+#include "flowire/flow/fem/sample.hpp"
 #include "flowire/flow/solver.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -446,4 +446,4 @@ void write_calibration_report(const std::string& dir, const Network& net, const 
   write_text_atomically(std::filesystem::path(dir) / "calibration.csv", csv.str());
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

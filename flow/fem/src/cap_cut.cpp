@@ -1,5 +1,5 @@
 // The network cut at a lumen's caps (cap_cut.hpp).
-#include "flowire/fem/cap_cut.hpp"
+#include "flowire/flow/fem/cap_cut.hpp"
 
 #include <fmt/format.h>
 
@@ -8,7 +8,7 @@
 
 #include "flowire/common/error.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using vessels::Branch;
@@ -131,4 +131,4 @@ CapCut cut_at_caps(const Network& net, std::span<const LumenCap> caps, const std
   return out;
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

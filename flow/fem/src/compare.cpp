@@ -1,7 +1,7 @@
 // The steady comparison: the network's pressures and flows against the FEM solution's,
 // sampled along the centerlines (cross-section means and fluxes), per outlet and per branch;
 // and the whole comparison at one instant (mesh, FEM solve, network solve, compare, files).
-#include "flowire/fem/compare.hpp"
+#include "flowire/flow/fem/compare.hpp"
 
 #include <fmt/format.h>
 
@@ -17,15 +17,15 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/fem/cap_cut.hpp"
-#include "flowire/fem/compare_output.hpp"
-#include "flowire/fem/lumen.hpp"
-#include "flowire/fem/network_mesh.hpp"
-#include "flowire/fem/obstacle.hpp"
-#include "flowire/fem/sample.hpp"
+#include "flowire/flow/fem/cap_cut.hpp"
+#include "flowire/flow/fem/compare_output.hpp"
+#include "flowire/flow/fem/lumen.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
+#include "flowire/flow/fem/sample.hpp"
 #include "flowire/flow/solver.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 /// Distance along the network from `source` to every node (Dijkstra).
@@ -348,4 +348,4 @@ CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOpt
   return res;
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

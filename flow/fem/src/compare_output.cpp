@@ -1,7 +1,7 @@
 // The files of a network-vs-FEM comparison: the samples and outlets as CSV, the Markdown
 // report, the solution as VTU (and a ParaView series for the frames of a pulsatile run),
 // the pressure plot as PNG (by a Python script). Rank 0 writes; every file atomically.
-#include "flowire/fem/compare_output.hpp"
+#include "flowire/flow/fem/compare_output.hpp"
 
 #include <fmt/format.h>
 
@@ -14,11 +14,11 @@
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
-#include "flowire/fem/element.hpp"
-#include "flowire/fem/obstacle.hpp"
+#include "flowire/flow/fem/element.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
 #include "flowire/flow/petsc_runtime.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using flow::mpi_rank;
@@ -251,4 +251,4 @@ void write_pulsatile_outputs(const std::string& out_dir, const Network& net, con
   }
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -1,11 +1,11 @@
 // Reference P2/P1 tetrahedron and P2 triangle: basis functions written out in barycentric
 // coordinates, and symmetric quadrature rules (Walkington's 14-point degree-5 rule on the
 // tetrahedron, the 6-point degree-4 rule on the triangle).
-#include "flowire/fem/element.hpp"
+#include "flowire/flow/fem/element.hpp"
 
 #include <vector>
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 std::vector<QuadPoint> make_tet_rule() {
@@ -109,4 +109,4 @@ void tri_p2_grad(const std::array<double, 3>& xi, double (*g)[2]) {
   }
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

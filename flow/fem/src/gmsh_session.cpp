@@ -9,7 +9,7 @@
 
 #include "flowire/common/error.hpp"
 
-namespace flowire::fem::detail {
+namespace flowire::flow::fem::detail {
 
 GmshModel::GmshModel(bool verbose) {
   static bool initialized = false;
@@ -86,4 +86,4 @@ TetMesh guarded(const std::string& at, const std::function<TetMesh()>& build) {
   }
 }
 
-}  // namespace flowire::fem::detail
+}  // namespace flowire::flow::fem::detail

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
-namespace flowire::fem::detail {
+namespace flowire::flow::fem::detail {
 
 /// gmsh is initialized once per process and kept; each build uses its own model, removed
 /// (with any size callback) when the build ends, also by an exception.
@@ -40,4 +40,4 @@ void generate(const MeshOptions& opt);
 /// flowire errors pass through.
 TetMesh guarded(const std::string& at, const std::function<TetMesh()>& build);
 
-}  // namespace flowire::fem::detail
+}  // namespace flowire::flow::fem::detail

@@ -1,7 +1,7 @@
 // A real lumen surface meshed by gmsh: open ends found (or a closed surface's flat caps),
 // capped, matched to the centerline ends, classified into patches and meshed into
 // quadratic tetrahedra (see lumen.hpp).
-#include "flowire/fem/lumen.hpp"
+#include "flowire/flow/fem/lumen.hpp"
 
 #include <fmt/format.h>
 #include <gmsh.h>
@@ -19,7 +19,7 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/common/input.hpp"
-#include "flowire/fem/element.hpp"
+#include "flowire/flow/fem/element.hpp"
 #include "gmsh_session.hpp"
 #include "mesh_broadcast.hpp"
 #include "mesh_extract.hpp"
@@ -39,7 +39,7 @@
 #include <vtkXMLPolyDataReader.h>
 #endif
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 std::string mm(const Vec3& x) {
@@ -551,4 +551,4 @@ TetMesh build_mesh(const Network& net, const LumenSurface& lumen, const MeshOpti
       [&] { return detail::guarded(lumen.surface.source, [&] { return mesh_lumen(net, lumen, opt); }); });
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -1,12 +1,12 @@
 // The quadratic tetrahedral mesh's own queries: its groups by name and by network end node,
 // and its volume and boundary areas integrated over the curved (quadratic) elements.
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
 #include <Eigen/Dense>
 
-#include "flowire/fem/element.hpp"
+#include "flowire/flow/fem/element.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 int TetMesh::group_named(const std::string& name) const {
   for (size_t g = 0; g < groups.size(); ++g)
@@ -53,4 +53,4 @@ double TetMesh::area(int group) const {
   return a;
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

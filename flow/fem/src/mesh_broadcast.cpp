@@ -10,7 +10,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/flow/petsc_runtime.hpp"
 
-namespace flowire::fem::detail {
+namespace flowire::flow::fem::detail {
 namespace {
 
 /// Broadcast a vector of trivially copyable values from rank 0 (its size first).
@@ -81,4 +81,4 @@ TetMesh build_shared(const std::function<TetMesh()>& build) {
   return mesh;
 }
 
-}  // namespace flowire::fem::detail
+}  // namespace flowire::flow::fem::detail

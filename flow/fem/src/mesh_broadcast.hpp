@@ -3,12 +3,12 @@
 // error). Shared by every mesh builder. Not installed.
 #include <functional>
 
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
-namespace flowire::fem::detail {
+namespace flowire::flow::fem::detail {
 
 /// Mesh on rank 0 with `build`; under MPI with more than one rank every rank receives
 /// the mesh (or rank 0's error, of the same kind). Collective.
 TetMesh build_shared(const std::function<TetMesh()>& build);
 
-}  // namespace flowire::fem::detail
+}  // namespace flowire::flow::fem::detail

@@ -11,9 +11,9 @@
 #include <unordered_map>
 
 #include "flowire/common/error.hpp"
-#include "flowire/fem/element.hpp"
+#include "flowire/flow/fem/element.hpp"
 
-namespace flowire::fem::detail {
+namespace flowire::flow::fem::detail {
 namespace {
 
 /// Reference coordinates of the nodes of a gmsh element type -> our local node order.
@@ -165,4 +165,4 @@ void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vecto
     if (!o) throw_numerical_error(fmt::format("{}: a boundary triangle has no tetrahedron", at));
 }
 
-}  // namespace flowire::fem::detail
+}  // namespace flowire::flow::fem::detail

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
-namespace flowire::fem::detail {
+namespace flowire::flow::fem::detail {
 
 /// Nodes, tetrahedra and boundary triangles (by group: `surf_group[k]` for surface
 /// `surfs[k]`) of the meshed model into `mesh`.
@@ -18,4 +18,4 @@ namespace flowire::fem::detail {
 void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
                   const std::string& at);
 
-}  // namespace flowire::fem::detail
+}  // namespace flowire::flow::fem::detail

@@ -7,7 +7,7 @@
 
 #include "stokes_internal.hpp"
 
-namespace flowire::fem::internal {
+namespace flowire::flow::fem::internal {
 
 namespace {
 
@@ -305,4 +305,4 @@ StokesSolution solve_navier_stokes(const TetMesh& mesh, std::span<const GroupCon
   return x;
 }
 
-}  // namespace flowire::fem::internal
+}  // namespace flowire::flow::fem::internal

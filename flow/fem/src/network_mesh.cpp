@@ -2,7 +2,7 @@
 // quadratic tetrahedra (see network_mesh.hpp for the geometry rules and the checks): the
 // pieces and spheres of the network and their checks, then the solids, the end faces
 // tagged as inlet and outlets, and the size field.
-#include "flowire/fem/network_mesh.hpp"
+#include "flowire/flow/fem/network_mesh.hpp"
 
 #include <fmt/format.h>
 #include <gmsh.h>
@@ -23,7 +23,7 @@
 #include "mesh_broadcast.hpp"
 #include "mesh_extract.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 /// A run of collinear segments of one radius: one cylinder from node a to node b.
@@ -319,4 +319,4 @@ TetMesh build_mesh(const Network& net, const MeshOptions& opt) {
   });
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

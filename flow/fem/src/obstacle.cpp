@@ -1,6 +1,6 @@
 // Flow past obstacles on meshes built in code: the DFG benchmark 3D-1Z and a wire in a
 // tube (domains, solve, forces, outputs).
-#include "flowire/fem/obstacle.hpp"
+#include "flowire/flow/fem/obstacle.hpp"
 
 #include <fmt/format.h>
 
@@ -9,11 +9,11 @@
 
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
-#include "flowire/fem/compare_output.hpp"
-#include "flowire/fem/sample.hpp"
+#include "flowire/flow/fem/compare_output.hpp"
+#include "flowire/flow/fem/sample.hpp"
 #include "flowire/flow/petsc_runtime.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 bool rank0() { return flow::mpi_rank() == 0; }
@@ -148,4 +148,4 @@ ObstacleResult dfg_3d_1z(const ObstacleMesh& sizes, Stabilization stabilization,
   return r;
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

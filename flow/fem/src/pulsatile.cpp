@@ -2,7 +2,7 @@
 // or a Navier–Stokes solve per frame), or frames from a time integration of the FEM side
 // with windkessel outlets (BDF2, quasi-steady fields or UnsteadyStokes) run period after
 // period until the frames repeat.
-#include "flowire/fem/pulsatile.hpp"
+#include "flowire/flow/fem/pulsatile.hpp"
 
 #include <fmt/format.h>
 
@@ -13,10 +13,10 @@
 #include <utility>
 
 #include "flowire/common/error.hpp"
-#include "flowire/fem/compare_output.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/compare_output.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 /// The frames of a dynamic series (see compare_pulsatile): the fields at times[i] of the
@@ -213,4 +213,4 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
   return out;
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

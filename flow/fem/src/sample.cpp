@@ -1,5 +1,5 @@
 // Point location in a curved quadratic tetrahedral mesh and field evaluation.
-#include "flowire/fem/sample.hpp"
+#include "flowire/flow/fem/sample.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,9 +7,9 @@
 #include <numbers>
 #include <tuple>
 
-#include "flowire/fem/element.hpp"
+#include "flowire/flow/fem/element.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 FieldSampler::FieldSampler(const TetMesh& mesh, const StokesSolution& solution) : mesh_(mesh), sol_(solution) {
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
@@ -174,4 +174,4 @@ std::optional<double> section_total_pressure(const FieldSampler& fs, const Vec3&
   return energy / flux;
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -1,7 +1,7 @@
 // A fluid domain built in code (an outer box or cylinder minus cylinders) meshed by gmsh:
 // the domain's checks, the OpenCASCADE cut, each fluid face given the group of the solid
 // face it lies on, and sizes growing with the distance from the holes.
-#include "flowire/fem/shape_domain.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
 
 #include <fmt/format.h>
 #include <gmsh.h>
@@ -18,7 +18,7 @@
 #include "mesh_broadcast.hpp"
 #include "mesh_extract.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 namespace {
 
 using detail::extract_mesh;
@@ -182,4 +182,4 @@ TetMesh build_mesh(const ShapeDomain& domain, const MeshOptions& opt) {
   return detail::build_shared([&] { return detail::guarded(domain.name, [&] { return mesh_domain(domain, opt); }); });
 }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

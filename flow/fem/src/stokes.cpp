@@ -1,7 +1,7 @@
 // Taylor–Hood P2/P1 Stokes / Navier–Stokes: element matrices computed here, a PETSc AIJ
 // matrix with exact (CSR) preallocation, MUMPS or a fieldsplit Schur preconditioner;
 // Navier–Stokes by Newton with density continuation and SUPG/LSIC/backflow stabilization.
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "stokes_internal.hpp"
 
-namespace flowire::fem::internal {
+namespace flowire::flow::fem::internal {
 
 void add_scaled(StokesSolution& sol, double c, const StokesSolution& other) {
   for (size_t n = 0; n < sol.velocity.size(); ++n) sol.velocity[n] += c * other.velocity[n];
@@ -121,9 +121,9 @@ double mean_pressure(const TetMesh& mesh, const std::vector<double>& pressure, i
   return area > 0.0 ? sum / area : 0.0;
 }
 
-}  // namespace flowire::fem::internal
+}  // namespace flowire::flow::fem::internal
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 using namespace internal;  // NOLINT(google-build-using-namespace): this file is the solver's own
 
@@ -381,4 +381,4 @@ std::vector<Vec3> surface_forces(const TetMesh& mesh, const StokesSolution& sol,
 
 void initialize() { internal::ensure_petsc(); }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

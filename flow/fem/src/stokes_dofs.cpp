@@ -8,7 +8,7 @@
 
 #include "stokes_internal.hpp"
 
-namespace flowire::fem::internal {
+namespace flowire::flow::fem::internal {
 
 void default_option(const char* name, const char* value) {
   PetscBool set = PETSC_FALSE;
@@ -164,4 +164,4 @@ void configure_solver(KSP ksp, Mat a, Mat mp, const Numbering& num, const Stokes
   FLOWIRE_PETSC(KSPSetFromOptions(ksp));
 }
 
-}  // namespace flowire::fem::internal
+}  // namespace flowire::flow::fem::internal

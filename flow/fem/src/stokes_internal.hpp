@@ -1,6 +1,6 @@
 #pragma once
 // The Taylor–Hood P2/P1 Stokes / Navier–Stokes solver's parts shared by its source files
-// (the public interface is flowire/fem/stokes.hpp):
+// (the public interface is flowire/flow/fem/stokes.hpp):
 //   stokes_dofs.cpp      unknown numbering, sparsity pattern, linear-solver configuration
 //   stokes_kernels.cpp   element matrices (Stokes) and residual/Jacobian (Navier–Stokes),
 //                        their assembly into PETSc matrices and vectors
@@ -20,13 +20,13 @@
 #include <Eigen/Dense>
 
 #include "flowire/common/error.hpp"
-#include "flowire/fem/element.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/element.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire/flow/petsc_runtime.hpp"
 
 #define FLOWIRE_PETSC(call) ::flowire::flow::check_petsc((call), #call, "fem")
 
-namespace flowire::fem::internal {
+namespace flowire::flow::fem::internal {
 
 inline void ensure_petsc() { flow::ensure_petsc("fem"); }
 
@@ -409,4 +409,4 @@ double mean_pressure(const TetMesh& mesh, const std::vector<double>& pressure, i
 /// Steady Navier–Stokes by Newton with density continuation (see stokes.hpp).
 StokesSolution solve_navier_stokes(const TetMesh& mesh, std::span<const GroupCondition> cond, const StokesOptions& opt);
 
-}  // namespace flowire::fem::internal
+}  // namespace flowire::flow::fem::internal

@@ -9,7 +9,7 @@
 
 #include "stokes_internal.hpp"
 
-namespace flowire::fem::internal {
+namespace flowire::flow::fem::internal {
 
 namespace {
 /// @p bad: the first inverted tetrahedron this rank met, or −1. Every rank throws if any met one.
@@ -459,9 +459,9 @@ void assemble_rhs(const TetMesh& mesh, const Numbering& num, const Mpi& mpi, std
   FLOWIRE_PETSC(VecAssemblyEnd(b));
 }
 
-}  // namespace flowire::fem::internal
+}  // namespace flowire::flow::fem::internal
 
-namespace flowire::fem::detail {
+namespace flowire::flow::fem::detail {
 
 using internal::ns_element;
 using internal::ns_face;
@@ -483,4 +483,4 @@ void navier_stokes_face(const TetMesh& mesh, int face, const StokesOptions& opt,
   ns_face(mesh, static_cast<size_t>(face), ns_params(opt), st, res, jac, any);
 }
 
-}  // namespace flowire::fem::detail
+}  // namespace flowire::flow::fem::detail

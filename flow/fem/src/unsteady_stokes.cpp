@@ -5,7 +5,7 @@
 
 #include "stokes_internal.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 using internal::ensure_petsc;
 using internal::System;
@@ -96,4 +96,4 @@ double UnsteadyStokes::dt() const { return impl_->dt; }
 const std::vector<std::vector<double>>& UnsteadyStokes::unit_flux() const { return impl_->flux; }
 const std::vector<int>& UnsteadyStokes::open_groups() const { return impl_->open; }
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

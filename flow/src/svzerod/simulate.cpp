@@ -10,9 +10,9 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/flow/solver.hpp"
-#include "flowire/flow/svzerod.hpp"
 #include "flowire/flow/svzerod/integrator.hpp"
 #include "flowire/flow/svzerod/model.hpp"
+#include "flowire/flow/svzerod/simulate.hpp"
 
 namespace flowire::flow::svzerod {
 namespace {

@@ -4,7 +4,7 @@
 /// ids `sn` → `tn`, an inlet flow table, blood properties), run as compliant lumped networks.
 ///
 /// Each vessel is cut into segments of at most `max_segment_length`, each an svZeroDSolver
-/// `BloodVessel` (svzerod.hpp) whose R, L and C are the integrals of the 1D model's per-length
+/// `BloodVessel` (svzerod/simulate.hpp) whose R, L and C are the integrals of the 1D model's per-length
 /// coefficients over the segment, the radius varying linearly from `Rp` to `Rd`:
 /// - friction, with openBF's velocity profile of exponent γ (`gamma_profile`, 2: Poiseuille):
 ///   \f$ R' = 2(\gamma + 2)\mu / (\pi r^4) \f$;

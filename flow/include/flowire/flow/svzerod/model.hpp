@@ -8,9 +8,9 @@
 #include <string_view>
 #include <vector>
 
-#include "flowire/flow/svzerod.hpp"
 #include "flowire/flow/svzerod/block.hpp"
 #include "flowire/flow/svzerod/integrator.hpp"
+#include "flowire/flow/svzerod/simulate.hpp"
 
 namespace flowire::flow::svzerod {
 

@@ -10,7 +10,7 @@
 #include <array>
 #include <span>
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// Edge e of the tetrahedron joins vertices kTetEdges[e][0] and kTetEdges[e][1].
 inline constexpr std::array<std::array<int, 2>, 6> kTetEdges{{{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}}};
@@ -44,4 +44,4 @@ void tri_p2(const std::array<double, 3>& xi, double* values);
 /// @brief P2 triangle gradients (6 × 2) with respect to (s, t).
 void tri_p2_grad(const std::array<double, 3>& xi, double (*grads)[2]);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -23,9 +23,9 @@
 /// `mesh_size` or `size_factor` times the radius of the nearest piece; one thread, so
 /// the same network gives the same mesh every run. Groups: 0 wall, 1 inlet, then the
 /// outlets in end-node order.
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief Build and mesh the lumen of `net`.
 ///
@@ -35,4 +35,4 @@ namespace flowire::fem {
 /// (numerical) when gmsh fails to mesh it.
 TetMesh build_mesh(const Network& net, const MeshOptions& opt = {});
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -25,12 +25,12 @@
 #include <utility>
 #include <vector>
 
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire/flow/spec.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief Options of a comparison: the mesh, the equations and solver, the samples and the
 /// files (compare_output.hpp).
@@ -161,4 +161,4 @@ StokesOptions comparison_stokes_options(const FemOptions& opt, const BoundaryVal
 /// `branch_<index>` when it has none.
 std::string branch_label(const Network& net, int branch);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -20,11 +20,11 @@
 #include <span>
 #include <string>
 
-#include "flowire/fem/compare.hpp"
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/compare.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief Write a solution as quadratic tetrahedra (.vtu, point data `velocity` and
 /// `pressure`; edge nodes take the mean pressure of their vertices).
@@ -43,4 +43,4 @@ void write_outputs(const std::string& out_dir, const Network& net, const TetMesh
 void write_pulsatile_outputs(const std::string& out_dir, const Network& net, const TetMesh& mesh,
                              std::span<const CompareResult> frames, std::span<const StokesSolution> fields);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -9,10 +9,10 @@
 #include <tuple>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 struct PointValue {
   Vec3 velocity = Vec3::Zero();  ///< m/s (P2 interpolation)
@@ -51,4 +51,4 @@ std::tuple<double, double, bool> section_pressure(const FieldSampler& fs, const 
 std::optional<double> section_total_pressure(const FieldSampler& fs, const Vec3& c, const Vec3& axis, double r,
                                              double density);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

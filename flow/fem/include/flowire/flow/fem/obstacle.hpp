@@ -17,11 +17,11 @@
 #include <utility>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/shape_domain.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/shape_domain.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief Mesh sizes of an obstacle domain.
 struct ObstacleMesh {
@@ -72,4 +72,4 @@ void write_forces(const std::string& dir, const std::vector<std::pair<std::strin
 std::vector<std::pair<std::string, Vec3>> named_forces(const TetMesh& mesh, const StokesSolution& sol,
                                                        const StokesOptions& opt);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

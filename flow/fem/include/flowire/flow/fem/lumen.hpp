@@ -33,9 +33,9 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief A triangulated surface in metres.
 struct SurfaceMesh {
@@ -85,4 +85,4 @@ LumenSurface prepare_lumen(const Network& net, SurfaceMesh surface, const LumenO
 /// @throws flowire::Error (input) for bad tagging, (numerical) when gmsh fails.
 TetMesh build_mesh(const Network& net, const LumenSurface& lumen, const MeshOptions& opt = {});
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -64,9 +64,9 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 enum class Equations { Stokes, NavierStokes };
 enum class LinearSolver { Mumps, Fieldsplit };
@@ -262,4 +262,4 @@ void navier_stokes_face(const TetMesh& mesh, int face, const StokesOptions& opt,
 /// PETSc is owned by flow (flow/petsc_runtime.hpp): flow::finalize_petsc() ends it.
 void initialize();
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -14,7 +14,7 @@
 
 #include "flowire/vessels/network.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 using vessels::Network;
 using vessels::Vec3;
@@ -67,4 +67,4 @@ struct TetMesh {
   [[nodiscard]] double area(int group) const;
 };
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -14,11 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
 #include "flowire/flow/spec.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief Time integration of a pulsatile FEM series (see compare_pulsatile).
 struct DynamicOptions {
@@ -73,4 +73,4 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
                                   double steady_time, const FemOptions& opt, const std::string& out_dir,
                                   const DynamicOptions* dyn = nullptr);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -12,11 +12,11 @@
 #include <utility>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
-#include "flowire/fem/stokes.hpp"
+#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/flow/fem/stokes.hpp"
 #include "flowire/flow/spec.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief Condition at one outlet end of the network.
 struct OutletValue {
@@ -83,4 +83,4 @@ NetworkFlow network_flow(const Network& net, const BoundaryValues& bv, std::span
 /// @throws flowire::Error (usage) for a negative outlet resistance.
 std::vector<GroupCondition> group_conditions(const TetMesh& mesh, const BoundaryValues& bv);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/lumen.hpp"
+#include "flowire/flow/fem/lumen.hpp"
 #include "flowire/vessels/network.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief A network cut at a lumen's caps, and where each input node went.
 struct CapCut {
@@ -40,4 +40,4 @@ struct CapCut {
 /// the branch it ends.
 CapCut cut_at_caps(const Network& net, std::span<const LumenCap> caps, const std::string& source);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

@@ -1,5 +1,5 @@
 #pragma once
-/// @file svzerod.hpp
+/// @file simulate.hpp
 /// @brief svZeroDSolver interop: read its JSON model, simulate it as svZeroDSolver does,
 /// write `svzerod_result.csv` in its format.
 ///

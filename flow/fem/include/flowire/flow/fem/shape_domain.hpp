@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/mesh.hpp"
+#include "flowire/flow/fem/mesh.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 /// @brief A solid of a ShapeDomain: a box or a circular cylinder.
 struct Solid {
@@ -60,4 +60,4 @@ struct ShapeDomain {
 /// no solid's face, not one connected volume), (numerical) when gmsh fails.
 TetMesh build_mesh(const ShapeDomain& domain, const MeshOptions& opt = {});
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem

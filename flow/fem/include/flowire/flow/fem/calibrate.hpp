@@ -37,11 +37,11 @@
 #include <string>
 #include <vector>
 
-#include "flowire/fem/boundary_values.hpp"
-#include "flowire/fem/compare.hpp"
 #include "flowire/flow/calibration.hpp"
+#include "flowire/flow/fem/boundary_values.hpp"
+#include "flowire/flow/fem/compare.hpp"
 
-namespace flowire::fem {
+namespace flowire::flow::fem {
 
 struct CalibrateOptions {
   std::vector<double> factors{0.5, 1.0, 1.5};  ///< of the inlet value, the solutions fitted (> 0)
@@ -76,4 +76,4 @@ CalibrationResult calibrate(const Network& net, const BoundaryValues& bv, const 
 /// pressure, and the network's after) in `dir`. Rank 0 only.
 void write_calibration_report(const std::string& dir, const Network& net, const CalibrationResult& r);
 
-}  // namespace flowire::fem
+}  // namespace flowire::flow::fem
