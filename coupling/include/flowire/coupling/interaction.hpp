@@ -5,6 +5,7 @@
 /// differences in tests/coupling/test_interaction.cpp. The wire–blood laws are in drag.hpp.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 
 #include "flowire/coupling/drag.hpp"  // the blood drag laws
 
@@ -50,5 +51,38 @@ struct FrictionResult {
   Mat3 dfdv = Mat3::Zero();
 };
 FrictionResult coulomb_friction(const Vec3& v, const Vec3& n, double normal_force, double mu, double eps);
+
+/// @brief The wall contact and friction settings of a scene's `contact:` section.
+struct ContactParams {
+  bool enabled = true;
+  double stiffness = 0.0;  ///< penalty stiffness per vertex [N/m]
+  /// [m] width of the penalty's smoothed onset around first touch (wall_penalty): the force
+  /// ramps in over |δ| < onset/2, so that Newton sees a wall before it reaches it
+  double onset = 0.0;
+  double friction = 0.1;      ///< Coulomb coefficient, shaft (wire on vessel wall: 0.1–1.0, Tang et al. 2010, §3.3)
+  double tip_friction = 0.1;  ///< Coulomb coefficient, tip region
+  double tip_length = 0.03;   ///< [m] distal length using tip_friction
+  double slip_speed = 1e-4;   ///< [m/s] smooth stick/slip transition width ε
+  double viscous_friction = 0.0;  ///< [N s/m²] tangential viscous wall friction per unit length
+};
+
+/// @brief What the interaction of the wire with the vessels and the blood did, summed over a run.
+struct InteractionStats {
+  std::uint64_t evaluations = 0;
+  std::uint64_t lookups = 0;
+  std::uint64_t contacts = 0;          ///< vertex evaluations in contact
+  std::uint64_t wall_queries = 0;      ///< wall distances asked of the network or the lumen surface
+  std::uint64_t drag_evaluations = 0;  ///< vertex evaluations of the blood drag
+  double max_penetration = 0.0;        ///< over accepted steps [m]
+  double max_outside = 0.0;            ///< max over accepted steps of (wall distance of a vertex centre) [m]
+  /// Where and when a vertex centre was first more than a wire radius outside the lumen
+  /// (outside_time < 0: never).
+  double outside_time = -1.0;       ///< [s]
+  double outside_arc_length = 0.0;  ///< of that vertex, from the entry [m]
+  double outside_distance = 0.0;    ///< its distance outside the wall [m]
+  Eigen::Vector3d outside_position = Eigen::Vector3d::Zero();
+  double seconds_lookup = 0.0, seconds_contact = 0.0, seconds_drag = 0.0;
+  double max_reynolds = 0.0;  ///< largest normal Reynolds number of the drag law over accepted steps [-]
+};
 
 }  // namespace flowire::coupling

@@ -1,0 +1,80 @@
+#pragma once
+/// @file wall_contact.hpp
+/// @brief The wall's normal force on the wire: the penalty of interaction.hpp (`wall_penalty`)
+/// on the distance a `Wall` gives, at each free vertex's own radius (rod::RodView::vertex_radius),
+/// stiffness per unit length (RodView::cell_weight), reported as a conservative force with its
+/// energy k φ(δ) so that the rod's line search measures the contact exactly; and the entry's
+/// introducer sheath, the same penalty on a plane. At the end of each step it records each
+/// vertex's normal force and normal (what the friction of the next step presses with) and how
+/// far outside the lumen the wire went.
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "flowire/coupling/interaction.hpp"
+#include "flowire/coupling/wall.hpp"
+#include "flowire/rod/external.hpp"
+
+namespace flowire::coupling {
+
+class WallContact {
+ public:
+  /// @param wire_radius the wire's radius where the rod's view carries none [m]
+  WallContact(const ContactParams& params, double wire_radius) : params_(params), wire_radius_(wire_radius) {}
+
+  /// @brief The entry as an introducer sheath: a vertex within @p reach of the entry axis may
+  /// not come back out behind the entry (point @p p, unit direction @p t into the vessel): the
+  /// penalty on the signed distance (p − x)·t − a to the plane one wire radius a behind the
+  /// entry (vertices fed in at the entry itself stay free).
+  void set_introducer(const Vec3& p, const Vec3& t, double reach);
+
+  /// @brief Add the normal forces on the free vertices (index < @p free) against @p wall to
+  /// @p out, and each vertex's force to @p tally.
+  void evaluate(const rod::RodView& rod, int free, Wall& wall, rod::ForceAccumulator& out, std::span<Vec3> tally,
+                InteractionStats& stats);
+  /// @brief At an accepted state: each free vertex's normal force and normal for the next step's
+  /// friction, and the "outside the lumen" record of @p stats.
+  void end_step(const rod::RodView& rod, Wall& wall, InteractionStats& stats);
+
+  /// @brief Vertex @p i's normal force [N] and normal: those of the step's start once a step
+  /// has ended (lagged, as in IPC), else those of the last evaluation.
+  [[nodiscard]] double normal_force(int i) const {
+    const auto k = static_cast<size_t>(i);
+    return lagged() ? lag_normal_force_[k] : normal_force_[k];
+  }
+  [[nodiscard]] const Vec3& normal(int i) const {
+    const auto k = static_cast<size_t>(i);
+    return lagged() ? lag_normal_[k] : normal_[k];
+  }
+  /// @brief Whether the normal forces are those of a step's start (a step has ended since the
+  /// vertex set last changed size).
+  [[nodiscard]] bool lagged() const { return lagged_; }
+  void save_checkpoint() { checkpoint_ = {lag_normal_force_, lag_normal_, lagged_}; }
+  void restore_checkpoint() {
+    lag_normal_force_ = checkpoint_.normal_force;
+    lag_normal_ = checkpoint_.normal;
+    lagged_ = checkpoint_.lagged;
+  }
+  [[nodiscard]] std::uint64_t introducer_contacts() const { return intro_contacts_; }
+  [[nodiscard]] const ContactParams& params() const { return params_; }
+  /// @brief The wall's normal force on a vertex of radius @p a at wall distance @p d (k φ′) [N].
+  [[nodiscard]] double normal_force_at(double d, double a, double cell_weight) const;
+
+ private:
+  void ensure_size(int n);
+  ContactParams params_;
+  double wire_radius_;
+  std::vector<double> normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
+  std::vector<Vec3> normal_, lag_normal_;
+  bool lagged_ = false;
+  struct {
+    std::vector<double> normal_force;
+    std::vector<Vec3> normal;
+    bool lagged = false;
+  } checkpoint_;
+  Vec3 intro_point_ = Vec3::Zero(), intro_dir_ = Vec3::Zero();
+  double intro_reach_ = 0.0;  ///< 0: no introducer
+  std::uint64_t intro_contacts_ = 0;
+};
+
+}  // namespace flowire::coupling
