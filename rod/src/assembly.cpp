@@ -42,14 +42,20 @@ void RodSimulator::gather(Eigen::Ref<Eigen::VectorXd> q) const {
 }
 
 int RodSimulator::add_point_force(double s, const Vec3& f) {
-  point_forces_.push_back({s, f});
-  return static_cast<int>(point_forces_.size()) - 1;
+  loads_.point_forces.points.push_back({s, f});
+  return static_cast<int>(loads_.point_forces.points.size()) - 1;
 }
 
 void RodSimulator::add_external(std::shared_ptr<ExternalForce> force) {
   if (!force) throw_usage_error("RodSimulator::add_external: null force");
   externals_.push_back(std::move(force));
   externals_.back()->start(current_view(0.0));
+}
+
+LoadSite RodSimulator::load_site() const {
+  const auto nv = static_cast<size_t>(state_.vertex_count());
+  return {state_.x, std::span<const double>(state_.u.data(), nv), std::span<const double>(disc_.mass.data(), nv),
+          state_.inserted_length};
 }
 
 void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
@@ -63,33 +69,8 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   w.has_ext_k = false;
   w.has_ext_edge_k = false;
   w.moment_k.setZero();
-  if (gravity_.squaredNorm() > 0.0)
-    for (int k = 0; k < nv; ++k) w.fext.segment<3>(4 * k) += load_scale * disc_.mass[k] * gravity_;
-  w.fext.segment<3>(0) += load_scale * tip_force_;
-  const double L = s.inserted_length;
-  for (const PointForce& pf : point_forces_) {
-    const double u = L - pf.s;
-    if (u < 0.0 || u > L) continue;
-    const auto it = std::upper_bound(s.u.begin(), s.u.end(), u);
-    const int k = std::clamp(static_cast<int>(it - s.u.begin()) - 1, 0, nv - 2);
-    const double a = std::clamp((u - s.u[k]) / (s.u[k + 1] - s.u[k]), 0.0, 1.0);
-    w.fext.segment<3>(4 * k) += load_scale * (1.0 - a) * pf.f;
-    w.fext.segment<3>(4 * (k + 1)) += load_scale * a * pf.f;
-  }
-  if (tip_moment_.squaredNorm() > 0.0) {
-    const Vec3 M = load_scale * tip_moment_;
-    const Vec3 e = s.x[1] - s.x[0];
-    const double l2 = e.squaredNorm();
-    const Vec3 t = e / std::sqrt(l2);
-    w.fext(3) += M.dot(t);
-    const Vec3 Mp = M - t * t.dot(M);
-    const Vec3 f1 = Mp.cross(e) / l2;  // couple: e × f1 = M⊥
-    w.fext.segment<3>(4) += f1;
-    w.fext.segment<3>(0) -= f1;
-    Mat3 skewM;
-    skewM << 0, -Mp.z(), Mp.y(), Mp.z(), 0, -Mp.x(), -Mp.y(), Mp.x(), 0;
-    w.moment_k = -sym(skewM / l2 - 2.0 * f1 * e.transpose() / l2);
-  }
+  LoadTerms terms{w.fext.head(nd), w.moment_k};
+  loads_.add(load_site(), load_scale, terms);
   if (!externals_.empty()) {
     w.vel.resize(nv);
     w.spin.resize(nv - 1);
@@ -238,20 +219,15 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
 
 double RodSimulator::force_scale(double load_scale) const {
   const RodState& s = state_;
-  double total_mass = 0.0, ei = 0.0, ea = 0.0;
-  for (int k = 0; k < s.vertex_count(); ++k) {
-    total_mass += disc_.mass[k];
-    ei = std::max(ei, disc_.bend_stiffness[k]);
-  }
+  double ei = 0.0, ea = 0.0;
+  for (int k = 0; k < s.vertex_count(); ++k) ei = std::max(ei, disc_.bend_stiffness[k]);
   double lmin = model_.h;
   for (int j = 0; j < s.edge_count(); ++j) {
     ea = std::max(ea, disc_.stretch_stiffness[j]);
     lmin = std::min(lmin, disc_.rest_length[j]);
   }
   const double L = std::max(s.inserted_length, model_.h);
-  double f = std::max({ei / (L * L), load_scale * total_mass * gravity_.norm(), load_scale * tip_force_.norm(),
-                       load_scale * tip_moment_.norm() / L});
-  for (const auto& pf : point_forces_) f = std::max(f, load_scale * pf.f.norm());
+  const double f = loads_.force_scale(load_site(), load_scale, L, ei / (L * L));
   const double xscale = model_.base_position.norm() + L;
   const double floor = 4.0 * std::numeric_limits<double>::epsilon() * ea * (1.0 + xscale / lmin);
   return settings_.force_tolerance * f + floor;

@@ -78,6 +78,7 @@
 #include "flowire/rod/drive.hpp"
 #include "flowire/rod/energies.hpp"
 #include "flowire/rod/external.hpp"
+#include "flowire/rod/loads.hpp"
 #include "flowire/rod/model.hpp"
 
 namespace flowire::rod {
@@ -284,16 +285,18 @@ class RodSimulator {
   /// @brief The clamp's drive (feeding and turning rules, what they did).
   [[nodiscard]] const Drive& drive() const { return drive_; }
   /// @brief Dead force on the distal tip vertex [N].
-  void set_tip_force(const Eigen::Vector3d& f) { tip_force_ = f; }
+  void set_tip_force(const Eigen::Vector3d& f) { loads_.tip_force.force = f; }
   /// @brief Moment on the distal edge [N m]: the component along the edge twists it, the
   /// rest acts as a force couple on its two vertices.
-  void set_tip_moment(const Eigen::Vector3d& m) { tip_moment_ = m; }
+  void set_tip_moment(const Eigen::Vector3d& m) { loads_.tip_moment.moment = m; }
   /// @brief Gravitational acceleration [m/s²].
-  void set_gravity(const Eigen::Vector3d& g) { gravity_ = g; }
+  void set_gravity(const Eigen::Vector3d& g) { loads_.gravity.acceleration = g; }
   /// @brief Dead force at arc length s from the entry (shared by the two nearest
   /// vertices). Returns its index.
   int add_point_force(double s, const Eigen::Vector3d& f);
-  void clear_point_forces() { point_forces_.clear(); }
+  void clear_point_forces() { loads_.point_forces.points.clear(); }
+  /// @brief The loads set above (loads.hpp), each its own object.
+  [[nodiscard]] const Loads& loads() const { return loads_; }
   /// @brief Register an external force provider (contact, drag); kept alive by the rod.
   void add_external(std::shared_ptr<ExternalForce> force);
   void clear_externals() { externals_.clear(); }
@@ -482,6 +485,8 @@ class RodSimulator {
   /// assembly (same configuration), so externals are evaluated once per configuration.
   double assemble(Mode mode, double h, double load_scale, Need need, bool psd = false, bool reuse_loads = false);
   void evaluate_loads(Mode mode, double h, double load_scale);
+  /// The current configuration as the loads see it.
+  [[nodiscard]] LoadSite load_site() const;
   void compute_base_reaction();
   [[nodiscard]] double force_scale(double load_scale) const;
   [[nodiscard]] int dof_count() const { return 4 * state_.vertex_count() - 1; }
@@ -497,14 +502,7 @@ class RodSimulator {
   std::unique_ptr<Work> work_;
   std::vector<double> arc_length_;
   std::vector<std::shared_ptr<ExternalForce>> externals_;
-  struct PointForce {
-    double s;
-    Eigen::Vector3d f;
-  };
-  std::vector<PointForce> point_forces_;
-  Eigen::Vector3d tip_force_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d tip_moment_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();
+  Loads loads_;  // gravity, tip force, point forces, tip moment
   Eigen::Vector3d base_force_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d base_torque_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d base_d1_ = Eigen::Vector3d::Zero();  // clamp frame at zero rotation
