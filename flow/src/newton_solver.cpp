@@ -6,7 +6,8 @@
 // increasing in Δp, so the node balance F(p) = Σ Q − injections is the gradient of a convex
 // function of the unknown pressures and its Jacobian is the nodal conductance matrix of the
 // tangent conductances dQ/dΔp: symmetric positive definite, with the pattern of the linear one.
-// Newton's method from the last frame's pressures (the Poiseuille solution at the first), the
+// Newton's method from the last frames' pressures extrapolated to the frame's time (the
+// Poiseuille solution at the first), the
 // Jacobian refilled in place and refactored by CHOLMOD on the pattern analysed once, and a
 // backtracking line search on |F| converge to the tolerance in a few iterations; between frames
 // the last factorization is reused (chord steps, one solve each) while it still converges fast; the superposition of
@@ -14,6 +15,7 @@
 #include <fmt/format.h>
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -69,6 +71,7 @@ class NewtonSolver final : public FrameSolver {
  protected:
   void apply_occlusion() override {
     factored_ = false;
+    r_eff_.clear();
     scratch_q_.clear();
     compute(time_, p_.data(), q_.data());
   }
@@ -89,16 +92,19 @@ class NewtonSolver final : public FrameSolver {
     auto set_unknowns = [&](const Eigen::VectorXd& x) {
       for (int u = 0; u < nu; ++u) p[a_.node_of_unknown[static_cast<size_t>(u)]] = x[u];
     };
-    // Segment flows and tangent conductances at p, and the node balance F (flow out − in).
+    // The linear resistances (with the occlusion's factors), once per change of the occlusion.
+    if (r_eff_.empty()) {
+      r_eff_.resize(static_cast<size_t>(net_.num_segments()));
+      for (int s = 0; s < net_.num_segments(); ++s) r_eff_[static_cast<size_t>(s)] = effective_resistance(s);
+    }
+    // Segment flows at p and the node balance F (flow out − in); the tangent's conductances are
+    // computed where a factorization needs them (chord steps do not).
     auto balance = [&]() {
       double qmax = 0.0;
       for (int s = 0; s < net_.num_segments(); ++s) {
         const auto& seg = net_.segment(s);
         const double dp = p[seg.node_from] - p[seg.node_to];
-        const double r = effective_resistance(s);
-        const SegmentLaw& law = spec_.segment_laws[static_cast<size_t>(s)];
-        q[s] = law.flow(dp, r);
-        dq_[static_cast<size_t>(s)] = law.conductance(dp, r);
+        q[s] = spec_.segment_laws[static_cast<size_t>(s)].flow(dp, r_eff_[static_cast<size_t>(s)]);
         qmax = std::max(qmax, std::abs(q[s]));
       }
       f_ = -inj_;
@@ -119,6 +125,20 @@ class NewtonSolver final : public FrameSolver {
       (void)balance();
       return;
     }
+    // Newton's start: the last three frames' pressures extrapolated to t by the parabola through
+    // them (frames follow a waveform: the start is then O(Δt³) from the solution instead of
+    // O(Δt)); with two frames the line through them; the last frame's where there is no such
+    // history or t does not move forward by a step like the last ones.
+    if (history_ >= 2 && t > t_[0] && t - t_[0] <= 4.0 * (t_[0] - t_[1])) {
+      if (history_ == 3 && t_[1] > t_[2]) {
+        const double l0 = (t - t_[1]) * (t - t_[2]) / ((t_[0] - t_[1]) * (t_[0] - t_[2]));
+        const double l1 = (t - t_[0]) * (t - t_[2]) / ((t_[1] - t_[0]) * (t_[1] - t_[2]));
+        const double l2 = (t - t_[0]) * (t - t_[1]) / ((t_[2] - t_[0]) * (t_[2] - t_[1]));
+        x_ = l0 * xs_[0] + l1 * xs_[1] + l2 * xs_[2];
+      } else {
+        x_ = xs_[0] + ((t - t_[0]) / (t_[0] - t_[1])) * (xs_[0] - xs_[1]);
+      }
+    }
     set_unknowns(x_);
     double scale = std::max(balance(), inj_scale);
     double norm = f_.norm();
@@ -133,7 +153,7 @@ class NewtonSolver final : public FrameSolver {
       if (stalled && !(f_.lpNorm<Eigen::Infinity>() > kFloor * scale)) break;
       const bool newton = refactor;
       if (refactor) {
-        factorize_tangent(t);
+        factorize_tangent(t, p);
         refactor = false;
       }
       step_ = chol_.solve(f_);
@@ -155,6 +175,13 @@ class NewtonSolver final : public FrameSolver {
       stalled = newton && norm > 0.5 * before;
     }
     iterations_ += it;
+    if (history_ == 0 || t != t_[0]) {
+      std::rotate(xs_.begin(), xs_.begin() + 2, xs_.end());  // (newest first)
+      std::rotate(t_.begin(), t_.begin() + 2, t_.end());
+      xs_[0] = x_;
+      t_[0] = t;
+      history_ = std::min(history_ + 1, 3);
+    }
     if (f_.lpNorm<Eigen::Infinity>() > kFloor * scale || !std::isfinite(norm))
       throw_numerical_error(
           fmt::format("flow: Newton's method on the quadratic losses did not converge at t = {} s ({} iterations, node "
@@ -163,8 +190,13 @@ class NewtonSolver final : public FrameSolver {
   }
 
  private:
-  /// The tangent conductance matrix at the current dq_, refilled in place and factored.
-  void factorize_tangent(double t) const {
+  /// The tangent conductance matrix at the pressures @p p, refilled in place and factored.
+  void factorize_tangent(double t, const double* p) const {
+    for (int s = 0; s < net_.num_segments(); ++s) {
+      const auto& seg = net_.segment(s);
+      dq_[static_cast<size_t>(s)] = spec_.segment_laws[static_cast<size_t>(s)].conductance(
+          p[seg.node_from] - p[seg.node_to], r_eff_[static_cast<size_t>(s)]);
+    }
     double* v = jac_.valuePtr();
     std::fill(v, v + jac_.nonZeros(), 0.0);
     for (size_t u = 0; u < diag_slot_.size(); ++u)
@@ -194,8 +226,12 @@ class NewtonSolver final : public FrameSolver {
   mutable long factorizations_ = 0;
   mutable Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
   mutable Eigen::VectorXd x_, f_, inj_, step_, x0_;  // unknown pressures (the last frame's), balance, injections
-  mutable std::vector<double> coef_, dq_;
+  mutable std::vector<double> coef_, dq_, r_eff_;    // ..., tangent conductances, linear resistances
   mutable long iterations_ = 0;
+  // The last three frames' solutions and times, newest first, for the next frame's start.
+  mutable std::array<Eigen::VectorXd, 3> xs_;
+  mutable std::array<double, 3> t_{};
+  mutable int history_ = 0;
 };
 
 }  // namespace
