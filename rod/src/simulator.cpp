@@ -14,22 +14,6 @@ namespace flowire::rod {
 
 using detail::kBandwidth;
 
-const char* to_string(SolveStatus s) {
-  switch (s) {
-    case SolveStatus::Converged:
-      return "converged";
-    case SolveStatus::MaxIterations:
-      return "maximum Newton iterations reached";
-    case SolveStatus::LineSearchFailed:
-      return "line search failed";
-    case SolveStatus::NonFinite:
-      return "non-finite values";
-    case SolveStatus::SingularMatrix:
-      return "singular matrix";
-  }
-  return "unknown";
-}
-
 Integrator parse_integrator(std::string_view name) {
   if (name == "implicit_euler") return Integrator::ImplicitEuler;
   if (name == "implicit_midpoint") return Integrator::ImplicitMidpoint;
@@ -49,11 +33,11 @@ RodSimulator::RodSimulator(const WireSpec& spec) : model_(RodModel::from_spec(sp
   const int max_dof = 4 * nvmax - 1;
   Work& w = *work_;
   w.max_dof = max_dof;
-  for (Eigen::VectorXd* v : {&w.q, &w.grad, &w.rhs, &w.dq, &w.mass, &w.damp, &w.fext, &w.fext_accepted, &w.q0, &w.qhat,
+  for (Eigen::VectorXd* v : {&w.q, &w.grad, &w.rhs, &w.mass, &w.damp, &w.fext, &w.fext_accepted, &w.q0, &w.qhat,
                              &w.fcons, &w.fcons_accepted})
     v->setZero(max_dof);
   w.H.reserve(max_dof, kBandwidth);
-  w.ldlt.reserve(max_dof, kBandwidth);
+  newton_.reserve(max_dof, kBandwidth);
   w.ext_k.reserve(nvmax);
   w.ext_edge_k.reserve(nvmax);
   w.edges.reserve(nvmax);

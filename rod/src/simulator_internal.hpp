@@ -6,7 +6,8 @@
 //                   speed- and force-driven steps
 //   adapt.cpp       adaptive refinement and resampling
 //   assembly.cpp    loads, energy, gradient and banded Hessian
-//   newton.cpp      Newton's method: linear solve with its fallbacks, line search
+//   stage.cpp       a solve as the problem of Newton's method (newton.hpp, its own part):
+//                   the merit, the trial moves along a direction, the residual
 //   stepping.cpp    integrators (implicit Euler, implicit midpoint, statics), substeps
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
@@ -106,16 +107,11 @@ struct RodSimulator::Work {
   bool has_ext_edge_k = false;
   std::vector<double> ext_spin_k;  ///< (ne) −∂τ/∂ω / h
 
-  // Newton (newton.cpp).
-  Eigen::VectorXd q;                   ///< (nd) unknowns at the iterate
-  Eigen::VectorXd grad;                ///< (nd) gradient of the incremental potential minus the loads
-  Eigen::VectorXd rhs;                 ///< (nd) −grad on the free unknowns; in the line search, the trial q
-  Eigen::VectorXd dq;                  ///< (nd) Newton direction
-  BandedMatrix H;                      ///< (nd, half-band 10) Hessian, lower band
-  BandedLDLT ldlt;                     ///< its factorization, kept for chord iterations
-  Eigen::SparseMatrix<double> sparse;  ///< the general sparse back end (LinearSolver::SparseLDLT)
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> sparse_ldlt;
-  int sparse_pattern_size = -1;
+  // A solve (stage.cpp): its iterate, and what the line search keeps.
+  Eigen::VectorXd q;     ///< (nd) unknowns at the iterate
+  Eigen::VectorXd grad;  ///< (nd) gradient of the incremental potential minus the loads
+  Eigen::VectorXd rhs;   ///< (nd) in the line search, the base's unknowns while a trial is evaluated
+  BandedMatrix H;        ///< (nd, half-band 10) Hessian, lower band
   // The accepted iterate while the line search tries points along the direction.
   std::vector<Vec3> x_accepted;                        ///< (nv)
   std::vector<double> theta_accepted, twist_accepted;  ///< (ne), (nv)

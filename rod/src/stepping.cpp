@@ -410,14 +410,9 @@ void RodSimulator::rewind_to_step_start() {
 
 int RodSimulator::static_hessian_negative_eigenvalues() {
   Work& w = *work_;
-  const int nd = dof_count();
   gather(w.q);
   assemble(Mode::Static, 1.0, 1.0, Need::Matrix);
-  for (int d = 4 * first_clamped_; d < nd; ++d) w.H.set_identity_row(d);
-  if (tip_clamped_)
-    for (int d = 0; d < 7; ++d) w.H.set_identity_row(d);
-  if (!w.ldlt.factorize(w.H)) return -1;
-  return w.ldlt.negative_pivots();
+  return newton_.negative_pivots(w.H, tip_clamped_ ? 7 : 0, 4 * first_clamped_);
 }
 
 }  // namespace flowire::rod

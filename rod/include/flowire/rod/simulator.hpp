@@ -16,7 +16,8 @@
 ///   no numerical damping (for oscillation studies);
 /// - static: \f$ \nabla E(q) = f(q) \f$ (equilibrium), load steps optional.
 ///
-/// Each solve is Newton's method with a backtracking line search on the incremental
+/// Each solve is Newton's method (newton.hpp, `NewtonSolver`; the rod's problem is
+/// src/stage.cpp) with a backtracking line search on the incremental
 /// potential plus the potential energy external forces report (`add_energy`, e.g. penalty
 /// contact); the other loads (dead loads, friction, drag) enter through the trapezoidal
 /// work along the search ray. The full step is evaluated with its gradient; shorter trials
@@ -80,53 +81,15 @@
 #include "flowire/rod/external.hpp"
 #include "flowire/rod/loads.hpp"
 #include "flowire/rod/model.hpp"
+#include "flowire/rod/newton.hpp"
 
 namespace flowire::rod {
 
 enum class Integrator { ImplicitEuler, ImplicitMidpoint };
-enum class LinearSolver { Banded, SparseLDLT };
 
-enum class SolveStatus {
-  Converged,
-  MaxIterations,     ///< Newton hit max_iterations; the last iterate is kept
-  LineSearchFailed,  ///< no decrease along the Newton direction; the last iterate is kept
-  NonFinite,         ///< NaN/Inf appeared; the state is rolled back to the step start
-  SingularMatrix,    ///< the system could not be factorized even after regularization
-};
-
-[[nodiscard]] const char* to_string(SolveStatus s);
 /// @brief "implicit_euler" | "implicit_midpoint" (scene files). @throws flowire::Error (usage).
 [[nodiscard]] Integrator parse_integrator(std::string_view name);
 [[nodiscard]] const char* to_string(Integrator integrator);
-
-/// @brief Outcome of one step or static solve.
-struct StepReport {
-  SolveStatus status = SolveStatus::Converged;
-  int newton_iterations = 0;  ///< iterations, chord iterations included
-  int chord_iterations = 0;   ///< iterations that reused the previous factorization
-  int line_search_cuts = 0;   ///< halvings summed over the iterations
-  int regularizations = 0;    ///< diagonal shifts added to indefinite matrices
-  int subdivisions = 0;       ///< levels of step halving a failed solve needed (0: none)
-  double residual = 0.0;      ///< final scaled residual [N]
-  double tolerance = 0.0;     ///< the force tolerance it was compared with [N]
-  [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
-  /// @brief Continue this report with a later solve's: its counts added, its status,
-  /// residual and tolerance taken (the last solve decides), the deeper subdivision kept.
-  void then(const StepReport& later) {
-    add_work(later);
-    status = later.status;
-    subdivisions = subdivisions > later.subdivisions ? subdivisions : later.subdivisions;
-    residual = later.residual;
-    tolerance = later.tolerance;
-  }
-  /// @brief Add another solve's iteration counts to this report's (its status aside).
-  void add_work(const StepReport& other) {
-    newton_iterations += other.newton_iterations;
-    chord_iterations += other.chord_iterations;
-    line_search_cuts += other.line_search_cuts;
-    regularizations += other.regularizations;
-  }
-};
 
 /// @brief What the dynamic steps have cost so far, summed over every step taken with step()
 /// (step halvings and force-feed retakes included): the per-step figures a benchmark or a
@@ -148,15 +111,6 @@ struct SolverTotals {
     subdivided_steps += r.subdivisions > 0 ? 1 : 0;
     unconverged_steps += r.converged() ? 0 : 1;
   }
-};
-
-/// @brief Wall-clock seconds spent by the Newton solves, by phase, summed since construction
-/// (a benchmark's per-phase breakdown). External forces are evaluated inside the first
-/// and third (their own timers split them further).
-struct NewtonPhaseSeconds {
-  double assembly = 0.0;     ///< gradient and Newton matrix at accepted iterates
-  double factorize = 0.0;    ///< LDLᵀ factorizations and solves
-  double line_search = 0.0;  ///< trial configurations: state update, frames, merit (and gradient)
 };
 
 /// @brief Newton and linear-solver settings.
@@ -336,7 +290,7 @@ class RodSimulator {
   /// @brief Torque the clamp exerts on the wire about the entry point [N m].
   [[nodiscard]] const Eigen::Vector3d& base_torque() const { return base_torque_; }
   [[nodiscard]] const StepReport& last_report() const { return last_report_; }
-  [[nodiscard]] const NewtonPhaseSeconds& phase_seconds() const { return phase_seconds_; }
+  [[nodiscard]] const NewtonPhaseSeconds& phase_seconds() const { return newton_.phase_seconds(); }
   /// @brief Newton work of the dynamic steps so far (step() calls).
   [[nodiscard]] const SolverTotals& solver_totals() const { return totals_; }
   [[nodiscard]] const std::vector<TipSample>& tip_trace() const { return trace_; }
@@ -431,23 +385,17 @@ class RodSimulator {
   StepReport step_at_feed(double dt, double speed);
   StepReport step_force_fed(double dt);
   void vertex_params(int k, VertexParams& p) const;
-  /// Newton's method on the incremental potential (newton.cpp): from the current state to
-  /// a residual within force_scale(), or the status that stopped it.
+  /// One solve as a Newton problem (stage.hpp): the incremental potential of a stage of
+  /// length h (or the static potential) at a load ramp, for newton_.
+  class Stage;
+  /// Newton's method (newton.hpp) on that problem: from the current state to a residual within
+  /// force_scale(), or the status that stopped it.
   /// @p max_iterations: the limit (< 0: the settings' limit for the mode).
   StepReport newton(Mode mode, double h, double load_scale, int max_iterations = -1);
   /// Back to the step start begin_step() kept: positions, angles, frames, reference twist.
   void rewind_to_step_start();
   /// Max over the free unknowns [first_free, first_fixed) of |force| and |torque| / rest length.
   [[nodiscard]] double residual_norm(int first_free, int first_fixed) const;
-  /// Newton's direction into work dq: with the kept factorization (a chord step), or by
-  /// factorizing the Hessian with its fallbacks. False if no factorization succeeded.
-  bool solve_direction(Mode mode, double h, double load_scale, bool chord_step, int first_free, int first_fixed,
-                       StepReport& rep);
-  /// Backtracking line search along dq from the current state, which it moves to the
-  /// accepted point (φ and the largest step updated); returns the step length, or 0 with
-  /// nothing accepted (the state then is the trial last rejected).
-  double line_search(Mode mode, double h, double load_scale, int first_free, int first_fixed, double& phi,
-                     double& max_step, StepReport& rep);
   StepReport solve_static_once();
   /// Pseudo-transient continuation to the static equilibrium at @p load_scale from the
   /// current state (stepping.cpp): the fallback of a static Newton solve that failed, within
@@ -477,9 +425,6 @@ class RodSimulator {
   void transport_frames_to(const std::vector<Eigen::Vector3d>& x_new, const std::vector<EdgeFrame>& frame_from,
                            const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
                            std::vector<double>& twist_to) const;
-  /// What an assembly computes: the incremental potential only (line-search trials), its
-  /// gradient too, or gradient and Newton matrix.
-  enum class Need { Value, Gradient, Matrix };
   /// Incremental potential (elastic + inertial + external potential energy) at the
   /// current state; @p reuse_loads keeps the loads and external forces of the previous
   /// assembly (same configuration), so externals are evaluated once per configuration.
@@ -517,7 +462,7 @@ class RodSimulator {
   StepReport last_report_;
   double coupled_angle_ = 0.0;  // the base angle at the end of a coupled step
   double coupled_phi_ = 0.0;    // the potential of the accepted iterate
-  NewtonPhaseSeconds phase_seconds_;
+  NewtonSolver newton_;         // Newton and its line search; the Stage is the problem it solves
   SolverTotals totals_;
   std::vector<TipSample> trace_;
 };
