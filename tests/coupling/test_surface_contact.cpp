@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 
+#include "faceted_tube.hpp"
 #include "flowire/coupling/interaction.hpp"
 #include "flowire/coupling/lumen.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
@@ -21,23 +22,7 @@ using vessels::Vec3;
 
 namespace {
 
-/// A tube of radius R along z, n facets around, m rings over length L, open at both ends.
-vessels::LumenSurface faceted_tube(int n, int m, double R, double L) {
-  vessels::SurfaceMesh mesh;
-  for (int j = 0; j <= m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const double a = 2.0 * M_PI * i / n + (j % 2) * M_PI / n;
-      mesh.vertices.emplace_back(R * std::cos(a), R * std::sin(a), L * j / m - 0.5 * L);
-    }
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * n + i, b = j * n + (i + 1) % n, c = (j + 1) * n + i, d = (j + 1) * n + (i + 1) % n;
-      mesh.triangles.push_back({a, b, c});
-      mesh.triangles.push_back({b, d, c});
-    }
-  mesh.source = "faceted tube";
-  return vessels::LumenSurface(std::move(mesh), {Vec3::Zero()});
-}
+using test::faceted_tube;
 
 /// The triangles' mean edge length.
 double mean_edge(const vessels::LumenSurface& s) { return s.counts().mean_edge; }

@@ -12,6 +12,7 @@
 #include <numbers>
 #include <random>
 
+#include "faceted_tube.hpp"
 #include "flowire/vessels/generators.hpp"
 #include "flowire_test.hpp"
 
@@ -20,24 +21,6 @@ using namespace flowire::coupling;
 using vessels::Vec3;
 
 namespace {
-
-/// A tube of radius R along x from 0 to L, n facets around, m rings, open at both ends.
-vessels::LumenSurface faceted_tube_along_x(int n, int m, double R, double L) {
-  vessels::SurfaceMesh mesh;
-  for (int j = 0; j <= m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const double a = 2.0 * std::numbers::pi * i / n + (j % 2) * std::numbers::pi / n;
-      mesh.vertices.emplace_back(L * j / m, R * std::cos(a), R * std::sin(a));
-    }
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * n + i, b = j * n + (i + 1) % n, c = (j + 1) * n + i, d = (j + 1) * n + (i + 1) % n;
-      mesh.triangles.push_back({a, b, c});
-      mesh.triangles.push_back({b, d, c});
-    }
-  mesh.source = "faceted tube";
-  return vessels::LumenSurface(std::move(mesh), {Vec3(0.5 * L, 0, 0)});
-}
 
 rod::RodView view_of(const std::vector<Vec3>& x) {
   rod::RodView v;
@@ -50,20 +33,21 @@ rod::RodView view_of(const std::vector<Vec3>& x) {
 
 TEST(Wall, BothWallsGiveTheCylindersDistanceAndNormalOnAStraightTube) {
   const double R = 3e-3, L = 0.06, a = 0.45e-3;
-  const auto net =
-      vessels::Network::build(vessels::straight_tube({.length = L, .radius = R}), {.max_segment_length = 5e-3});
+  const auto net = vessels::Network::build(
+      vessels::straight_tube({.length = L, .radius = R, .origin = Vec3(0, 0, -0.5 * L), .direction = Vec3::UnitZ()}),
+      {.max_segment_length = 5e-3});
   const vessels::SpatialIndex index(net);
   WireLocation where(index);
   NetworkWall capsules(where);
-  const auto surface = faceted_tube_along_x(128, 120, R, L);
+  const auto surface = test::faceted_tube(128, 120, R, L);
   const double sigma = 0.5 * surface.counts().mean_edge;
   SurfaceWall lumen(surface, sigma, a, 0.0, 0.0);
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> ang(0, 2 * std::numbers::pi), rho(R - 0.9 * a, R + 0.2 * a), xs(0.02, 0.04);
+  std::uniform_real_distribution<double> ang(0, 2 * std::numbers::pi), rho(R - 0.9 * a, R + 0.2 * a), zs(-0.01, 0.01);
   std::vector<Vec3> x(50);
   for (auto& p : x) {
     const double t = ang(rng), r = rho(rng);
-    p = Vec3(xs(rng), r * std::cos(t), r * std::sin(t));
+    p = Vec3(r * std::cos(t), r * std::sin(t), zs(rng));
   }
   InteractionStats stats;
   const int n = static_cast<int>(x.size());
@@ -73,8 +57,8 @@ TEST(Wall, BothWallsGiveTheCylindersDistanceAndNormalOnAStraightTube) {
   double worst_capsule = 0.0, worst_surface = 0.0, worst_normal = 0.0;
   for (int i = 0; i < n; ++i) {
     const Vec3& p = x[static_cast<size_t>(i)];
-    const double exact = std::hypot(p.y(), p.z()) - R;
-    const Vec3 radial = Vec3(0, p.y(), p.z()).normalized();
+    const double exact = std::hypot(p.x(), p.y()) - R;
+    const Vec3 radial = Vec3(p.x(), p.y(), 0).normalized();
     double d = 0.0, ds = 0.0;
     Vec3 nrm, ns;
     Eigen::Matrix3d H, Hs;
@@ -140,11 +124,11 @@ TEST(Wall, AVertexTheNetworkWallSkipsIsDeeperInsideThanItsRadiusAndReach) {
 
 TEST(Wall, TheSurfaceWallMeasuresOutsideFromTheEntryMarginOnAndKeepsItsAnswersOverAResampling) {
   const double R = 3e-3, L = 0.06, a = 0.45e-3, margin = 3e-3;
-  const auto surface = faceted_tube_along_x(32, 30, R, L);
+  const auto surface = test::faceted_tube(32, 30, R, L);
   const double sigma = 0.5 * surface.counts().mean_edge;
   SurfaceWall wall(surface, sigma, a, 0.0, margin);
   std::vector<Vec3> x;
-  for (int i = 0; i < 10; ++i) x.emplace_back(0.01 + 2e-3 * i, R - 0.5 * a, 0.0);
+  for (int i = 0; i < 10; ++i) x.emplace_back(R - 0.5 * a, 0.0, -0.02 + 2e-3 * i);
   const int n = static_cast<int>(x.size());
   wall.ensure_size(n);
   std::vector<double> d0(x.size());
@@ -163,7 +147,7 @@ TEST(Wall, TheSurfaceWallMeasuresOutsideFromTheEntryMarginOnAndKeepsItsAnswersOv
   std::vector<int> source;
   std::vector<Vec3> y;
   for (int i = n - 1; i >= 0; --i) y.push_back(x[static_cast<size_t>(i)]), source.push_back(i);
-  y.emplace_back(0.03, 0.0, R - 0.2 * a);
+  y.emplace_back(0.0, R - 0.2 * a, 0.0);
   source.push_back(-1);
   wall.remap(source, n + 1);
   for (int j = 0; j <= n; ++j) {
