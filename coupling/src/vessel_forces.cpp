@@ -1,6 +1,7 @@
 #include "flowire/coupling/vessel_forces.hpp"
 
 #include <algorithm>
+#include <chrono>
 
 namespace flowire::coupling {
 

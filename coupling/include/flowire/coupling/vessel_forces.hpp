@@ -12,7 +12,6 @@
 ///
 /// Vertices are indexed from the distal tip (rod convention), so a vertex keeps its index,
 /// and its lookup hint, while the wire is fed in at the base.
-#include <chrono>
 #include <memory>
 #include <vector>
 

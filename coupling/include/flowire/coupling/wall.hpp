@@ -6,6 +6,7 @@
 /// blended at junctions, read from the vertices' locations) and a triangulated lumen surface
 /// (`SurfaceWall`, its smooth signed distance). The contact law (wall_contact.hpp) takes either
 /// and knows neither; another wall (a deforming one) is a third implementation.
+#include <algorithm>
 #include <span>
 #include <vector>
 
