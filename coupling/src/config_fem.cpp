@@ -101,6 +101,8 @@ nlohmann::json fem_result_json(const flow::fem::CompareResult& r) {
   // A real lumen: the length of centerline cut beyond each cap (m, network end order; < 0: the
   // network was lengthened to reach the cap), so that both models end at the caps.
   if (!r.cut_length.empty()) j["network_cut_at_caps"] = r.cut_length;
+  // Open ends cut so obliquely that they were cut again square to their vessel (lumen.hpp).
+  if (r.lumen_ends_recut > 0) j["lumen_ends_recut"] = r.lumen_ends_recut;
   return j;
 }
 

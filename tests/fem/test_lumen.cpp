@@ -233,6 +233,32 @@ TEST(FemLumen, CapsThatMatchNoCenterlineEndAreRefused) {
                      "0 open ends");
 }
 
+/// A straight tube along x of radius r from 0 to `length` as an STL of `around` facets round and
+/// `along` rings, open at both ends; with `oblique` > 0 one more ring, 1 mm further, cut
+/// obliquely: at angle φ round, x = length + 1 mm + r (1 + cos φ) tan(oblique).
+void write_faceted_tube(const std::string& stl, double r, double length, int around, int along, double oblique = 0.0) {
+  std::ofstream o(stl);
+  o.precision(17);
+  o << "solid tube\n";
+  auto at = [&](int i, int k) {
+    const double phi = 2.0 * std::numbers::pi * (k % around) / around;
+    const double x = i <= along ? length * i / along : length + 1e-3 + r * (1.0 + std::cos(phi)) * std::tan(oblique);
+    return Vec3(x, r * std::cos(phi), r * std::sin(phi));
+  };
+  auto facet = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    o << "facet normal 0 0 0\nouter loop\n";
+    for (const Vec3* x : {&a, &b, &c}) o << "vertex " << x->x() << ' ' << x->y() << ' ' << x->z() << '\n';
+    o << "endloop\nendfacet\n";
+  };
+  const int rings = oblique > 0.0 ? along + 1 : along;
+  for (int i = 0; i < rings; ++i)
+    for (int k = 0; k < around; ++k) {
+      facet(at(i, k), at(i + 1, k), at(i + 1, k + 1));
+      facet(at(i, k), at(i + 1, k + 1), at(i, k + 1));
+    }
+  o << "endsolid tube\n";
+}
+
 // The whole real-lumen path (surface file -> caps -> tags -> Stokes -> comparison) on a lumen
 // whose answer is known: a straight tube given as an STL of 64 facets around, open at both
 // ends, with a straight centerline. Hagen–Poiseuille for a regular n-gon is, to 1e-3, that of
@@ -242,26 +268,7 @@ TEST(FemLumen, FacetedTubeSurfaceMatchesHagenPoiseuille) {
   constexpr int kAround = 64, kAlong = 16;
   const fs::path dir = testing::scratch_dir("fem_lumen_tube");
   const std::string stl = (dir / "tube.stl").string();
-  {
-    std::ofstream o(stl);
-    o.precision(17);
-    o << "solid tube\n";
-    auto at = [&](int i, int k) {
-      const double phi = 2.0 * std::numbers::pi * (k % kAround) / kAround;
-      return Vec3(length * i / kAlong, r * std::cos(phi), r * std::sin(phi));
-    };
-    auto facet = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
-      o << "facet normal 0 0 0\nouter loop\n";
-      for (const Vec3* x : {&a, &b, &c}) o << "vertex " << x->x() << ' ' << x->y() << ' ' << x->z() << '\n';
-      o << "endloop\nendfacet\n";
-    };
-    for (int i = 0; i < kAlong; ++i)
-      for (int k = 0; k < kAround; ++k) {
-        facet(at(i, k), at(i + 1, k), at(i + 1, k + 1));
-        facet(at(i, k), at(i + 1, k + 1), at(i, k + 1));
-      }
-    o << "endsolid tube\n";
-  }
+  write_faceted_tube(stl, r, length, kAround, kAlong);
   vessels::StraightTubeParams tp;
   tp.length = length;
   tp.radius = r;
@@ -298,6 +305,53 @@ TEST(FemLumen, FacetedTubeSurfaceMatchesHagenPoiseuille) {
     EXPECT_NEAR(sp.pressure_fem / (p_exact * (1.0 - sp.s / length)), 1.0, 0.02);
   }
   EXPECT_EQ(interior, 3);
+}
+
+// An open end cut at 60° from square (the wall meets its cap at 30° on one side, which the
+// patch classification cannot split) is cut again square just inside its innermost point: the
+// lumen meshes, and the tube up to that cut obeys Hagen–Poiseuille as the square one does.
+TEST(FemLumen, AnObliquelyCutOpenEndIsCutAgainSquareAndTheTubeStillMatchesHagenPoiseuille) {
+  const double r = 2e-3, length = 16e-3, q = 1e-6, eta = 3.5e-3, oblique = std::numbers::pi / 3.0;
+  constexpr int kAround = 64, kAlong = 16;
+  const fs::path dir = testing::scratch_dir("fem_lumen_oblique");
+  const std::string stl = (dir / "tube.stl").string();
+  write_faceted_tube(stl, r, length, kAround, kAlong, oblique);
+  // The centerline runs to the oblique end's centroid.
+  vessels::StraightTubeParams tp;
+  tp.length = length + 1e-3 + r * std::tan(oblique);
+  tp.radius = r;
+  vessels::BuildOptions bo;
+  bo.max_segment_length = 2e-3;
+  const vessels::Network net = vessels::Network::build(vessels::straight_tube(tp), bo);
+  const LumenSurface lumen = prepare_lumen(net, read_surface(stl, 1.0));
+  EXPECT_EQ(lumen.recut_ends, 1);
+  // The new outlet cap: square to the axis, just inside the old loop's innermost point.
+  const double x_cut = length + 1e-3 - 0.1 * r;
+  bool found = false;
+  for (const LumenCap& c : lumen.caps)
+    if (c.centroid.x() > 0.5 * length) {
+      found = true;
+      EXPECT_NEAR(c.centroid.x(), x_cut, 1e-9);
+      EXPECT_NEAR(std::abs(c.normal.x()), 1.0, 1e-9);
+      EXPECT_LT(c.planarity, 1e-9);
+    }
+  EXPECT_TRUE(found);
+  BoundaryValues bv;
+  bv.inlet_type = BoundaryValues::Inlet::Flow;
+  bv.inlet_flow = q;
+  bv.outlet_pressure = 0.0;
+  bv.viscosity = eta;
+  FemOptions fo;
+  fo.surface = stl;
+  fo.size_factor = 0.4;
+  fo.samples_per_branch = 5;
+  const CompareResult res = compare(net, bv, fo, "");
+  EXPECT_EQ(res.lumen_ends_recut, 1);
+  const double n = kAround;
+  const double r_eq = r * std::sqrt(n / (2.0 * std::numbers::pi) * std::sin(2.0 * std::numbers::pi / n));
+  const double p_exact = 8.0 * eta * x_cut * q / (std::numbers::pi * std::pow(r_eq, 4));
+  EXPECT_NEAR(res.inlet_pressure_fem / p_exact, 1.0, 0.01);
+  EXPECT_NEAR(res.inlet_flow_fem / q, 1.0, 1e-9);
 }
 
 }  // namespace

@@ -309,6 +309,7 @@ ComparisonDomain comparison_domain(const Network& net, const FemOptions& opt, co
   d.node = std::move(cut.node);
   d.segment = std::move(cut.segment);
   d.cut_length = std::move(cut.cut_length);
+  d.lumen_ends_recut = lumen.recut_ends;
   for (auto& g : d.mesh.groups)
     if (g.node >= 0) g.node = d.node[static_cast<size_t>(g.node)];
   d.bv = renumbered(bv, net, d.node);
@@ -343,6 +344,7 @@ CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOpt
   CompareResult res = compare_fields(d.network, d.mesh, sol, nf, d.bv.inlet_node, opt.samples_per_branch);
   res.forces = named_forces(d.mesh, sol, comparison_stokes_options(opt, d.bv));
   res.cut_length = d.cut_length;
+  res.lumen_ends_recut = d.lumen_ends_recut;
   res.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!out_dir.empty()) write_outputs(out_dir, d.network, d.mesh, sol, res, opt);
   return res;

@@ -42,6 +42,11 @@
 namespace flowire::flow::fem {
 namespace {
 
+/// The angle between two faces' normals beyond which gmsh splits patches (the cap rims), and
+/// the rim angle below which an open end is cut again square (a margin above it).
+constexpr double kCreaseAngle = 40.0 * std::numbers::pi / 180.0;
+constexpr double kRimAngle = 45.0 * std::numbers::pi / 180.0;
+
 std::string mm(const Vec3& x) {
   return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z());
 }
@@ -200,6 +205,67 @@ std::vector<std::vector<int>> boundary_loops(const SurfaceMesh& s) {
   return loops;
 }
 
+/// The sharpest rim of an open end: the smallest angle between a wall triangle on the loop and
+/// the cap's fan triangle on the same edge (both oriented as the surface), in radians. Where it
+/// is small the cap nearly continues the wall (an end cut obliquely) and the patches cannot be
+/// told apart at the rim.
+double rim_angle(const SurfaceMesh& s, const std::vector<int>& loop) {
+  std::unordered_map<std::uint64_t, Vec3> wall_normal;
+  std::unordered_map<std::uint64_t, char> on_loop;
+  const size_t n = loop.size();
+  for (size_t i = 0; i < n; ++i) on_loop[edge_key(loop[i], loop[(i + 1) % n])] = 1;
+  for (const auto& t : s.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const auto key = edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]);
+      if (!on_loop.count(key)) continue;
+      const Vec3& a = s.points[static_cast<size_t>(t[0])];
+      wall_normal[key] = (s.points[static_cast<size_t>(t[1])] - a).cross(s.points[static_cast<size_t>(t[2])] - a);
+    }
+  Vec3 centroid = Vec3::Zero();
+  for (int v : loop) centroid += s.points[static_cast<size_t>(v)];
+  centroid /= static_cast<double>(n);
+  double sharpest = std::numbers::pi;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& a = s.points[static_cast<size_t>(loop[i])];
+    const Vec3& b = s.points[static_cast<size_t>(loop[(i + 1) % n])];
+    const Vec3 fan = (b - centroid).cross(a - centroid);  // (centre, b, a), as the caps are made
+    const auto it = wall_normal.find(edge_key(loop[i], loop[(i + 1) % n]));
+    if (it == wall_normal.end() || fan.norm() == 0.0 || it->second.norm() == 0.0) continue;
+    const double c = std::clamp(fan.normalized().dot(it->second.normalized()), -1.0, 1.0);
+    sharpest = std::min(sharpest, std::acos(c));
+  }
+  return sharpest;
+}
+
+/// Open ends cut so obliquely that the wall meets their cap at less than `min_angle`: each cut
+/// again by the plane normal to its centerline just inside the loop's innermost point (all of
+/// the old loop beyond it), which leaves a planar open end square to the vessel. Returns the
+/// number of ends cut.
+int recut_oblique_ends(SurfaceMesh& s, const Network& net, const std::vector<std::vector<int>>& loops,
+                       double min_angle) {
+  int cut = 0;
+  for (const auto& loop : loops) {
+    if (rim_angle(s, loop) >= min_angle) continue;
+    Vec3 centroid = Vec3::Zero();
+    for (int v : loop) centroid += s.points[static_cast<size_t>(v)];
+    centroid /= static_cast<double>(loop.size());
+    int e = -1;
+    for (int end : net.ends())
+      if (e < 0 || (net.node(end) - centroid).norm() < (net.node(e) - centroid).norm()) e = end;
+    const auto& sg = net.segment(*net.node_segments(e).first);
+    const int other = sg.node_from == e ? sg.node_to : sg.node_from;
+    const Vec3 out = (net.node(e) - net.node(other)).normalized();
+    double innermost = std::numeric_limits<double>::infinity();
+    for (int v : loop) innermost = std::min(innermost, (s.points[static_cast<size_t>(v)] - net.node(e)).dot(out));
+    const Vec3 origin = net.node(e) + (innermost - 0.1 * sg.radius) * out;
+    double reach = 0.0;
+    for (int v : loop) reach = std::max(reach, (s.points[static_cast<size_t>(v)] - origin).norm());
+    clip_end(s, origin, out, reach + sg.radius, 1e-6 * sg.radius);
+    ++cut;
+  }
+  return cut;
+}
+
 double end_radius(const Network& net, int e) { return net.segment(*net.node_segments(e).first).radius; }
 
 }  // namespace
@@ -278,6 +344,7 @@ LumenSurface prepare_lumen(const Network& net, SurfaceMesh s, const LumenOptions
                       "the network needs an inlet and at least one outlet end");
   std::vector<std::vector<int>> loops = boundary_loops(s);
   bool was_capped = false;
+  int recut = 0;
   if (loops.empty()) {
     clip_ends(s, net, opt.clip_back);
     was_capped = true;
@@ -287,6 +354,15 @@ LumenSurface prepare_lumen(const Network& net, SurfaceMesh s, const LumenOptions
     throw_input_error(s.source, fmt::format("the surface has {} open ends but the centerlines {} have {} ends; they "
                                             "must be the same anatomy, one open end per vessel end",
                                             loops.size(), net.source(), ends.size()));
+  // An end cut so obliquely that its cap would nearly continue the wall is cut again square to
+  // the vessel (mesh_lumen tells caps from the wall by a 40° crease).
+  if (!was_capped && (recut = recut_oblique_ends(s, net, loops, kRimAngle)) > 0) {
+    loops = boundary_loops(s);
+    if (loops.size() != ends.size())
+      throw_input_error(s.source,
+                        fmt::format("cutting its oblique open ends square left {} open ends for {} centerline ends",
+                                    loops.size(), ends.size()));
+  }
   // Drop the points no triangle uses, then append the fan centres.
   std::vector<int> renum(s.points.size(), -1);
   SurfaceMesh out;
@@ -305,6 +381,7 @@ LumenSurface prepare_lumen(const Network& net, SurfaceMesh s, const LumenOptions
     for (int& v : l) v = renum[static_cast<size_t>(v)];
 
   LumenSurface lumen;
+  lumen.recut_ends = recut;
   lumen.wall_triangles = static_cast<int>(out.triangles.size());
   struct Cap {
     LumenCap info;
@@ -447,7 +524,7 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
     for (int v : t) tri_nodes.push_back(static_cast<std::size_t>(v) + 1);
   gmsh::model::mesh::addElementsByType(1, 2, tri_tags, tri_nodes);
   // Patches split at sharp edges (the cap rims), each one parametrizable.
-  gmsh::model::mesh::classifySurfaces(40.0 * std::numbers::pi / 180.0, true, true, std::numbers::pi);
+  gmsh::model::mesh::classifySurfaces(kCreaseAngle, true, true, std::numbers::pi);
   gmsh::model::mesh::createGeometry();
 
   gmsh::vectorpair surfs;

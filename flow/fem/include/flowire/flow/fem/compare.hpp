@@ -117,6 +117,7 @@ struct CompareResult {
   /// real lumen: per cap (network end order), the length of centerline cut beyond it (m; < 0:
   /// the network was lengthened to reach it; ComparisonDomain)
   std::vector<double> cut_length;
+  int lumen_ends_recut = 0;  ///< real lumen: open ends cut again square to their vessel (LumenSurface::recut_ends)
 };
 
 /// @brief Compare a FEM solution with a network solution (see the file comment).
@@ -138,6 +139,7 @@ struct ComparisonDomain {
   std::vector<int> node;           ///< (input nodes) the node of `network` each became, -1 cut away
   std::vector<int> segment;        ///< (input segments) the segment of `network` each became, -1 cut away
   std::vector<double> cut_length;  ///< real lumen: per cap (network end order), the length cut (m)
+  int lumen_ends_recut = 0;        ///< real lumen: open ends cut again square (LumenSurface::recut_ends)
   BoundaryValues bv;               ///< the input boundary values on `network`
   [[nodiscard]] bool cut() const { return !cut_length.empty(); }
   /// @brief Segment laws of the input network (one per input segment, or empty) on `network`: a

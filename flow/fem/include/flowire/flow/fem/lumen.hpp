@@ -11,7 +11,10 @@
 ///    surface (capped, or an image's level set rounded at its ends) has none: every vessel
 ///    is then cut by the plane normal to its centerline `LumenOptions::clip_back` end radii
 ///    before the centerline's end (triangles split on the plane, within a few radii of the
-///    end only), which removes the file's cap and leaves a planar open end.
+///    end only), which removes the file's cap and leaves a planar open end. An open end cut
+///    so obliquely that the wall would meet its cap at less than 45° (the cap nearly continuing
+///    the wall, which step 4 could not tell apart) is cut again the same way, by the plane
+///    normal to its centerline just inside the loop's innermost point.
 /// 3. Every open end is capped by a fan from its loop's centroid (a plane for a planar
 ///    loop; the loop's planarity is reported) and matched one to one to the network end
 ///    nearest its centroid. Their numbers must agree and every match must be closer than
@@ -73,6 +76,7 @@ struct LumenSurface {
   std::vector<LumenCap> caps;    ///< one per network end, in the order of Network::ends()
   std::vector<int> cap_centre;   ///< (caps) index of the fan's centre point
   double enclosed_volume = 0.0;  ///< of the closed triangulation (divergence theorem), m³
+  int recut_ends = 0;            ///< open ends cut again square to their vessel (step 2)
 };
 
 /// @brief Find the open ends of `surface`, cap them and match them to the ends of `net`.
