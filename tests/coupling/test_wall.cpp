@@ -154,9 +154,10 @@ TEST(Wall, TheSurfaceWallMeasuresOutsideFromTheEntryMarginOnAndKeepsItsAnswersOv
     double d = 0.0;
     Vec3 nrm;
     ASSERT_TRUE(wall.at(j, y[static_cast<size_t>(j)], a, 0.0, &d, &nrm, nullptr));
-    if (j < n)
+    if (j < n) {
       EXPECT_EQ(d, d0[static_cast<size_t>(n - 1 - j)]) << j;
-    else
+    } else {
       EXPECT_NEAR(d, surface.smooth_distance(y.back(), sigma).distance, 1e-15);
+    }
   }
 }

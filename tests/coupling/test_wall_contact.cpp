@@ -73,10 +73,11 @@ struct ArchWall {
 void expect_presses_with(const WallContact& contact, const rod::ForceAccumulator& forces) {
   for (size_t i = 0; i < forces.forces().size(); ++i) {
     const int k = static_cast<int>(i);
-    if (contact.normal_force(k) > 0.0)
+    if (contact.normal_force(k) > 0.0) {
       EXPECT_LT((contact.normal(k) * contact.normal_force(k) + forces.forces()[i]).norm(), 1e-12) << i;
-    else
+    } else {
       EXPECT_EQ(forces.forces()[i], Vec3::Zero()) << i;
+    }
   }
 }
 

@@ -42,7 +42,9 @@ void expect_holds(const vessels::SpatialIndex& index, const WireLocation& where,
   const auto& seg = index.network().segment(loc.segment);
   const Vec3 a = index.network().node(seg.node_from), b = index.network().node(seg.node_to);
   const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
-  if (brute.inside) EXPECT_LE((p - (a + t * (b - a))).norm(), seg.radius * (1 + 1e-12)) << "vertex " << i;
+  if (brute.inside) {
+    EXPECT_LE((p - (a + t * (b - a))).norm(), seg.radius * (1 + 1e-12)) << "vertex " << i;
+  }
 }
 
 }  // namespace
@@ -105,7 +107,10 @@ TEST(WireLocation, AResampledWireKeepsItsHintsAndLooksUpOnlyItsNewVertices) {
   where.remap(view_of(y, n), source, stats);
   EXPECT_EQ(stats.lookups - lookups, 19u);  // the new vertices only
   for (int i = 0; i < n; ++i) {
-    if (i % 2 == 0) EXPECT_EQ(where.segment(i), before[static_cast<size_t>(i / 2)]) << i;
-    if (i % 2 == 1) expect_holds(index, where, i, y[static_cast<size_t>(i)]);
+    if (i % 2 == 0) {
+      EXPECT_EQ(where.segment(i), before[static_cast<size_t>(i / 2)]) << i;
+    } else {
+      expect_holds(index, where, i, y[static_cast<size_t>(i)]);
+    }
   }
 }

@@ -113,10 +113,11 @@ TEST(Newton, ReachesAChainsMinimizerFromFarWithChordStepsAtTheEndAndLeavesHeldUn
   ASSERT_TRUE(r.converged()) << to_string(r.status);
   EXPECT_LE(r.residual, 1e-12);
   for (int i = 0; i < n; ++i) {
-    if (i >= c.free_begin && i < c.free_end)
+    if (i >= c.free_begin && i < c.free_end) {
       EXPECT_NEAR(c.q()[i], c.a()[i], 1e-11) << i;
-    else
+    } else {
       EXPECT_EQ(c.q()[i], held[i]) << "held unknown " << i << " moved";
+    }
   }
   // cosh from 3 away: damped steps first, then quadratic convergence, the last with the kept
   // factorization.
