@@ -259,6 +259,36 @@ void write_faceted_tube(const std::string& stl, double r, double length, int aro
   o << "endsolid tube\n";
 }
 
+/// A straight centerline along x from 0 to @p length, radius @p r, 2 mm segments.
+vessels::Network straight_centerline(double length, double r) {
+  vessels::StraightTubeParams tp;
+  tp.length = length;
+  tp.radius = r;
+  vessels::BuildOptions bo;
+  bo.max_segment_length = 2e-3;
+  return vessels::Network::build(vessels::straight_tube(tp), bo);
+}
+
+/// The comparison on the lumen of @p stl: flow @p q in, 0 Pa out, viscosity @p eta.
+CompareResult tube_comparison(const std::string& stl, const vessels::Network& net, double q, double eta) {
+  BoundaryValues bv;
+  bv.inlet_type = BoundaryValues::Inlet::Flow;
+  bv.inlet_flow = q;
+  bv.outlet_pressure = 0.0;
+  bv.viscosity = eta;
+  FemOptions fo;
+  fo.surface = stl;
+  fo.size_factor = 0.4;
+  fo.samples_per_branch = 5;
+  return compare(net, bv, fo, "");
+}
+
+/// Hagen–Poiseuille for a regular n-gon of circumradius r is, to 1e-3, that of the circle of
+/// equal area: r_eq² = (n / 2π) r² sin(2π / n).
+double polygon_equivalent_radius(double r, int n) {
+  return r * std::sqrt(n / (2.0 * std::numbers::pi) * std::sin(2.0 * std::numbers::pi / n));
+}
+
 // The whole real-lumen path (surface file -> caps -> tags -> Stokes -> comparison) on a lumen
 // whose answer is known: a straight tube given as an STL of 64 facets around, open at both
 // ends, with a straight centerline. Hagen–Poiseuille for a regular n-gon is, to 1e-3, that of
@@ -269,24 +299,8 @@ TEST(FemLumen, FacetedTubeSurfaceMatchesHagenPoiseuille) {
   const fs::path dir = testing::scratch_dir("fem_lumen_tube");
   const std::string stl = (dir / "tube.stl").string();
   write_faceted_tube(stl, r, length, kAround, kAlong);
-  vessels::StraightTubeParams tp;
-  tp.length = length;
-  tp.radius = r;
-  vessels::BuildOptions bo;
-  bo.max_segment_length = 2e-3;
-  const vessels::Network net = vessels::Network::build(vessels::straight_tube(tp), bo);
-  BoundaryValues bv;
-  bv.inlet_type = BoundaryValues::Inlet::Flow;
-  bv.inlet_flow = q;
-  bv.outlet_pressure = 0.0;
-  bv.viscosity = eta;
-  FemOptions fo;
-  fo.surface = stl;
-  fo.size_factor = 0.4;
-  fo.samples_per_branch = 5;
-  const CompareResult res = compare(net, bv, fo, "");
-  const double n = kAround;
-  const double r_eq = r * std::sqrt(n / (2.0 * std::numbers::pi) * std::sin(2.0 * std::numbers::pi / n));
+  const CompareResult res = tube_comparison(stl, straight_centerline(length, r), q, eta);
+  const double r_eq = polygon_equivalent_radius(r, kAround);
   const double p_exact = 8.0 * eta * length * q / (std::numbers::pi * std::pow(r_eq, 4));
   std::printf(
       "faceted tube: %d tets; inlet pressure FEM %.6g Pa, Hagen-Poiseuille (r_eq) %.6g Pa, network "
@@ -317,12 +331,7 @@ TEST(FemLumen, AnObliquelyCutOpenEndIsCutAgainSquareAndTheTubeStillMatchesHagenP
   const std::string stl = (dir / "tube.stl").string();
   write_faceted_tube(stl, r, length, kAround, kAlong, oblique);
   // The centerline runs to the oblique end's centroid.
-  vessels::StraightTubeParams tp;
-  tp.length = length + 1e-3 + r * std::tan(oblique);
-  tp.radius = r;
-  vessels::BuildOptions bo;
-  bo.max_segment_length = 2e-3;
-  const vessels::Network net = vessels::Network::build(vessels::straight_tube(tp), bo);
+  const vessels::Network net = straight_centerline(length + 1e-3 + r * std::tan(oblique), r);
   const LumenSurface lumen = prepare_lumen(net, read_surface(stl, 1.0));
   EXPECT_EQ(lumen.recut_ends, 1);
   // The new outlet cap: square to the axis, just inside the old loop's innermost point.
@@ -336,19 +345,9 @@ TEST(FemLumen, AnObliquelyCutOpenEndIsCutAgainSquareAndTheTubeStillMatchesHagenP
       EXPECT_LT(c.planarity, 1e-9);
     }
   EXPECT_TRUE(found);
-  BoundaryValues bv;
-  bv.inlet_type = BoundaryValues::Inlet::Flow;
-  bv.inlet_flow = q;
-  bv.outlet_pressure = 0.0;
-  bv.viscosity = eta;
-  FemOptions fo;
-  fo.surface = stl;
-  fo.size_factor = 0.4;
-  fo.samples_per_branch = 5;
-  const CompareResult res = compare(net, bv, fo, "");
+  const CompareResult res = tube_comparison(stl, net, q, eta);
   EXPECT_EQ(res.lumen_ends_recut, 1);
-  const double n = kAround;
-  const double r_eq = r * std::sqrt(n / (2.0 * std::numbers::pi) * std::sin(2.0 * std::numbers::pi / n));
+  const double r_eq = polygon_equivalent_radius(r, kAround);
   const double p_exact = 8.0 * eta * x_cut * q / (std::numbers::pi * std::pow(r_eq, 4));
   EXPECT_NEAR(res.inlet_pressure_fem / p_exact, 1.0, 0.01);
   EXPECT_NEAR(res.inlet_flow_fem / q, 1.0, 1e-9);
