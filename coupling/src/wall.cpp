@@ -4,26 +4,23 @@
 
 namespace flowire::coupling {
 
-bool NetworkWall::at(int i, const Vec3& x, double a, double reach, double* d, Vec3* n, Mat3* H) {
+bool NetworkWall::deep_inside(int segment, const Vec3& x, double a, double reach) const {
   const auto& net = where_.index().network();
-  const auto& seg = net.segment(where_.segment(i));
+  const auto& seg = net.segment(segment);
   // The union's distance is at most the located capsule's: deep inside it, no wall is near.
-  if (capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + a + reach <
-      0.0)
-    return false;
+  return capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + a + reach <
+         0.0;
+}
+
+bool NetworkWall::at(int i, const Vec3& x, double a, double reach, double* d, Vec3* n, Mat3* H) {
+  if (deep_inside(where_.segment(i), x, a, reach)) return false;
   *d = where_.index().wall_distance(x, where_.location(i), where_.near(i), n, H);
   return true;
 }
 
 bool NetworkWall::accepted(int i, const Vec3& x, double a, double reach, double /*s*/, AcceptedWall* out) {
   const int s = where_.segment(i);
-  if (s < 0) return false;
-  const auto& net = where_.index().network();
-  const auto& seg = net.segment(s);
-  // Deep inside the located capsule the union's wall is farther still: nothing to record.
-  if (capsule_distance(x, net.node(seg.node_from), net.node(seg.node_to), seg.radius, nullptr, nullptr) + a + reach <
-      0.0)
-    return false;
+  if (s < 0 || deep_inside(s, x, a, reach)) return false;  // nothing to record
   const auto loc = where_.index().locate(x, s, where_.near(i));
   out->distance = where_.index().wall_distance(x, loc, where_.near(i), &out->normal);
   out->contact_distance = out->distance;

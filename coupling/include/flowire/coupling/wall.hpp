@@ -58,6 +58,9 @@ class NetworkWall final : public Wall {
   void remap(std::span<const int> /*source*/, int /*n*/) override {}  // the locations remap themselves
 
  private:
+  /// Whether a vertex of radius @p a at @p x is deeper than @p reach inside the capsule of
+  /// @p segment (the union's wall is then farther still).
+  [[nodiscard]] bool deep_inside(int segment, const Vec3& x, double a, double reach) const;
   WireLocation& where_;
 };
 
