@@ -18,7 +18,7 @@ if [ -z "$CF" ]; then
   echo "format.sh: error: clang-format not found (Debian: apt-get install clang-format)" >&2
   exit "${FORMAT_MISSING_STATUS:-2}"
 fi
-mapfile -t FILES < <(find common vessels flow rod coupling tools tests bench python \
+mapfile -t FILES < <(find common vessels mesh solid flow rod coupling tools tests bench python \
   \( -name '*.cpp' -o -name '*.hpp' -o -name '*.h' \) -type f | sort)
 if [ "$CHECK" = 0 ]; then
   "$CF" -i "${FILES[@]}"

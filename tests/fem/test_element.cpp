@@ -1,4 +1,4 @@
-// The reference elements (flow/fem/src/element.cpp): quadrature exact to its degree against
+// The reference elements (common/src/element.cpp): quadrature exact to its degree against
 // the closed-form monomial integrals, P2/P1 bases nodal and reproducing every quadratic /
 // linear field, gradients and second derivatives against finite differences.
 #include "flowire/flow/fem/element.hpp"
@@ -27,6 +27,24 @@ TEST(FemElement, TetQuadratureIsExactToDegreeFive) {
         const double exact = factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
         EXPECT_NEAR(sum, exact, 1e-15) << a << b << c;
       }
+}
+
+TEST(FemElement, TheFourPointTetQuadratureIsExactToDegreeTwoAndNotThree) {
+  double worst_cubic = 0.0;
+  for (int a = 0; a <= 3; ++a)
+    for (int b = 0; a + b <= 3; ++b)
+      for (int c = 0; a + b + c <= 3; ++c) {
+        double sum = 0.0;
+        for (const auto& q : element::tet_quadrature_degree2())
+          sum += q.weight * std::pow(q.xi[0], a) * std::pow(q.xi[1], b) * std::pow(q.xi[2], c);
+        const double exact = factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
+        if (a + b + c <= 2) {
+          EXPECT_NEAR(sum, exact, 1e-16) << a << b << c;
+        } else {
+          worst_cubic = std::max(worst_cubic, std::abs(sum - exact));
+        }
+      }
+  EXPECT_GT(worst_cubic, 1e-5);  // the rule's degree is 2, not more
 }
 
 TEST(FemElement, TriQuadratureIsExactToDegreeFour) {

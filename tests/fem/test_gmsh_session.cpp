@@ -1,4 +1,4 @@
-// The gmsh session the mesh builders share (flow/fem/src/gmsh_session.cpp): a size that is
+// The gmsh session the mesh builders share (mesh/src/gmsh_session.cpp): a size that is
 // neither fixed nor a positive fraction of the radius is a usage error that passes through
 // unchanged (not turned into a gmsh failure), and a build that failed inside the session
 // leaves it clean: the next mesh is the one built before the failure, node for node.

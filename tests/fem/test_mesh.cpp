@@ -1,4 +1,4 @@
-// The quadratic tetrahedral mesh (flow/fem/src/mesh.cpp): volume and areas of a curved P2
+// The quadratic tetrahedral mesh (mesh/src/tet_mesh.cpp): volume and areas of a curved P2
 // mesh against the exact cylinder, and its boundary groups.
 #include <gtest/gtest.h>
 

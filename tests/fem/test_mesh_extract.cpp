@@ -1,4 +1,4 @@
-// The meshed gmsh model read into a TetMesh (flow/fem/src/mesh_extract.cpp), on a network
+// The meshed gmsh model read into a TetMesh (mesh/src/extract.cpp), on a network
 // lumen with a junction and on a domain built in code with two no-slip groups: every
 // straight tetrahedron has positive volume, each vertex has one pressure unknown and edge
 // nodes none, and the boundary triangles close the mesh with outward normals: the

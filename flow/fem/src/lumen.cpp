@@ -20,9 +20,9 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/input.hpp"
 #include "flowire/flow/fem/element.hpp"
-#include "gmsh_session.hpp"
+#include "flowire/mesh/extract.hpp"
+#include "flowire/mesh/gmsh_session.hpp"
 #include "mesh_broadcast.hpp"
-#include "mesh_extract.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
 #include <vtkAlgorithm.h>
@@ -508,7 +508,7 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
   for (int e : ends)
     if (e != inlet) mesh.groups.push_back({BoundaryGroup::Kind::Outlet, e, fmt::format("outlet_{}", e)});
 
-  detail::GmshModel model(opt.verbose);
+  mesh::GmshModel model(opt.verbose);
   const SurfaceMesh& s = lumen.surface;
   gmsh::model::addDiscreteEntity(2, 1);
   std::vector<std::size_t> node_tags(s.points.size());
@@ -564,9 +564,9 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
   gmsh::vectorpair vols;
   gmsh::model::getEntities(vols, 3);
   if (vols.size() != 1) throw_numerical_error(fmt::format("{}: the lumen gave {} volumes, not one", at, vols.size()));
-  detail::tag_groups_and_set_options(vols[0].second, "lumen", mesh.groups, surfs, surf_group, opt.algorithm3d);
+  mesh::tag_groups_and_set_options(vols[0].second, "lumen", mesh.groups, surfs, surf_group, opt.algorithm3d);
 
-  if (!detail::set_size_bounds(opt.mesh_size, opt.size_factor)) {
+  if (!mesh::set_size_bounds(opt.mesh_size, opt.size_factor)) {
     struct Axis {
       Vec3 a, d;
       double l2, r;
@@ -592,8 +592,8 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
       return factor * r;
     });
   }
-  detail::generate(opt);
-  detail::extract_mesh(mesh, surfs, surf_group, at);
+  mesh::generate(opt);
+  mesh::extract_mesh(mesh, surfs, surf_group, at);
   // gmsh places the edge nodes on the reparametrized surface; where it cannot (a handful
   // on a patch seam, left at 1e21) the edge node goes to the chord midpoint.
   for (const auto& t : mesh.tets)
@@ -625,7 +625,7 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
 
 TetMesh build_mesh(const Network& net, const LumenSurface& lumen, const MeshOptions& opt) {
   return detail::build_shared(
-      [&] { return detail::guarded(lumen.surface.source, [&] { return mesh_lumen(net, lumen, opt); }); });
+      [&] { return mesh::guarded(lumen.surface.source, [&] { return mesh_lumen(net, lumen, opt); }); });
 }
 
 }  // namespace flowire::flow::fem

@@ -18,10 +18,10 @@
 #include <vector>
 
 #include "flowire/common/error.hpp"
+#include "flowire/mesh/extract.hpp"
+#include "flowire/mesh/gmsh_session.hpp"
 #include "flowire/vessels/spatial.hpp"
-#include "gmsh_session.hpp"
 #include "mesh_broadcast.hpp"
-#include "mesh_extract.hpp"
 
 namespace flowire::flow::fem {
 namespace {
@@ -219,10 +219,10 @@ Geometry make_geometry(const Network& net) {
   return g;
 }
 
-using detail::extract_mesh;
-using detail::generate;
-using detail::GmshModel;
-using detail::tag_groups_and_set_options;
+using mesh::extract_mesh;
+using mesh::generate;
+using mesh::GmshModel;
+using mesh::tag_groups_and_set_options;
 
 TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& opt) {
   const auto start = std::chrono::steady_clock::now();
@@ -287,7 +287,7 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
   // Sizes: fixed, or a fraction of the radius of the nearest piece.
   double hmin = std::numeric_limits<double>::infinity();
   for (const Piece& p : g.pieces) hmin = std::min(hmin, opt.size_factor * p.radius);
-  if (!detail::set_size_bounds(opt.mesh_size, opt.size_factor)) {
+  if (!mesh::set_size_bounds(opt.mesh_size, opt.size_factor)) {
     const Geometry* geo = &g;
     const Network* nw = &net;
     const double factor = opt.size_factor;
@@ -315,7 +315,7 @@ TetMesh mesh_geometry(const Network& net, const Geometry& g, const MeshOptions& 
 TetMesh build_mesh(const Network& net, const MeshOptions& opt) {
   return detail::build_shared([&] {
     const Geometry g = make_geometry(net);
-    return detail::guarded(where(net), [&] { return mesh_geometry(net, g, opt); });
+    return mesh::guarded(where(net), [&] { return mesh_geometry(net, g, opt); });
   });
 }
 

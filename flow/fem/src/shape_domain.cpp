@@ -13,18 +13,18 @@
 #include <vector>
 
 #include "flowire/common/error.hpp"
+#include "flowire/mesh/extract.hpp"
+#include "flowire/mesh/gmsh_session.hpp"
 #include "flowire/vessels/spatial.hpp"
-#include "gmsh_session.hpp"
 #include "mesh_broadcast.hpp"
-#include "mesh_extract.hpp"
 
 namespace flowire::flow::fem {
 namespace {
 
-using detail::extract_mesh;
-using detail::generate;
-using detail::GmshModel;
-using detail::tag_groups_and_set_options;
+using mesh::extract_mesh;
+using mesh::generate;
+using mesh::GmshModel;
+using mesh::tag_groups_and_set_options;
 
 /// Distance from x to the segment [a, b] and the axial parameter t of its projection
 /// (t in units of length from a, unclamped).
@@ -179,7 +179,7 @@ TetMesh mesh_domain(const ShapeDomain& dom, const MeshOptions& opt) {
 }  // namespace
 
 TetMesh build_mesh(const ShapeDomain& domain, const MeshOptions& opt) {
-  return detail::build_shared([&] { return detail::guarded(domain.name, [&] { return mesh_domain(domain, opt); }); });
+  return detail::build_shared([&] { return mesh::guarded(domain.name, [&] { return mesh_domain(domain, opt); }); });
 }
 
 }  // namespace flowire::flow::fem

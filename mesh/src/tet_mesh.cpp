@@ -1,12 +1,20 @@
 // The quadratic tetrahedral mesh's own queries: its groups by name and by network end node,
 // and its volume and boundary areas integrated over the curved (quadratic) elements.
-#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/mesh/tet_mesh.hpp"
 
 #include <Eigen/Dense>
 
-#include "flowire/flow/fem/element.hpp"
+#include "flowire/common/element.hpp"
 
-namespace flowire::flow::fem {
+namespace flowire::mesh {
+
+using element::kTetEdges;
+using element::kTriEdges;
+using element::QuadPoint;
+using element::tet_p2_grad;
+using element::tet_quadrature;
+using element::tri_p2_grad;
+using element::tri_quadrature;
 
 int TetMesh::group_named(const std::string& name) const {
   for (size_t g = 0; g < groups.size(); ++g)
@@ -53,4 +61,4 @@ double TetMesh::area(int group) const {
   return a;
 }
 
-}  // namespace flowire::flow::fem
+}  // namespace flowire::mesh

@@ -1,11 +1,11 @@
 // Reference P2/P1 tetrahedron and P2 triangle: basis functions written out in barycentric
 // coordinates, and symmetric quadrature rules (Walkington's 14-point degree-5 rule on the
-// tetrahedron, the 6-point degree-4 rule on the triangle).
-#include "flowire/flow/fem/element.hpp"
+// tetrahedron, the 4-point degree-2 rule, the 6-point degree-4 rule on the triangle).
+#include "flowire/common/element.hpp"
 
 #include <vector>
 
-namespace flowire::flow::fem {
+namespace flowire::element {
 namespace {
 
 std::vector<QuadPoint> make_tet_rule() {
@@ -47,6 +47,15 @@ std::vector<QuadPoint> make_tri_rule() {
 
 std::span<const QuadPoint> tet_quadrature() {
   static const std::vector<QuadPoint> rule = make_tet_rule();
+  return rule;
+}
+
+std::span<const QuadPoint> tet_quadrature_degree2() {
+  // Barycentric (a, a, a, b) and its permutations, a = (5 − √5)/20, b = (5 + 3√5)/20.
+  static constexpr double a = 0.1381966011250105151795;
+  static constexpr double b = 0.5854101966249684544614;
+  static constexpr double w = 1.0 / 24.0;
+  static const std::vector<QuadPoint> rule = {{{a, a, a}, w}, {{b, a, a}, w}, {{a, b, a}, w}, {{a, a, b}, w}};
   return rule;
 }
 
@@ -109,4 +118,4 @@ void tri_p2_grad(const std::array<double, 3>& xi, double (*g)[2]) {
   }
 }
 
-}  // namespace flowire::flow::fem
+}  // namespace flowire::element

@@ -1,7 +1,7 @@
 // The gmsh session the mesh builders share: one gmsh initialization per process, a model per
 // build, the physical groups and meshing options every builder sets, the size bounds,
 // second-order generation, and gmsh's exceptions turned into flowire errors.
-#include "gmsh_session.hpp"
+#include "flowire/mesh/gmsh_session.hpp"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 
 #include "flowire/common/error.hpp"
 
-namespace flowire::flow::fem::detail {
+namespace flowire::mesh {
 
 GmshModel::GmshModel(bool verbose) {
   static bool initialized = false;
@@ -86,4 +86,4 @@ TetMesh guarded(const std::string& at, const std::function<TetMesh()>& build) {
   }
 }
 
-}  // namespace flowire::flow::fem::detail
+}  // namespace flowire::mesh

@@ -1,15 +1,15 @@
 #pragma once
 // The meshed gmsh model read into a TetMesh (nodes, positively oriented 10-node tetrahedra in
 // our local node order, outward boundary triangles by group), shared by every mesh builder.
-// Not installed.
+// Installed with the mesh part; a program including it links gmsh.
 #include <gmsh.h>
 
 #include <string>
 #include <vector>
 
-#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/mesh/tet_mesh.hpp"
 
-namespace flowire::flow::fem::detail {
+namespace flowire::mesh {
 
 /// Nodes, tetrahedra and boundary triangles (by group: `surf_group[k]` for surface
 /// `surfs[k]`) of the meshed model into `mesh`.
@@ -18,4 +18,4 @@ namespace flowire::flow::fem::detail {
 void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
                   const std::string& at);
 
-}  // namespace flowire::flow::fem::detail
+}  // namespace flowire::mesh

@@ -1,7 +1,7 @@
 // The meshed gmsh model read into a TetMesh: gmsh's node order mapped to ours by the
 // reference coordinates of its element types, tetrahedra turned to positive volume, and the
 // boundary triangles of each group oriented outwards by the tetrahedron behind them.
-#include "mesh_extract.hpp"
+#include "flowire/mesh/extract.hpp"
 
 #include <fmt/format.h>
 
@@ -10,10 +10,18 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "flowire/common/element.hpp"
 #include "flowire/common/error.hpp"
-#include "flowire/flow/fem/element.hpp"
 
-namespace flowire::flow::fem::detail {
+namespace flowire::mesh {
+
+using element::kTetEdges;
+using element::kTriEdges;
+using element::QuadPoint;
+using element::tet_p2_grad;
+using element::tet_quadrature;
+using element::tri_p2_grad;
+using element::tri_quadrature;
 namespace {
 
 /// Reference coordinates of the nodes of a gmsh element type -> our local node order.
@@ -165,4 +173,4 @@ void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vecto
     if (!o) throw_numerical_error(fmt::format("{}: a boundary triangle has no tetrahedron", at));
 }
 
-}  // namespace flowire::flow::fem::detail
+}  // namespace flowire::mesh

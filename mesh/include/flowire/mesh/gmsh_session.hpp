@@ -1,16 +1,16 @@
 #pragma once
-// The gmsh session the mesh builders share (network_mesh.cpp, shape_domain.cpp, lumen.cpp):
+// The gmsh session the mesh builders share (the flow check's lumens in flow/fem, the wall in solid/):
 // the model's lifetime, the physical groups and meshing options, the size bounds, second-order
-// generation, and gmsh's exceptions turned into flowire errors. Not installed.
+// generation, and gmsh's exceptions turned into flowire errors.
 #include <gmsh.h>
 
 #include <functional>
 #include <string>
 #include <vector>
 
-#include "flowire/flow/fem/mesh.hpp"
+#include "flowire/mesh/tet_mesh.hpp"
 
-namespace flowire::flow::fem::detail {
+namespace flowire::mesh {
 
 /// gmsh is initialized once per process and kept; each build uses its own model, removed
 /// (with any size callback) when the build ends, also by an exception.
@@ -40,4 +40,4 @@ void generate(const MeshOptions& opt);
 /// flowire errors pass through.
 TetMesh guarded(const std::string& at, const std::function<TetMesh()>& build);
 
-}  // namespace flowire::flow::fem::detail
+}  // namespace flowire::mesh
