@@ -1,0 +1,107 @@
+#pragma once
+/// @file elastic_solid.hpp
+/// @brief A hyperelastic solid on a quadratic tetrahedral mesh: the vessel wall.
+///
+/// Total Lagrangian: the unknowns are the displacements u of the mesh's nodes (3 a node), the
+/// deformation gradient \f$ F = I + \sum_k u_k \otimes \nabla_X N_k \f$ of the 10-node
+/// tetrahedra, integrated with the 4-point degree-2 rule. The total potential is
+/// \f[ \Pi(u) = \int_\Omega W(F)\,dV + \tfrac12 \int_{\Gamma_s} k\,|u|^2 dA
+///     - \int_{\Gamma_p} (-p\,N)\cdot u\,dA - f\cdot u, \f]
+/// a neo-Hookean W, an elastic support k (surrounding tissue; Pa/m) on chosen boundary groups,
+/// a pressure p on others acting on the reference faces (dead load; N the outward normal of the
+/// solid, so a lumen's pressure pushes the wall outwards), and nodal forces f. Chosen
+/// displacement components of chosen groups are held at zero. `solve` finds the equilibrium
+/// \f$ \nabla\Pi = 0 \f$ by Newton with CHOLMOD's Cholesky factorization, the tangent's pattern
+/// analysed once, and a backtracking search that never accepts an inverted element.
+/// The solid knows nothing of wires or blood: every load reaches it as a pressure or a force.
+#include <Eigen/Sparse>
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "flowire/mesh/tet_mesh.hpp"
+#include "flowire/solid/neo_hookean.hpp"
+
+namespace flowire::solid {
+
+using vessels::Vec3;
+
+/// @brief When `solve` stops.
+struct SolveOptions {
+  double tolerance = 1e-10;  ///< |∇Π| ≤ tolerance × max(|loads|, |∇Π at the start|)
+  int max_iterations = 50;
+};
+
+/// @brief What `solve` did.
+struct SolveReport {
+  int iterations = 0;
+  double residual = 0.0;  ///< |∇Π| (N) over the free components at the end
+  bool converged = false;
+};
+
+/// @brief The wall as an elastic solid.
+class ElasticSolid {
+ public:
+  ElasticSolid(mesh::TetMesh mesh, NeoHookean law);
+  ~ElasticSolid();
+  ElasticSolid(ElasticSolid&&) noexcept;
+  ElasticSolid& operator=(ElasticSolid&&) noexcept;
+
+  [[nodiscard]] const mesh::TetMesh& mesh() const { return mesh_; }
+  [[nodiscard]] const NeoHookean& law() const { return law_; }
+  [[nodiscard]] int num_dofs() const { return 3 * mesh_.num_nodes(); }
+
+  /// @brief Hold the chosen displacement components of every node of boundary group `group` at 0.
+  void hold(int group, std::array<bool, 3> components = {true, true, true});
+  /// @brief An elastic support on `group`: traction −k u, k in Pa/m (added to any before).
+  void support(int group, double stiffness_per_area);
+  /// @brief A pressure p (Pa) on `group`'s reference faces, against their outward normal
+  /// (replaces the group's previous pressure).
+  void set_pressure(int group, double pressure);
+  /// @brief A pressure field p(X) (Pa) over `group`'s reference faces (the blood pressure
+  /// along a vessel, a band load), integrated with the 6-point rule on each curved face.
+  void set_pressure(int group, std::function<double(const Vec3&)> pressure);
+  /// @brief Nodal forces (N), 3 a node, added to the pressure loads; zero until set.
+  [[nodiscard]] Eigen::VectorXd& nodal_forces() { return nodal_forces_; }
+
+  /// @brief Π(u); +∞ when an element is inverted at a quadrature point.
+  [[nodiscard]] double energy(const Eigen::VectorXd& u) const;
+  /// @brief ∇Π(u) (every component, held ones included).
+  [[nodiscard]] Eigen::VectorXd gradient(const Eigen::VectorXd& u) const;
+  /// @brief ∇²Π(u), symmetric, full pattern (held components included).
+  [[nodiscard]] Eigen::SparseMatrix<double> hessian(const Eigen::VectorXd& u) const;
+  /// @brief All loads: pressures and nodal forces (N), 3 a node.
+  [[nodiscard]] Eigen::VectorXd loads() const { return pressure_forces_ + nodal_forces_; }
+  /// @brief True for a held component.
+  [[nodiscard]] bool held(int dof) const { return held_[static_cast<size_t>(dof)] != 0; }
+
+  /// @brief Equilibrium from the current displacement under the current loads.
+  /// @throws flowire::Error (numerical) when an element would have to be inverted or the
+  /// tangent cannot be factorized.
+  SolveReport solve(const SolveOptions& options = {});
+  [[nodiscard]] const Eigen::VectorXd& displacement() const { return u_; }
+  void set_displacement(const Eigen::VectorXd& u);
+  [[nodiscard]] Vec3 displacement(int node) const { return u_.segment<3>(3 * node); }
+
+ private:
+  struct Factor;
+  void assemble_hessian(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>& h) const;
+  double elastic_energy(const Eigen::VectorXd& u) const;
+
+  mesh::TetMesh mesh_;
+  NeoHookean law_;
+  std::vector<double> geometry_;         ///< per tet and quadrature point: ∇_X N (10×3) and weight·det J
+  Eigen::SparseMatrix<double> pattern_;  ///< the tangent's pattern (values zero)
+  std::vector<int> scatter_;             ///< per tet, node pair (k, l), column c: index of entry (3k, 3l+c)
+  Eigen::SparseMatrix<double> support_;  ///< ∫ k N_k N_l dA ⊗ I
+  std::vector<int> support_scatter_;     ///< index in pattern_ of each of support_'s entries
+  std::vector<std::function<double(const Vec3&)>> group_pressure_;  ///< per boundary group (empty: none)
+  Eigen::VectorXd pressure_forces_, nodal_forces_;
+  std::vector<char> held_;
+  Eigen::VectorXd u_;
+  std::unique_ptr<Factor> factor_;
+};
+
+}  // namespace flowire::solid

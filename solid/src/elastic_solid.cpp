@@ -1,0 +1,330 @@
+// The hyperelastic solid: geometry at the quadrature points computed once, the tangent's
+// pattern and each element's place in it found once, then energy, gradient and tangent
+// assembled element by element, and Newton with CHOLMOD's supernodal Cholesky.
+#include "flowire/solid/elastic_solid.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/CholmodSupport>
+#include <algorithm>
+#include <cmath>
+
+#include "flowire/common/element.hpp"
+#include "flowire/common/error.hpp"
+
+namespace flowire::solid {
+namespace {
+
+constexpr int kQuad = 4;   // quadrature points a tetrahedron
+constexpr int kGeom = 31;  // ∇N (10 × 3) and weight·det J per point
+using Grad = Eigen::Matrix<double, 10, 3>;
+
+Mat3 displacement_gradient(const double* g, const std::array<int, 10>& tet, const Eigen::VectorXd& u) {
+  Mat3 e = Mat3::Zero();
+  for (int k = 0; k < 10; ++k) {
+    const auto uk = u.segment<3>(3 * tet[static_cast<size_t>(k)]);
+    for (int b = 0; b < 3; ++b) e.col(b) += uk * g[3 * k + b];
+  }
+  return e;
+}
+
+}  // namespace
+
+struct ElasticSolid::Factor {
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  bool analysed = false;
+};
+
+ElasticSolid::ElasticSolid(mesh::TetMesh mesh, NeoHookean law)
+    : mesh_(std::move(mesh)), law_(law), factor_(std::make_unique<Factor>()) {
+  if (!(law_.mu > 0.0) || !(law_.lambda > -2.0 / 3.0 * law_.mu))
+    throw_usage_error("wall: the material needs μ > 0 and a positive bulk modulus");
+  const int n = num_dofs();
+  const auto nt = static_cast<size_t>(mesh_.num_tets());
+  // Geometry at the quadrature points (curved elements: the Jacobian at each point).
+  geometry_.resize(nt * kQuad * kGeom);
+  const auto rule = element::tet_quadrature_degree2();
+  for (size_t t = 0; t < nt; ++t) {
+    const auto& tet = mesh_.tets[t];
+    for (int q = 0; q < kQuad; ++q) {
+      double dref[10][3];
+      element::tet_p2_grad(rule[static_cast<size_t>(q)].xi, dref);
+      Mat3 jac = Mat3::Zero();  // jac(a, b) = ∂X_a/∂ξ_b
+      for (int k = 0; k < 10; ++k)
+        for (int b = 0; b < 3; ++b)
+          jac.col(b) += mesh_.nodes[static_cast<size_t>(tet[static_cast<size_t>(k)])] * dref[k][b];
+      const double det = jac.determinant();
+      if (!(det > 0.0))
+        throw_input_error("wall mesh", fmt::format("tetrahedron {} is inverted or flat (det J = {:.3g})", t, det));
+      const Mat3 inv = jac.inverse();
+      double* g = &geometry_[(t * kQuad + static_cast<size_t>(q)) * kGeom];
+      for (int k = 0; k < 10; ++k)
+        for (int b = 0; b < 3; ++b) {
+          double s = 0.0;
+          for (int c = 0; c < 3; ++c) s += dref[k][c] * inv(c, b);  // ∂N/∂X_b = Σ_c ∂N/∂ξ_c ∂ξ_c/∂X_b
+          g[3 * k + b] = s;
+        }
+      g[30] = rule[static_cast<size_t>(q)].weight * det;
+    }
+  }
+  // The tangent's pattern: every node pair of a tetrahedron, 3 × 3 a pair.
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(nt * 900);
+  for (const auto& tet : mesh_.tets)
+    for (int k : tet)
+      for (int l : tet)
+        for (int a = 0; a < 3; ++a)
+          for (int c = 0; c < 3; ++c) trip.emplace_back(3 * k + a, 3 * l + c, 0.0);
+  pattern_.resize(n, n);
+  pattern_.setFromTriplets(trip.begin(), trip.end());
+  pattern_.makeCompressed();
+  auto position = [this](int row, int col) {
+    const int* begin = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col];
+    const int* end = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col + 1];
+    return static_cast<int>(std::lower_bound(begin, end, row) - pattern_.innerIndexPtr());
+  };
+  scatter_.resize(nt * 300);
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 10; ++k)
+      for (int l = 0; l < 10; ++l)
+        for (int c = 0; c < 3; ++c)
+          scatter_[t * 300 + static_cast<size_t>(30 * k + 3 * l + c)] =
+              position(3 * mesh_.tets[t][static_cast<size_t>(k)], 3 * mesh_.tets[t][static_cast<size_t>(l)] + c);
+  support_.resize(n, n);
+  group_pressure_.resize(mesh_.groups.size());
+  pressure_forces_ = Eigen::VectorXd::Zero(n);
+  nodal_forces_ = Eigen::VectorXd::Zero(n);
+  held_.assign(static_cast<size_t>(n), 0);
+  u_ = Eigen::VectorXd::Zero(n);
+}
+
+ElasticSolid::~ElasticSolid() = default;
+ElasticSolid::ElasticSolid(ElasticSolid&&) noexcept = default;
+ElasticSolid& ElasticSolid::operator=(ElasticSolid&&) noexcept = default;
+
+void ElasticSolid::hold(int group, std::array<bool, 3> components) {
+  for (size_t f = 0; f < mesh_.faces.size(); ++f)
+    if (mesh_.face_group[f] == group)
+      for (int node : mesh_.faces[f])
+        for (int c = 0; c < 3; ++c)
+          if (components[static_cast<size_t>(c)]) held_[static_cast<size_t>(3 * node + c)] = 1;
+}
+
+void ElasticSolid::support(int group, double stiffness_per_area) {
+  if (!(stiffness_per_area >= 0.0) || !std::isfinite(stiffness_per_area))
+    throw_usage_error(fmt::format("wall: support stiffness must be >= 0 Pa/m, got {}", stiffness_per_area));
+  std::vector<Eigen::Triplet<double>> trip;
+  for (size_t f = 0; f < mesh_.faces.size(); ++f) {
+    if (mesh_.face_group[f] != group) continue;
+    const auto& face = mesh_.faces[f];
+    for (const auto& q : element::tri_quadrature()) {
+      double nval[6], ngrad[6][2];
+      element::tri_p2(q.xi, nval);
+      element::tri_p2_grad(q.xi, ngrad);
+      Vec3 ds = Vec3::Zero(), dt = Vec3::Zero();
+      for (int k = 0; k < 6; ++k) {
+        ds += mesh_.nodes[static_cast<size_t>(face[static_cast<size_t>(k)])] * ngrad[k][0];
+        dt += mesh_.nodes[static_cast<size_t>(face[static_cast<size_t>(k)])] * ngrad[k][1];
+      }
+      const double w = q.weight * ds.cross(dt).norm() * stiffness_per_area;
+      for (int k = 0; k < 6; ++k)
+        for (int l = 0; l < 6; ++l)
+          for (int c = 0; c < 3; ++c)
+            trip.emplace_back(3 * face[static_cast<size_t>(k)] + c, 3 * face[static_cast<size_t>(l)] + c,
+                              w * nval[k] * nval[l]);
+    }
+  }
+  Eigen::SparseMatrix<double> add(num_dofs(), num_dofs());
+  add.setFromTriplets(trip.begin(), trip.end());
+  support_ += add;
+  support_.makeCompressed();
+  support_scatter_.clear();
+  for (int col = 0; col < support_.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(support_, col); it; ++it) {
+      const int* begin = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col];
+      const int* end = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col + 1];
+      support_scatter_.push_back(static_cast<int>(std::lower_bound(begin, end, it.row()) - pattern_.innerIndexPtr()));
+    }
+}
+
+void ElasticSolid::set_pressure(int group, double pressure) {
+  if (!std::isfinite(pressure)) throw_usage_error("wall: the pressure must be a finite number of Pa");
+  set_pressure(group, [pressure](const Vec3&) { return pressure; });
+}
+
+void ElasticSolid::set_pressure(int group, std::function<double(const Vec3&)> pressure) {
+  if (group < 0 || group >= static_cast<int>(mesh_.groups.size()))
+    throw_usage_error(fmt::format("wall: no boundary group {}", group));
+  group_pressure_[static_cast<size_t>(group)] = std::move(pressure);
+  pressure_forces_.setZero();
+  for (size_t f = 0; f < mesh_.faces.size(); ++f) {
+    const auto& field = group_pressure_[static_cast<size_t>(mesh_.face_group[f])];
+    if (!field) continue;
+    const auto& face = mesh_.faces[f];
+    for (const auto& q : element::tri_quadrature()) {
+      double nval[6], ngrad[6][2];
+      element::tri_p2(q.xi, nval);
+      element::tri_p2_grad(q.xi, ngrad);
+      Vec3 x = Vec3::Zero(), ds = Vec3::Zero(), dt = Vec3::Zero();
+      for (int k = 0; k < 6; ++k) {
+        const Vec3& xk = mesh_.nodes[static_cast<size_t>(face[static_cast<size_t>(k)])];
+        x += xk * nval[k];
+        ds += xk * ngrad[k][0];
+        dt += xk * ngrad[k][1];
+      }
+      const double p = field(x);
+      if (!std::isfinite(p))
+        throw_usage_error(
+            fmt::format("wall: the pressure at ({:.4g}, {:.4g}, {:.4g}) m is {}", x.x(), x.y(), x.z(), p));
+      const Vec3 area_normal = ds.cross(dt) * q.weight;  // outward, |·| = dA
+      for (int k = 0; k < 6; ++k)
+        pressure_forces_.segment<3>(3 * face[static_cast<size_t>(k)]) -= p * nval[k] * area_normal;
+    }
+  }
+}
+
+double ElasticSolid::elastic_energy(const Eigen::VectorXd& u) const {
+  double e = 0.0;
+  for (size_t t = 0; t < mesh_.tets.size(); ++t)
+    for (int q = 0; q < kQuad; ++q) {
+      const double* g = &geometry_[(t * kQuad + static_cast<size_t>(q)) * kGeom];
+      e += g[30] * law_.energy(displacement_gradient(g, mesh_.tets[t], u));
+    }
+  return e;
+}
+
+double ElasticSolid::energy(const Eigen::VectorXd& u) const {
+  const double elastic = elastic_energy(u);
+  if (!std::isfinite(elastic)) return elastic;
+  return elastic + 0.5 * u.dot(support_ * u) - loads().dot(u);
+}
+
+Eigen::VectorXd ElasticSolid::gradient(const Eigen::VectorXd& u) const {
+  Eigen::VectorXd grad = support_ * u - loads();
+  for (size_t t = 0; t < mesh_.tets.size(); ++t) {
+    const auto& tet = mesh_.tets[t];
+    for (int q = 0; q < kQuad; ++q) {
+      const double* g = &geometry_[(t * kQuad + static_cast<size_t>(q)) * kGeom];
+      const Mat3 P = law_.stress(displacement_gradient(g, tet, u)) * g[30];
+      for (int k = 0; k < 10; ++k)
+        grad.segment<3>(3 * tet[static_cast<size_t>(k)]) += P * Vec3(g[3 * k], g[3 * k + 1], g[3 * k + 2]);
+    }
+  }
+  return grad;
+}
+
+void ElasticSolid::assemble_hessian(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>& h) const {
+  h = pattern_;
+  double* values = h.valuePtr();
+  for (size_t t = 0; t < mesh_.tets.size(); ++t) {
+    const auto& tet = mesh_.tets[t];
+    const int* scatter = &scatter_[t * 300];
+    for (int q = 0; q < kQuad; ++q) {
+      const double* g = &geometry_[(t * kQuad + static_cast<size_t>(q)) * kGeom];
+      const Tangent A = law_.tangent(displacement_gradient(g, tet, u)) * g[30];
+      // Y_l(a + 3B, c) = Σ_D A(a + 3B, c + 3D) ∂N_l/∂X_D; K(3k + a, 3l + c) = Σ_B ∂N_k/∂X_B Y_l(a + 3B, c).
+      for (int l = 0; l < 10; ++l) {
+        Eigen::Matrix<double, 9, 3> y;
+        for (int c = 0; c < 3; ++c)
+          y.col(c) = A.col(c) * g[3 * l] + A.col(c + 3) * g[3 * l + 1] + A.col(c + 6) * g[3 * l + 2];
+        for (int k = 0; k < 10; ++k) {
+          const Eigen::Matrix3d block =
+              y.topRows<3>() * g[3 * k] + y.middleRows<3>(3) * g[3 * k + 1] + y.bottomRows<3>() * g[3 * k + 2];
+          for (int c = 0; c < 3; ++c) {
+            double* col = values + scatter[30 * k + 3 * l + c];
+            col[0] += block(0, c);
+            col[1] += block(1, c);
+            col[2] += block(2, c);
+          }
+        }
+      }
+    }
+  }
+  size_t s = 0;
+  for (int col = 0; col < support_.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(support_, col); it; ++it)
+      values[support_scatter_[s++]] += it.value();
+}
+
+Eigen::SparseMatrix<double> ElasticSolid::hessian(const Eigen::VectorXd& u) const {
+  Eigen::SparseMatrix<double> h;
+  assemble_hessian(u, h);
+  return h;
+}
+
+void ElasticSolid::set_displacement(const Eigen::VectorXd& u) {
+  if (u.size() != num_dofs())
+    throw_usage_error(fmt::format("wall: a displacement of {} components for {} unknowns", u.size(), num_dofs()));
+  u_ = u;
+}
+
+SolveReport ElasticSolid::solve(const SolveOptions& options) {
+  SolveReport report;
+  const int n = num_dofs();
+  auto free_gradient = [&](const Eigen::VectorXd& u) {
+    Eigen::VectorXd g = gradient(u);
+    for (int i = 0; i < n; ++i)
+      if (held_[static_cast<size_t>(i)]) g[i] = 0.0;
+    return g;
+  };
+  for (int i = 0; i < n; ++i)
+    if (held_[static_cast<size_t>(i)]) u_[i] = 0.0;
+  Eigen::VectorXd g = free_gradient(u_);
+  Eigen::VectorXd load = loads();
+  for (int i = 0; i < n; ++i)
+    if (held_[static_cast<size_t>(i)]) load[i] = 0.0;
+  const double scale = std::max(load.norm(), g.norm());
+  report.residual = g.norm();
+  Eigen::SparseMatrix<double> h;
+  while (!(report.residual <= options.tolerance * scale)) {
+    if (report.iterations >= options.max_iterations) return report;
+    if (!std::isfinite(report.residual))
+      throw_numerical_error(
+          fmt::format("wall: the residual became {} (iteration {})", report.residual, report.iterations));
+    assemble_hessian(u_, h);
+    // Held components: their rows and columns replaced by the identity.
+    for (int col = 0; col < n; ++col)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(h, col); it; ++it)
+        if (held_[static_cast<size_t>(it.row())] || held_[static_cast<size_t>(col)])
+          it.valueRef() = it.row() == col ? 1.0 : 0.0;
+    if (!factor_->analysed) {
+      factor_->llt.analyzePattern(h);
+      factor_->analysed = true;
+    }
+    factor_->llt.factorize(h);
+    if (factor_->llt.info() != Eigen::Success)
+      throw_numerical_error(
+          fmt::format("wall: the tangent stiffness is not positive definite at iteration {} (is the wall held?)",
+                      report.iterations));
+    const Eigen::VectorXd step = -factor_->llt.solve(g);
+    // Backtracking: the energy must not rise (Armijo), or, where its change is below its
+    // round-off, the residual must fall; an inverted element is never accepted.
+    const double e0 = energy(u_);
+    const double slope = g.dot(step);
+    double alpha = 1.0;
+    for (;;) {
+      const Eigen::VectorXd trial = u_ + alpha * step;
+      const double e = energy(trial);
+      if (std::isfinite(e)) {
+        const double round_off = 1e-12 * (std::abs(e0) + std::abs(e) + std::abs(loads().dot(trial)));
+        const Eigen::VectorXd gt = free_gradient(trial);
+        if (e <= e0 + 1e-4 * alpha * slope || (std::abs(e - e0) <= round_off && gt.norm() < report.residual)) {
+          u_ = trial;
+          g = gt;
+          break;
+        }
+      }
+      alpha *= 0.5;
+      if (alpha < 1e-10)
+        throw_numerical_error(fmt::format(
+            "wall: no step lowers the energy without inverting an element (iteration {}, residual {:.3g} N)",
+            report.iterations, report.residual));
+    }
+    ++report.iterations;
+    report.residual = g.norm();
+  }
+  report.converged = true;
+  return report;
+}
+
+}  // namespace flowire::solid
