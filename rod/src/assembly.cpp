@@ -68,6 +68,7 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   w.ext_energy = 0.0;
   w.has_ext_k = false;
   w.has_ext_edge_k = false;
+  w.coupled.clear();
   w.moment_k.setZero();
   LoadTerms terms{w.fext.head(nd), w.moment_k};
   loads_.add(load_site(), load_scale, terms);
@@ -111,6 +112,11 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
       }
     }
     w.ext_energy = w.acc.energy();
+    if (!w.acc.coupled_vertices().empty()) {
+      for (int v : w.acc.coupled_vertices()) w.coupled.dofs.push_back(4 * v);
+      w.coupled.directions = w.acc.coupled_directions();
+      w.coupled.core = w.acc.coupled_core();
+    }
     for (int k = 0; k < nv; ++k) {
       w.fcons.segment<3>(4 * k) = w.acc.conservative_forces()[k];
       w.fext.segment<3>(4 * k) += w.acc.forces()[k];

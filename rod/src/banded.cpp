@@ -225,4 +225,13 @@ void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const {
     solve_band<0>(l_.data().data(), n, b, x.data());
 }
 
+void LowRankStiffness::multiply_add(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const {
+  const int m = rank();
+  Eigen::VectorXd ux(m);
+  for (int j = 0; j < m; ++j)
+    ux[j] = directions[static_cast<size_t>(j)].dot(x.segment<3>(dofs[static_cast<size_t>(j)]));
+  const Eigen::VectorXd r = core * ux;
+  for (int j = 0; j < m; ++j) y.segment<3>(dofs[static_cast<size_t>(j)]) += r[j] * directions[static_cast<size_t>(j)];
+}
+
 }  // namespace flowire::rod

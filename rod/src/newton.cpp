@@ -125,9 +125,12 @@ bool NewtonSolver::direction(NewtonProblem& p, const NewtonOptions& o, bool chor
   if (chord_step) {
     dq_.head(nd) = rhs;
     ldlt_.solve_in_place(dq_.head(nd));
+    low_rank_.correct(dq_.head(nd));
     ++rep.chord_iterations;
     return true;
   }
+  static const LowRankStiffness kNone;
+  const LowRankStiffness& low_rank = p.low_rank() ? *p.low_rank() : kNone;
   // The exact Hessian first; if it is indefinite (strongly bent or compressed states), the
   // Gauss–Newton matrix of the same residual, which is positive semi-definite, with a
   // modified factorization as last resort.
@@ -144,9 +147,12 @@ bool NewtonSolver::direction(NewtonProblem& p, const NewtonOptions& o, bool chor
     auto scale = [&] { return std::max(H.max_diagonal(), 1e-300); };
     if (o.linear_solver == LinearSolver::Banded) {
       ok = attempt == 0 ? (ldlt_.factorize(H) && ldlt_.negative_pivots() == 0) : ldlt_.factorize(H, 1e-12 * scale());
+      if (ok)
+        ok = low_rank_.prepare(low_rank, nd, first_free, first_fixed, [&](auto col) { ldlt_.solve_in_place(col); });
       if (ok) {
         dq_.head(nd) = rhs;
         ldlt_.solve_in_place(dq_.head(nd));
+        low_rank_.correct(dq_.head(nd));
       }
     } else {
       double shift = 0.0;
@@ -164,7 +170,15 @@ bool NewtonSolver::direction(NewtonProblem& p, const NewtonOptions& o, bool chor
         sparse_ldlt_.factorize(sparse_);
         ok = sparse_ldlt_.info() == Eigen::Success && (sparse_ldlt_.vectorD().array() > 0.0).all();
       }
-      if (ok) dq_.head(nd) = sparse_ldlt_.solve(rhs);
+      if (ok)
+        ok = low_rank_.prepare(low_rank, nd, first_free, first_fixed, [&](auto col) {
+          const Eigen::VectorXd x = sparse_ldlt_.solve(col);
+          col = x;
+        });
+      if (ok) {
+        dq_.head(nd) = sparse_ldlt_.solve(rhs);
+        low_rank_.correct(dq_.head(nd));
+      }
     }
   }
   return ok;

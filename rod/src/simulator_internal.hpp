@@ -105,6 +105,7 @@ struct RodSimulator::Work {
   bool has_ext_k = false;
   std::vector<Eigen::Matrix<double, 6, 6>> ext_edge_k;  ///< (ne) −∂(f_j, f_j+1)/∂(x_j, x_j+1), symmetrized
   bool has_ext_edge_k = false;
+  LowRankStiffness coupled;        ///< the external forces' coupled stiffness (dofs: 4·vertex)
   std::vector<double> ext_spin_k;  ///< (ne) −∂τ/∂ω / h
 
   // A solve (stage.cpp): its iterate, and what the line search keeps.

@@ -38,6 +38,7 @@ class RodSimulator::Stage final : public NewtonProblem {
   }
   [[nodiscard]] const Eigen::VectorXd& gradient() const override { return w_.grad; }
   BandedMatrix& matrix() override { return w_.H; }
+  [[nodiscard]] const LowRankStiffness* low_rank() const override { return w_.coupled.empty() ? nullptr : &w_.coupled; }
   [[nodiscard]] double residual() const override { return sim_.residual_norm(first_free_, first_fixed_); }
   [[nodiscard]] double tolerance() const override { return sim_.force_scale(load_scale_); }
   [[nodiscard]] double max_step(const Eigen::Ref<const Eigen::VectorXd>& dq) const override {

@@ -8,8 +8,10 @@
 /// factorization and both triangular solves run over contiguous memory. All storage is
 /// reserved up front (`reserve`); `resize` within that capacity does not allocate.
 #include <cassert>
+#include <cmath>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 #include <Eigen/SparseCore>
 #include <vector>
 
@@ -110,6 +112,64 @@ class BandedLDLT {
   int negative_ = 0;
   int modified_ = 0;
   double min_pivot_ = 0.0;
+};
+
+/// @brief A symmetric stiffness of low rank that couples unknowns far apart in the band:
+/// K = U R Uᵀ, column j of U the 3-vector `directions[j]` at unknowns `dofs[j]` … `dofs[j] + 2`.
+/// A deformable wall's contacts give one (a push at one contact moves the wall under another):
+/// R is then their condensed stiffness, m × m for m contacts.
+struct LowRankStiffness {
+  std::vector<int> dofs;                    ///< first unknown of each column's 3-vector
+  std::vector<Eigen::Vector3d> directions;  ///< each column's 3-vector
+  Eigen::MatrixXd core;                     ///< R (m × m, symmetric)
+  [[nodiscard]] bool empty() const { return dofs.empty(); }
+  [[nodiscard]] int rank() const { return static_cast<int>(dofs.size()); }
+  void clear() {
+    dofs.clear();
+    directions.clear();
+    core.resize(0, 0);
+  }
+  /// @brief y += U R Uᵀ x.
+  void multiply_add(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const;
+};
+
+/// @brief Solves with H + U R Uᵀ from a solver of H (Sherman–Morrison–Woodbury):
+/// (H + U R Uᵀ)⁻¹ b = x − Y (I + R W)⁻¹ R Uᵀ x, with x = H⁻¹ b, Y = H⁻¹ U, W = Uᵀ Y.
+/// R need not be invertible (no R⁻¹ is formed); the m × m system is solved by LU.
+class LowRankSolve {
+ public:
+  /// @brief Y and the small system for @p term with the solver @p solve_h (x ← H⁻¹ x in
+  /// place) of an n × n H; the columns' entries at unknowns outside [first_free, first_fixed)
+  /// (held) are dropped. Returns false if I + R W is singular.
+  template <class SolveH>
+  bool prepare(const LowRankStiffness& term, int n, int first_free, int first_fixed, SolveH&& solve_h) {
+    active_ = !term.empty();
+    if (!active_) return true;
+    const int m = term.rank();
+    u_.setZero(n, m);
+    for (int j = 0; j < m; ++j)
+      for (int c = 0; c < 3; ++c) {
+        const int d = term.dofs[static_cast<size_t>(j)] + c;
+        if (d >= first_free && d < first_fixed) u_(d, j) = term.directions[static_cast<size_t>(j)][c];
+      }
+    y_ = u_;
+    for (int j = 0; j < m; ++j) solve_h(y_.col(j));
+    r_ = term.core;
+    small_.compute(Eigen::MatrixXd::Identity(m, m) + r_ * (u_.transpose() * y_));
+    return std::abs(small_.determinant()) > 0.0 && std::isfinite(small_.determinant());
+  }
+  /// @brief x ← (H + U R Uᵀ)⁻¹ b given x = H⁻¹ b (no-op without a term).
+  void correct(Eigen::Ref<Eigen::VectorXd> x) const {
+    if (!active_) return;
+    const Eigen::VectorXd z = small_.solve(r_ * (u_.transpose() * x));
+    x -= y_ * z;
+  }
+  [[nodiscard]] bool active() const { return active_; }
+
+ private:
+  bool active_ = false;
+  Eigen::MatrixXd u_, y_, r_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> small_;
 };
 
 }  // namespace flowire::rod

@@ -111,6 +111,22 @@ class ForceAccumulator {
     edge_dfdx_[edge] += dfdx;
     has_edge_dfdx_ = true;
   }
+  /// @brief Add a stiffness −∂f/∂x = Σ_ij R_ij (d_i ⊗ e_{v_i})(d_j ⊗ e_{v_j})ᵀ that couples vertices
+  /// far apart along the wire (the contacts of a deformable wall: a push at one contact moves
+  /// the wall under another). Vertex @p vertices[i] with direction @p directions[i]; @p core
+  /// is R (symmetric). Several calls add block-diagonally. Newton solves with it exactly
+  /// (Sherman–Morrison–Woodbury on the band), so such forces converge quadratically.
+  void add_coupled_stiffness(std::span<const int> vertices, std::span<const Eigen::Vector3d> directions,
+                             const Eigen::MatrixXd& core) {
+    const auto m0 = static_cast<Eigen::Index>(coupled_vertices_.size());
+    const auto m = static_cast<Eigen::Index>(vertices.size());
+    coupled_vertices_.insert(coupled_vertices_.end(), vertices.begin(), vertices.end());
+    coupled_directions_.insert(coupled_directions_.end(), directions.begin(), directions.end());
+    Eigen::MatrixXd merged = Eigen::MatrixXd::Zero(m0 + m, m0 + m);
+    merged.topLeftCorner(m0, m0) = coupled_core_;
+    merged.bottomRightCorner(m, m) = core;
+    coupled_core_.swap(merged);
+  }
   /// @brief Add ∂f_i/∂v_i (e.g. −c·I for viscous drag).
   void add_velocity_jacobian(int vertex, const Eigen::Matrix3d& dfdv) { dfdv_[vertex] += dfdv; }
   /// @brief Add a torque about edge @p edge's tangent [N m] (e.g. rotational friction or
@@ -142,6 +158,9 @@ class ForceAccumulator {
       edge_dfdx_.assign(n > 0 ? n - 1 : 0, Eigen::Matrix<double, 6, 6>::Zero());
     has_edge_dfdx_ = false;
     energy_ = 0.0;
+    coupled_vertices_.clear();
+    coupled_directions_.clear();
+    coupled_core_.resize(0, 0);
   }
   /// @brief All forces per vertex (conservative ones included).
   [[nodiscard]] const std::vector<Eigen::Vector3d>& forces() const { return force_; }
@@ -155,6 +174,10 @@ class ForceAccumulator {
   [[nodiscard]] const std::vector<Eigen::Matrix<double, 6, 6>>& edge_jacobians() const { return edge_dfdx_; }
   [[nodiscard]] bool has_edge_jacobians() const { return has_edge_dfdx_; }
   [[nodiscard]] const std::vector<double>& twist_torques() const { return torque_; }
+  /// @brief The coupled stiffness (add_coupled_stiffness): its vertices, directions and core.
+  [[nodiscard]] const std::vector<int>& coupled_vertices() const { return coupled_vertices_; }
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& coupled_directions() const { return coupled_directions_; }
+  [[nodiscard]] const Eigen::MatrixXd& coupled_core() const { return coupled_core_; }
   [[nodiscard]] const std::vector<double>& twist_torque_spin_derivatives() const { return dtorque_; }
 
  private:
@@ -164,6 +187,9 @@ class ForceAccumulator {
   std::vector<double> torque_;
   std::vector<double> dtorque_;
   std::vector<Eigen::Vector3d> conservative_;
+  std::vector<int> coupled_vertices_;
+  std::vector<Eigen::Vector3d> coupled_directions_;
+  Eigen::MatrixXd coupled_core_;
   std::vector<Eigen::Matrix<double, 6, 6>> edge_dfdx_;
   bool has_edge_dfdx_ = false;
   double energy_ = 0.0;

@@ -111,6 +111,8 @@ class NewtonProblem {
   /// second, more conservative merit, tried when the first finds no decrease).
   virtual void merits(int pass, double phi_base, double phi_trial, double* at_base, double* at_trial) const = 0;
   [[nodiscard]] virtual int merit_passes() const { return 1; }
+  /// @brief A stiffness of low rank outside the band, added to matrix() (none by default).
+  [[nodiscard]] virtual const LowRankStiffness* low_rank() const { return nullptr; }
   /// @brief Back to the base after a rejected trial (its unknowns; the state follows the next trial).
   virtual void reject_trial() = 0;
   /// @brief Back to the base, state and all (the line search found nothing).
@@ -152,6 +154,7 @@ class NewtonSolver {
   double line_search(NewtonProblem& p, const NewtonOptions& o, double& phi, double& max_step, StepReport& rep);
   Eigen::VectorXd rhs_, dq_;
   BandedLDLT ldlt_;                     ///< the factorization, kept for chord iterations
+  LowRankSolve low_rank_;               ///< the low-rank term of that matrix, kept with it
   Eigen::SparseMatrix<double> sparse_;  ///< the general sparse back end (LinearSolver::SparseLDLT)
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> sparse_ldlt_;
   int sparse_pattern_size_ = -1;
