@@ -258,6 +258,35 @@ void ElasticSolid::set_displacement(const Eigen::VectorXd& u) {
   u_ = u;
 }
 
+bool ElasticSolid::factorize_tangent(const Eigen::VectorXd& u) {
+  Eigen::SparseMatrix<double> h;
+  assemble_hessian(u, h);
+  // Held components: their rows and columns replaced by the identity.
+  for (int col = 0; col < h.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(h, col); it; ++it)
+      if (held_[static_cast<size_t>(it.row())] || held_[static_cast<size_t>(col)])
+        it.valueRef() = it.row() == col ? 1.0 : 0.0;
+  if (!factor_->analysed) {
+    factor_->llt.analyzePattern(h);
+    factor_->analysed = true;
+  }
+  factor_->llt.factorize(h);
+  return factor_->llt.info() == Eigen::Success;
+}
+
+void ElasticSolid::linearize() {
+  if (!factorize_tangent(u_))
+    throw_numerical_error("wall: the tangent stiffness is not positive definite (is the wall held or supported?)");
+  linearized_ = true;
+}
+
+void ElasticSolid::tangent_solve(Eigen::MatrixXd& x) const {
+  if (!linearized_) throw_usage_error("wall: tangent_solve before linearize");
+  for (int i = 0; i < num_dofs(); ++i)
+    if (held_[static_cast<size_t>(i)]) x.row(i).setZero();
+  x = factor_->llt.solve(x).eval();
+}
+
 SolveReport ElasticSolid::solve(const SolveOptions& options) {
   SolveReport report;
   const int n = num_dofs();
@@ -275,24 +304,13 @@ SolveReport ElasticSolid::solve(const SolveOptions& options) {
     if (held_[static_cast<size_t>(i)]) load[i] = 0.0;
   const double scale = std::max(load.norm(), g.norm());
   report.residual = g.norm();
-  Eigen::SparseMatrix<double> h;
+  linearized_ = false;
   while (!(report.residual <= options.tolerance * scale)) {
     if (report.iterations >= options.max_iterations) return report;
     if (!std::isfinite(report.residual))
       throw_numerical_error(
           fmt::format("wall: the residual became {} (iteration {})", report.residual, report.iterations));
-    assemble_hessian(u_, h);
-    // Held components: their rows and columns replaced by the identity.
-    for (int col = 0; col < n; ++col)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(h, col); it; ++it)
-        if (held_[static_cast<size_t>(it.row())] || held_[static_cast<size_t>(col)])
-          it.valueRef() = it.row() == col ? 1.0 : 0.0;
-    if (!factor_->analysed) {
-      factor_->llt.analyzePattern(h);
-      factor_->analysed = true;
-    }
-    factor_->llt.factorize(h);
-    if (factor_->llt.info() != Eigen::Success)
+    if (!factorize_tangent(u_))
       throw_numerical_error(
           fmt::format("wall: the tangent stiffness is not positive definite at iteration {} (is the wall held?)",
                       report.iterations));

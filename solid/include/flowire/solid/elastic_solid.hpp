@@ -81,6 +81,13 @@ class ElasticSolid {
   /// @throws flowire::Error (numerical) when an element would have to be inverted or the
   /// tangent cannot be factorized.
   SolveReport solve(const SolveOptions& options = {});
+  /// @brief Factorize the tangent ∇²Π at the current displacement (held rows and columns as
+  /// the identity) for `tangent_solve`: the wall's linear response about its current state.
+  /// @throws flowire::Error (numerical) when it is not positive definite.
+  void linearize();
+  /// @brief x ← (∇²Π)⁻¹ x, column by column, with the factorization of the last `linearize`
+  /// (held components of x are zeroed first and stay zero).
+  void tangent_solve(Eigen::MatrixXd& x) const;
   [[nodiscard]] const Eigen::VectorXd& displacement() const { return u_; }
   void set_displacement(const Eigen::VectorXd& u);
   [[nodiscard]] Vec3 displacement(int node) const { return u_.segment<3>(3 * node); }
@@ -88,6 +95,8 @@ class ElasticSolid {
  private:
   struct Factor;
   void assemble_hessian(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>& h) const;
+  /// Factorize the tangent at u with held rows and columns as the identity; false if not SPD.
+  bool factorize_tangent(const Eigen::VectorXd& u);
   double elastic_energy(const Eigen::VectorXd& u) const;
 
   mesh::TetMesh mesh_;
@@ -102,6 +111,7 @@ class ElasticSolid {
   std::vector<char> held_;
   Eigen::VectorXd u_;
   std::unique_ptr<Factor> factor_;
+  bool linearized_ = false;  ///< factor_ holds the tangent of the last linearize()
 };
 
 }  // namespace flowire::solid

@@ -1,0 +1,109 @@
+// The wall's compliance between lumen points (solid/src/lumen_compliance.cpp): the nearest
+// lumen point against a search of every face, Maxwell–Betti's reciprocity, and the condensed
+// compliance against a full solve of the same loads.
+#include "flowire/solid/lumen_compliance.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "flowire/common/element.hpp"
+#include "flowire/solid/tube_wall.hpp"
+#include "flowire_test.hpp"
+
+namespace flowire::solid {
+namespace {
+
+constexpr double kA = 2e-3, kB = 2.5e-3, kL = 12e-3;
+
+ElasticSolid supported_tube() {
+  ElasticSolid s{mesh_tube_wall({kA, kB, kL, 0.6e-3, false}), NeoHookean::from_young_poisson(1e6, 0.45)};
+  s.hold(s.mesh().group_named("end_0"));
+  s.hold(s.mesh().group_named("end_1"));
+  s.support(s.mesh().group_named("outer"), 1e8);  // tissue around the vessel
+  return s;
+}
+
+/// Points just inside the lumen at several angles and heights.
+std::vector<Vec3> probe_points() {
+  std::vector<Vec3> x;
+  for (int k = 0; k < 5; ++k) {
+    const double phi = 0.4 + 1.1 * k, r = kA - 0.1e-3, z = kL / 2 + (k - 2) * 1.3e-3;
+    x.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+  }
+  return x;
+}
+
+Vec3 interpolate(const ElasticSolid& s, const LumenPoint& p, const Eigen::VectorXd& u) {
+  double w[6];
+  element::tri_p2({p.bary[1], p.bary[2], 0.0}, w);
+  Vec3 v = Vec3::Zero();
+  for (int a = 0; a < 6; ++a)
+    v += w[a] * u.segment<3>(3 * s.mesh().faces[static_cast<size_t>(p.face)][static_cast<size_t>(a)]);
+  return v;
+}
+
+TEST(LumenCompliance, LocatesTheNearestLumenPointAsASearchOfEveryFaceDoes) {
+  ElasticSolid s = supported_tube();
+  s.linearize();
+  LumenCompliance c(s, s.mesh().group_named("lumen"));
+  for (const Vec3& x : probe_points()) {
+    const LumenPoint p = c.locate(x);
+    double best = 1e300;
+    const auto& m = s.mesh();
+    for (size_t f = 0; f < m.faces.size(); ++f) {
+      if (m.face_group[f] != m.group_named("lumen")) continue;
+      // The distance to the flat triangle, sampled finely: never below the located one.
+      for (int i = 0; i <= 20; ++i)
+        for (int j = 0; i + j <= 20; ++j) {
+          const double b1 = i / 20.0, b2 = j / 20.0;
+          const Vec3 q = (1 - b1 - b2) * m.nodes[static_cast<size_t>(m.faces[f][0])] +
+                         b1 * m.nodes[static_cast<size_t>(m.faces[f][1])] +
+                         b2 * m.nodes[static_cast<size_t>(m.faces[f][2])];
+          best = std::min(best, (q - x).norm());
+        }
+    }
+    EXPECT_LE((p.point - x).norm(), best + 1e-12);
+    EXPECT_NEAR(std::hypot(p.point.x(), p.point.y()), kA, 0.02 * kA);  // a chord of the circle
+    const Vec3 radial(x.x(), x.y(), 0.0);
+    EXPECT_LT(p.normal.dot(radial.normalized()), -0.95);  // out of the solid: towards the axis
+  }
+}
+
+TEST(LumenCompliance, IsReciprocalAndIsTheFullSolvesResponse) {
+  ElasticSolid s = supported_tube();
+  s.linearize();
+  LumenCompliance c(s, s.mesh().group_named("lumen"));
+  std::vector<LumenPoint> points;
+  std::vector<Vec3> directions;
+  for (const Vec3& x : probe_points()) {
+    points.push_back(c.locate(x));
+    directions.push_back(-points.back().normal);  // pushing the wall outwards
+  }
+  const Eigen::MatrixXd compliance = c.compliance(points, directions);
+  const double scale = compliance.cwiseAbs().maxCoeff();
+  EXPECT_LT((compliance - compliance.transpose()).cwiseAbs().maxCoeff(), 1e-9 * scale);  // Maxwell–Betti
+  EXPECT_GT(compliance.selfadjointView<Eigen::Lower>().ldlt().vectorD().minCoeff(), 0.0);
+  EXPECT_GT(c.solved_nodes(), 0);
+  // The same loads through a full (nonlinear) solve: up to 20 µN at a point, which moves the
+  // lumen 0.1 µm, 1e-4 of the wall's thickness, so the response is linear to about 1e-5
+  // (2 mN gives 0.2% of nonlinearity under the loaded node).
+  Eigen::VectorXd lambda(5);
+  lambda << 1e-5, 0.5e-5, 2e-5, 0.0, 1.5e-5;
+  std::vector<Vec3> forces;
+  for (int j = 0; j < 5; ++j) forces.push_back(lambda[j] * directions[static_cast<size_t>(j)]);
+  ElasticSolid full = supported_tube();
+  full.nodal_forces() = c.nodal_forces(points, forces);
+  ASSERT_TRUE(full.solve().converged);
+  const Eigen::VectorXd predicted = compliance * lambda;
+  for (int i = 0; i < 5; ++i) {
+    const Vec3 u = interpolate(full, points[static_cast<size_t>(i)], full.displacement());
+    EXPECT_NEAR(u.dot(directions[static_cast<size_t>(i)]), predicted[i], 1e-3 * predicted.cwiseAbs().maxCoeff()) << i;
+    EXPECT_LT((c.displacement(points[static_cast<size_t>(i)], points, forces) - u).norm(), 1e-3 * u.norm()) << i;
+  }
+}
+
+}  // namespace
+}  // namespace flowire::solid
