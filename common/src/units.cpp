@@ -73,6 +73,10 @@ constexpr std::array kUnits = {
     UnitEntry{"mL/mmHg", Dimension::Compliance, 1e-6 / mmHg},
     UnitEntry{"cm^5/dyn", Dimension::Compliance, 1e-5},
     UnitEntry{"m/s^2", Dimension::Acceleration, 1.0},
+    UnitEntry{"Pa/m", Dimension::SupportStiffness, 1.0},
+    UnitEntry{"N/m^3", Dimension::SupportStiffness, 1.0},
+    UnitEntry{"kPa/mm", Dimension::SupportStiffness, 1e6},
+    UnitEntry{"MPa/m", Dimension::SupportStiffness, 1e6},
 };
 
 std::string_view trim(std::string_view s) {
@@ -127,6 +131,8 @@ std::string_view dimension_name(Dimension d) {
       return "compliance";
     case Dimension::Acceleration:
       return "acceleration";
+    case Dimension::SupportStiffness:
+      return "support stiffness";
   }
   return "?";
 }

@@ -80,13 +80,14 @@ void VesselForces::end_step(const rod::RodView& rod) {
   const int free = std::min(rod.first_clamped_vertex, rod.vertex_count());
   ensure_size(rod.vertex_count());
   drag_law_.end_step(free, stats_);
-  contact_law_.end_step(rod, *wall_, stats_);
+  contact_law_.end_step(rod, *wall_, stats_, contact_force_);
   // The step's wall distances for friction and for the outside check are contact work too.
   stats_.seconds_contact += since(t0);
 }
 
 void VesselForces::remap(const rod::RodView& rod, std::span<const int> source) {
   drag_law_.invalidate();  // another vertex set
+  contact_law_.invalidate_anchors();
   wall_->remap(source, rod.vertex_count());
   where_.remap(rod, source, stats_);
   if (contact_law_.lagged()) end_step(rod);

@@ -177,8 +177,34 @@ const Eigen::MatrixXd& LumenCompliance::column(int node) {
   return columns_.emplace(node, std::move(kept)).first->second;
 }
 
+void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
+  const auto& m = solid_.mesh();
+  std::vector<int> missing;
+  for (const auto& p : points)
+    for (int node : m.faces[static_cast<size_t>(p.face)])
+      if (!columns_.count(node) && std::find(missing.begin(), missing.end(), node) == missing.end())
+        missing.push_back(node);
+  // Many right-hand sides per back-substitution: the supernodal solve then works on blocks.
+  constexpr size_t kBatch = 64;
+  for (size_t first = 0; first < missing.size(); first += kBatch) {
+    const size_t count = std::min(kBatch, missing.size() - first);
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(solid_.num_dofs(), 3 * static_cast<Eigen::Index>(count));
+    for (size_t q = 0; q < count; ++q)
+      for (int c = 0; c < 3; ++c) x(3 * missing[first + q] + c, 3 * static_cast<Eigen::Index>(q) + c) = 1.0;
+    solid_.tangent_solve(x);
+    for (size_t q = 0; q < count; ++q) {
+      Eigen::MatrixXd kept(3 * static_cast<Eigen::Index>(lumen_nodes_.size()), 3);
+      for (size_t a = 0; a < lumen_nodes_.size(); ++a)
+        kept.middleRows<3>(3 * static_cast<Eigen::Index>(a)) =
+            x.block<3, 3>(3 * lumen_nodes_[a], 3 * static_cast<Eigen::Index>(q));
+      columns_.emplace(missing[first + q], std::move(kept));
+    }
+  }
+}
+
 Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
   const auto& m = solid_.mesh();
+  prefetch(points);
   const auto n = static_cast<Eigen::Index>(points.size());
   Eigen::MatrixXd c(n, n);
   for (Eigen::Index j = 0; j < n; ++j) {

@@ -9,22 +9,23 @@ namespace flowire::units {
 
 /// @brief The physical dimension a scene key expects; a unit of another dimension is an error.
 enum class Dimension {
-  None,          ///< dimensionless (no unit allowed except none)
-  Length,        ///< m, cm, mm, um
-  Pressure,      ///< Pa, kPa, mmHg, cmH2O, dyn/cm^2, MPa, GPa
-  Time,          ///< s, ms, us, min
-  Viscosity,     ///< Pa*s, mPa*s, cP, P
-  Density,       ///< kg/m^3, g/cm^3
-  FlowRate,      ///< m^3/s, mL/s, mL/min, L/min
-  Velocity,      ///< m/s, cm/s, mm/s
-  Angle,         ///< rad, deg, turn
-  AngularSpeed,  ///< rad/s, deg/s, turn/s, turns/s, rpm
-  Frequency,     ///< Hz, bpm, 1/s
-  Force,         ///< N, mN, uN
-  Moment,        ///< N*m, N*mm
-  Resistance,    ///< Pa*s/m^3, mmHg*s/mL, dyn*s/cm^5
-  Compliance,    ///< m^3/Pa, mL/mmHg, cm^5/dyn
-  Acceleration,  ///< m/s^2
+  None,              ///< dimensionless (no unit allowed except none)
+  Length,            ///< m, cm, mm, um
+  Pressure,          ///< Pa, kPa, mmHg, cmH2O, dyn/cm^2, MPa, GPa
+  Time,              ///< s, ms, us, min
+  Viscosity,         ///< Pa*s, mPa*s, cP, P
+  Density,           ///< kg/m^3, g/cm^3
+  FlowRate,          ///< m^3/s, mL/s, mL/min, L/min
+  Velocity,          ///< m/s, cm/s, mm/s
+  Angle,             ///< rad, deg, turn
+  AngularSpeed,      ///< rad/s, deg/s, turn/s, turns/s, rpm
+  Frequency,         ///< Hz, bpm, 1/s
+  Force,             ///< N, mN, uN
+  Moment,            ///< N*m, N*mm
+  Resistance,        ///< Pa*s/m^3, mmHg*s/mL, dyn*s/cm^5
+  Compliance,        ///< m^3/Pa, mL/mmHg, cm^5/dyn
+  Acceleration,      ///< m/s^2
+  SupportStiffness,  ///< Pa/m, N/m^3, kPa/mm, MPa/m (an elastic support: traction per displacement)
 };
 
 /// @brief Name of a dimension, for messages ("length", "pressure", ...).

@@ -75,6 +75,9 @@ class VesselForces : public rod::ExternalForce {
   /// blood velocity. Vertices closer than @p entry_margin (arc length) to the entry are not
   /// measured for `outside` (the wire passes the open inlet there).
   void set_surface(const vessels::LumenSurface* surface, double smoothing, double entry_margin = 3e-3);
+  /// @brief A wall that yields to the wire (compliant_wall.hpp; outlives this object): the
+  /// contact meets it where it has moved, and the wall takes the contact forces' opposites.
+  void set_deformable(CompliantWall* wall) { contact_law_.set_deformable(wall); }
   /// @brief The entry as an introducer sheath (WallContact::set_introducer).
   void set_introducer(const vessels::Vec3& p, const vessels::Vec3& t, double reach) {
     contact_law_.set_introducer(p, t, reach);

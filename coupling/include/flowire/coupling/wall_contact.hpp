@@ -7,10 +7,12 @@
 /// introducer sheath, the same penalty on a plane. At the end of each step it records each
 /// vertex's normal force and normal (what the friction of the next step presses with) and how
 /// far outside the lumen the wire went.
+#include <Eigen/Dense>
 #include <limits>
 #include <span>
 #include <vector>
 
+#include "flowire/coupling/compliant_wall.hpp"
 #include "flowire/coupling/interaction.hpp"
 #include "flowire/coupling/wall.hpp"
 #include "flowire/rod/external.hpp"
@@ -33,8 +35,16 @@ class WallContact {
   void evaluate(const rod::RodView& rod, int free, Wall& wall, rod::ForceAccumulator& out, std::span<Vec3> tally,
                 InteractionStats& stats);
   /// @brief At an accepted state: each free vertex's normal force and normal for the next step's
-  /// friction, and the "outside the lumen" record of @p stats.
-  void end_step(const rod::RodView& rod, Wall& wall, InteractionStats& stats);
+  /// friction, and the "outside the lumen" record of @p stats. A deformable wall is loaded with
+  /// the opposites of @p tally (each vertex's wall force, normal and friction).
+  void end_step(const rod::RodView& rod, Wall& wall, InteractionStats& stats, std::span<const Vec3> tally = {});
+  /// @brief Contact against a wall that yields (compliant_wall.hpp; outlives this object);
+  /// null: the rigid wall. The contact then takes the sharp penalty onset.
+  void set_deformable(CompliantWall* wall) {
+    deformable_ = wall;
+    anchors_stale_ = true;
+  }
+  [[nodiscard]] const CompliantWall* deformable() const { return deformable_; }
 
   /// @brief Vertex @p i's normal force [N] and normal: those of the step's start once a step
   /// has ended (lagged, as in IPC), else those of the last evaluation.
@@ -51,6 +61,7 @@ class WallContact {
   [[nodiscard]] bool lagged() const { return lagged_; }
   void save_checkpoint() { checkpoint_ = {lag_normal_force_, lag_normal_, lagged_}; }
   void restore_checkpoint() {
+    anchors_stale_ = true;
     lag_normal_force_ = checkpoint_.normal_force;
     lag_normal_ = checkpoint_.normal;
     lagged_ = checkpoint_.lagged;
@@ -59,13 +70,36 @@ class WallContact {
   [[nodiscard]] const ContactParams& params() const { return params_; }
   /// @brief The wall's normal force on a vertex of radius @p a at wall distance @p d (k φ′) [N].
   [[nodiscard]] double normal_force_at(double d, double a, double cell_weight) const;
+  /// @brief The wire's vertices or its resampling changed: anchor the candidates anew.
+  void invalidate_anchors() { anchors_stale_ = true; }
 
  private:
   void ensure_size(int n);
+  /// The step's candidate contacts with a deformable wall: free vertices within reach of the
+  /// rest wall at the step's first evaluation, anchored at their closest wall points.
+  void anchor_candidates(const rod::RodView& rod, int free, Wall& wall);
+  /// The candidates' normal forces λ = k·max(0, δ − C λ) (active set), applied with their
+  /// energy ½ λᵀ(K⁻¹ + C)λ, the band's part of their stiffness and the coupled rest.
+  void solve_compliant(const rod::RodView& rod, rod::ForceAccumulator& out, std::span<Vec3> tally,
+                       InteractionStats& stats);
+  CompliantWall* deformable_ = nullptr;
+  bool anchors_stale_ = true;
+  struct Candidate {
+    int vertex = -1;
+    double penetration = -1.0;  ///< into the rest wall, d + a [m]; ≤ 0 apart
+    Vec3 normal = Vec3::UnitX();
+    Mat3 hessian = Mat3::Zero();
+    double stiffness = 0.0;  ///< the penalty's k at this vertex [N/m]
+  };
+  std::vector<int> candidate_of_;  ///< (vertices) index into candidates_, −1 if none
+  std::vector<Candidate> candidates_;
+  Eigen::VectorXd lambda_;      ///< (candidates) normal forces at the last evaluation [N]
+  Eigen::VectorXd wall_shift_;  ///< (candidates) the wall's normal displacement there, C λ [m]
   ContactParams params_;
   double wire_radius_;
   std::vector<double> normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
   std::vector<Vec3> normal_, lag_normal_;
+  std::vector<Vec3> intro_force_;  ///< (vertices) the introducer's share of the tally
   bool lagged_ = false;
   struct {
     std::vector<double> normal_force;

@@ -47,6 +47,8 @@ class LumenCompliance {
   Vec3 displacement(const LumenPoint& at, std::span<const LumenPoint> points, std::span<const Vec3> forces);
   /// @brief Nodal forces (3 a node of the solid) of forces @p forces at @p points.
   [[nodiscard]] Eigen::VectorXd nodal_forces(std::span<const LumenPoint> points, std::span<const Vec3> forces) const;
+  /// @brief Solve the columns the faces of @p points still lack, many at a time.
+  void prefetch(std::span<const LumenPoint> points);
   /// @brief Lumen nodes whose columns have been solved so far.
   [[nodiscard]] int solved_nodes() const { return static_cast<int>(columns_.size()); }
   /// @brief Forget the kept columns (after the solid was linearized again).

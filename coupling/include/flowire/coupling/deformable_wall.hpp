@@ -1,0 +1,83 @@
+#pragma once
+/// @file deformable_wall.hpp
+/// @brief The vessel wall as an elastic solid the wire pushes (the scene's `wall:` section).
+///
+/// The wall (solid/: neo-Hookean, 10-node tetrahedra, ends held, an elastic support on its
+/// outer surface) is linearized about its rest state, and its compliance is condensed onto the
+/// lumen points the wire may touch in a step (solid::LumenCompliance). The contact law
+/// (wall_contact.hpp) then solves, at every Newton iterate, for the normal forces λ ≥ 0 of the
+/// step's candidate contacts with the wall's displacement under all of them,
+/// λ = k·max(0, δ − C λ), δ the penetration into the rest wall: the wire meets the wall where
+/// the wall has moved to, implicitly, and the rod's Newton gets the coupled stiffness
+/// (K⁻¹ + C)⁻¹ of the contacts exactly (a low-rank term off its band). At the end of a step
+/// the wire's contact forces, normal and friction, load the wall with their opposites (Newton's
+/// third law) and the wall's displacement field is solved for the outputs.
+/// This version builds the wall of a straight vessel of one radius; the contact sees the
+/// wall's displacement along its normal (the wall's tangential motion is not seen).
+#include <Eigen/Dense>
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "flowire/coupling/compliant_wall.hpp"
+#include "flowire/coupling/interaction.hpp"
+#include "flowire/mesh/tet_mesh.hpp"
+
+namespace flowire::solid {
+class ElasticSolid;
+class LumenCompliance;
+struct LumenPoint;
+}  // namespace flowire::solid
+
+namespace flowire::coupling {
+
+/// @brief The wall's material, size and support.
+struct WallSpec {
+  double thickness = 0.0;       ///< [m]
+  double youngs_modulus = 0.0;  ///< [Pa]
+  double poisson_ratio = 0.45;
+  double support = 0.0;    ///< elastic support of the outer surface [Pa/m]
+  double mesh_size = 0.0;  ///< target tetrahedron size [m]
+};
+
+class DeformableWall final : public CompliantWall {
+ public:
+  /// @brief The wall of the straight vessel from @p p0 to @p p1 of lumen radius @p radius.
+  /// @throws flowire::Error (usage) for a non-positive size or modulus, a ratio ν ∉ (−1, 0.5)
+  DeformableWall(const Vec3& p0, const Vec3& p1, double radius, const WallSpec& spec);
+  ~DeformableWall() override;
+  DeformableWall(const DeformableWall&) = delete;
+  DeformableWall& operator=(const DeformableWall&) = delete;
+
+  /// @brief The step's candidate contacts: their points on the rest lumen (the wall's closest
+  /// points) and the lumen's outward normals there. Computes their compliance along the normals.
+  void anchor(std::span<const Vec3> points, std::span<const Vec3> normals) override;
+  /// @brief C (m × m) of the anchored points [m/N].
+  [[nodiscard]] const Eigen::MatrixXd& compliance() const override { return compliance_; }
+  /// @brief The wall under forces @p forces at lumen points @p points (the wire's contact forces'
+  /// opposites): its displacement field, largest displacement and total load.
+  void load(std::span<const Vec3> points, std::span<const Vec3> forces) override;
+  /// @brief The solid's mesh in the scene's frame, and its displacement (3 a node) [m].
+  [[nodiscard]] const mesh::TetMesh& mesh() const;
+  [[nodiscard]] const Eigen::VectorXd& displacement() const { return displacement_; }
+  [[nodiscard]] double max_displacement() const { return max_displacement_; }
+  [[nodiscard]] double max_displacement_ever() const override { return max_ever_; }
+  /// @brief Sum of the forces on the wall at the last load [N].
+  [[nodiscard]] const Vec3& load_total() const { return load_total_; }
+  /// @brief Lumen nodes whose compliance columns were solved, and the seconds spent on the
+  /// wall (mesh, factorization, columns, loads).
+  [[nodiscard]] int compliance_columns() const;
+  [[nodiscard]] double seconds() const { return seconds_; }
+  [[nodiscard]] double mesh_seconds() const { return mesh_seconds_; }
+
+ private:
+  std::unique_ptr<solid::ElasticSolid> solid_;
+  std::unique_ptr<solid::LumenCompliance> lumen_;
+  Eigen::MatrixXd compliance_;
+  Eigen::VectorXd displacement_;
+  Vec3 load_total_ = Vec3::Zero();
+  double max_displacement_ = 0.0, max_ever_ = 0.0, seconds_ = 0.0, mesh_seconds_ = 0.0;
+};
+
+}  // namespace flowire::coupling

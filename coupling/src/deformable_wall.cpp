@@ -1,0 +1,79 @@
+// The straight vessel's wall as an elastic solid: meshed along z by solid::mesh_tube_wall and
+// turned into the vessel's frame, ends held, supported outside, linearized at rest; the step's
+// contacts anchored on its lumen and their compliance condensed; loaded at the end of a step.
+#include "flowire/coupling/deformable_wall.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+
+#include "flowire/common/error.hpp"
+#include "flowire/solid/elastic_solid.hpp"
+#include "flowire/solid/lumen_compliance.hpp"
+#include "flowire/solid/tube_wall.hpp"
+
+namespace flowire::coupling {
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+DeformableWall::DeformableWall(const Vec3& p0, const Vec3& p1, double radius, const WallSpec& spec) {
+  const auto t0 = Clock::now();
+  const solid::NeoHookean law = solid::NeoHookean::from_young_poisson(spec.youngs_modulus, spec.poisson_ratio,
+                                                                      "wall.youngs_modulus / wall.poisson_ratio");
+  if (!(spec.thickness > 0.0)) throw_usage_error(fmt::format("wall.thickness: must be > 0, got {} m", spec.thickness));
+  if (!(spec.mesh_size > 0.0)) throw_usage_error(fmt::format("wall.mesh_size: must be > 0, got {} m", spec.mesh_size));
+  if (!(spec.support >= 0.0)) throw_usage_error(fmt::format("wall.support: must be >= 0, got {} Pa/m", spec.support));
+  const Vec3 axis = p1 - p0;
+  mesh::TetMesh m = solid::mesh_tube_wall({radius, radius + spec.thickness, axis.norm(), spec.mesh_size, false});
+  // Along z from the origin → from p0 along the vessel.
+  const Eigen::Matrix3d rotation =
+      Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), axis.normalized()).toRotationMatrix();
+  for (Vec3& x : m.nodes) x = p0 + rotation * x;
+  mesh_seconds_ = m.mesh_seconds;
+  solid_ = std::make_unique<solid::ElasticSolid>(std::move(m), law);
+  solid_->hold(solid_->mesh().group_named("end_0"));
+  solid_->hold(solid_->mesh().group_named("end_1"));
+  if (spec.support > 0.0) solid_->support(solid_->mesh().group_named("outer"), spec.support);
+  solid_->linearize();
+  lumen_ = std::make_unique<solid::LumenCompliance>(*solid_, solid_->mesh().group_named("lumen"));
+  displacement_ = Eigen::VectorXd::Zero(solid_->num_dofs());
+  seconds_ += since(t0);
+}
+
+DeformableWall::~DeformableWall() = default;
+
+const mesh::TetMesh& DeformableWall::mesh() const { return solid_->mesh(); }
+
+int DeformableWall::compliance_columns() const { return lumen_->solved_nodes(); }
+
+void DeformableWall::anchor(std::span<const Vec3> points, std::span<const Vec3> normals) {
+  const auto t0 = Clock::now();
+  std::vector<solid::LumenPoint> at;
+  at.reserve(points.size());
+  for (const Vec3& p : points) at.push_back(lumen_->locate(p));
+  compliance_ = lumen_->compliance(at, normals);
+  seconds_ += since(t0);
+}
+
+void DeformableWall::load(std::span<const Vec3> points, std::span<const Vec3> forces) {
+  const auto t0 = Clock::now();
+  std::vector<solid::LumenPoint> at;
+  at.reserve(points.size());
+  load_total_.setZero();
+  for (size_t j = 0; j < points.size(); ++j) {
+    at.push_back(lumen_->locate(points[j]));
+    load_total_ += forces[j];
+  }
+  Eigen::MatrixXd u = lumen_->nodal_forces(at, forces);
+  solid_->tangent_solve(u);
+  displacement_ = u.col(0);
+  max_displacement_ = 0.0;
+  for (int n = 0; n < solid_->mesh().num_nodes(); ++n)
+    max_displacement_ = std::max(max_displacement_, displacement_.segment<3>(3 * n).norm());
+  max_ever_ = std::max(max_ever_, max_displacement_);
+  seconds_ += since(t0);
+}
+
+}  // namespace flowire::coupling

@@ -1,0 +1,199 @@
+// A wire pressed against a wall that yields (coupling/src/deformable_wall.cpp and the
+// compliant branch of wall_contact.cpp): the static equilibrium of a cantilevered wire pushed
+// by a tip load onto the wall of a straight vessel, against the same wire on the rigid wall,
+// against a full (nonlinear) solve of the wall under the wire's final forces, and in the limit
+// of a stiff wall; the forces on the wall are the opposites of those on the wire.
+#include "flowire/coupling/deformable_wall.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "flowire/common/element.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/coupling/vessel_forces.hpp"
+#include "flowire/rod/simulator.hpp"
+#include "flowire/solid/elastic_solid.hpp"
+#include "flowire/solid/lumen_compliance.hpp"
+#include "flowire/solid/tube_wall.hpp"
+#include "flowire/vessels/generators.hpp"
+#include "flowire_test.hpp"
+
+namespace flowire::coupling {
+namespace {
+
+constexpr double kR = 2e-3, kLength = 30e-3, kThickness = 0.5e-3;
+
+struct Pressed {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> contact_force;  ///< the wall's force on each vertex
+  bool converged = false;
+  int newton = 0;
+};
+
+/// The wire along the axis from x = 3 mm, 25 mm long, a 50 mN tip load towards +y: without a
+/// wall its tip would move 3.5 mm sideways, the lumen leaves it 1.8 mm.
+/// With @p lying, the wire clamped 0.1 mm from the wall and a body load of 10 N/m towards it
+/// instead (gravity ×1000): it lies along the wall with many contacts, each moving the wall
+/// under the others.
+Pressed press(const vessels::Network& net, CompliantWall* wall, bool lying = false) {
+  rod::WireSpec spec;
+  spec.length = 25e-3;
+  spec.radius = 0.2e-3;
+  spec.youngs_modulus = 60e9;
+  spec.segments = 50;
+  spec.inserted_length = spec.length;
+  spec.tip.length = 0.0;
+  spec.base_position = Vec3(28e-3, lying ? kR - 0.3e-3 : 0.0, 0);
+  spec.base_direction = -Vec3::UnitX();  // fed in from x = 28 mm towards x = 3 mm
+  spec.base_normal = Vec3::UnitZ();
+  rod::RodSimulator sim(spec);
+  auto index = std::make_shared<vessels::SpatialIndex>(net, 4);
+  ContactParams contact;
+  contact.stiffness = 3e4;
+  contact.friction = 0.0;
+  contact.tip_friction = 0.0;
+  DragModel drag;
+  drag.law = DragLaw::None;
+  auto forces = std::make_shared<VesselForces>(*index, spec.radius, contact, drag);
+  if (wall) forces->set_deformable(wall);
+  sim.add_external(forces);
+  if (lying) {
+    sim.set_gravity({0.0, 9810.0, 0.0});
+  } else {
+    sim.set_tip_force({0.0, 0.05, 0.0});
+  }
+  const rod::StepReport rep = sim.solve_static();
+  Pressed p;
+  p.converged = rep.converged();
+  p.newton = rep.newton_iterations;
+  p.positions.assign(sim.positions().begin(), sim.positions().end());
+  p.contact_force = forces->contact_force();
+  p.contact_force.resize(p.positions.size(), Vec3::Zero());
+  return p;
+}
+
+vessels::Network tube() {
+  return vessels::Network::build(vessels::straight_tube({.length = kLength, .radius = kR}),
+                                 {.max_segment_length = 1e-3});
+}
+
+WallSpec soft_wall(double E) { return {kThickness, E, 0.45, 0.0, 1e-3}; }
+
+double tip_offset(const Pressed& p) { return p.positions.front().y(); }
+
+TEST(DeformableWall, TheWirePushesTheWallOutAndTheWallPushesBack) {
+  const vessels::Network net = tube();
+  const Pressed rigid = press(net, nullptr);
+  DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, soft_wall(0.5e6));
+  const Pressed soft = press(net, &wall);
+  ASSERT_TRUE(rigid.converged);
+  ASSERT_TRUE(soft.converged);
+  std::printf("wall: %d nodes, %d tets, %d compliance columns, %.2f s (mesh %.2f s)\n", wall.mesh().num_nodes(),
+              wall.mesh().num_tets(), wall.compliance_columns(), wall.seconds(), wall.mesh_seconds());
+  std::printf("tip offset: rigid wall %.4f mm, 0.5 MPa wall %.4f mm; wall displaced %.4f mm; Newton %d vs %d\n",
+              tip_offset(rigid) * 1e3, tip_offset(soft) * 1e3, wall.max_displacement() * 1e3, rigid.newton,
+              soft.newton);
+  // The rigid lumen stops the tip at R − a (less the penalty's sink).
+  EXPECT_NEAR(tip_offset(rigid), kR - 0.2e-3, 0.1e-3);
+  // The soft wall lets it go farther, by about what the wall moved.
+  EXPECT_GT(tip_offset(soft), tip_offset(rigid) + 0.5 * wall.max_displacement());
+  EXPECT_GT(wall.max_displacement(), 20e-6);
+  // Newton's third law: the wall carries the opposite of every wall force on the wire.
+  Vec3 on_wire = Vec3::Zero();
+  for (const Vec3& f : soft.contact_force) on_wire += f;
+  EXPECT_LT((wall.load_total() + on_wire).norm(), 1e-12 + 1e-9 * on_wire.norm());
+  EXPECT_GT(on_wire.norm(), 0.01);
+}
+
+class DeformableWallAgainstFullSolve : public ::testing::TestWithParam<bool> {};
+
+TEST_P(DeformableWallAgainstFullSolve, TheContactsWallIsTheFullSolidsUnderTheWiresForces) {
+  // The contact assumes the wall's linear response condensed onto its contacts; solve the
+  // wall again, in full and nonlinear, under the opposites of the wire's final forces, and
+  // compare where the lumen went under each contact vertex. The tip pressing (one contact),
+  // and the wire lying along the wall (many, coupled through the wall).
+  const vessels::Network net = tube();
+  const WallSpec spec = soft_wall(2e6);
+  DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, spec);
+  const Pressed soft = press(net, &wall, GetParam());
+  ASSERT_TRUE(soft.converged);
+  solid::ElasticSolid full(wall.mesh(), solid::NeoHookean::from_young_poisson(spec.youngs_modulus, spec.poisson_ratio));
+  full.hold(full.mesh().group_named("end_0"));
+  full.hold(full.mesh().group_named("end_1"));
+  full.linearize();
+  solid::LumenCompliance lumen(full, full.mesh().group_named("lumen"));
+  std::vector<solid::LumenPoint> points;
+  std::vector<Vec3> loads;
+  std::vector<double> expected;  // the wall's radial displacement the contact assumed
+  for (size_t i = 0; i < soft.positions.size(); ++i) {
+    if (soft.contact_force[i].norm() == 0.0) continue;
+    const Vec3& x = soft.positions[i];
+    const double r = std::hypot(x.y(), x.z());
+    const Vec3 radial(0.0, x.y() / r, x.z() / r);
+    points.push_back(lumen.locate(Vec3(x.x(), kR * radial.y(), kR * radial.z())));
+    loads.push_back(-soft.contact_force[i]);
+    // penetration into the rest wall = the penalty's sink λ/k + the wall's displacement w
+    expected.push_back(r + 0.2e-3 - kR - soft.contact_force[i].norm() / 3e4);
+  }
+  ASSERT_FALSE(points.empty());
+  // The same wall linear (what the contact condenses) and nonlinear (neo-Hookean, large
+  // displacements): the first checks the condensation, the second what linearizing costs.
+  Eigen::MatrixXd linear = lumen.nodal_forces(points, loads);
+  full.tangent_solve(linear);
+  full.nodal_forces() = lumen.nodal_forces(points, loads);
+  ASSERT_TRUE(full.solve().converged);
+  auto radial_at = [&](const solid::LumenPoint& p, const Eigen::VectorXd& u_all) {
+    double w[6];
+    element::tri_p2({p.bary[1], p.bary[2], 0.0}, w);
+    Vec3 u = Vec3::Zero();
+    for (int a = 0; a < 6; ++a)
+      u += w[a] * u_all.segment<3>(3 * full.mesh().faces[static_cast<size_t>(p.face)][static_cast<size_t>(a)]);
+    return -u.dot(p.normal);  // outwards
+  };
+  double worst_linear = 0.0, worst_nonlinear = 0.0, largest = 0.0;
+  for (size_t j = 0; j < points.size(); ++j) {
+    worst_linear = std::max(worst_linear, std::abs(radial_at(points[j], linear.col(0)) - expected[j]));
+    worst_nonlinear = std::max(worst_nonlinear, std::abs(radial_at(points[j], full.displacement()) - expected[j]));
+    largest = std::max(largest, std::abs(expected[j]));
+  }
+  std::printf(
+      "%zu contacts: wall displacement assumed by the contact up to %.4g mm; the full linear solve differs "
+      "by %.3g mm, the nonlinear one by %.3g mm\n",
+      points.size(), largest * 1e3, worst_linear * 1e3, worst_nonlinear * 1e3);
+  // One concentrated contact (the tip) reads the compliance where the contact was anchored,
+  // which the tip has slid from within the solve: a point load's compliance varies within a
+  // face, so 5% there; many contacts spread the load and agree to 1%.
+  EXPECT_LT(worst_linear, (GetParam() ? 0.01 : 0.05) * largest);
+  EXPECT_LT(worst_nonlinear, 0.1 * largest);  // displacements of half the wall's thickness
+  if (GetParam()) EXPECT_GT(points.size(), 10u);
+}
+
+INSTANTIATE_TEST_SUITE_P(TipOrLying, DeformableWallAgainstFullSolve, ::testing::Values(false, true));
+
+TEST(DeformableWall, AStiffWallIsTheRigidWall) {
+  const vessels::Network net = tube();
+  const Pressed rigid = press(net, nullptr);
+  DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, soft_wall(1e12));
+  const Pressed stiff = press(net, &wall);
+  ASSERT_TRUE(stiff.converged);
+  double worst = 0.0;
+  for (size_t i = 0; i < rigid.positions.size(); ++i)
+    worst = std::max(worst, (rigid.positions[i] - stiff.positions[i]).norm());
+  EXPECT_LT(worst, 1e-7);
+}
+
+TEST(DeformableWall, RefusesAWallThatCannotBe) {
+  auto build = [](double thickness, double E, double nu, double support) {
+    const WallSpec spec{thickness, E, nu, support, 0.5e-3};
+    DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, spec);
+  };
+  EXPECT_THROW(build(0.0, 1e6, 0.45, 0.0), Error);
+  EXPECT_THROW(build(kThickness, -1e6, 0.45, 0.0), Error);
+  EXPECT_THROW(build(kThickness, 1e6, 0.5, 0.0), Error);
+  EXPECT_THROW(build(kThickness, 1e6, 0.45, -1.0), Error);
+}
+
+}  // namespace
+}  // namespace flowire::coupling
