@@ -164,6 +164,16 @@ void CoSimulation::add_wall_forces(const rod::WireSpec& spec, int entry, nlohman
     info = surface_info_;
     wall_smoothing = surface_smoothing_;
     if (surface_) forces_->set_surface(surface_.get(), wall_smoothing), s["surface"] = info;
+    wall_ = make_scene_wall(c, *net_, s);
+    if (wall_) {
+      if (surface_)
+        throw_input_error(c.where("wall"),
+                          "a deformable wall is built around the network's vessel, not yet around "
+                          "vessels.surface");
+      if (!forces_->contact().enabled)
+        throw_input_error(c.where("wall"), "a deformable wall needs the wall contact (contact.enabled: true)");
+      forces_->set_deformable(wall_.get());
+    }
     introduce(*forces_);
     sim_->add_external(forces_);
   }

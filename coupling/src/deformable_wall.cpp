@@ -6,8 +6,10 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <ostream>
 
 #include "flowire/common/error.hpp"
+#include "flowire/common/output.hpp"
 #include "flowire/solid/elastic_solid.hpp"
 #include "flowire/solid/lumen_compliance.hpp"
 #include "flowire/solid/tube_wall.hpp"
@@ -39,6 +41,7 @@ DeformableWall::DeformableWall(const Vec3& p0, const Vec3& p1, double radius, co
   solid_->linearize();
   lumen_ = std::make_unique<solid::LumenCompliance>(*solid_, solid_->mesh().group_named("lumen"));
   displacement_ = Eigen::VectorXd::Zero(solid_->num_dofs());
+  load_ = displacement_;
   seconds_ += since(t0);
 }
 
@@ -66,14 +69,69 @@ void DeformableWall::load(std::span<const Vec3> points, std::span<const Vec3> fo
     at.push_back(lumen_->locate(points[j]));
     load_total_ += forces[j];
   }
-  Eigen::MatrixXd u = lumen_->nodal_forces(at, forces);
+  load_ = lumen_->nodal_forces(at, forces);
+  field_current_ = false;
+  seconds_ += since(t0);
+}
+
+void DeformableWall::solve_field() const {
+  if (field_current_) return;
+  const auto t0 = Clock::now();
+  Eigen::MatrixXd u = load_;
   solid_->tangent_solve(u);
   displacement_ = u.col(0);
   max_displacement_ = 0.0;
   for (int n = 0; n < solid_->mesh().num_nodes(); ++n)
     max_displacement_ = std::max(max_displacement_, displacement_.segment<3>(3 * n).norm());
   max_ever_ = std::max(max_ever_, max_displacement_);
+  field_current_ = true;
   seconds_ += since(t0);
+}
+
+const Eigen::VectorXd& DeformableWall::displacement() const {
+  solve_field();
+  return displacement_;
+}
+
+double DeformableWall::max_displacement() const {
+  solve_field();
+  return max_displacement_;
+}
+
+nlohmann::json DeformableWall::summary() const {
+  solve_field();
+  return {{"max_displacement", max_ever_},  // over the output frames and the end
+          {"final_max_displacement", max_displacement_},
+          {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
+          {"compliance_columns", compliance_columns()},
+          {"seconds", seconds_}};
+}
+
+void DeformableWall::write_vtu(const std::filesystem::path& path, const Eigen::VectorXd& state) const {
+  const mesh::TetMesh& m = mesh();
+  write_stream_atomically(path, [&](std::ostream& f) {
+    f.precision(10);
+    f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << m.nodes.size() << "\" NumberOfCells=\"" << m.tets.size()
+      << "\">\n<PointData Vectors=\"displacement\" Scalars=\"displacement_magnitude\">\n"
+      << "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (int n = 0; n < m.num_nodes(); ++n)
+      f << state[3 * n] << ' ' << state[3 * n + 1] << ' ' << state[3 * n + 2] << '\n';
+    f << "</DataArray>\n<DataArray type=\"Float64\" Name=\"displacement_magnitude\" format=\"ascii\">\n";
+    for (int n = 0; n < m.num_nodes(); ++n) f << state.segment<3>(3 * n).norm() << '\n';
+    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+         "format=\"ascii\">\n";
+    for (const Vec3& x : m.nodes) f << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+    f << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+    // VTK_QUADRATIC_TETRA's edge order, (0,1), (1,2), (0,2), (0,3), (1,3), (2,3), is ours.
+    for (const auto& t : m.tets)
+      for (int k = 0; k < 10; ++k) f << t[static_cast<size_t>(k)] << (k == 9 ? '\n' : ' ');
+    f << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+    for (size_t e = 0; e < m.tets.size(); ++e) f << 10 * (e + 1) << '\n';
+    f << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (size_t e = 0; e < m.tets.size(); ++e) f << "24\n";
+    f << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+  });
 }
 
 }  // namespace flowire::coupling

@@ -20,6 +20,7 @@
 #include "flowire/coupling/schedule.hpp"
 #include "flowire/coupling/tip_forces.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
+#include "flowire/coupling/wire_output.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/rod/simulator.hpp"
 #include "flowire/vessels/io.hpp"
@@ -165,6 +166,7 @@ void RunRecorder::record(double t) {
     f.time = t;
     catheter_->add_frame(f);
   }
+  if (cosim_.wall() && vtk_) wall_frames_.emplace_back(t, cosim_.wall()->state());
   seconds_ += seconds_since(t0);
 }
 
@@ -195,6 +197,16 @@ void RunRecorder::finish(bool series) {
   if (c_.boolean("output.png") && net) render_pictures(c_, *net, fsolver, sim, cosim_.catheter(), out_);
   if (wire_) wire_->finish();
   if (catheter_) catheter_->finish();
+  if (cosim_.wall() && !wall_frames_.empty()) {
+    // wall.pvd: the wall's displacement at every output frame (warp by `displacement`).
+    std::vector<std::pair<double, std::string>> files;
+    for (size_t k = 0; k < wall_frames_.size(); ++k) {
+      const std::string name = fmt::format("wall_{:05d}.vtu", k);
+      cosim_.wall()->write_vtu(out_ / name, wall_frames_[k].second);
+      files.emplace_back(wall_frames_[k].first, name);
+    }
+    write_pvd(out_ / "wall.pvd", files);
+  }
   if (net && !fsolver && csv_) {
     // Without flow: the network's geometry in the same columns, the flow columns empty.
     std::string csv =
@@ -249,6 +261,7 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
     calls["rod_steps"] = sim ? sim->solver_totals().steps : 0;
     calls["catheter_steps"] = cosim.catheter() ? cosim.catheter()->solver_totals().steps : 0;
   }
+  if (cosim.wall()) s["wall"].update(cosim.wall()->summary());
   if (sim) {
     s["wire"] = {{"vertices", sim->vertex_count()},
                  {"inserted_length", sim->inserted_length()},

@@ -37,6 +37,7 @@ class RunRecorder {
   bool csv_ = false, vtk_ = false;
   std::vector<flow::FlowFrame> flow_frames_;
   std::optional<WireOutput> wire_, catheter_;
+  std::vector<std::pair<double, Eigen::VectorXd>> wall_frames_;  ///< (time, the wall's state) per frame
   double seconds_ = 0.0;
 };
 

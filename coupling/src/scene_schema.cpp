@@ -30,6 +30,7 @@ config::Schema make_schema() {
   declare_coupling_keys(s);
   declare_solve_keys(s);
   declare_fem_keys(s);
+  declare_wall_keys(s);
   declare_output_keys(s);
   return s;
 }

@@ -21,6 +21,7 @@
 #include <string_view>
 
 #include "flowire/common/config.hpp"
+#include "flowire/coupling/compliant_wall.hpp"
 #include "flowire/coupling/drag.hpp"
 #include "flowire/coupling/schedule.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
@@ -135,6 +136,14 @@ void check_fem(const config::Config& scene, const flow::FlowSolver* flow, const 
                                      const flow::FlowSolver& flow, const std::filesystem::path& out);
 /// @brief The DFG benchmark 3D-1Z (fem.geometry: dfg_3d_1z).
 [[nodiscard]] nlohmann::json run_fem_geometry(const config::Config& scene, const std::filesystem::path& out);
+
+// ---- wall: (config_wall.cpp)
+void declare_wall_keys(config::Schema& schema);
+/// @brief The vessel wall as an elastic solid (wall:), null without the section.
+/// @throws flowire::Error (input) naming the key at fault, or the vessels where the network is
+/// not one straight vessel of one radius; (input) without gmsh in the build.
+[[nodiscard]] std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& scene, const vessels::Network& net,
+                                                             nlohmann::json& facts);
 
 // ---- output: (run_output.cpp)
 void declare_output_keys(config::Schema& schema);

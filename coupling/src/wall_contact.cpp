@@ -97,10 +97,10 @@ void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wal
   candidate_of_.assign(static_cast<size_t>(rod.vertex_count()), -1);
   candidates_.clear();
   std::vector<Vec3> points, normals;
-  // Within reach: four wire radii, the wall's largest displacement so far twice, and 1 mm of
+  // Within reach: four wire radii, the wall's largest displacement at a contact so far twice, and 1 mm of
   // motion within the step (a vertex that comes into contact from farther during a solve
   // meets the rest wall there, and the candidates are anchored again at the next evaluation).
-  const double reach = 4.0 * wire_radius_ + 2.0 * deformable_->max_displacement_ever() + 1e-3;
+  const double reach = 4.0 * wire_radius_ + 2.0 * max_shift_ + 1e-3;
   for (int i = 0; i < free; ++i) {
     const double a = rod.vertex_radius(i, wire_radius_);
     double d = 0.0;
@@ -242,6 +242,7 @@ void WallContact::end_step(const rod::RodView& rod, Wall& wall, InteractionStats
     stats.max_penetration = std::max(stats.max_penetration, d + a);
   }
   if (deformable_) {
+    if (wall_shift_.size() > 0) max_shift_ = std::max(max_shift_, wall_shift_.maxCoeff());
     deformable_->load(wall_points, wall_forces);
     anchors_stale_ = true;
   }

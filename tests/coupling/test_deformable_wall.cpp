@@ -167,7 +167,9 @@ TEST_P(DeformableWallAgainstFullSolve, TheContactsWallIsTheFullSolidsUnderTheWir
   // face, so 5% there; many contacts spread the load and agree to 1%.
   EXPECT_LT(worst_linear, (GetParam() ? 0.01 : 0.05) * largest);
   EXPECT_LT(worst_nonlinear, 0.1 * largest);  // displacements of half the wall's thickness
-  if (GetParam()) EXPECT_GT(points.size(), 10u);
+  if (GetParam()) {
+    EXPECT_GT(points.size(), 10u);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(TipOrLying, DeformableWallAgainstFullSolve, ::testing::Values(false, true));

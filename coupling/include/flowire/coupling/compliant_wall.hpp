@@ -5,6 +5,8 @@
 /// Implemented by DeformableWall (deformable_wall.hpp: an elastic solid, built with gmsh).
 #include <Eigen/Dense>
 
+#include <filesystem>
+#include <nlohmann/json.hpp>
 #include <span>
 
 #include "flowire/coupling/interaction.hpp"
@@ -20,10 +22,14 @@ class CompliantWall {
   /// @brief C (m × m) of the anchored points [m/N]: symmetric positive definite.
   [[nodiscard]] virtual const Eigen::MatrixXd& compliance() const = 0;
   /// @brief The wall under forces @p forces at lumen points @p points (the opposites of the
-  /// wire's contact forces) at the end of a step.
+  /// wire's contact forces) at the end of a step (its displacement field is solved when asked).
   virtual void load(std::span<const Vec3> points, std::span<const Vec3> forces) = 0;
-  /// @brief The largest displacement of the wall so far [m] (sizes the candidates' reach).
-  [[nodiscard]] virtual double max_displacement_ever() const = 0;
+  /// @brief What a run reports of the wall (summary.json's `wall`).
+  [[nodiscard]] virtual nlohmann::json summary() const = 0;
+  /// @brief The wall's state now (its displacement field), for an output frame.
+  [[nodiscard]] virtual Eigen::VectorXd state() const = 0;
+  /// @brief Write the wall in state @p state (from state()) as a VTK unstructured grid.
+  virtual void write_vtu(const std::filesystem::path& path, const Eigen::VectorXd& state) const = 0;
 };
 
 }  // namespace flowire::coupling

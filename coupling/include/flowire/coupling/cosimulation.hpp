@@ -22,6 +22,7 @@
 
 #include "flowire/common/config.hpp"
 #include "flowire/coupling/catheter.hpp"
+#include "flowire/coupling/compliant_wall.hpp"
 #include "flowire/coupling/schedule.hpp"
 #include "flowire/coupling/wire_output.hpp"
 #include "flowire/rod/simulator.hpp"
@@ -117,6 +118,8 @@ class CoSimulation {
   [[nodiscard]] WireFrame catheter_frame() const;
   /// @brief The wire–catheter lumen contact, null without a catheter.
   [[nodiscard]] const LumenContact* lumen_contact() const { return lumen_.get(); }
+  /// @brief The deformable vessel wall (wall:), null without.
+  [[nodiscard]] const CompliantWall* wall() const { return wall_.get(); }
   /// @brief Catheter steps that did not converge; coupled static solves that did not.
   [[nodiscard]] int catheter_unconverged_steps() const { return cath_failures_; }
   /// @brief The last coupled static solve of wire and catheter (sweeps, imbalance).
@@ -152,6 +155,7 @@ class CoSimulation {
   nlohmann::json surface_info_;                     // what reading it found (summary.json)
   double surface_smoothing_ = 0.0;
   std::shared_ptr<VesselForces> forces_;
+  std::unique_ptr<CompliantWall> wall_;  // wall:, null without
   std::shared_ptr<TipForces> tip_forces_;
   std::unique_ptr<WireOcclusion> occlusion_;
   // catheter: (catheter.hpp): its rod, wall forces and the contact with the wire in its lumen

@@ -58,11 +58,13 @@ class DeformableWall final : public CompliantWall {
   /// @brief The wall under forces @p forces at lumen points @p points (the wire's contact forces'
   /// opposites): its displacement field, largest displacement and total load.
   void load(std::span<const Vec3> points, std::span<const Vec3> forces) override;
-  /// @brief The solid's mesh in the scene's frame, and its displacement (3 a node) [m].
+  /// @brief The solid's mesh in the scene's frame, and its displacement (3 a node) [m] under
+  /// the last load (solved on first request after a load: one back-substitution).
   [[nodiscard]] const mesh::TetMesh& mesh() const;
-  [[nodiscard]] const Eigen::VectorXd& displacement() const { return displacement_; }
-  [[nodiscard]] double max_displacement() const { return max_displacement_; }
-  [[nodiscard]] double max_displacement_ever() const override { return max_ever_; }
+  [[nodiscard]] const Eigen::VectorXd& displacement() const;
+  [[nodiscard]] double max_displacement() const;
+  /// @brief The largest displacement over the states solved so far [m].
+  [[nodiscard]] double max_displacement_solved() const { return max_ever_; }
   /// @brief Sum of the forces on the wall at the last load [N].
   [[nodiscard]] const Vec3& load_total() const { return load_total_; }
   /// @brief Lumen nodes whose compliance columns were solved, and the seconds spent on the
@@ -70,14 +72,25 @@ class DeformableWall final : public CompliantWall {
   [[nodiscard]] int compliance_columns() const;
   [[nodiscard]] double seconds() const { return seconds_; }
   [[nodiscard]] double mesh_seconds() const { return mesh_seconds_; }
+  /// @brief Largest displacement, ever and now, the load now, columns solved, seconds.
+  [[nodiscard]] nlohmann::json summary() const override;
+  [[nodiscard]] Eigen::VectorXd state() const override { return displacement(); }
+  /// @brief The 10-node tetrahedra (VTK_QUADRATIC_TETRA) with point data `displacement` [m]
+  /// and `displacement_magnitude` [m]; warp by the vector to see the deformed wall.
+  void write_vtu(const std::filesystem::path& path, const Eigen::VectorXd& state) const override;
 
  private:
   std::unique_ptr<solid::ElasticSolid> solid_;
   std::unique_ptr<solid::LumenCompliance> lumen_;
   Eigen::MatrixXd compliance_;
-  Eigen::VectorXd displacement_;
+  /// Solve the displacement field of the last load if not yet done.
+  void solve_field() const;
+  Eigen::VectorXd load_;  ///< nodal forces of the last load
+  mutable Eigen::VectorXd displacement_;
+  mutable bool field_current_ = true;
   Vec3 load_total_ = Vec3::Zero();
-  double max_displacement_ = 0.0, max_ever_ = 0.0, seconds_ = 0.0, mesh_seconds_ = 0.0;
+  mutable double max_displacement_ = 0.0, max_ever_ = 0.0, seconds_ = 0.0;
+  double mesh_seconds_ = 0.0;
 };
 
 }  // namespace flowire::coupling

@@ -95,6 +95,7 @@ class WallContact {
   std::vector<Candidate> candidates_;
   Eigen::VectorXd lambda_;      ///< (candidates) normal forces at the last evaluation [N]
   Eigen::VectorXd wall_shift_;  ///< (candidates) the wall's normal displacement there, C λ [m]
+  double max_shift_ = 0.0;      ///< the largest such displacement at an accepted state [m]
   ContactParams params_;
   double wire_radius_;
   std::vector<double> normal_force_, lag_normal_force_;  ///< (vertices) at this evaluation / step start
