@@ -6,10 +6,9 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <ostream>
 
 #include "flowire/common/error.hpp"
-#include "flowire/common/output.hpp"
+#include "flowire/mesh/vtu.hpp"
 #include "flowire/solid/elastic_solid.hpp"
 #include "flowire/solid/lumen_compliance.hpp"
 #include "flowire/solid/tube_wall.hpp"
@@ -108,30 +107,11 @@ nlohmann::json DeformableWall::summary() const {
 }
 
 void DeformableWall::write_vtu(const std::filesystem::path& path, const Eigen::VectorXd& state) const {
-  const mesh::TetMesh& m = mesh();
-  write_stream_atomically(path, [&](std::ostream& f) {
-    f.precision(10);
-    f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << m.nodes.size() << "\" NumberOfCells=\"" << m.tets.size()
-      << "\">\n<PointData Vectors=\"displacement\" Scalars=\"displacement_magnitude\">\n"
-      << "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (int n = 0; n < m.num_nodes(); ++n)
-      f << state[3 * n] << ' ' << state[3 * n + 1] << ' ' << state[3 * n + 2] << '\n';
-    f << "</DataArray>\n<DataArray type=\"Float64\" Name=\"displacement_magnitude\" format=\"ascii\">\n";
-    for (int n = 0; n < m.num_nodes(); ++n) f << state.segment<3>(3 * n).norm() << '\n';
-    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
-         "format=\"ascii\">\n";
-    for (const Vec3& x : m.nodes) f << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
-    f << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-    // VTK_QUADRATIC_TETRA's edge order, (0,1), (1,2), (0,2), (0,3), (1,3), (2,3), is ours.
-    for (const auto& t : m.tets)
-      for (int k = 0; k < 10; ++k) f << t[static_cast<size_t>(k)] << (k == 9 ? '\n' : ' ');
-    f << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-    for (size_t e = 0; e < m.tets.size(); ++e) f << 10 * (e + 1) << '\n';
-    f << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-    for (size_t e = 0; e < m.tets.size(); ++e) f << "24\n";
-    f << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-  });
+  const auto n = static_cast<size_t>(mesh().num_nodes());
+  mesh::PointField displacement{"displacement", 3, std::vector<double>(state.data(), state.data() + 3 * n)};
+  mesh::PointField magnitude{"displacement_magnitude", 1, {}};
+  for (size_t k = 0; k < n; ++k) magnitude.values.push_back(state.segment<3>(3 * static_cast<Eigen::Index>(k)).norm());
+  mesh::write_vtu(path, mesh(), {displacement, magnitude});
 }
 
 }  // namespace flowire::coupling

@@ -17,11 +17,6 @@ namespace flowire::mesh {
 
 using element::kTetEdges;
 using element::kTriEdges;
-using element::QuadPoint;
-using element::tet_p2_grad;
-using element::tet_quadrature;
-using element::tri_p2_grad;
-using element::tri_quadrature;
 namespace {
 
 /// Reference coordinates of the nodes of a gmsh element type -> our local node order.

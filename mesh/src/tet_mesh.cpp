@@ -8,8 +8,6 @@
 
 namespace flowire::mesh {
 
-using element::kTetEdges;
-using element::kTriEdges;
 using element::QuadPoint;
 using element::tet_p2_grad;
 using element::tet_quadrature;

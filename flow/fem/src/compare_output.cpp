@@ -17,6 +17,7 @@
 #include "flowire/flow/fem/element.hpp"
 #include "flowire/flow/fem/obstacle.hpp"
 #include "flowire/flow/petsc_runtime.hpp"
+#include "flowire/mesh/vtu.hpp"
 
 namespace flowire::flow::fem {
 namespace {
@@ -110,29 +111,10 @@ void write_vtu(const std::string& path, const TetMesh& mesh, const StokesSolutio
     for (size_t e = 0; e < 6; ++e)
       ev[static_cast<size_t>(t[4 + e])] = {t[static_cast<size_t>(kTetEdges[e][0])],
                                            t[static_cast<size_t>(kTetEdges[e][1])]};
-  write_stream_atomically(path, [&](std::ostream& f) {
-    f.precision(10);
-    f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\""
-      << mesh.tets.size() << "\">\n<PointData Scalars=\"pressure\" Vectors=\"velocity\">\n"
-      << "<DataArray type=\"Float64\" Name=\"pressure\" format=\"ascii\">\n";
-    for (size_t n = 0; n < mesh.nodes.size(); ++n) f << pressure_at_node(mesh, sol, n, ev) << '\n';
-    f << "</DataArray>\n<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (const Vec3& u : sol.velocity) f << u.x() << ' ' << u.y() << ' ' << u.z() << '\n';
-    f << "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
-         "format=\"ascii\">\n";
-    for (const Vec3& x : mesh.nodes) f << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
-    f << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-    // VTK_QUADRATIC_TETRA edge order: (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — the same as ours.
-    for (const auto& t : mesh.tets) {
-      for (int k = 0; k < 10; ++k) f << t[static_cast<size_t>(k)] << (k == 9 ? '\n' : ' ');
-    }
-    f << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-    for (size_t e = 0; e < mesh.tets.size(); ++e) f << 10 * (e + 1) << '\n';
-    f << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-    for (size_t e = 0; e < mesh.tets.size(); ++e) f << "24\n";
-    f << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-  });
+  mesh::PointField pressure{"pressure", 1, {}}, velocity{"velocity", 3, {}};
+  for (size_t n = 0; n < mesh.nodes.size(); ++n) pressure.values.push_back(pressure_at_node(mesh, sol, n, ev));
+  for (const Vec3& u : sol.velocity) velocity.values.insert(velocity.values.end(), {u.x(), u.y(), u.z()});
+  mesh::write_vtu(path, mesh, {pressure, velocity});
 }
 
 void write_outputs(const std::string& out_dir, const Network& net, const TetMesh& mesh, const StokesSolution& sol,
