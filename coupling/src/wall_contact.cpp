@@ -30,6 +30,7 @@ void WallContact::evaluate(const rod::RodView& rod, int free, Wall& wall, rod::F
                            std::span<Vec3> tally, InteractionStats& stats) {
   ensure_size(rod.vertex_count());
   wall.ensure_size(rod.vertex_count());
+  energy_ = 0.0;
   if (deformable_) {
     if (anchors_stale_ || static_cast<int>(candidate_of_.size()) != rod.vertex_count())
       anchor_candidates(rod, free, wall);
@@ -84,6 +85,7 @@ void WallContact::evaluate(const rod::RodView& rod, int free, Wall& wall, rod::F
     const Vec3 f = -pen.gradient;
     out.add_conservative_force(i, f);
     out.add_energy(pen.energy);
+    energy_ += pen.energy;
     out.add_position_jacobian(i, -pen.hessian);
     normal_force_[k] = pen.normal_force;
     normal_[k] = n_wall;
@@ -195,6 +197,7 @@ void WallContact::solve_compliant(const rod::RodView& rod, rod::ForceAccumulator
     directions.push_back(cj.normal);
   }
   out.add_energy(energy);
+  energy_ += energy;
   if (na > 1) {
     Eigen::MatrixXd off = s;
     off.diagonal().setZero();

@@ -68,6 +68,8 @@ class VesselForces : public rod::ExternalForce {
   [[nodiscard]] const InteractionStats& stats() const { return stats_; }
   void set_velocity_field(VelocityField v) { drag_law_.set_velocity_field(std::move(v)); }
   [[nodiscard]] const ContactParams& contact() const { return contact_law_.params(); }
+  /// @brief The wall contact's potential energy at the last evaluation (WallContact::energy) [J].
+  [[nodiscard]] double contact_energy() const { return contact_law_.energy(); }
 
   /// @brief Wall contact against a triangulated lumen surface (outlives this object) instead
   /// of the network's capsules (SurfaceWall: its smooth signed distance of width @p smoothing);

@@ -70,6 +70,9 @@ class WallContact {
   [[nodiscard]] const ContactParams& params() const { return params_; }
   /// @brief The wall's normal force on a vertex of radius @p a at wall distance @p d (k φ′) [N].
   [[nodiscard]] double normal_force_at(double d, double a, double cell_weight) const;
+  /// @brief The wall's potential energy at the last evaluation [J]: the penalties', and with a
+  /// deformable wall ½ λᵀ(K⁻¹ + C)λ, the wall's strain energy included (the introducer's not).
+  [[nodiscard]] double energy() const { return energy_; }
   /// @brief The wire's vertices or its resampling changed: anchor the candidates anew.
   void invalidate_anchors() { anchors_stale_ = true; }
 
@@ -82,6 +85,7 @@ class WallContact {
   /// energy ½ λᵀ(K⁻¹ + C)λ, the band's part of their stiffness and the coupled rest.
   void solve_compliant(const rod::RodView& rod, rod::ForceAccumulator& out, std::span<Vec3> tally,
                        InteractionStats& stats);
+  double energy_ = 0.0;
   CompliantWall* deformable_ = nullptr;
   bool anchors_stale_ = true;
   struct Candidate {
