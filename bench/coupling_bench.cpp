@@ -316,6 +316,16 @@ void BM_RealArch_SurfaceVsCylinderContact(benchmark::State& state) {
 }
 BENCHMARK(BM_RealArch_SurfaceVsCylinderContact)->Unit(benchmark::kSecond)->Iterations(1);
 
+/// A scene run's counters: ms a step (the run's time without its setup), Newton iterations a
+/// step, unconverged steps.
+void run_counters(benchmark::State& state, const nlohmann::json& summary) {
+  const double steps = summary["steps"].get<double>();
+  const auto& t = summary["timings"];
+  state.counters["ms_per_step"] = 1e3 * (t["total"].get<double>() - t["setup"].get<double>()) / steps;
+  state.counters["newton_per_step"] = summary["wire"]["solver"]["newton_iterations_per_step"].get<double>();
+  state.counters["unconverged"] = summary["wire"]["unconverged_steps"].get<double>();
+}
+
 /// The driven variants on a real lumen: the Feel++ aortic arch with its own surface as the
 /// wall (examples/real/feelpp_arch.yaml), 10 cm of the J-tipped wire inside at 1 mm a
 /// vertex, held, pushed or pulled at 2 cm/s, or pushed while turned at π rad/s, for 100
@@ -349,11 +359,7 @@ void BM_RealArchDriven(benchmark::State& state) {
     const auto cfg = config::load_config_text(text.str(), scene.string(), coupling::scene_schema(), sets);
     summary = coupling::run_scene(cfg).summary;
   }
-  const double steps = summary["steps"].get<double>();
-  const auto& t = summary["timings"];
-  state.counters["ms_per_step"] = 1e3 * (t["total"].get<double>() - t["setup"].get<double>()) / steps;
-  state.counters["newton_per_step"] = summary["wire"]["solver"]["newton_iterations_per_step"].get<double>();
-  state.counters["unconverged"] = summary["wire"]["unconverged_steps"].get<double>();
+  run_counters(state, summary);
 }
 BENCHMARK(BM_RealArchDriven)
     ->ArgName("drive")
@@ -391,11 +397,7 @@ void BM_DeformableWallPush(benchmark::State& state) {
     const auto cfg = config::load_config_text(text, scene.string(), coupling::scene_schema(), sets);
     summary = coupling::run_scene(cfg).summary;
   }
-  const double steps = summary["steps"].get<double>();
-  const auto& t = summary["timings"];
-  state.counters["ms_per_step"] = 1e3 * (t["total"].get<double>() - t["setup"].get<double>()) / steps;
-  state.counters["newton_per_step"] = summary["wire"]["solver"]["newton_iterations_per_step"].get<double>();
-  state.counters["unconverged"] = summary["wire"]["unconverged_steps"].get<double>();
+  run_counters(state, summary);
   if (summary.contains("wall")) {
     state.counters["wall_seconds"] = summary["wall"]["seconds"].get<double>();
     state.counters["compliance_columns"] = summary["wall"]["compliance_columns"].get<double>();

@@ -33,33 +33,46 @@ struct Pressed {
   int newton = 0;
 };
 
-/// The wire along the axis from x = 3 mm, 25 mm long, a 50 mN tip load towards +y: without a
-/// wall its tip would move 3.5 mm sideways, the lumen leaves it 1.8 mm.
-/// With @p lying, the wire clamped 0.1 mm from the wall and a body load of 10 N/m towards it
-/// instead (gravity ×1000): it lies along the wall with many contacts, each moving the wall
-/// under the others.
+/// The wire of every case here: 25 mm long, clamped at x = 28 mm (on the axis, or 0.3 mm from
+/// the wall at y = R − 0.3 mm) and fed towards x = 3 mm, no friction, no drag, against the
+/// rigid wall or @p wall.
+struct Rig {
+  std::unique_ptr<vessels::SpatialIndex> index;
+  std::unique_ptr<rod::RodSimulator> sim;
+  std::shared_ptr<VesselForces> forces;
+  Rig(const vessels::Network& net, CompliantWall* wall, double base_y = 0.0) {
+    rod::WireSpec spec;
+    spec.length = 25e-3;
+    spec.radius = 0.2e-3;
+    spec.youngs_modulus = 60e9;
+    spec.segments = 50;
+    spec.inserted_length = spec.length;
+    spec.tip.length = 0.0;
+    spec.base_position = Vec3(28e-3, base_y, 0);
+    spec.base_direction = -Vec3::UnitX();
+    spec.base_normal = Vec3::UnitZ();
+    sim = std::make_unique<rod::RodSimulator>(spec);
+    index = std::make_unique<vessels::SpatialIndex>(net, 4);
+    ContactParams contact;
+    contact.stiffness = 3e4;
+    contact.friction = 0.0;
+    contact.tip_friction = 0.0;
+    DragModel drag;
+    drag.law = DragLaw::None;
+    forces = std::make_shared<VesselForces>(*index, spec.radius, contact, drag);
+    if (wall) forces->set_deformable(wall);
+    sim->add_external(forces);
+  }
+};
+
+/// A 50 mN tip load towards +y: without a wall the tip would move 3.5 mm sideways, the lumen
+/// leaves it 1.8 mm. With @p lying, the wire clamped near the wall and a body load of 10 N/m
+/// towards it instead (gravity ×1000): it lies along the wall with many contacts, each moving
+/// the wall under the others.
 Pressed press(const vessels::Network& net, CompliantWall* wall, bool lying = false) {
-  rod::WireSpec spec;
-  spec.length = 25e-3;
-  spec.radius = 0.2e-3;
-  spec.youngs_modulus = 60e9;
-  spec.segments = 50;
-  spec.inserted_length = spec.length;
-  spec.tip.length = 0.0;
-  spec.base_position = Vec3(28e-3, lying ? kR - 0.3e-3 : 0.0, 0);
-  spec.base_direction = -Vec3::UnitX();  // fed in from x = 28 mm towards x = 3 mm
-  spec.base_normal = Vec3::UnitZ();
-  rod::RodSimulator sim(spec);
-  auto index = std::make_shared<vessels::SpatialIndex>(net, 4);
-  ContactParams contact;
-  contact.stiffness = 3e4;
-  contact.friction = 0.0;
-  contact.tip_friction = 0.0;
-  DragModel drag;
-  drag.law = DragLaw::None;
-  auto forces = std::make_shared<VesselForces>(*index, spec.radius, contact, drag);
-  if (wall) forces->set_deformable(wall);
-  sim.add_external(forces);
+  Rig rig(net, wall, lying ? kR - 0.3e-3 : 0.0);
+  rod::RodSimulator& sim = *rig.sim;
+  const auto& forces = rig.forces;
   if (lying) {
     sim.set_gravity({0.0, 9810.0, 0.0});
   } else {
@@ -182,27 +195,9 @@ TEST(DeformableWall, APushAndReleaseWithoutFrictionGainsNoEnergy) {
   // anchored and their compliance condensed anew every step.
   const vessels::Network net = tube();
   DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, soft_wall(0.5e6));
-  rod::WireSpec spec;
-  spec.length = 25e-3;
-  spec.radius = 0.2e-3;
-  spec.youngs_modulus = 60e9;
-  spec.segments = 50;
-  spec.inserted_length = spec.length;
-  spec.tip.length = 0.0;
-  spec.base_position = Vec3(28e-3, 0, 0);
-  spec.base_direction = -Vec3::UnitX();
-  spec.base_normal = Vec3::UnitZ();
-  rod::RodSimulator sim(spec);
-  vessels::SpatialIndex index(net, 4);
-  ContactParams contact;
-  contact.stiffness = 3e4;
-  contact.friction = 0.0;
-  contact.tip_friction = 0.0;
-  DragModel drag;
-  drag.law = DragLaw::None;
-  auto forces = std::make_shared<VesselForces>(index, spec.radius, contact, drag);
-  forces->set_deformable(&wall);
-  sim.add_external(forces);
+  Rig rig(net, &wall);
+  rod::RodSimulator& sim = *rig.sim;
+  const auto& forces = rig.forces;
   sim.set_tip_force({0.0, 0.05, 0.0});
   for (int n = 0; n < 20; ++n) ASSERT_TRUE(sim.step(1e-3).converged());
   sim.set_tip_force(Vec3::Zero());
