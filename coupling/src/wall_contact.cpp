@@ -91,7 +91,7 @@ void WallContact::evaluate(const rod::RodView& rod, int free, Wall& wall, rod::F
     normal_[k] = n_wall;
     tally[k] += f;
   }
-  if (deformable_) solve_compliant(rod, out, tally, stats);
+  if (deformable_) solve_compliant(out, tally, stats);
 }
 
 void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wall) {
@@ -118,9 +118,7 @@ void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wal
   wall_shift_.setZero(static_cast<Eigen::Index>(candidates_.size()));
 }
 
-void WallContact::solve_compliant(const rod::RodView& rod, rod::ForceAccumulator& out, std::span<Vec3> tally,
-                                  InteractionStats& stats) {
-  (void)rod;
+void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> tally, InteractionStats& stats) {
   const auto m = static_cast<Eigen::Index>(candidates_.size());
   lambda_.setZero(m);
   wall_shift_.setZero(m);

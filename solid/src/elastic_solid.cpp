@@ -28,6 +28,36 @@ Mat3 displacement_gradient(const double* g, const std::array<int, 10>& tet, cons
   return e;
 }
 
+/// Index into a compressed matrix's values of its (existing) entry (row, col).
+int pattern_position(const Eigen::SparseMatrix<double>& pattern, int row, int col) {
+  const int* begin = pattern.innerIndexPtr() + pattern.outerIndexPtr()[col];
+  const int* end = pattern.innerIndexPtr() + pattern.outerIndexPtr()[col + 1];
+  return static_cast<int>(std::lower_bound(begin, end, row) - pattern.innerIndexPtr());
+}
+
+/// Every quadrature point of the curved faces of `group` (all groups when `group` < 0):
+/// visit(face, shape values (6), point, outward area vector (|·| = the point's weight·dA)).
+template <class Visit>
+void for_face_points(const mesh::TetMesh& m, int group, Visit&& visit) {
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (group >= 0 && m.face_group[f] != group) continue;
+    const auto& face = m.faces[f];
+    for (const auto& q : element::tri_quadrature()) {
+      double nval[6], ngrad[6][2];
+      element::tri_p2(q.xi, nval);
+      element::tri_p2_grad(q.xi, ngrad);
+      Vec3 x = Vec3::Zero(), ds = Vec3::Zero(), dt = Vec3::Zero();
+      for (int k = 0; k < 6; ++k) {
+        const Vec3& xk = m.nodes[static_cast<size_t>(face[static_cast<size_t>(k)])];
+        x += xk * nval[k];
+        ds += xk * ngrad[k][0];
+        dt += xk * ngrad[k][1];
+      }
+      visit(f, nval, x, Vec3(ds.cross(dt) * q.weight));
+    }
+  }
+}
+
 }  // namespace
 
 struct ElasticSolid::Factor {
@@ -78,18 +108,13 @@ ElasticSolid::ElasticSolid(mesh::TetMesh mesh, NeoHookean law)
   pattern_.resize(n, n);
   pattern_.setFromTriplets(trip.begin(), trip.end());
   pattern_.makeCompressed();
-  auto position = [this](int row, int col) {
-    const int* begin = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col];
-    const int* end = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col + 1];
-    return static_cast<int>(std::lower_bound(begin, end, row) - pattern_.innerIndexPtr());
-  };
   scatter_.resize(nt * 300);
   for (size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 10; ++k)
       for (int l = 0; l < 10; ++l)
         for (int c = 0; c < 3; ++c)
-          scatter_[t * 300 + static_cast<size_t>(30 * k + 3 * l + c)] =
-              position(3 * mesh_.tets[t][static_cast<size_t>(k)], 3 * mesh_.tets[t][static_cast<size_t>(l)] + c);
+          scatter_[t * 300 + static_cast<size_t>(30 * k + 3 * l + c)] = pattern_position(
+              pattern_, 3 * mesh_.tets[t][static_cast<size_t>(k)], 3 * mesh_.tets[t][static_cast<size_t>(l)] + c);
   support_.resize(n, n);
   group_pressure_.resize(mesh_.groups.size());
   pressure_forces_ = Eigen::VectorXd::Zero(n);
@@ -114,37 +139,23 @@ void ElasticSolid::support(int group, double stiffness_per_area) {
   if (!(stiffness_per_area >= 0.0) || !std::isfinite(stiffness_per_area))
     throw_usage_error(fmt::format("wall: support stiffness must be >= 0 Pa/m, got {}", stiffness_per_area));
   std::vector<Eigen::Triplet<double>> trip;
-  for (size_t f = 0; f < mesh_.faces.size(); ++f) {
-    if (mesh_.face_group[f] != group) continue;
+  for_face_points(mesh_, group, [&](size_t f, const double* nval, const Vec3&, const Vec3& area) {
     const auto& face = mesh_.faces[f];
-    for (const auto& q : element::tri_quadrature()) {
-      double nval[6], ngrad[6][2];
-      element::tri_p2(q.xi, nval);
-      element::tri_p2_grad(q.xi, ngrad);
-      Vec3 ds = Vec3::Zero(), dt = Vec3::Zero();
-      for (int k = 0; k < 6; ++k) {
-        ds += mesh_.nodes[static_cast<size_t>(face[static_cast<size_t>(k)])] * ngrad[k][0];
-        dt += mesh_.nodes[static_cast<size_t>(face[static_cast<size_t>(k)])] * ngrad[k][1];
-      }
-      const double w = q.weight * ds.cross(dt).norm() * stiffness_per_area;
-      for (int k = 0; k < 6; ++k)
-        for (int l = 0; l < 6; ++l)
-          for (int c = 0; c < 3; ++c)
-            trip.emplace_back(3 * face[static_cast<size_t>(k)] + c, 3 * face[static_cast<size_t>(l)] + c,
-                              w * nval[k] * nval[l]);
-    }
-  }
+    const double w = area.norm() * stiffness_per_area;
+    for (int k = 0; k < 6; ++k)
+      for (int l = 0; l < 6; ++l)
+        for (int c = 0; c < 3; ++c)
+          trip.emplace_back(3 * face[static_cast<size_t>(k)] + c, 3 * face[static_cast<size_t>(l)] + c,
+                            w * nval[k] * nval[l]);
+  });
   Eigen::SparseMatrix<double> add(num_dofs(), num_dofs());
   add.setFromTriplets(trip.begin(), trip.end());
   support_ += add;
   support_.makeCompressed();
   support_scatter_.clear();
   for (int col = 0; col < support_.outerSize(); ++col)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(support_, col); it; ++it) {
-      const int* begin = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col];
-      const int* end = pattern_.innerIndexPtr() + pattern_.outerIndexPtr()[col + 1];
-      support_scatter_.push_back(static_cast<int>(std::lower_bound(begin, end, it.row()) - pattern_.innerIndexPtr()));
-    }
+    for (Eigen::SparseMatrix<double>::InnerIterator it(support_, col); it; ++it)
+      support_scatter_.push_back(pattern_position(pattern_, static_cast<int>(it.row()), col));
 }
 
 void ElasticSolid::set_pressure(int group, double pressure) {
@@ -157,30 +168,15 @@ void ElasticSolid::set_pressure(int group, std::function<double(const Vec3&)> pr
     throw_usage_error(fmt::format("wall: no boundary group {}", group));
   group_pressure_[static_cast<size_t>(group)] = std::move(pressure);
   pressure_forces_.setZero();
-  for (size_t f = 0; f < mesh_.faces.size(); ++f) {
+  for_face_points(mesh_, -1, [&](size_t f, const double* nval, const Vec3& x, const Vec3& area) {
     const auto& field = group_pressure_[static_cast<size_t>(mesh_.face_group[f])];
-    if (!field) continue;
-    const auto& face = mesh_.faces[f];
-    for (const auto& q : element::tri_quadrature()) {
-      double nval[6], ngrad[6][2];
-      element::tri_p2(q.xi, nval);
-      element::tri_p2_grad(q.xi, ngrad);
-      Vec3 x = Vec3::Zero(), ds = Vec3::Zero(), dt = Vec3::Zero();
-      for (int k = 0; k < 6; ++k) {
-        const Vec3& xk = mesh_.nodes[static_cast<size_t>(face[static_cast<size_t>(k)])];
-        x += xk * nval[k];
-        ds += xk * ngrad[k][0];
-        dt += xk * ngrad[k][1];
-      }
-      const double p = field(x);
-      if (!std::isfinite(p))
-        throw_usage_error(
-            fmt::format("wall: the pressure at ({:.4g}, {:.4g}, {:.4g}) m is {}", x.x(), x.y(), x.z(), p));
-      const Vec3 area_normal = ds.cross(dt) * q.weight;  // outward, |·| = dA
-      for (int k = 0; k < 6; ++k)
-        pressure_forces_.segment<3>(3 * face[static_cast<size_t>(k)]) -= p * nval[k] * area_normal;
-    }
-  }
+    if (!field) return;
+    const double p = field(x);
+    if (!std::isfinite(p))
+      throw_usage_error(fmt::format("wall: the pressure at ({:.4g}, {:.4g}, {:.4g}) m is {}", x.x(), x.y(), x.z(), p));
+    for (int k = 0; k < 6; ++k)
+      pressure_forces_.segment<3>(3 * mesh_.faces[f][static_cast<size_t>(k)]) -= p * nval[k] * area;
+  });
 }
 
 double ElasticSolid::elastic_energy(const Eigen::VectorXd& u) const {

@@ -165,17 +165,7 @@ std::array<double, 6> LumenCompliance::weights(const LumenPoint& p) const {
   return w;
 }
 
-const Eigen::MatrixXd& LumenCompliance::column(int node) {
-  auto it = columns_.find(node);
-  if (it != columns_.end()) return it->second;
-  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(solid_.num_dofs(), 3);
-  for (int c = 0; c < 3; ++c) x(3 * node + c, c) = 1.0;
-  solid_.tangent_solve(x);
-  Eigen::MatrixXd kept(3 * static_cast<Eigen::Index>(lumen_nodes_.size()), 3);
-  for (size_t a = 0; a < lumen_nodes_.size(); ++a)
-    kept.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = x.middleRows<3>(3 * lumen_nodes_[a]);
-  return columns_.emplace(node, std::move(kept)).first->second;
-}
+const Eigen::MatrixXd& LumenCompliance::column(int node) const { return columns_.at(node); }
 
 void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   const auto& m = solid_.mesh();

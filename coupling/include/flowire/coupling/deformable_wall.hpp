@@ -63,8 +63,6 @@ class DeformableWall final : public CompliantWall {
   [[nodiscard]] const mesh::TetMesh& mesh() const;
   [[nodiscard]] const Eigen::VectorXd& displacement() const;
   [[nodiscard]] double max_displacement() const;
-  /// @brief The largest displacement over the states solved so far [m].
-  [[nodiscard]] double max_displacement_solved() const { return max_ever_; }
   /// @brief Sum of the forces on the wall at the last load [N].
   [[nodiscard]] const Vec3& load_total() const { return load_total_; }
   /// @brief Lumen nodes whose compliance columns were solved, and the seconds spent on the

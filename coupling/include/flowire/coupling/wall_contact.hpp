@@ -83,8 +83,7 @@ class WallContact {
   void anchor_candidates(const rod::RodView& rod, int free, Wall& wall);
   /// The candidates' normal forces λ = k·max(0, δ − C λ) (active set), applied with their
   /// energy ½ λᵀ(K⁻¹ + C)λ, the band's part of their stiffness and the coupled rest.
-  void solve_compliant(const rod::RodView& rod, rod::ForceAccumulator& out, std::span<Vec3> tally,
-                       InteractionStats& stats);
+  void solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> tally, InteractionStats& stats);
   double energy_ = 0.0;
   CompliantWall* deformable_ = nullptr;
   bool anchors_stale_ = true;

@@ -57,8 +57,8 @@ class LumenCompliance {
  private:
   /// Shape function weights of the face's six nodes at a point.
   [[nodiscard]] std::array<double, 6> weights(const LumenPoint& p) const;
-  /// The kept column block of lumen node `node` (solved on first use): (3 × lumen nodes) × 3.
-  const Eigen::MatrixXd& column(int node);
+  /// The kept column block of lumen node `node` (solved by prefetch): (3 × lumen nodes) × 3.
+  [[nodiscard]] const Eigen::MatrixXd& column(int node) const;
 
   const ElasticSolid& solid_;
   std::vector<int> faces_;        ///< the lumen's faces
