@@ -1,9 +1,9 @@
-#include "flowire/rod/simulator.hpp"
+#include "flowire/rod/feeder.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "simulator_internal.hpp"
+#include "rod_internal.hpp"
 
 namespace flowire::rod {
 
@@ -19,19 +19,19 @@ bool aligned(double u, double len) {
 }
 }  // namespace
 
-bool RodSimulator::adapt() { return adapt_for(0.0); }
-
-bool RodSimulator::adapt_for(double pull_back) {
-  if (!model_.adapt.enabled) return false;
-  const AdaptSpec& a = model_.adapt;
-  const double h = model_.h;
+bool Feeder::adapt_for(double pull_back, const std::function<void(const std::vector<int>&)>& on_resample) {
+  const RodModel& model = body_.model;
+  const Discretization& disc = body_.disc;
+  if (!model.adapt.enabled) return false;
+  const AdaptSpec& a = model.adapt;
+  const double h = model.h;
   const double tol = 1e-9 * h;
   bool any = false;
   // Round 0 applies the curvature criteria and the grid near the entry; later rounds only
   // finish restoring the grid near the entry (after a pull-back over a refined part).
   for (int round = 0; round < 8; ++round) {
-    RodState& s = state_;
-    Work& w = *work_;
+    RodState& s = body_.state;
+    Scratch& w = *scratch_;
     const int nv = s.vertex_count();
     const int fc = first_clamped_;
     // Vertices at or behind `zone` (the entry after the next step's pull-back) must be
@@ -44,7 +44,7 @@ bool RodSimulator::adapt_for(double pull_back) {
       const Vec3 te = (s.x[k] - s.x[k - 1]).normalized();
       const Vec3 tf = (s.x[k + 1] - s.x[k]).normalized();
       const double phi = std::atan2(te.cross(tf).norm(), te.dot(tf));
-      const double rest = 2.0 * std::atan(0.5 * std::hypot(disc_.rest_kappa1[k], disc_.rest_kappa2[k]));
+      const double rest = 2.0 * std::atan(0.5 * std::hypot(disc.rest_kappa1[k], disc.rest_kappa2[k]));
       w.turn_angle[k] = std::max(phi, rest);
     }
     w.split_edge.assign(nv - 1, 0);
@@ -89,9 +89,9 @@ bool RodSimulator::adapt_for(double pull_back) {
         // Lumping the vertex's mass onto its neighbours raises the kinetic energy by
         // (m_k/8)|v_{k−1} − v_{k+1}|² (exact for a linear velocity field): merge only where
         // that is negligible, so a rod swinging through straight is not coarsened.
-        const double dke = 0.125 * disc_.mass[k] * (s.v[k - 1] - s.v[k + 1]).squaredNorm();
-        const double ke = 0.5 * (disc_.mass[k - 1] * s.v[k - 1].squaredNorm() + disc_.mass[k] * s.v[k].squaredNorm() +
-                                 disc_.mass[k + 1] * s.v[k + 1].squaredNorm());
+        const double dke = 0.125 * disc.mass[k] * (s.v[k - 1] - s.v[k + 1]).squaredNorm();
+        const double ke = 0.5 * (disc.mass[k - 1] * s.v[k - 1].squaredNorm() + disc.mass[k] * s.v[k].squaredNorm() +
+                                 disc.mass[k + 1] * s.v[k + 1].squaredNorm());
         if (dke > 1e-4 * ke) continue;
         w.remove_vertex[k] = 1;
       }
@@ -111,6 +111,7 @@ bool RodSimulator::adapt_for(double pull_back) {
     }
     if (splits == 0 && merges == 0) break;
     resample(w.new_u);
+    on_resample(w.new_source);
     adapt_splits_ += splits;
     adapt_merges_ += merges;
     any = true;
@@ -118,12 +119,13 @@ bool RodSimulator::adapt_for(double pull_back) {
   return any;
 }
 
-void RodSimulator::resample(const std::vector<double>& u_new) {
-  RodState& s = state_;
-  Work& w = *work_;
+void Feeder::resample(const std::vector<double>& u_new) {
+  RodState& s = body_.state;
+  const Discretization& disc = body_.disc;
+  Scratch& w = *scratch_;
   const int nv = s.vertex_count();
   const int nn = static_cast<int>(u_new.size());
-  const double tol = 1e-9 * model_.h;
+  const double tol = 1e-9 * body_.model.h;
   // The old state.
   w.old_u = s.u;
   w.old_x = s.x;
@@ -132,7 +134,7 @@ void RodSimulator::resample(const std::vector<double>& u_new) {
   w.old_omega = s.omega;
   w.old_frame = s.frame;
   w.old_ref_twist = s.ref_twist;
-  w.old_cell = disc_.cell_length;
+  w.old_cell = disc.cell_length;
   const int old_clamp = first_clamped_;
   // Old twist density (twist per cell length) and vertex tangents.
   w.old_twist_density.assign(nv, 0.0);
@@ -175,7 +177,7 @@ void RodSimulator::resample(const std::vector<double>& u_new) {
   }
   for (int m = 0; m < nn; ++m)
     if (w.new_source[m] == old_clamp) first_clamped_ = m;
-  model_.discretize(s.u, disc_);
+  body_.rediscretize();
 
   // Edges: the old edge holding the new edge's midpoint gives the frame (transported to
   // the new tangent), the spin rate and a provisional angle.
@@ -206,14 +208,10 @@ void RodSimulator::resample(const std::vector<double>& u_new) {
   for (int j = nn - 3; j >= 0; --j) {
     if (j >= first_clamped_) continue;  // clamp edges keep their angle
     const int m = j + 1;
-    const double twist = w.new_twist_density[m] * disc_.cell_length[m];
+    const double twist = w.new_twist_density[m] * disc.cell_length[m];
     s.theta[j] = s.theta[j + 1] + s.ref_twist[m] - twist;
   }
   refresh_arc_lengths();
-  if (!externals_.empty()) {
-    const RodView view = current_view(0.0);
-    for (auto& e : externals_) e->remap(view, w.new_source);
-  }
 }
 
 }  // namespace flowire::rod

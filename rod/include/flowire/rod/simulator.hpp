@@ -2,22 +2,19 @@
 /// @file simulator.hpp
 /// @brief The guidewire simulator: a discrete elastic rod stepped implicitly in O(n).
 ///
+/// A façade over the rod's parts (body.hpp): the `Feeder` (feeder.hpp: the vertex set, the
+/// clamps, feeding and adaptive resampling), the `TimeStepper` (stepper.hpp: the integrators,
+/// each solve a problem for Newton's method), the `Loads` (loads.hpp) and the registered
+/// `ExternalForce`s (external.hpp). Callers talk to it alone; the parts are reachable for
+/// those that need one (`feeder()`, `stepper()`).
+///
 /// **Unknowns.** Vertex positions and one twist angle per edge, interleaved
 /// (x_0, θ_0, x_1, θ_1, …, x_n): 4n+3 unknowns, Hessian banded with half-width 10.
 /// Vertex 0 is the distal tip; the last two vertices are behind the entry point and held
 /// by the clamp (their positions and the angle of the edge between them are prescribed).
 ///
-/// **Governing equations.** With M the lumped mass (and edge rotational inertia),
-/// E the elastic energy (energies.hpp), f the loads and external forces:
-/// - backward Euler: \f$ M (q_{n+1} - q_n - h v_n)/h^2 + \nabla E(q_{n+1}) = f(q_{n+1}, v_{n+1}) \f$,
-///   \f$ v_{n+1} = (q_{n+1}-q_n)/h \f$ — stable at any step, damps high frequencies;
-/// - implicit midpoint: a backward-Euler solve of h/2 to the midpoint z, then
-///   \f$ q_{n+1} = 2z - q_n \f$, \f$ v_{n+1} = 2(z-q_n)/(h/2) - v_n \f$ — second order,
-///   no numerical damping (for oscillation studies);
-/// - static: \f$ \nabla E(q) = f(q) \f$ (equilibrium), load steps optional.
-///
 /// Each solve is Newton's method (newton.hpp, `NewtonSolver`; the rod's problem is
-/// src/stage.cpp) with a backtracking line search on the incremental
+/// src/stepper_stage.cpp) with a backtracking line search on the incremental
 /// potential plus the potential energy external forces report (`add_energy`, e.g. penalty
 /// contact); the other loads (dead loads, friction, drag) enter through the trapezoidal
 /// work along the search ray. The full step is evaluated with its gradient; shorter trials
@@ -76,100 +73,17 @@
 #include <vector>
 
 #include "flowire/rod/banded.hpp"
+#include "flowire/rod/body.hpp"
 #include "flowire/rod/drive.hpp"
 #include "flowire/rod/energies.hpp"
 #include "flowire/rod/external.hpp"
+#include "flowire/rod/feeder.hpp"
 #include "flowire/rod/loads.hpp"
 #include "flowire/rod/model.hpp"
 #include "flowire/rod/newton.hpp"
+#include "flowire/rod/stepper.hpp"
 
 namespace flowire::rod {
-
-enum class Integrator { ImplicitEuler, ImplicitMidpoint };
-
-/// @brief "implicit_euler" | "implicit_midpoint" (scene files). @throws flowire::Error (usage).
-[[nodiscard]] Integrator parse_integrator(std::string_view name);
-[[nodiscard]] const char* to_string(Integrator integrator);
-
-/// @brief What the dynamic steps have cost so far, summed over every step taken with step()
-/// (step halvings and force-feed retakes included): the per-step figures a benchmark or a
-/// summary reports beside the time.
-struct SolverTotals {
-  long steps = 0;              ///< calls of step()
-  long newton_iterations = 0;  ///< chord iterations included
-  long chord_iterations = 0;   ///< iterations that reused a factorization
-  long factorizations = 0;     ///< matrix factorizations (Newton iterations that were not chord steps, plus fallbacks)
-  long line_search_cuts = 0;
-  long subdivided_steps = 0;  ///< steps retaken as halves
-  long unconverged_steps = 0;
-  void add(const StepReport& r) {
-    ++steps;
-    newton_iterations += r.newton_iterations;
-    chord_iterations += r.chord_iterations;
-    factorizations += r.newton_iterations - r.chord_iterations + r.regularizations;
-    line_search_cuts += r.line_search_cuts;
-    subdivided_steps += r.subdivisions > 0 ? 1 : 0;
-    unconverged_steps += r.converged() ? 0 : 1;
-  }
-};
-
-/// @brief Newton and linear-solver settings.
-struct SolverSettings {
-  int max_iterations = 30;  ///< per dynamic step
-  int max_static_iterations =
-      400;                        ///< per static load step (a pseudo-time continuation after a failed Newton included)
-  double force_tolerance = 1e-8;  ///< relative to the force scale
-  double step_tolerance = 1e-10;  ///< relative to the segment length
-  int max_line_search_cuts = 30;
-  LinearSolver linear_solver = LinearSolver::Banded;
-  Integrator integrator = Integrator::ImplicitEuler;
-  int static_load_steps = 1;  ///< loads ramped in this many increments
-  /// Newton updates of positions follow the rotation of each edge (lengths changed only to
-  /// first order): large rotations are taken in few iterations despite stiff stretching.
-  bool curvilinear_update = true;
-  /// A step whose solve fails is retaken from its start as two half steps, at most this
-  /// many levels deep (dt/2^n); 0 keeps a failed step's last iterate at once.
-  int max_subdivisions = 3;
-  /// After a full Newton step that cut the residual a thousandfold, the next iteration reuses
-  /// that step's factorization (a chord step) instead of a new matrix; it falls back to Newton
-  /// when the chord step does not cut the residual tenfold. Same converged states (the same
-  /// tolerances), less work per step.
-  bool chord_iterations = true;
-  /// Implicit Euler's Newton starts from q + h q̇ + h (q̇ − q̇_prev) (the last step's
-  /// acceleration held) where the vertex has not moved since that step; else q + h q̇.
-  bool second_order_guess = true;
-};
-
-/// @brief One sample of the tip trace.
-struct TipSample {
-  double time = 0.0;
-  double inserted_length = 0.0;
-  Eigen::Vector3d tip = Eigen::Vector3d::Zero();
-};
-
-/// @brief Energies of the current state [J].
-struct RodEnergy {
-  double kinetic = 0.0;
-  double stretching = 0.0;
-  double bending_twisting = 0.0;
-  [[nodiscard]] double total() const { return kinetic + stretching + bending_twisting; }
-};
-
-/// @brief The changing state (sizes in comments; vertex 0 = distal tip).
-struct RodState {
-  std::vector<Eigen::Vector3d> x;  ///< (n_vertices) positions [m]
-  std::vector<Eigen::Vector3d> v;  ///< (n_vertices) velocities [m/s]
-  std::vector<double> theta;       ///< (n_edges) material angle w.r.t. reference frame [rad]
-  std::vector<double> omega;       ///< (n_edges) dθ/dt [rad/s]
-  std::vector<EdgeFrame> frame;    ///< (n_edges) reference frames (time-parallel)
-  std::vector<double> ref_twist;   ///< (n_vertices) reference twist (interior vertices)
-  std::vector<double> u;           ///< (n_vertices) material coordinate from the tip [m]
-  double time = 0.0;               ///< [s]
-  double inserted_length = 0.0;    ///< [m] wire length in front of the entry point
-  double base_angle = 0.0;         ///< [rad] rotation of the clamp
-  [[nodiscard]] int vertex_count() const { return static_cast<int>(x.size()); }
-  [[nodiscard]] int edge_count() const { return static_cast<int>(x.size()) - 1; }
-};
 
 class RodSimulator {
  public:
@@ -206,13 +120,13 @@ class RodSimulator {
   [[nodiscard]] double step_imbalance();
 
   // --- controls and loads ---------------------------------------------------------------
-  void set_integrator(Integrator integrator) { settings_.integrator = integrator; }
+  void set_integrator(Integrator integrator) { stepper_.settings().integrator = integrator; }
   /// @brief Feeding speed [m/s], > 0 pushes in, < 0 pulls back.
-  void set_insertion_speed(double speed) { drive_.set_insertion_speed(speed); }
+  void set_insertion_speed(double speed) { feeder_.drive().set_insertion_speed(speed); }
   /// @brief Force-limited feeding: a step that starts with the clamp pushing the wire in
   /// harder than @p force [N] (base_force() along the insertion direction) feeds nothing,
   /// as a force-limited drive or an operator's hand would; 0 (default): no limit.
-  void set_max_insertion_force(double force) { drive_.set_max_insertion_force(force); }
+  void set_max_insertion_force(double force) { feeder_.drive().set_max_insertion_force(force); }
   /// @brief Force-driven feeding: the base is pushed along the insertion direction with a
   /// constant force @p force [N] (> 0; 0 returns to the kinematic feed) and the feed of each
   /// step is the one for which the clamp's axial force at the step's end, base_force()·d,
@@ -220,24 +134,24 @@ class RodSimulator {
   /// then advances at the speed the resisting forces (inertia, damping, drag, friction)
   /// allow, and stops where the wire's axial reaction against an obstacle reaches the force.
   /// Replaces set_insertion_speed while set; rotation_speed still turns the base.
-  void set_push_force(double force) { drive_.set_push_force(force); }
-  [[nodiscard]] double push_force() const { return drive_.push_force(); }
+  void set_push_force(double force) { feeder_.drive().set_push_force(force); }
+  [[nodiscard]] double push_force() const { return feeder_.drive().push_force(); }
   /// @brief Feed speed of the last force-driven step [m/s].
-  [[nodiscard]] double force_feed_speed() const { return drive_.force_feed_speed(); }
+  [[nodiscard]] double force_feed_speed() const { return feeder_.drive().force_feed_speed(); }
   /// @brief Secant iterations (extra step solves) spent by force-driven feeding so far.
-  [[nodiscard]] long force_feed_iterations() const { return drive_.force_feed_iterations(); }
+  [[nodiscard]] long force_feed_iterations() const { return feeder_.drive().force_feed_iterations(); }
   /// @brief Force-driven steps whose axial force stayed off F by more than the tolerance
   /// (the per-step feed limit of half a segment reached, or the iteration limit).
-  [[nodiscard]] long force_feed_unbalanced() const { return drive_.force_feed_unbalanced(); }
+  [[nodiscard]] long force_feed_unbalanced() const { return feeder_.drive().force_feed_unbalanced(); }
   /// @brief Steps in which feeding was held by the force limit.
-  [[nodiscard]] long held_steps() const { return drive_.held_steps(); }
+  [[nodiscard]] long held_steps() const { return feeder_.drive().held_steps(); }
   /// @brief Clamp rotation speed, right-handed about the insertion direction [rad/s].
-  void set_rotation_speed(double omega) { drive_.set_rotation_speed(omega); }
+  void set_rotation_speed(double omega) { feeder_.drive().set_rotation_speed(omega); }
   /// @brief Set the clamp rotation angle [rad], right-handed about the insertion direction
   /// (takes effect at the next step/solve).
-  void set_base_angle(double angle) { drive_.set_base_angle(angle); }
+  void set_base_angle(double angle) { feeder_.drive().set_base_angle(angle); }
   /// @brief The clamp's drive (feeding and turning rules, what they did).
-  [[nodiscard]] const Drive& drive() const { return drive_; }
+  [[nodiscard]] const Drive& drive() const { return feeder_.drive(); }
   /// @brief Dead force on the distal tip vertex [N].
   void set_tip_force(const Eigen::Vector3d& f) { loads_.tip_force.force = f; }
   /// @brief Moment on the distal edge [N m]: the component along the edge twists it, the
@@ -258,42 +172,42 @@ class RodSimulator {
   /// should be the segment length), its twist angle at the current value. For rods
   /// clamped at both ends (test cases); feeding still works at the base.
   void clamp_tip(const Eigen::Vector3d& tip, const Eigen::Vector3d& next);
-  void release_tip() { tip_clamped_ = false; }
+  void release_tip() { feeder_.release_tip(); }
   /// @brief Lay the free (inserted) part at rest on a curve: vertex k at @p along(s_k), s_k
   /// its arc length from the entry (e.g. a vessel path from the entry, so a long wire
   /// starts inside the lumen); frames parallel-transported from the clamp, so no twist.
   /// The rest shape of a pre-shaped tip is not applied: it springs back in the first
   /// static solve or steps. Call before add_external().
   void lay_along(const std::function<Eigen::Vector3d(double)>& along);
-  [[nodiscard]] bool tip_clamped() const { return tip_clamped_; }
-  SolverSettings& settings() { return settings_; }
-  [[nodiscard]] const SolverSettings& settings() const { return settings_; }
+  [[nodiscard]] bool tip_clamped() const { return feeder_.tip_clamped(); }
+  SolverSettings& settings() { return stepper_.settings(); }
+  [[nodiscard]] const SolverSettings& settings() const { return stepper_.settings(); }
 
   // --- results ---------------------------------------------------------------------------
-  [[nodiscard]] const RodModel& model() const { return model_; }
-  [[nodiscard]] const RodState& state() const { return state_; }
-  [[nodiscard]] int vertex_count() const { return state_.vertex_count(); }
-  [[nodiscard]] std::span<const Eigen::Vector3d> positions() const { return state_.x; }
-  [[nodiscard]] std::span<const Eigen::Vector3d> velocities() const { return state_.v; }
+  [[nodiscard]] const RodModel& model() const { return body_.model; }
+  [[nodiscard]] const RodState& state() const { return body_.state; }
+  [[nodiscard]] int vertex_count() const { return body_.state.vertex_count(); }
+  [[nodiscard]] std::span<const Eigen::Vector3d> positions() const { return body_.state.x; }
+  [[nodiscard]] std::span<const Eigen::Vector3d> velocities() const { return body_.state.v; }
   /// @brief (n_vertices) arc length from the entry point [m]: > 0 inserted, ≤ 0 clamped.
-  [[nodiscard]] std::span<const double> arc_lengths() const { return arc_length_; }
+  [[nodiscard]] std::span<const double> arc_lengths() const { return feeder_.arc_lengths(); }
   /// @brief Index of the first clamped vertex (the one at or just behind the entry).
-  [[nodiscard]] int first_clamped_vertex() const { return first_clamped_; }
-  [[nodiscard]] const Eigen::Vector3d& tip_position() const { return state_.x.front(); }
-  [[nodiscard]] double inserted_length() const { return state_.inserted_length; }
-  [[nodiscard]] double time() const { return state_.time; }
+  [[nodiscard]] int first_clamped_vertex() const { return feeder_.first_clamped(); }
+  [[nodiscard]] const Eigen::Vector3d& tip_position() const { return body_.state.x.front(); }
+  [[nodiscard]] double inserted_length() const { return body_.state.inserted_length; }
+  [[nodiscard]] double time() const { return body_.state.time; }
   /// @brief Material frame (m1, m2) of edge j.
   [[nodiscard]] std::pair<Eigen::Vector3d, Eigen::Vector3d> material_frame(int edge) const;
   /// @brief Force the clamp exerts on the wire in the last step/solve [N] (a haptic
   /// device renders its negative).
-  [[nodiscard]] const Eigen::Vector3d& base_force() const { return base_force_; }
+  [[nodiscard]] const Eigen::Vector3d& base_force() const { return stepper_.base_force(); }
   /// @brief Torque the clamp exerts on the wire about the entry point [N m].
-  [[nodiscard]] const Eigen::Vector3d& base_torque() const { return base_torque_; }
-  [[nodiscard]] const StepReport& last_report() const { return last_report_; }
-  [[nodiscard]] const NewtonPhaseSeconds& phase_seconds() const { return newton_.phase_seconds(); }
+  [[nodiscard]] const Eigen::Vector3d& base_torque() const { return stepper_.base_torque(); }
+  [[nodiscard]] const StepReport& last_report() const { return stepper_.last_report(); }
+  [[nodiscard]] const NewtonPhaseSeconds& phase_seconds() const { return stepper_.phase_seconds(); }
   /// @brief Newton work of the dynamic steps so far (step() calls).
-  [[nodiscard]] const SolverTotals& solver_totals() const { return totals_; }
-  [[nodiscard]] const std::vector<TipSample>& tip_trace() const { return trace_; }
+  [[nodiscard]] const SolverTotals& solver_totals() const { return stepper_.totals(); }
+  [[nodiscard]] const std::vector<TipSample>& tip_trace() const { return stepper_.trace(); }
   [[nodiscard]] RodEnergy energy() const;
   /// @brief max over free edges of |ℓ/ℓ̄ − 1|.
   [[nodiscard]] double max_strain() const;
@@ -303,12 +217,12 @@ class RodSimulator {
   /// changed. Called by step() and solve_static(); a no-op unless `WireSpec::adapt` is on.
   bool adapt();
   /// @brief Constants of the simulated vertices and edges (rest lengths, masses, …).
-  [[nodiscard]] const Discretization& discretization() const { return disc_; }
+  [[nodiscard]] const Discretization& discretization() const { return body_.disc; }
   /// @brief (n_vertices) material coordinate of each vertex, distance from the tip [m].
-  [[nodiscard]] std::span<const double> material_coordinates() const { return state_.u; }
+  [[nodiscard]] std::span<const double> material_coordinates() const { return body_.state.u; }
   /// @brief Vertices added and removed by adaptivity so far.
-  [[nodiscard]] long adapt_splits() const { return adapt_splits_; }
-  [[nodiscard]] long adapt_merges() const { return adapt_merges_; }
+  [[nodiscard]] long adapt_splits() const { return feeder_.adapt_splits(); }
+  [[nodiscard]] long adapt_merges() const { return feeder_.adapt_merges(); }
   /// @brief Number of negative eigenvalues of the static Hessian (free unknowns) at the
   /// current state — 0 means the equilibrium is stable.
   [[nodiscard]] int static_hessian_negative_eigenvalues();
@@ -320,151 +234,61 @@ class RodSimulator {
   /// keep or reject them, and finish. Implicit Euler and kinematic feeding only.
   ///@{
   /// @brief The step's start for a step of @p dt (as step(): feed, predictor, prescribed unknowns).
-  void coupled_begin(double dt);
+  void coupled_begin(double dt) { stepper_.coupled_begin(dt); }
   /// @brief The incremental potential at the current iterate (external potentials included),
   /// its gradient and with @p matrix the Newton matrix (@p psd: the positive semi-definite one).
-  double coupled_assemble(bool matrix, bool psd = false);
+  double coupled_assemble(bool matrix, bool psd = false) { return stepper_.coupled_assemble(matrix, psd); }
   /// @brief The residual over its tolerance (≤ 1: this rod's step is solved).
-  [[nodiscard]] double coupled_residual() const;
+  [[nodiscard]] double coupled_residual() const { return stepper_.coupled_residual(); }
   /// @brief Number of unknowns (4 per vertex, minus one).
-  [[nodiscard]] int coupled_dofs() const { return dof_count(); }
+  [[nodiscard]] int coupled_dofs() const { return stepper_.dof_count(); }
   /// @brief −gradient on the free unknowns, 0 on the held ones (the Newton right-hand side).
-  void coupled_rhs(Eigen::Ref<Eigen::VectorXd> rhs) const;
+  void coupled_rhs(Eigen::Ref<Eigen::VectorXd> rhs) const { stepper_.coupled_rhs(rhs); }
   /// @brief The Newton matrix's lower triangle, held unknowns as identity rows, at row and column
   /// @p offset of a larger system.
-  void coupled_matrix(std::vector<Eigen::Triplet<double>>& out, int offset) const;
+  void coupled_matrix(std::vector<Eigen::Triplet<double>>& out, int offset) const {
+    stepper_.coupled_matrix(out, offset);
+  }
   /// @brief Whether vertex @p k's position is an unknown (not held by the clamp or a tip clamp).
-  [[nodiscard]] bool coupled_free_vertex(int k) const;
+  [[nodiscard]] bool coupled_free_vertex(int k) const { return feeder_.free_vertex(k); }
   /// @brief The vertex velocities of the current iterate, (x − x₀)/Δt (velocities() is the
   /// step's start until coupled_finish).
-  void coupled_velocities(std::vector<Eigen::Vector3d>& out) const;
+  void coupled_velocities(std::vector<Eigen::Vector3d>& out) const { stepper_.coupled_velocities(out); }
   /// @brief Keep the current iterate as the base of the line search.
-  void coupled_accept();
+  void coupled_accept() { stepper_.coupled_accept(); }
   /// @brief The largest fraction of @p dq the trust region allows (no vertex moves more than half
   /// its shortest edge, no edge turns more than 0.5 rad).
-  [[nodiscard]] double coupled_max_step(const Eigen::Ref<const Eigen::VectorXd>& dq) const;
+  [[nodiscard]] double coupled_max_step(const Eigen::Ref<const Eigen::VectorXd>& dq) const {
+    return stepper_.coupled_max_step(dq);
+  }
   /// @brief Move to the accepted iterate + @p alpha @p dq (frames transported).
-  void coupled_trial(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha);
+  void coupled_trial(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha) { stepper_.coupled_trial(dq, alpha); }
   /// @brief The trapezoidal work of the non-conservative external forces from the accepted
   /// iterate to the current one (after an assembly there): the merit is potential − this work.
-  [[nodiscard]] double coupled_nonconservative_work() const;
+  [[nodiscard]] double coupled_nonconservative_work() const { return stepper_.coupled_nonconservative_work(); }
   /// @brief Back to the accepted iterate (its loads kept).
-  void coupled_reject();
+  void coupled_reject() { stepper_.coupled_reject(); }
   /// @brief End the step: velocities, the clamp's reaction (from the last assembly's gradient),
   /// the trace, the externals' end_step, and @p rep counted in solver_totals().
-  void coupled_finish(double dt, const StepReport& rep);
+  void coupled_finish(double dt, const StepReport& rep) { stepper_.coupled_finish(dt, rep); }
   /// @brief Keep / bring back the step's start for taking it again in two halves.
-  void coupled_save(int slot) { save_state(slot); }
-  void coupled_restore(int slot) { restore_state(slot); }
+  void coupled_save(int slot) { stepper_.save_state(slot); }
+  void coupled_restore(int slot) { stepper_.restore_state(slot); }
+  ///@}
+
+  /// @name The parts (for callers that need one: a test of a part, a solver over several rods)
+  ///@{
+  [[nodiscard]] const Feeder& feeder() const { return feeder_; }
+  [[nodiscard]] TimeStepper& stepper() { return stepper_; }
+  [[nodiscard]] const TimeStepper& stepper() const { return stepper_; }
   ///@}
 
  private:
-  struct Work;
-  enum class Mode { Static, Dynamic };
-
-  void build_initial_state(double inserted);
-  /// Positions, frames and zero velocities/angles of the rest shape on the current vertices.
-  void layout_rest_shape();
-  void record_trace_reset();
-  /// View of the current state for external forces (dt = 0: between steps).
-  RodView current_view(double dt);
-  void update_vertex_set(double new_inserted);
-  /// The inserted length at the end of a step of @p dt at the feed speed (held at the wire's
-  /// ends, with a warning), with the vertex set updated to it.
-  double feed_vertex_set(double dt);
-  /// Newton's start for an implicit stage of length @p h ending at inserted length @p L and
-  /// base angle @p angle, @p fed fed since the step start: the feed predictor, the
-  /// prescribed unknowns, the frames carried from the step start, time and arc lengths.
-  void start_stage(double L, double angle, double fed, double h);
-  void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x, std::vector<double>& theta) const;
-  void refresh_arc_lengths();
-  /// Replace the vertex set by the one at material coordinates @p u_new (a dyadic
-  /// refinement/coarsening of the current one), carrying the state over.
-  void resample(const std::vector<double>& u_new);
-  void predict_feed(double fed, double h);
-  StepReport step_at_feed(double dt, double speed);
-  StepReport step_force_fed(double dt);
-  void vertex_params(int k, VertexParams& p) const;
-  /// One solve as a Newton problem (stage.hpp): the incremental potential of a stage of
-  /// length h (or the static potential) at a load ramp, for newton_.
-  class Stage;
-  /// Newton's method (newton.hpp) on that problem: from the current state to a residual within
-  /// force_scale(), or the status that stopped it.
-  /// @p max_iterations: the limit (< 0: the settings' limit for the mode).
-  StepReport newton(Mode mode, double h, double load_scale, int max_iterations = -1);
-  /// Back to the step start begin_step() kept: positions, angles, frames, reference twist.
-  void rewind_to_step_start();
-  /// Max over the free unknowns [first_free, first_fixed) of |force| and |torque| / rest length.
-  [[nodiscard]] double residual_norm(int first_free, int first_fixed) const;
-  StepReport solve_static_once();
-  /// Pseudo-transient continuation to the static equilibrium at @p load_scale from the
-  /// current state (stepping.cpp): the fallback of a static Newton solve that failed, within
-  /// @p budget Newton iterations (pseudo-steps and static ones together).
-  StepReport relax_to_static(double load_scale, int budget);
-  /// adapt() with the grid kept over the length a pull-back of @p pull_back moves into the clamp.
-  bool adapt_for(double pull_back);
-  /// Snapshot the step start (x, v, θ, ω, frames; q0, mass, damping) and move the state to
-  /// the inertial prediction q + h·v, with q̂ = that prediction; shared by both integrators.
-  void begin_step(double h, bool extrapolate);
-  StepReport step_euler(double dt);
-  /// The end of an implicit Euler step of @p dt: velocities, the base angle, the predictor's
-  /// record, the clamp's reaction.
-  void end_euler_step(double dt, double angle_new);
-  /// The iterate's positions, angles, frames and reference twists into the accepted slots
-  /// the line search moves from (keep_iterate), and back (back_to_kept_iterate).
-  void keep_iterate();
-  void back_to_kept_iterate();
-  /// The state at the accepted iterate + @p alpha @p dq (curvilinear update, frames transported).
-  void move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha);
-  StepReport step_once(double dt);
-  StepReport step_subdivided(double dt, int depth);
-  void save_state(int depth);
-  void restore_state(int depth);
-  StepReport step_midpoint(double dt);
-  void gather(Eigen::Ref<Eigen::VectorXd> q) const;
-  void transport_frames_to(const std::vector<Eigen::Vector3d>& x_new, const std::vector<EdgeFrame>& frame_from,
-                           const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
-                           std::vector<double>& twist_to) const;
-  /// Incremental potential (elastic + inertial + external potential energy) at the
-  /// current state; @p reuse_loads keeps the loads and external forces of the previous
-  /// assembly (same configuration), so externals are evaluated once per configuration.
-  double assemble(Mode mode, double h, double load_scale, Need need, bool psd = false, bool reuse_loads = false);
-  void evaluate_loads(Mode mode, double h, double load_scale);
-  /// The current configuration as the loads see it.
-  [[nodiscard]] LoadSite load_site() const;
-  void compute_base_reaction();
-  [[nodiscard]] double force_scale(double load_scale) const;
-  [[nodiscard]] int dof_count() const { return 4 * state_.vertex_count() - 1; }
-  void report(const StepReport& r, const char* what);
-  void record_trace();
-
-  RodModel model_;
-  RodState state_;
-  Discretization disc_;  // constants of the simulated vertices (state_.u)
-  long adapt_splits_ = 0, adapt_merges_ = 0;
-  SolverSettings settings_;
-  long solve_serial_ = 0;  ///< RodView::solve_serial: counts the steps and stages begun
-  std::unique_ptr<Work> work_;
-  std::vector<double> arc_length_;
-  std::vector<std::shared_ptr<ExternalForce>> externals_;
-  Loads loads_;  // gravity, tip force, point forces, tip moment
-  Eigen::Vector3d base_force_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d base_torque_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d base_d1_ = Eigen::Vector3d::Zero();  // clamp frame at zero rotation
-  Eigen::Vector3d base_d2_ = Eigen::Vector3d::Zero();
-  Drive drive_;              // feeding and turning at the clamp
-  double feed_speed_ = 0.0;  // this step's feeding speed (the drive's, unless held at the wire's end)
-  int first_clamped_ = 0;
-  bool tip_clamped_ = false;
-  Eigen::Vector3d tip_clamp_x0_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d tip_clamp_x1_ = Eigen::Vector3d::Zero();
-  double tip_clamp_theta_ = 0.0;
-  StepReport last_report_;
-  double coupled_angle_ = 0.0;  // the base angle at the end of a coupled step
-  double coupled_phi_ = 0.0;    // the potential of the accepted iterate
-  NewtonSolver newton_;         // Newton and its line search; the Stage is the problem it solves
-  SolverTotals totals_;
-  std::vector<TipSample> trace_;
+  RodBody body_;  // the model, the state and the simulated vertices' constants
+  Loads loads_;   // gravity, tip force, point forces, tip moment
+  ExternalForces externals_;
+  Feeder feeder_;        // the vertex set, the clamps, feeding, adaptive resampling
+  TimeStepper stepper_;  // the integrators and their solves
 };
 
 }  // namespace flowire::rod

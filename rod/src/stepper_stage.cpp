@@ -9,22 +9,22 @@
 #include <algorithm>
 #include <cmath>
 
-#include "flowire/rod/simulator.hpp"
-#include "simulator_internal.hpp"
+#include "flowire/rod/stepper.hpp"
+#include "rod_internal.hpp"
 
 namespace flowire::rod {
 
-class RodSimulator::Stage final : public NewtonProblem {
+class TimeStepper::Stage final : public NewtonProblem {
  public:
-  Stage(RodSimulator& sim, Mode mode, double h, double load_scale)
+  Stage(TimeStepper& sim, Mode mode, double h, double load_scale)
       : sim_(sim),
         w_(*sim.work_),
         mode_(mode),
         h_(h),
         load_scale_(load_scale),
         nd_(sim.dof_count()),
-        first_free_(sim.tip_clamped_ ? 7 : 0),  // x0, θ0, x1 held by a tip clamp
-        first_fixed_(4 * sim.first_clamped_) {}
+        first_free_(sim.feeder_.first_free_dof()),
+        first_fixed_(sim.feeder_.first_fixed_dof()) {}
 
   [[nodiscard]] int dofs() const override { return nd_; }
   [[nodiscard]] int first_free() const override { return first_free_; }
@@ -54,7 +54,7 @@ class RodSimulator::Stage final : public NewtonProblem {
     sim_.move_along(dq, alpha);
     // The trial's unknowns (for the inertia terms), the base's kept in w.rhs until accepted.
     w_.rhs.head(nd_) = w_.q.head(nd_) + alpha * dq;
-    for (int k = 0; k < sim_.first_clamped_; ++k) w_.rhs.segment<3>(4 * k) = sim_.state_.x[k];
+    for (int k = 0; k < sim_.feeder_.first_clamped(); ++k) w_.rhs.segment<3>(4 * k) = sim_.body_.state.x[k];
     w_.q.head(nd_).swap(w_.rhs.head(nd_));
   }
   void merits(int pass, double phi_base, double phi_trial, double* at_base, double* at_trial) const override {
@@ -84,7 +84,7 @@ class RodSimulator::Stage final : public NewtonProblem {
   void back_to_base() override { sim_.back_to_kept_iterate(); }
 
  private:
-  RodSimulator& sim_;
+  TimeStepper& sim_;
   Work& w_;
   Mode mode_;
   double h_, load_scale_;
@@ -94,52 +94,52 @@ class RodSimulator::Stage final : public NewtonProblem {
 
 // The rod's pieces the stage is made of.
 
-double RodSimulator::residual_norm(int first_free, int first_fixed) const {
+double TimeStepper::residual_norm(int first_free, int first_fixed) const {
   // Max over the free unknowns of |force| and |torque| / rest length (a force too).
   const Work& w = *work_;
   double r = 0.0;
   for (int d = first_free; d < first_fixed && d % 4 != 0; ++d) {  // a partly held vertex
-    const double v = (d % 4 == 3) ? w.grad(d) / disc_.rest_length[d / 4] : w.grad(d);
+    const double v = (d % 4 == 3) ? w.grad(d) / body_.disc.rest_length[d / 4] : w.grad(d);
     r = std::max(r, std::abs(v));
   }
   for (int k = (first_free + 3) / 4; 4 * k < first_fixed; ++k) {
     const double* g = w.grad.data() + 4 * k;
     r = std::max({r, std::abs(g[0]), std::abs(g[1]), std::abs(g[2])});
-    if (4 * k + 3 < first_fixed) r = std::max(r, std::abs(g[3]) / disc_.rest_length[k]);
+    if (4 * k + 3 < first_fixed) r = std::max(r, std::abs(g[3]) / body_.disc.rest_length[k]);
   }
   return r;
 }
 
-void RodSimulator::keep_iterate() {
+void TimeStepper::keep_iterate() {
   Work& w = *work_;
-  w.x_accepted = state_.x;
-  w.theta_accepted = state_.theta;
-  w.frame_accepted = state_.frame;
-  w.twist_accepted = state_.ref_twist;
+  w.x_accepted = body_.state.x;
+  w.theta_accepted = body_.state.theta;
+  w.frame_accepted = body_.state.frame;
+  w.twist_accepted = body_.state.ref_twist;
 }
 
-void RodSimulator::back_to_kept_iterate() {
+void TimeStepper::back_to_kept_iterate() {
   const Work& w = *work_;
-  state_.x = w.x_accepted;
-  state_.theta = w.theta_accepted;
-  state_.frame = w.frame_accepted;
-  state_.ref_twist = w.twist_accepted;
+  body_.state.x = w.x_accepted;
+  body_.state.theta = w.theta_accepted;
+  body_.state.frame = w.frame_accepted;
+  body_.state.ref_twist = w.twist_accepted;
 }
 
-void RodSimulator::move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha) {
+void TimeStepper::move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha) {
   Work& w = *work_;
-  RodState& s = state_;
+  RodState& s = body_.state;
   const int nv = s.vertex_count();
   for (int k = 0; k < nv; ++k) {
     s.x[k] = w.x_accepted[k] + alpha * dq.segment<3>(4 * k);
     if (k < nv - 1) s.theta[k] = w.theta_accepted[k] + alpha * dq(4 * k + 3);
   }
-  if (settings_.curvilinear_update && !tip_clamped_) {
+  if (settings_.curvilinear_update && !feeder_.tip_clamped()) {
     // Walk from the clamp to the tip keeping each free edge's updated direction but
     // its linearized length: removes the O(α²) spurious stretch of a straight-line
     // step through a rotation, so stiff stretching does not throttle the step.
-    Vec3 next_unprojected = s.x[first_clamped_];
-    for (int j = first_clamped_ - 1; j >= 0; --j) {
+    Vec3 next_unprojected = s.x[feeder_.first_clamped()];
+    for (int j = feeder_.first_clamped() - 1; j >= 0; --j) {
       const Vec3 xn = s.x[j];
       const Vec3 eb = w.x_accepted[j + 1] - w.x_accepted[j];
       const double lb = eb.norm();
@@ -149,10 +149,10 @@ void RodSimulator::move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, doubl
       next_unprojected = xn;
     }
   }
-  transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
+  detail::transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
 }
 
-StepReport RodSimulator::newton(Mode mode, double h, double load_scale, int max_iterations) {
+StepReport TimeStepper::newton(Mode mode, double h, double load_scale, int max_iterations) {
   Stage stage(*this, mode, h, load_scale);
   NewtonOptions o;
   o.max_iterations = max_iterations >= 0    ? max_iterations
@@ -161,7 +161,7 @@ StepReport RodSimulator::newton(Mode mode, double h, double load_scale, int max_
   o.max_line_search_cuts = settings_.max_line_search_cuts;
   o.linear_solver = settings_.linear_solver;
   o.chord_iterations = settings_.chord_iterations;
-  o.step_tolerance = settings_.step_tolerance * model_.h;
+  o.step_tolerance = settings_.step_tolerance * body_.model.h;
   o.quadratic_backtracking = mode == Mode::Dynamic;
   return newton_.solve(stage, o);
 }

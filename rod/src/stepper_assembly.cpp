@@ -1,4 +1,4 @@
-#include "flowire/rod/simulator.hpp"
+#include "flowire/rod/stepper.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "flowire/common/error.hpp"
 #include "kernel_clones.hpp"
-#include "simulator_internal.hpp"
+#include "rod_internal.hpp"
 
 namespace flowire::rod {
 
@@ -18,49 +18,23 @@ using detail::sym;
 // Assembly
 // -----------------------------------------------------------------------------------------
 
-void RodSimulator::vertex_params(int k, VertexParams& p) const {
-  // A clamp vertex owns only the half cell on its free side: the wire behind it is
-  // held rigid, so its bending and twisting act over h/2 (this keeps the clamp exactly at
-  // the entry and the scheme second-order; a full cell would move the clamp back by h/2).
-  double cell = 1.0;
-  if (k == first_clamped_) cell = 0.5 * disc_.rest_length[k - 1] / disc_.cell_length[k];
-  if (tip_clamped_ && k == 1) cell = 0.5;
-  p.bend_stiffness1 = p.bend_stiffness2 = disc_.bend_stiffness[k];
-  p.rest_kappa1 = cell * disc_.rest_kappa1[k];
-  p.rest_kappa2 = cell * disc_.rest_kappa2[k];
-  p.twist_stiffness = disc_.twist_stiffness[k];
-  p.rest_twist = 0.0;
-  p.voronoi_length = cell * disc_.cell_length[k];
-}
-
-void RodSimulator::gather(Eigen::Ref<Eigen::VectorXd> q) const {
-  const int nv = state_.vertex_count();
+void TimeStepper::gather(Eigen::Ref<Eigen::VectorXd> q) const {
+  const int nv = body_.state.vertex_count();
   for (int k = 0; k < nv; ++k) {
-    q.segment<3>(4 * k) = state_.x[k];
-    if (k < nv - 1) q(4 * k + 3) = state_.theta[k];
+    q.segment<3>(4 * k) = body_.state.x[k];
+    if (k < nv - 1) q(4 * k + 3) = body_.state.theta[k];
   }
 }
 
-int RodSimulator::add_point_force(double s, const Vec3& f) {
-  loads_.point_forces.points.push_back({s, f});
-  return static_cast<int>(loads_.point_forces.points.size()) - 1;
+LoadSite TimeStepper::load_site() const {
+  const auto nv = static_cast<size_t>(body_.state.vertex_count());
+  return {body_.state.x, std::span<const double>(body_.state.u.data(), nv),
+          std::span<const double>(body_.disc.mass.data(), nv), body_.state.inserted_length};
 }
 
-void RodSimulator::add_external(std::shared_ptr<ExternalForce> force) {
-  if (!force) throw_usage_error("RodSimulator::add_external: null force");
-  externals_.push_back(std::move(force));
-  externals_.back()->start(current_view(0.0));
-}
-
-LoadSite RodSimulator::load_site() const {
-  const auto nv = static_cast<size_t>(state_.vertex_count());
-  return {state_.x, std::span<const double>(state_.u.data(), nv), std::span<const double>(disc_.mass.data(), nv),
-          state_.inserted_length};
-}
-
-void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
+void TimeStepper::evaluate_loads(Mode mode, double h, double load_scale) {
   Work& w = *work_;
-  const RodState& s = state_;
+  const RodState& s = body_.state;
   const int nv = s.vertex_count();
   const int nd = dof_count();
   w.fext.head(nd).setZero();
@@ -85,13 +59,13 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
     RodView view;
     view.positions = s.x;
     view.velocities = w.vel;
-    view.arc_length = std::span<const double>(arc_length_.data(), nv);
-    view.radius = std::span<const double>(disc_.edge_radius.data(), nv - 1);
-    view.rest_lengths = std::span<const double>(disc_.rest_length.data(), nv - 1);
-    view.segment_length = model_.h;
+    view.arc_length = std::span<const double>(feeder_.arc_lengths().data(), nv);
+    view.radius = std::span<const double>(body_.disc.edge_radius.data(), nv - 1);
+    view.rest_lengths = std::span<const double>(body_.disc.rest_length.data(), nv - 1);
+    view.segment_length = body_.model.h;
     view.spin_rates = w.spin;
     view.tangents = w.tangent;
-    view.first_clamped_vertex = first_clamped_;
+    view.first_clamped_vertex = feeder_.first_clamped();
     view.time = s.time;
     view.dt = mode == Mode::Dynamic ? h : 0.0;
     view.solve_serial = solve_serial_;
@@ -126,9 +100,9 @@ void RodSimulator::evaluate_loads(Mode mode, double h, double load_scale) {
   }
 }
 
-double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need, bool psd, bool reuse_loads) {
+double TimeStepper::assemble(Mode mode, double h, double load_scale, Need need, bool psd, bool reuse_loads) {
   Work& w = *work_;
-  const RodState& s = state_;
+  const RodState& s = body_.state;
   const int nv = s.vertex_count();
   const int nd = dof_count();
   const bool need_grad = need != Need::Value;
@@ -139,8 +113,8 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
   double energy = 0.0;
   // Stretching: E = ½ ks ℓ̄ (ℓ/ℓ̄ − 1)², one length and tangent per edge.
   for (int j = 0; j < nv - 1; ++j) {
-    const double lbar = disc_.rest_length[j];
-    const double ks = disc_.stretch_stiffness[j];
+    const double lbar = body_.disc.rest_length[j];
+    const double ks = body_.disc.stretch_stiffness[j];
     const Vec3 e = s.x[j + 1] - s.x[j];
     const double l = e.norm();
     const double strain = l / lbar - 1.0;
@@ -174,7 +148,7 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
   Vec11 gs;
   Mat11 hs;
   for (int k = 1; k < nv - 1; ++k) {
-    vertex_params(k, p);
+    feeder_.vertex_params(k, p);
     energy += bend_twist(w.edges[k - 1], w.edges[k], s.theta[k - 1], s.theta[k], s.ref_twist[k], p,
                          need_grad ? &gs : nullptr, need_matrix ? &hs : nullptr, psd);
     if (need_grad) g.segment<11>(4 * (k - 1)) += gs;
@@ -223,18 +197,18 @@ double RodSimulator::assemble(Mode mode, double h, double load_scale, Need need,
   return energy + w.ext_energy;
 }
 
-double RodSimulator::force_scale(double load_scale) const {
-  const RodState& s = state_;
+double TimeStepper::force_scale(double load_scale) const {
+  const RodState& s = body_.state;
   double ei = 0.0, ea = 0.0;
-  for (int k = 0; k < s.vertex_count(); ++k) ei = std::max(ei, disc_.bend_stiffness[k]);
-  double lmin = model_.h;
+  for (int k = 0; k < s.vertex_count(); ++k) ei = std::max(ei, body_.disc.bend_stiffness[k]);
+  double lmin = body_.model.h;
   for (int j = 0; j < s.edge_count(); ++j) {
-    ea = std::max(ea, disc_.stretch_stiffness[j]);
-    lmin = std::min(lmin, disc_.rest_length[j]);
+    ea = std::max(ea, body_.disc.stretch_stiffness[j]);
+    lmin = std::min(lmin, body_.disc.rest_length[j]);
   }
-  const double L = std::max(s.inserted_length, model_.h);
+  const double L = std::max(s.inserted_length, body_.model.h);
   const double f = loads_.force_scale(load_site(), load_scale, L, ei / (L * L));
-  const double xscale = model_.base_position.norm() + L;
+  const double xscale = body_.model.base_position.norm() + L;
   const double floor = 4.0 * std::numeric_limits<double>::epsilon() * ea * (1.0 + xscale / lmin);
   return settings_.force_tolerance * f + floor;
 }

@@ -1,14 +1,15 @@
 #pragma once
-// The simulator's private parts shared by its source files: the work buffers and a few small
-// helpers. The simulator is split by phase:
-//   simulator.cpp   construction, state layout, frames, reactions, diagnostics
-//   feeding.cpp     the inserted length: vertex set, prescribed unknowns, feed predictor,
-//                   speed- and force-driven steps
-//   adapt.cpp       adaptive refinement and resampling
-//   assembly.cpp    loads, energy, gradient and banded Hessian
-//   stage.cpp       a solve as the problem of Newton's method (newton.hpp, its own part):
-//                   the merit, the trial moves along a direction, the residual
-//   stepping.cpp    integrators (implicit Euler, implicit midpoint, statics), substeps
+// The rod's private pieces shared by its source files: the parts' work buffers and a few small
+// helpers. The sources, by part:
+//   simulator.cpp          the façade: construction, diagnostics (energy, strain)
+//   feeder.cpp             the vertex set, the clamps, the rest layout, the feed predictor
+//   adapt.cpp              the feeder's adaptive refinement and resampling
+//   stepper.cpp            the integrators (implicit Euler, implicit midpoint, statics), substeps,
+//                          checkpoints, speed- and force-driven feeding of a step
+//   stepper_assembly.cpp   loads, energy, gradient and banded Hessian of a stage
+//   stepper_stage.cpp      a solve as the problem of Newton's method (newton.hpp, its own part):
+//                          the merit, the trial moves along a direction, the residual
+//   stepper_coupled.cpp    one step's parts for a Newton iteration over several rods
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 
@@ -16,7 +17,8 @@
 #include <vector>
 
 #include "flowire/rod/banded.hpp"
-#include "flowire/rod/simulator.hpp"
+#include "flowire/rod/feeder.hpp"
+#include "flowire/rod/stepper.hpp"
 
 namespace flowire::rod::detail {
 
@@ -46,17 +48,24 @@ inline double clamp_inserted(double L, const RodModel& m, bool& clamped) {
   return std::clamp(L, lo, hi);
 }
 
+/// Edge frames of @p frame_from parallel-transported to the edges of @p x_new, and the reference
+/// twists at the vertices between them (carried on from @p twist_from); in place is allowed.
+void transport_frames_to(const std::vector<Vec3>& x_new, const std::vector<EdgeFrame>& frame_from,
+                         const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
+                         std::vector<double>& twist_to);
+
 }  // namespace flowire::rod::detail
 
 namespace flowire::rod {
 
-/// Buffers sized once for the whole wire, so that a step allocates nothing. Sizes: nd =
-/// 4 nv − 1 unknowns (x_k and θ_k interleaved: q = (x_0, θ_0, x_1, θ_1, …, x_{nv−1})),
-/// nv vertices, ne = nv − 1 edges.
-struct RodSimulator::Work {
+/// The stepper's buffers, sized once for the whole wire, so that a step allocates nothing.
+/// Sizes: nd = 4 nv − 1 unknowns (x_k and θ_k interleaved: q = (x_0, θ_0, x_1, θ_1, …,
+/// x_{nv−1})), nv vertices, ne = nv − 1 edges.
+struct TimeStepper::Work {
+  explicit Work(int nvmax, int max_subdivisions);
   int max_dof = 0;
 
-  // Step start (stepping.cpp): for velocities, the inertial target and rollback.
+  // Step start (stepper.cpp): for velocities, the inertial target and rollback.
   std::vector<Vec3> x0, v0;                    ///< (nv)
   std::vector<double> theta0, omega0, twist0;  ///< (ne)
   std::vector<EdgeFrame> frame0;               ///< (ne)
@@ -68,7 +77,6 @@ struct RodSimulator::Work {
   std::vector<Vec3> v_guess;                   ///< (nv) velocity of Newton's initial guess
   std::vector<double> omega_guess;             ///< (ne)
   std::vector<Vec3> x_mid;                     ///< (nv) implicit midpoint: positions at the midpoint
-  std::vector<double> feed_twist;              ///< (nv) feeding: each vertex's total twist, kept across a re-layout
   struct Saved {                               ///< a step start kept for a retry in substeps
     RodState state;
     double target_angle = 0.0, insertion_speed = 0.0;
@@ -90,7 +98,7 @@ struct RodSimulator::Work {
   std::vector<double> guess_theta;  ///< … its material angles; empty: none
   double h_newton = 0.0;            ///< the step of the last dynamic Newton solve (a substep's if halved)
 
-  // Assembly (assembly.cpp).
+  // Assembly (stepper_assembly.cpp).
   Eigen::VectorXd mass, damp;       ///< (nd) lumped mass and damping diagonals
   Eigen::VectorXd fext;             ///< (nd) loads: gravity, point forces, external forces
   Eigen::VectorXd fcons;            ///< (nd) the conservative part of fext (it has a potential)
@@ -108,7 +116,7 @@ struct RodSimulator::Work {
   LowRankStiffness coupled;        ///< the external forces' coupled stiffness (dofs: 4·vertex)
   std::vector<double> ext_spin_k;  ///< (ne) −∂τ/∂ω / h
 
-  // A solve (stage.cpp): its iterate, and what the line search keeps.
+  // A solve (stepper_stage.cpp): its iterate, and what the line search keeps.
   Eigen::VectorXd q;     ///< (nd) unknowns at the iterate
   Eigen::VectorXd grad;  ///< (nd) gradient of the incremental potential minus the loads
   Eigen::VectorXd rhs;   ///< (nd) in the line search, the base's unknowns while a trial is evaluated
@@ -119,8 +127,13 @@ struct RodSimulator::Work {
   std::vector<EdgeFrame> frame_accepted;               ///< (ne)
   Eigen::VectorXd fext_accepted, fcons_accepted;       ///< (nd) its loads
   Eigen::VectorXd q_accepted;                          ///< (nd) its unknowns (coupled steps)
+};
 
-  // Adaptivity (adapt.cpp): the plan, and the old state while resampling.
+/// The feeder's buffers (sized once): the twist kept across a pull-back, and adaptivity's plan
+/// and the old state while resampling.
+struct Feeder::Scratch {
+  explicit Scratch(int nvmax);
+  std::vector<double> feed_twist;         ///< (nv) each vertex's total twist, kept across a re-layout
   std::vector<double> turn_angle;         ///< (nv) turning angle, or the rest shape's if larger
   std::vector<char> split_edge;           ///< (ne) edges to halve
   std::vector<char> remove_vertex;        ///< (nv) vertices to merge away

@@ -1,4 +1,4 @@
-#include "flowire/rod/simulator.hpp"
+#include "flowire/rod/stepper.hpp"
 
 #include <fmt/format.h>
 
@@ -7,26 +7,132 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
-#include "simulator_internal.hpp"
+#include "kernel_clones.hpp"
+#include "rod_internal.hpp"
 
 namespace flowire::rod {
 
-using detail::clamp_inserted;
 using detail::finite;
+using detail::kBandwidth;
+
+Integrator parse_integrator(std::string_view name) {
+  if (name == "implicit_euler") return Integrator::ImplicitEuler;
+  if (name == "implicit_midpoint") return Integrator::ImplicitMidpoint;
+  throw_usage_error(fmt::format("integrator '{}': use implicit_euler or implicit_midpoint", name));
+}
+
+const char* to_string(Integrator integrator) {
+  return integrator == Integrator::ImplicitMidpoint ? "implicit_midpoint" : "implicit_euler";
+}
+
+TimeStepper::Work::Work(int nvmax, int max_subdivisions) : max_dof(4 * nvmax - 1) {
+  for (Eigen::VectorXd* v : {&q, &grad, &rhs, &mass, &damp, &fext, &fext_accepted, &q0, &qhat, &fcons, &fcons_accepted})
+    v->setZero(max_dof);
+  H.reserve(max_dof, kBandwidth);
+  ext_k.reserve(nvmax);
+  ext_edge_k.reserve(nvmax);
+  edges.reserve(nvmax);
+  acc.reserve(nvmax);
+  for (auto* v : {&vel, &x0, &v0, &x_accepted, &x_mid, &tangent, &x_end, &v_guess}) v->reserve(nvmax);
+  spin.reserve(nvmax);
+  ext_spin_k.reserve(nvmax);
+  for (auto* v : {&theta0, &omega0, &twist0, &theta_accepted, &twist_accepted, &omega_guess}) v->reserve(nvmax);
+  saved.resize(static_cast<size_t>(std::max(max_subdivisions, 0)) + 4);
+  for (auto& v : saved) v.state.reserve(nvmax);
+  frame0.reserve(nvmax);
+  frame_accepted.reserve(nvmax);
+}
+
+TimeStepper::TimeStepper(RodBody& body, Feeder& feeder, const Loads& loads, const ExternalForces& externals)
+    : body_(body),
+      feeder_(feeder),
+      loads_(loads),
+      externals_(externals),
+      work_(std::make_unique<Work>(body.max_vertices(), SolverSettings{}.max_subdivisions)) {
+  newton_.reserve(work_->max_dof, kBandwidth);
+  trace_.reserve(1 << 14);
+}
+
+TimeStepper::~TimeStepper() = default;
+
+bool TimeStepper::adapt_for(double pull_back) {
+  return feeder_.adapt_for(pull_back, [this](const std::vector<int>& new_source) {
+    if (externals_.empty()) return;
+    const RodView view = current_view(0.0);
+    for (const auto& e : externals_) e->remap(view, new_source);
+  });
+}
+
+RodView TimeStepper::current_view(double dt) {
+  Work& w = *work_;
+  const RodState& s = body_.state;
+  const int nv = s.vertex_count();
+  RodView view;
+  view.positions = s.x;
+  view.velocities = s.v;
+  view.arc_length = feeder_.arc_lengths();
+  view.radius = std::span<const double>(body_.disc.edge_radius.data(), nv - 1);
+  view.rest_lengths = std::span<const double>(body_.disc.rest_length.data(), nv - 1);
+  view.segment_length = body_.model.h;
+  w.tangent.resize(nv - 1);
+  for (int j = 0; j < nv - 1; ++j) w.tangent[j] = (s.x[j + 1] - s.x[j]).normalized();
+  view.spin_rates = s.omega;
+  view.tangents = w.tangent;
+  view.first_clamped_vertex = feeder_.first_clamped();
+  view.time = s.time;
+  view.dt = dt;
+  view.solve_serial = solve_serial_;
+  return view;
+}
+
+void TimeStepper::reset_trace() {
+  trace_.clear();
+  record_trace();
+}
+
+void TimeStepper::compute_base_reaction() {
+  const Work& w = *work_;
+  const RodState& s = body_.state;
+  const int nv = s.vertex_count();
+  base_force_.setZero();
+  base_torque_.setZero();
+  for (int k = feeder_.first_clamped(); k < nv; ++k) {
+    const Vec3 f = w.grad.segment<3>(4 * k);
+    base_force_ += f;
+    base_torque_ += (s.x[k] - body_.model.base_position).cross(f);
+    if (k < nv - 1) {
+      const Vec3 t = (s.x[k + 1] - s.x[k]).normalized();
+      base_torque_ += w.grad(4 * k + 3) * t;
+    }
+  }
+}
+
+void TimeStepper::report(const StepReport& r, const char* what) {
+  last_report_ = r;
+  if (r.converged()) return;
+  warn(
+      fmt::format("rod: {} at t = {:.6g} s: {} after {} Newton iterations "
+                  "(residual {:.3g} N, tolerance {:.3g} N)",
+                  what, body_.state.time, to_string(r.status), r.newton_iterations, r.residual, r.tolerance));
+}
+
+void TimeStepper::record_trace() {
+  trace_.push_back({body_.state.time, body_.state.inserted_length, body_.state.x.front()});
+}
 
 // -----------------------------------------------------------------------------------------
 // Stepping
 // -----------------------------------------------------------------------------------------
 
-StepReport RodSimulator::step(double dt) {
-  if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("RodSimulator::step: dt must be > 0");
+StepReport TimeStepper::step(double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt)) throw_usage_error("TimeStepper::step: dt must be > 0");
   const StepReport rep = step_subdivided(dt, 0);
   totals_.add(rep);
   report(rep, settings_.integrator == Integrator::ImplicitMidpoint ? "implicit midpoint step" : "implicit Euler step");
   return rep;
 }
 
-StepReport RodSimulator::step_subdivided(double dt, int depth) {
+StepReport TimeStepper::step_subdivided(double dt, int depth) {
   // A step whose Newton solve fails (no descent left, the iteration limit far from
   // convergence, non-finite values) is taken again from its start as two half steps, down
   // to dt/2^max_subdivisions; only the last level's result is kept as it is.
@@ -56,40 +162,40 @@ StepReport RodSimulator::step_subdivided(double dt, int depth) {
   return rep;
 }
 
-void RodSimulator::save_state(int depth) {
+void TimeStepper::save_state(int depth) {
   Work& w = *work_;
   if (static_cast<int>(w.saved.size()) <= depth) w.saved.resize(static_cast<size_t>(depth) + 1);
   Work::Saved& v = w.saved[static_cast<size_t>(depth)];
-  v.state = state_;
-  v.target_angle = drive_.base_angle();
-  v.insertion_speed = drive_.insertion_speed();
-  v.first_clamped = first_clamped_;
+  v.state = body_.state;
+  v.target_angle = feeder_.drive().base_angle();
+  v.insertion_speed = feeder_.drive().insertion_speed();
+  v.first_clamped = feeder_.first_clamped();
   v.base_force = base_force_;
   v.base_torque = base_torque_;
   v.trace_size = trace_.size();
 }
 
-void RodSimulator::restore_state(int depth) {
+void TimeStepper::restore_state(int depth) {
   const Work::Saved& v = work_->saved[static_cast<size_t>(depth)];
-  state_ = v.state;
-  drive_.set_base_angle(v.target_angle);
-  drive_.set_insertion_speed(v.insertion_speed);
-  first_clamped_ = v.first_clamped;
+  body_.state = v.state;
+  feeder_.drive().set_base_angle(v.target_angle);
+  feeder_.drive().set_insertion_speed(v.insertion_speed);
+  feeder_.set_first_clamped(v.first_clamped);
   base_force_ = v.base_force;
   base_torque_ = v.base_torque;
   trace_.resize(v.trace_size);
-  model_.discretize(state_.u, disc_);
-  refresh_arc_lengths();
+  body_.rediscretize();
+  feeder_.refresh_arc_lengths();
 }
 
-StepReport RodSimulator::step_once(double dt) {
-  if (drive_.force_driven()) return step_force_fed(dt);
-  return step_at_feed(dt, drive_.kinematic_speed(base_force_.dot(model_.base_direction)));
+StepReport TimeStepper::step_once(double dt) {
+  if (feeder_.drive().force_driven()) return step_force_fed(dt);
+  return step_at_feed(dt, feeder_.drive().kinematic_speed(base_force_.dot(body_.model.base_direction)));
 }
 
-void RodSimulator::begin_step(double h, bool extrapolate) {
+void TimeStepper::begin_step(double h, bool extrapolate) {
   auto& w = *work_;
-  auto& s = state_;
+  auto& s = body_.state;
   ++solve_serial_;
   const int nv = s.vertex_count();
   // Newton's initial guess. Inertial: q + h q̇. With `extrapolate` (implicit Euler), where the
@@ -116,12 +222,13 @@ void RodSimulator::begin_step(double h, bool extrapolate) {
   w.twist0 = s.ref_twist;
   for (int k = 0; k < nv; ++k) {
     w.q0.segment<3>(4 * k) = s.x[k];
-    w.mass.segment<3>(4 * k).setConstant(disc_.mass[k]);
-    w.damp.segment<3>(4 * k).setConstant(model_.damping * disc_.cell_length[k] + model_.mass_damping * disc_.mass[k]);
+    w.mass.segment<3>(4 * k).setConstant(body_.disc.mass[k]);
+    w.damp.segment<3>(4 * k).setConstant(body_.model.damping * body_.disc.cell_length[k] +
+                                         body_.model.mass_damping * body_.disc.mass[k]);
     if (k < nv - 1) {
       w.q0(4 * k + 3) = s.theta[k];
       w.qhat(4 * k + 3) = s.theta[k] + h * s.omega[k];
-      w.mass(4 * k + 3) = disc_.twist_inertia[k];
+      w.mass(4 * k + 3) = body_.disc.twist_inertia[k];
       w.damp(4 * k + 3) = 0.0;
     }
   }
@@ -131,40 +238,27 @@ void RodSimulator::begin_step(double h, bool extrapolate) {
   }
 }
 
-double RodSimulator::feed_vertex_set(double dt) {
-  bool clamped = false;
-  const double L_new = clamp_inserted(state_.inserted_length + feed_speed_ * dt, model_, clamped);
-  if (clamped && feed_speed_ != 0.0) {
-    warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
-    drive_.set_insertion_speed(0.0);
-    feed_speed_ = 0.0;
-  }
-  state_.base_angle = drive_.base_angle();
-  update_vertex_set(L_new);
-  return L_new;
-}
-
-void RodSimulator::start_stage(double L, double angle, double fed, double h) {
+void TimeStepper::start_stage(double L, double angle, double fed, double h) {
   Work& w = *work_;
-  RodState& s = state_;
-  predict_feed(fed, h);
+  RodState& s = body_.state;
+  feeder_.predict_feed(fed, h, w.x0, w.v0);
   if (!w.guess_x.empty()) {  // a caller's guess (restore_checkpoint), for the free unknowns
     if (w.guess_x.size() == s.x.size() && w.guess_theta.size() == s.theta.size())
       s.x = w.guess_x, s.theta = w.guess_theta;
     w.guess_x.clear(), w.guess_theta.clear();
   }
-  set_prescribed(L, angle, s.x, s.theta);
-  transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+  feeder_.set_prescribed(L, angle, s.x, s.theta);
+  detail::transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
   s.time += h;
   s.inserted_length = L;
-  refresh_arc_lengths();
+  feeder_.refresh_arc_lengths();
 }
 
-StepReport RodSimulator::step_euler(double dt) {
+StepReport TimeStepper::step_euler(double dt) {
   Work& w = *work_;
-  RodState& s = state_;
-  const double L_new = feed_vertex_set(dt);
-  const double angle_new = drive_.angle_after(dt);
+  RodState& s = body_.state;
+  const double L_new = feeder_.feed_vertex_set(dt);
+  const double angle_new = feeder_.drive().angle_after(dt);
 
   // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
   // While the wire is fed at the speed of the last step, the second-order inertial guess
@@ -172,7 +266,7 @@ StepReport RodSimulator::step_euler(double dt) {
   // solution, where the feed predictor (the wire slid along its own polyline) is O(h²) off
   // in every bend and far off at a pre-shaped tip. The feed predictor starts a feed, or a
   // change of its speed, where the inertial guess has nothing to go on.
-  const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feed_speed_ == w.feed_end;
+  const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feeder_.feed_speed() == w.feed_end;
   begin_step(dt, settings_.second_order_guess);
   w.h_newton = dt;
   start_stage(L_new, angle_new, steady_feed ? 0.0 : L_new - s.inserted_length, dt);
@@ -182,39 +276,39 @@ StepReport RodSimulator::step_euler(double dt) {
     rewind_to_step_start();
     s.v = w.v0;
     s.omega = w.omega0;
-    set_prescribed(L_new, angle_new, s.x, s.theta);
-    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+    feeder_.set_prescribed(L_new, angle_new, s.x, s.theta);
+    detail::transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
   }
   end_euler_step(dt, angle_new);
   return rep;
 }
 
-void RodSimulator::end_euler_step(double dt, double angle_new) {
+void TimeStepper::end_euler_step(double dt, double angle_new) {
   Work& w = *work_;
-  RodState& s = state_;
+  RodState& s = body_.state;
   const int nv = s.vertex_count();
   for (int k = 0; k < nv; ++k) {
     s.v[k] = (s.x[k] - w.x0[k]) / dt;
     if (k < nv - 1) s.omega[k] = (s.theta[k] - w.theta0[k]) / dt;
   }
-  drive_.set_base_angle(angle_new);
+  feeder_.drive().set_base_angle(angle_new);
   s.base_angle = angle_new;
   // Where this step left the vertices, for the next step's predictor.
   w.x_end = s.x;
   w.h_end = dt;
-  w.feed_end = feed_speed_;
+  w.feed_end = feeder_.feed_speed();
   compute_base_reaction();
 }
 
-StepReport RodSimulator::step_midpoint(double dt) {
+StepReport TimeStepper::step_midpoint(double dt) {
   Work& w = *work_;
-  RodState& s = state_;
+  RodState& s = body_.state;
   const double L_start = s.inserted_length;
-  const double L_new = feed_vertex_set(dt);
+  const double L_new = feeder_.feed_vertex_set(dt);
   const double hh = 0.5 * dt;
   const double L_half = 0.5 * (L_start + L_new);
-  const double angle_half = drive_.angle_after(hh);
-  const double angle_new = drive_.angle_after(dt);
+  const double angle_half = feeder_.drive().angle_after(hh);
+  const double angle_new = feeder_.drive().angle_after(dt);
 
   begin_step(hh, /*extrapolate=*/false);
   const int nv = s.vertex_count();
@@ -227,8 +321,8 @@ StepReport RodSimulator::step_midpoint(double dt) {
     rewind_to_step_start();
     for (auto& v : s.v) v.setZero();
     for (auto& o : s.omega) o = 0.0;
-    set_prescribed(L_new, angle_new, s.x, s.theta);
-    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+    feeder_.set_prescribed(L_new, angle_new, s.x, s.theta);
+    detail::transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
   } else {
     // Extrapolate from the midpoint z: q₁ = 2z − q₀, v₁ = 2 (z − q₀)/(h/2) − v₀.
     w.x_mid = s.x;
@@ -243,41 +337,41 @@ StepReport RodSimulator::step_midpoint(double dt) {
         s.theta[k] = 2.0 * tz - w.theta0[k];
       }
     }
-    set_prescribed(L_new, angle_new, s.x, s.theta);
-    transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
+    feeder_.set_prescribed(L_new, angle_new, s.x, s.theta);
+    detail::transport_frames_to(s.x, w.frame_accepted, w.twist_accepted, s.frame, s.ref_twist);
   }
   s.time += hh;
   s.inserted_length = L_new;
-  refresh_arc_lengths();
-  drive_.set_base_angle(angle_new);
+  feeder_.refresh_arc_lengths();
+  feeder_.drive().set_base_angle(angle_new);
   s.base_angle = angle_new;
   return rep;
 }
 
-StepReport RodSimulator::solve_static() {
+StepReport TimeStepper::solve_static() {
   StepReport r = solve_static_once();
   // Adaptive: resample at the equilibrium and solve again until the vertex set settles.
-  for (int round = 0; round < 12 && r.converged() && adapt(); ++round) {
+  for (int round = 0; round < 12 && r.converged() && adapt_for(0.0); ++round) {
     trace_.pop_back();
     r.then(solve_static_once());
   }
   return r;
 }
 
-double RodSimulator::static_imbalance() {
+double TimeStepper::static_imbalance() {
   Work& w = *work_;
   gather(w.q);
   (void)assemble(Mode::Static, 1.0, 1.0, Need::Gradient);
-  return residual_norm(tip_clamped_ ? 7 : 0, 4 * first_clamped_) / force_scale(1.0);
+  return residual_norm(feeder_.tip_clamped() ? 7 : 0, 4 * feeder_.first_clamped()) / force_scale(1.0);
 }
 
-void RodSimulator::save_checkpoint() {
+void TimeStepper::save_checkpoint() {
   Work& w = *work_;
   Work::Checkpoint& c = w.checkpoint;
-  c.at.state = state_;
-  c.at.target_angle = drive_.base_angle();
-  c.at.insertion_speed = drive_.insertion_speed();
-  c.at.first_clamped = first_clamped_;
+  c.at.state = body_.state;
+  c.at.target_angle = feeder_.drive().base_angle();
+  c.at.insertion_speed = feeder_.drive().insertion_speed();
+  c.at.first_clamped = feeder_.first_clamped();
   c.at.base_force = base_force_;
   c.at.base_torque = base_torque_;
   c.at.trace_size = trace_.size();
@@ -287,43 +381,43 @@ void RodSimulator::save_checkpoint() {
   for (auto& e : externals_) e->save_checkpoint();
 }
 
-void RodSimulator::restore_checkpoint(bool guess_from_current) {
+void TimeStepper::restore_checkpoint(bool guess_from_current) {
   Work& w = *work_;
   const Work::Checkpoint& c = w.checkpoint;
-  if (!c.valid) throw_usage_error("RodSimulator::restore_checkpoint: no checkpoint was saved");
+  if (!c.valid) throw_usage_error("TimeStepper::restore_checkpoint: no checkpoint was saved");
   w.guess_x.clear(), w.guess_theta.clear();
-  if (guess_from_current) w.guess_x = state_.x, w.guess_theta = state_.theta;
-  state_ = c.at.state;
-  drive_.set_base_angle(c.at.target_angle);
-  drive_.set_insertion_speed(c.at.insertion_speed);
-  first_clamped_ = c.at.first_clamped;
+  if (guess_from_current) w.guess_x = body_.state.x, w.guess_theta = body_.state.theta;
+  body_.state = c.at.state;
+  feeder_.drive().set_base_angle(c.at.target_angle);
+  feeder_.drive().set_insertion_speed(c.at.insertion_speed);
+  feeder_.set_first_clamped(c.at.first_clamped);
   base_force_ = c.at.base_force;
   base_torque_ = c.at.base_torque;
   trace_.resize(c.at.trace_size);
   w.x_end = c.x_end, w.v0 = c.v0, w.omega0 = c.omega0;
   w.h_end = c.h_end, w.feed_end = c.feed_end;
   for (auto& e : externals_) e->restore_checkpoint();
-  model_.discretize(state_.u, disc_);
-  refresh_arc_lengths();
+  body_.rediscretize();
+  feeder_.refresh_arc_lengths();
 }
 
-double RodSimulator::step_imbalance() {
+double TimeStepper::step_imbalance() {
   Work& w = *work_;
   if (settings_.integrator != Integrator::ImplicitEuler || !(w.h_newton > 0.0))
-    throw_usage_error("RodSimulator::step_imbalance: only after an implicit Euler step");
+    throw_usage_error("TimeStepper::step_imbalance: only after an implicit Euler step");
   gather(w.q);
   (void)assemble(Mode::Dynamic, w.h_newton, 1.0, Need::Gradient);
-  return residual_norm(tip_clamped_ ? 7 : 0, 4 * first_clamped_) / force_scale(1.0);
+  return residual_norm(feeder_.tip_clamped() ? 7 : 0, 4 * feeder_.first_clamped()) / force_scale(1.0);
 }
 
-StepReport RodSimulator::solve_static_once() {
-  RodState& s = state_;
-  s.base_angle = drive_.base_angle();
-  set_prescribed(s.inserted_length, drive_.base_angle(), s.x, s.theta);
-  transport_frames_to(s.x, s.frame, s.ref_twist, s.frame, s.ref_twist);
+StepReport TimeStepper::solve_static_once() {
+  RodState& s = body_.state;
+  s.base_angle = feeder_.drive().base_angle();
+  feeder_.set_prescribed(s.inserted_length, feeder_.drive().base_angle(), s.x, s.theta);
+  detail::transport_frames_to(s.x, s.frame, s.ref_twist, s.frame, s.ref_twist);
   for (auto& v : s.v) v.setZero();
   for (auto& o : s.omega) o = 0.0;
-  refresh_arc_lengths();
+  feeder_.refresh_arc_lengths();
   const int steps = std::max(1, settings_.static_load_steps);
   StepReport total;
   for (int i = 1; i <= steps; ++i) {
@@ -351,7 +445,7 @@ StepReport RodSimulator::solve_static_once() {
   return total;
 }
 
-StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
+StepReport TimeStepper::relax_to_static(double load_scale, int budget) {
   // Pseudo-transient continuation (Kelley & Keyes 1998): implicit Euler steps of pseudo-time
   // τ from rest, each from the last one's end with the velocity reset to zero, so the inertia
   // M/τ² regularizes the matrix that alone is nearly singular; τ grows while the steps come
@@ -359,7 +453,7 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
   // from there. The fixed point of the pseudo-steps (x = x₀, so every velocity-dependent
   // force, friction and drag, is that of a wire at rest) is the static equilibrium itself.
   Work& w = *work_;
-  RodState& s = state_;
+  RodState& s = body_.state;
   StepReport total;
   total.status = SolveStatus::MaxIterations;
   double tau = 1e-3;
@@ -367,7 +461,7 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
     for (auto& v : s.v) v.setZero();
     for (auto& o : s.omega) o = 0.0;
     begin_step(tau, /*extrapolate=*/false);
-    transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
+    detail::transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
     const StepReport r = newton(Mode::Dynamic, tau, load_scale);
     total.add_work(r);
     if (!r.converged()) {
@@ -376,9 +470,9 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
       continue;
     }
     double moved = 0.0;
-    for (int i = 0; i < first_clamped_; ++i) moved = std::max(moved, (s.x[i] - w.x0[i]).norm());
+    for (int i = 0; i < feeder_.first_clamped(); ++i) moved = std::max(moved, (s.x[i] - w.x0[i]).norm());
     if (r.newton_iterations <= 4) tau *= 4.0;
-    if (moved > 1e-3 * model_.h && k % 8 != 7) continue;
+    if (moved > 1e-3 * body_.model.h && k % 8 != 7) continue;
     // Nearly at rest (or every eighth step): try to finish with static Newton, keeping the
     // pseudo-step's end if it cannot.
     const int try_budget = std::min(40, budget - total.newton_iterations);
@@ -400,19 +494,46 @@ StepReport RodSimulator::relax_to_static(double load_scale, int budget) {
   return total;
 }
 
-void RodSimulator::rewind_to_step_start() {
+void TimeStepper::rewind_to_step_start() {
   const Work& w = *work_;
-  state_.x = w.x0;
-  state_.theta = w.theta0;
-  state_.frame = w.frame0;
-  state_.ref_twist = w.twist0;
+  body_.state.x = w.x0;
+  body_.state.theta = w.theta0;
+  body_.state.frame = w.frame0;
+  body_.state.ref_twist = w.twist0;
 }
 
-int RodSimulator::static_hessian_negative_eigenvalues() {
+int TimeStepper::static_hessian_negative_eigenvalues() {
   Work& w = *work_;
   gather(w.q);
   assemble(Mode::Static, 1.0, 1.0, Need::Matrix);
-  return newton_.negative_pivots(w.H, tip_clamped_ ? 7 : 0, 4 * first_clamped_);
+  return newton_.negative_pivots(w.H, feeder_.tip_clamped() ? 7 : 0, 4 * feeder_.first_clamped());
+}
+
+StepReport TimeStepper::step_at_feed(double dt, double speed) {
+  feeder_.set_feed_speed(speed);
+  adapt_for(std::max(0.0, -feeder_.feed_speed() * dt));
+  return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt) : step_euler(dt);
+}
+
+StepReport TimeStepper::step_force_fed(double dt) {
+  // The feed length of the step is the unknown: the step is taken again from its start until
+  // the clamp's axial force at its end, base_force()·d, equals the applied force (the drive's
+  // secant). The feed of one step is kept within half a segment.
+  const Vec3& d = body_.model.base_direction;
+  const int slot = std::max(settings_.max_subdivisions, 0) + 2;
+  double m = 0.0;
+  for (double mk : body_.disc.mass) m += mk;
+  const double slope_guess =
+      std::max(m / dt + body_.model.damping * body_.state.inserted_length + body_.model.mass_damping * m, 1e-12);
+  save_state(slot);
+  StepReport rep = step_at_feed(dt, feeder_.drive().force_feed_begin(0.5 * body_.model.h / dt, slope_guess));
+  if (!rep.converged()) return rep;
+  while (const auto v = feeder_.drive().force_feed_next(base_force_.dot(d))) {
+    restore_state(slot);
+    rep = step_at_feed(dt, *v);
+    if (!rep.converged()) return rep;
+  }
+  return rep;
 }
 
 }  // namespace flowire::rod

@@ -1,0 +1,122 @@
+#pragma once
+/// @file feeder.hpp
+/// @brief Which part of the wire is simulated, and where its held unknowns are.
+///
+/// **Feeding.** The wire lies on a fixed grid in the material coordinate (model.hpp). The
+/// simulated vertices are the grid points from the tip to two points behind the entry: the
+/// clamp vertex (the first grid point at or behind the entry) and one more. Feeding moves the
+/// entry along the wire: grid points that pass it are released, new ones are appended behind
+/// it, and points pulled back behind it are laid onto the insertion line and held, their twist
+/// kept continuous. `set_prescribed` puts the held unknowns where the clamp (and an optional tip
+/// clamp) holds them; `predict_feed` gives Newton a start in which the wire slid along itself.
+///
+/// **Adaptivity** (`WireSpec::adapt`): `adapt_for` splits free edges where the wire is bent
+/// and merges them where it is straight, on a dyadic hierarchy in the material coordinate,
+/// and carries the state over (resample: positions on the Hermite curve through the old
+/// vertices and tangents, velocities interpolated, frames transported, twist density kept).
+/// Vertices at or behind the entry stay feeding-grid points.
+///
+/// The feeder moves vertices of the body's state and changes its vertex set; it solves
+/// nothing (the TimeStepper, stepper.hpp, does).
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "flowire/rod/body.hpp"
+#include "flowire/rod/drive.hpp"
+
+namespace flowire::rod {
+
+class Feeder {
+ public:
+  /// @p body: the rod this feeder lays out (kept by reference; it must outlive the feeder).
+  explicit Feeder(RodBody& body);
+  ~Feeder();
+  Feeder(const Feeder&) = delete;
+  Feeder& operator=(const Feeder&) = delete;
+
+  /// @brief The vertex set of @p inserted metres inserted, laid out in the rest shape from the
+  /// clamp (a pre-shaped tip bent about the base normal), at rest, base angle 0.
+  void build(double inserted);
+  /// @brief Positions, frames and zero velocities/angles of the rest shape on the current vertices.
+  void layout_rest_shape();
+  /// @brief The free part laid on a curve at rest: vertex k at @p along(s_k), s_k its arc length
+  /// from the entry; frames parallel-transported from the clamp (no twist).
+  void lay_along(const std::function<Eigen::Vector3d(double)>& along);
+
+  /// @brief The clamp's drive (feeding and turning rules).
+  Drive& drive() { return drive_; }
+  [[nodiscard]] const Drive& drive() const { return drive_; }
+  /// @brief This step's feed speed [m/s] (the drive's, unless held at the wire's ends).
+  [[nodiscard]] double feed_speed() const { return feed_speed_; }
+  void set_feed_speed(double speed) { feed_speed_ = speed; }
+
+  /// @brief The inserted length at the end of a step of @p dt at the feed speed (held between
+  /// two segments and the wire's length, with a warning and the feed stopped), with the vertex
+  /// set updated to it; the state's base angle set to the drive's.
+  double feed_vertex_set(double dt);
+  /// @brief The vertex set for inserted length @p inserted (grid points appended or held).
+  void update_vertex_set(double inserted);
+  /// @brief The held unknowns of @p x, @p theta where the clamp at inserted length @p inserted
+  /// and base angle @p angle (and a tip clamp) put them.
+  void set_prescribed(double inserted, double angle, std::vector<Eigen::Vector3d>& x, std::vector<double>& theta) const;
+  /// @brief Newton's start while feeding @p fed metres in a stage of length @p h: each free
+  /// vertex where material u − fed lay at the stage's start (@p x0, @p v0), plus its velocity
+  /// across the wire. No-op for fed = 0.
+  void predict_feed(double fed, double h, std::span<const Eigen::Vector3d> x0, std::span<const Eigen::Vector3d> v0);
+
+  /// @brief Index of the first clamped vertex (the one at or just behind the entry).
+  [[nodiscard]] int first_clamped() const { return first_clamped_; }
+  /// @brief For a step taken again from a kept start (the vertex set of that start).
+  void set_first_clamped(int k) { first_clamped_ = k; }
+  /// @brief (n_vertices) arc length from the entry point [m]: > 0 inserted, ≤ 0 clamped.
+  [[nodiscard]] std::span<const double> arc_lengths() const { return arc_length_; }
+  /// @brief arc_lengths() for the state's inserted length and vertices.
+  void refresh_arc_lengths();
+  /// @brief The first unknown that is not held by a tip clamp (x0, θ0, x1 are).
+  [[nodiscard]] int first_free_dof() const { return tip_clamped_ ? 7 : 0; }
+  /// @brief The first unknown held by the base clamp (4 · first clamped vertex).
+  [[nodiscard]] int first_fixed_dof() const { return 4 * first_clamped_; }
+  /// @brief Whether vertex @p k's position is an unknown.
+  [[nodiscard]] bool free_vertex(int k) const { return k < first_clamped_ && !(tip_clamped_ && k < 2); }
+  /// @brief Bending parameters of interior vertex @p k: a clamp vertex owns only the half cell
+  /// on its free side (the wire behind it is rigid), as does vertex 1 under a tip clamp.
+  void vertex_params(int k, VertexParams& p) const;
+
+  /// @brief Hold the distal edge: vertex 0 at @p tip, vertex 1 at @p next, its angle as it is.
+  void clamp_tip(const Eigen::Vector3d& tip, const Eigen::Vector3d& next);
+  void release_tip() { tip_clamped_ = false; }
+  [[nodiscard]] bool tip_clamped() const { return tip_clamped_; }
+
+  /// @brief Resample the free part (a no-op unless adaptivity is on), keeping the grid over the
+  /// length a pull-back of @p pull_back moves into the clamp; @p on_resample is told, after each
+  /// resampling, the old vertex each new one copies (−1: a new vertex). True if the set changed.
+  bool adapt_for(double pull_back, const std::function<void(const std::vector<int>&)>& on_resample);
+  /// @brief Vertices added and removed by adaptivity so far.
+  [[nodiscard]] long adapt_splits() const { return adapt_splits_; }
+  [[nodiscard]] long adapt_merges() const { return adapt_merges_; }
+
+ private:
+  struct Scratch;
+  /// Replace the vertex set by the one at material coordinates @p u_new (a dyadic refinement
+  /// or coarsening of the current one), carrying the state over.
+  void resample(const std::vector<double>& u_new);
+
+  RodBody& body_;
+  std::unique_ptr<Scratch> scratch_;
+  Drive drive_;
+  double feed_speed_ = 0.0;
+  int first_clamped_ = 0;
+  std::vector<double> arc_length_;
+  Eigen::Vector3d base_d1_ = Eigen::Vector3d::Zero();  // the clamp's frame at zero rotation
+  Eigen::Vector3d base_d2_ = Eigen::Vector3d::Zero();
+  bool tip_clamped_ = false;
+  Eigen::Vector3d tip_clamp_x0_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tip_clamp_x1_ = Eigen::Vector3d::Zero();
+  double tip_clamp_theta_ = 0.0;
+  long adapt_splits_ = 0, adapt_merges_ = 0;
+};
+
+}  // namespace flowire::rod

@@ -1,0 +1,314 @@
+#include "flowire/rod/feeder.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "flowire/common/diagnostics.hpp"
+#include "flowire/common/error.hpp"
+#include "kernel_clones.hpp"
+#include "rod_internal.hpp"
+
+namespace flowire::rod {
+
+// -----------------------------------------------------------------------------------------
+// Feeding: the inserted length decides which vertices are free, which are held by the
+// clamp, and where the prescribed ones are.
+// -----------------------------------------------------------------------------------------
+
+Feeder::Scratch::Scratch(int nvmax) {
+  for (auto* v : {&feed_twist, &turn_angle, &new_u, &new_twist_density, &old_u, &old_twist_density, &old_cell,
+                  &old_theta, &old_omega, &old_ref_twist})
+    v->reserve(static_cast<size_t>(nvmax));
+  for (auto* v : {&old_x, &old_v, &old_tangent}) v->reserve(static_cast<size_t>(nvmax));
+  old_frame.reserve(static_cast<size_t>(nvmax));
+  new_source.reserve(static_cast<size_t>(nvmax));
+  split_edge.reserve(static_cast<size_t>(nvmax));
+  remove_vertex.reserve(static_cast<size_t>(nvmax));
+}
+
+Feeder::Feeder(RodBody& body) : body_(body), scratch_(std::make_unique<Scratch>(body.max_vertices())) {
+  arc_length_.reserve(static_cast<size_t>(body.max_vertices()));
+  const Vec3 t = -body.model.base_direction;  // clamped edges point from tip side to holder
+  base_d2_ = body.model.base_normal;
+  base_d1_ = base_d2_.cross(t);
+}
+
+Feeder::~Feeder() = default;
+
+void Feeder::build(double inserted) {
+  const RodModel& model = body_.model;
+  const double h = model.h;
+  const int kc = static_cast<int>(std::ceil(inserted / h - 1e-9));
+  const int nv = kc + 2;
+  RodState& s = body_.state;
+  s.x.assign(nv, Vec3::Zero());
+  s.v.assign(nv, Vec3::Zero());
+  s.theta.assign(nv - 1, 0.0);
+  s.omega.assign(nv - 1, 0.0);
+  s.frame.assign(nv - 1, EdgeFrame{});
+  s.ref_twist.assign(nv, 0.0);
+  s.u.resize(nv);
+  for (int k = 0; k < nv; ++k) s.u[k] = model.u(k);
+  body_.rediscretize();
+  s.inserted_length = inserted;
+  s.base_angle = 0.0;
+  s.time = 0.0;
+  first_clamped_ = kc;
+  drive_.set_base_angle(0.0);
+  layout_rest_shape();
+}
+
+void Feeder::layout_rest_shape() {
+  RodState& s = body_.state;
+  const RodModel& model = body_.model;
+  const Discretization& d = body_.disc;
+  const int nv = s.vertex_count();
+  const int kc = first_clamped_;
+  const double inserted = s.inserted_length;
+  const Vec3& pb = model.base_position;
+  const Vec3& db = model.base_direction;
+  const Vec3 a = model.base_normal;
+  for (int k = kc; k < nv; ++k) s.x[k] = pb - db * (s.u[k] - inserted);
+  // Lay out the rest shape from the clamp to the tip (planar bends about the base normal).
+  Vec3 tf = -db;
+  for (int k = kc; k >= 1; --k) {
+    const double kappa = d.rest_kappa1[k];
+    const double phi = 2.0 * std::atan(0.5 * kappa);
+    const Eigen::AngleAxisd rot(-phi, a);
+    const Vec3 te = k == kc && k == nv - 1 ? tf : (rot * tf).normalized();
+    s.x[k - 1] = s.x[k] - d.rest_length[k - 1] * te;
+    tf = te;
+  }
+  for (auto& v : s.v) v.setZero();
+  for (int j = 0; j < nv - 1; ++j) {
+    s.theta[j] = 0.0;
+    s.omega[j] = 0.0;
+  }
+  for (int j = 0; j < nv - 1; ++j) {
+    const Vec3 t = (s.x[j + 1] - s.x[j]).normalized();
+    s.frame[j].d2 = (a - t * t.dot(a)).normalized();
+    s.frame[j].d1 = s.frame[j].d2.cross(t);
+  }
+  for (int k = 1; k < nv - 1; ++k)
+    s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(), s.frame[k].d1,
+                                     (s.x[k + 1] - s.x[k]).normalized(), 0.0);
+  refresh_arc_lengths();
+}
+
+void Feeder::lay_along(const std::function<Vec3(double)>& along) {
+  RodState& s = body_.state;
+  const int nv = s.vertex_count();
+  const int kc = first_clamped_;
+  for (int k = 0; k < kc; ++k) s.x[k] = along(arc_length_[k]);
+  for (auto& v : s.v) v.setZero();
+  for (int j = 0; j < nv - 1; ++j) s.theta[j] = s.omega[j] = 0.0;
+  // Frames from the clamp towards the tip, each transported from its neighbour.
+  for (int j = std::min(kc, nv - 2) - 1; j >= 0; --j) {
+    const Vec3 tn = (s.x[j + 2] - s.x[j + 1]).normalized();
+    const Vec3 t = (s.x[j + 1] - s.x[j]).normalized();
+    Vec3 d1 = parallel_transport(s.frame[j + 1].d1, tn, t);
+    d1 = (d1 - t * t.dot(d1)).normalized();
+    s.frame[j].d1 = d1;
+    s.frame[j].d2 = t.cross(d1);
+  }
+  for (int k = 1; k < nv - 1; ++k)
+    s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(), s.frame[k].d1,
+                                     (s.x[k + 1] - s.x[k]).normalized(), 0.0);
+}
+
+// The stepper's frame transport (rod_internal.hpp), beside the feeder's own transports of frames.
+FLOWIRE_ROD_KERNEL_CLONES
+void detail::transport_frames_to(const std::vector<Vec3>& x_new, const std::vector<EdgeFrame>& frame_from,
+                                 const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
+                                 std::vector<double>& twist_to) {
+  // One pass: edge j's frame, then the reference twist at the vertex before it from the
+  // two new frames (their tangents kept, not re-derived as d1 × d2). In place is allowed.
+  const int nv = static_cast<int>(x_new.size());
+  Vec3 t_prev = Vec3::Zero(), d1_prev = Vec3::Zero();
+  for (int j = 0; j < nv - 1; ++j) {
+    const EdgeFrame& from = frame_from[j];
+    const Vec3 t0 = from.d1.cross(from.d2);
+    const Vec3 t1 = (x_new[j + 1] - x_new[j]).normalized();
+    Vec3 d1 = parallel_transport(from.d1, t0, t1);
+    d1 = (d1 - t1 * t1.dot(d1)).normalized();
+    frame_to[j].d1 = d1;
+    frame_to[j].d2 = t1.cross(d1);
+    if (j > 0) twist_to[j] = reference_twist(d1_prev, t_prev, d1, t1, twist_from[j]);
+    t_prev = t1;
+    d1_prev = d1;
+  }
+}
+
+void Feeder::refresh_arc_lengths() {
+  const RodState& s = body_.state;
+  arc_length_.resize(s.x.size());
+  for (size_t k = 0; k < s.x.size(); ++k) arc_length_[k] = s.inserted_length - s.u[k];
+}
+
+void Feeder::update_vertex_set(double new_inserted) {
+  const RodModel& model = body_.model;
+  // The clamp vertex is the first feeding-grid point at or behind the entry, followed by
+  // one more grid point. Near the entry every edge is a grid edge (adapt() keeps it so),
+  // so feeding only appends or drops grid points at the proximal end.
+  RodState& s = body_.state;
+  const double h = model.h;
+  const int kc = static_cast<int>(std::ceil(new_inserted / h - 1e-9));
+  const int k_last = std::min(kc + 1, model.grid_vertices - 1);
+  const int k_old_last = static_cast<int>(std::lround(s.u.back() / h));
+  const int nv_old = s.vertex_count();
+  const Vec3& pb = model.base_position;
+  const Vec3& db = model.base_direction;
+  const double L = s.inserted_length;
+  const double angle = s.base_angle;
+  if (k_last > k_old_last) {
+    for (int k = k_old_last + 1; k <= k_last; ++k) {
+      s.u.push_back(model.u(k));
+      s.x.push_back(pb - db * (model.u(k) - L));
+      s.v.push_back(db * feed_speed_);
+      s.theta.push_back(-angle);
+      s.omega.push_back(-drive_.rotation_speed());
+      s.frame.push_back(EdgeFrame{base_d1_, base_d2_});
+      s.ref_twist.push_back(0.0);
+    }
+  } else if (k_last < k_old_last) {
+    const int nv_new = nv_old - (k_old_last - k_last);
+    s.u.resize(nv_new);
+    s.x.resize(nv_new);
+    s.v.resize(nv_new);
+    s.theta.resize(nv_new - 1);
+    s.omega.resize(nv_new - 1);
+    s.frame.resize(nv_new - 1);
+    s.ref_twist.resize(nv_new);
+    s.ref_twist.back() = 0.0;
+  }
+  const int nv = s.vertex_count();
+  if (nv != nv_old) body_.rediscretize();
+  const int fc = nv - 2;
+  if (fc < first_clamped_) {
+    // Pulled back: vertices fc … first_clamped_−1 enter the clamp. Keep the material twist
+    // continuous at the vertices whose edges are reset.
+    const int k_lo = std::max(fc, 1);
+    for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k)
+      scratch_->feed_twist.push_back(s.theta[k] - s.theta[k - 1] + s.ref_twist[k]);  // total twist
+    for (int k = fc; k < std::min(first_clamped_, nv); ++k) {
+      s.x[k] = pb - db * (s.u[k] - L);
+      s.v[k] = db * feed_speed_;
+    }
+    for (int j = fc; j < nv - 1; ++j) {
+      s.frame[j] = EdgeFrame{base_d1_, base_d2_};
+      s.theta[j] = -angle;
+      s.omega[j] = -drive_.rotation_speed();
+    }
+    // Re-transport the free edge that touches the clamp, then rebuild reference twists.
+    if (fc >= 1) {
+      const int j = fc - 1;
+      const Vec3 t0 = s.frame[j].d1.cross(s.frame[j].d2);
+      const Vec3 t1 = (s.x[j + 1] - s.x[j]).normalized();
+      s.frame[j].d1 = parallel_transport(s.frame[j].d1, t0, t1);
+      s.frame[j].d1 = (s.frame[j].d1 - t1 * t1.dot(s.frame[j].d1)).normalized();
+      s.frame[j].d2 = t1.cross(s.frame[j].d1);
+    }
+    int idx = 0;
+    for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k, ++idx) {
+      const double m_old = scratch_->feed_twist[idx];
+      const double previous = m_old - (s.theta[k] - s.theta[k - 1]);
+      s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(), s.frame[k].d1,
+                                       (s.x[k + 1] - s.x[k]).normalized(), previous);
+    }
+    scratch_->feed_twist.clear();
+  }
+  first_clamped_ = fc;
+}
+
+void Feeder::set_prescribed(double inserted, double angle, std::vector<Vec3>& x, std::vector<double>& theta) const {
+  const RodModel& model = body_.model;
+  const Vec3& pb = model.base_position;
+  const Vec3& db = model.base_direction;
+  const int nv = static_cast<int>(x.size());
+  for (int k = first_clamped_; k < nv; ++k) x[k] = pb - db * (body_.state.u[k] - inserted);
+  // Clamped edges point from the tip side to the holder (−base_direction); the base angle
+  // is right-handed about +base_direction, hence the sign.
+  for (int j = first_clamped_; j < nv - 1; ++j) theta[j] = -angle;
+  if (tip_clamped_) {
+    x[0] = tip_clamp_x0_;
+    x[1] = tip_clamp_x1_;
+    theta[0] = tip_clamp_theta_;
+  }
+}
+
+void Feeder::clamp_tip(const Vec3& tip, const Vec3& next) {
+  if (first_clamped_ < 3) throw_usage_error("Feeder::clamp_tip: the wire is too short");
+  if ((next - tip).norm() <= 0.0) throw_usage_error("Feeder::clamp_tip: tip and next coincide");
+  tip_clamped_ = true;
+  tip_clamp_x0_ = tip;
+  tip_clamp_x1_ = next;
+  tip_clamp_theta_ = body_.state.theta[0];
+}
+
+void Feeder::predict_feed(double fed, double h, std::span<const Vec3> x0, std::span<const Vec3> v0) {
+  // Initial Newton guess while feeding: each free vertex follows the wire — it moves to
+  // where material u_k − fed lay at the step start (on the old polyline, on the insertion
+  // line behind the entry, or past the tip along the tip edge) — plus its velocity across
+  // the wire. The plain inertial guess x + h v can fold the wire at the entry when the
+  // feed per step exceeds a segment.
+  if (fed == 0.0) return;
+  RodState& s = body_.state;
+  const Vec3& pb = body_.model.base_position;
+  const Vec3& db = body_.model.base_direction;
+  const int nv = static_cast<int>(x0.size());
+  const double L_old = s.inserted_length;
+  const std::vector<double>& uk = s.u;
+  int i = 0;  // old edge holding material u (u increases with k: a forward walk)
+  // (Measured: in vessels, where walls make the wire slide along its own path, this guess
+  // takes half the Newton work of the second-order inertial one, which it replaces while
+  // feeding; a pre-shaped tip in free space would rather keep the latter.)
+  for (int k = 0; k < first_clamped_; ++k) {
+    const double u = uk[k] - fed;
+    Vec3 p;
+    if (u >= L_old) {
+      p = pb + db * (L_old - u);
+    } else if (u < 0.0) {
+      p = x0[0] + (x0[0] - x0[1]) * (-u / (uk[1] - uk[0]));
+    } else {
+      while (i < nv - 2 && uk[i + 1] <= u) ++i;
+      const double a = (u - uk[i]) / (uk[i + 1] - uk[i]);
+      p = (1.0 - a) * x0[i] + a * x0[i + 1];
+    }
+    const Vec3 t = k + 1 < nv ? Vec3((x0[k + 1] - x0[k]).normalized()) : db;
+    const Vec3 v = v0[k];
+    s.x[k] = p + h * (v - t * t.dot(v));
+  }
+}
+
+double Feeder::feed_vertex_set(double dt) {
+  RodState& s = body_.state;
+  bool clamped = false;
+  const double L_new = detail::clamp_inserted(s.inserted_length + feed_speed_ * dt, body_.model, clamped);
+  if (clamped && feed_speed_ != 0.0) {
+    warn(fmt::format("rod: inserted length held at {:.6g} m (wire end reached)", L_new));
+    drive_.set_insertion_speed(0.0);
+    feed_speed_ = 0.0;
+  }
+  s.base_angle = drive_.base_angle();
+  update_vertex_set(L_new);
+  return L_new;
+}
+
+void Feeder::vertex_params(int k, VertexParams& p) const {
+  // A clamp vertex owns only the half cell on its free side: the wire behind it is
+  // held rigid, so its bending and twisting act over h/2 (this keeps the clamp exactly at
+  // the entry and the scheme second-order; a full cell would move the clamp back by h/2).
+  const Discretization& d = body_.disc;
+  double cell = 1.0;
+  if (k == first_clamped_) cell = 0.5 * d.rest_length[k - 1] / d.cell_length[k];
+  if (tip_clamped_ && k == 1) cell = 0.5;
+  p.bend_stiffness1 = p.bend_stiffness2 = d.bend_stiffness[k];
+  p.rest_kappa1 = cell * d.rest_kappa1[k];
+  p.rest_kappa2 = cell * d.rest_kappa2[k];
+  p.twist_stiffness = d.twist_stiffness[k];
+  p.rest_twist = 0.0;
+  p.voronoi_length = cell * d.cell_length[k];
+}
+}  // namespace flowire::rod
