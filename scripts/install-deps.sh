@@ -6,6 +6,9 @@ set -euo pipefail
 PKGS=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libsuitesparse-dev
+  # an optimized BLAS for CHOLMOD (supernodal solves), PETSc and LAPACK; serial: the tests and
+  # MPI ranks already use the cores
+  libopenblas0-serial
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libvtk9-dev
