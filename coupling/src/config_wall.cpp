@@ -2,7 +2,9 @@
 // their checks, and the wall they build (deformable_wall.hpp; built with gmsh).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "flowire/common/error.hpp"
 #include "flowire/common/units.hpp"
@@ -18,8 +20,8 @@ void declare_wall_keys(config::Schema& s) {
   using D = units::Dimension;
   s.add("wall", Type::Section, "", D::None,
         "the vessel wall as an elastic solid that the wire pushes and that pushes back (neo-Hookean, meshed with "
-        "gmsh, ends held; linear about its rest state, its compliance condensed onto the wire's contacts; this "
-        "version: a network of one straight vessel of one radius; not with a catheter)");
+        "gmsh around the network's tubes, the lumen the wire's contact sees, every end held; linear about its "
+        "rest state, its compliance condensed onto the wire's contacts; not with a catheter)");
   s.add("wall.thickness", Type::Number, "", D::Length, "wall thickness (default: thickness_ratio × radius)").positive();
   s.add("wall.thickness_ratio", Type::Number, "0.15", D::None, "wall thickness as a fraction of the lumen radius")
       .positive();
@@ -28,12 +30,32 @@ void declare_wall_keys(config::Schema& s) {
       .positive();
   s.add("wall.poisson_ratio", Type::Number, "0.45", D::None,
         "Poisson's ratio, below 0.5 (the law is compressible; arterial tissue is nearly incompressible)");
-  s.add("wall.support", Type::Number, "0 Pa/m", D::SupportStiffness,
+  s.add("wall.support_stiffness", Type::Number, "0 Pa/m", D::SupportStiffness,
         "elastic support of the wall's outer surface by the surrounding tissue: traction per displacement")
       .non_negative();
+  s.add("wall.density", Type::Number, "1100 kg/m^3", D::Density,
+        "wall density: the method is quasi-static (the wall's inertia is left out); the density gives the period "
+        "of the wall's breathing mode, reported in summary.json beside the step, which should be well above it")
+      .positive();
+  s.add("wall.model", Type::Enum, "neo_hookean", D::None,
+        "the wall's law: neo_hookean (compressible; the contact condenses it linearized about rest)", {"neo_hookean"});
   s.add("wall.mesh_size", Type::Number, "", D::Length, "target tetrahedron size (default: twice the thickness)")
       .positive();
 }
+
+#ifdef FLOWIRE_HAVE_SOLID
+namespace {
+/// The period [s] of the wall's lowest breathing mode, a ring of the widest radius R and thickness
+/// t held by its hoop stiffness and the tissue's support: ω² = (E/R² + k/t)/ρ (plane stress).
+double breathing_period(const vessels::Network& net, const WallSpec& spec, double density) {
+  double radius = 0.0;
+  for (int k = 0; k < net.num_segments(); ++k) radius = std::max(radius, net.segment(k).radius);
+  const double t = spec.thickness > 0.0 ? spec.thickness : spec.thickness_ratio * radius;
+  const double omega2 = (spec.youngs_modulus / (radius * radius) + spec.support / t) / density;
+  return 2.0 * std::acos(-1.0) / std::sqrt(omega2);
+}
+}  // namespace
+#endif
 
 std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const vessels::Network& net,
                                                nlohmann::json& facts) {
@@ -44,34 +66,25 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
   if (!(nu > -1.0 && nu < 0.5))
     throw_input_error(c.where("wall.poisson_ratio"),
                       fmt::format("must lie in (-1, 0.5) for the compressible law, got {}", nu));
-  // One straight vessel of one radius.
-  if (net.num_branches() != 1)
-    throw_input_error(c.where("wall"), fmt::format("this version builds the wall of one straight vessel; the network "
-                                                   "has {} branches",
-                                                   net.num_branches()));
-  const auto& br = net.branch(0);
-  const Vec3 p0 = net.node(br.nodes.front()), p1 = net.node(br.nodes.back());
-  const double radius = net.segment(br.segments.front()).radius;
-  for (size_t k = 0; k < br.segments.size(); ++k) {
-    const auto& seg = net.segment(br.segments[k]);
-    const Vec3 mid = 0.5 * (net.node(seg.node_from) + net.node(seg.node_to));
-    const Vec3 axis = (p1 - p0).normalized();
-    const double off = (mid - p0 - (mid - p0).dot(axis) * axis).norm();
-    if (std::abs(seg.radius - radius) > 1e-6 * radius || off > 1e-3 * radius)
-      throw_input_error(c.where("wall"), fmt::format("this version builds the wall of one straight vessel of one "
-                                                     "radius; segment {} bends away or changes radius",
-                                                     br.segments[k]));
-  }
-  const double thickness =
-      c.has("wall.thickness") ? c.number("wall.thickness") : c.number("wall.thickness_ratio") * radius;
-  const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : 2.0 * thickness;
+  const double thickness = c.has("wall.thickness") ? c.number("wall.thickness") : 0.0;
+  const double ratio = c.number("wall.thickness_ratio");
+  double rmin = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < net.num_segments(); ++k) rmin = std::min(rmin, net.segment(k).radius);
+  const double thinnest = thickness > 0.0 ? thickness : ratio * rmin;
+  const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : 2.0 * thinnest;
 #ifdef FLOWIRE_HAVE_SOLID
-  WallSpec spec{thickness, c.number("wall.youngs_modulus"), nu, c.number("wall.support"), mesh_size};
-  auto wall = std::make_unique<DeformableWall>(p0, p1, radius, spec);
-  facts["wall"] = {{"thickness", thickness},
+  WallSpec spec{thickness, thickness > 0.0 ? 0.0 : ratio,      c.number("wall.youngs_modulus"),
+                nu,        c.number("wall.support_stiffness"), mesh_size};
+  auto wall = std::make_unique<DeformableWall>(net, spec);
+  facts["wall"] = {{"thickness", thickness > 0.0 ? nlohmann::json(thickness) : nlohmann::json(nullptr)},
+                   {"thickness_ratio", thickness > 0.0 ? nlohmann::json(nullptr) : nlohmann::json(ratio)},
+                   {"thinnest", thinnest},
                    {"youngs_modulus", spec.youngs_modulus},
                    {"poisson_ratio", nu},
-                   {"support", spec.support},
+                   {"support_stiffness", spec.support},
+                   {"density", c.number("wall.density")},
+                   {"model", c.string("wall.model")},
+                   {"breathing_period", breathing_period(net, spec, c.number("wall.density"))},
                    {"mesh_size", mesh_size},
                    {"nodes", wall->mesh().num_nodes()},
                    {"tets", wall->mesh().num_tets()},

@@ -1,11 +1,12 @@
-// The straight vessel's wall as an elastic solid: meshed along z by solid::mesh_tube_wall and
-// turned into the vessel's frame, ends held, supported outside, linearized at rest; the step's
-// contacts anchored on its lumen and their compliance condensed; loaded at the end of a step.
+// The wall around a network's lumen as an elastic solid: meshed by solid::mesh_network_wall,
+// ends held, supported outside, linearized at rest; the step's contacts anchored on its lumen
+// and their compliance condensed; loaded at the end of a step.
 #include "flowire/coupling/deformable_wall.hpp"
 
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 
 #include "flowire/common/error.hpp"
 #include "flowire/mesh/vtu.hpp"
@@ -19,23 +20,18 @@ using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
-DeformableWall::DeformableWall(const Vec3& p0, const Vec3& p1, double radius, const WallSpec& spec) {
+DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec) {
   const auto t0 = Clock::now();
   const solid::NeoHookean law = solid::NeoHookean::from_young_poisson(spec.youngs_modulus, spec.poisson_ratio,
                                                                       "wall.youngs_modulus / wall.poisson_ratio");
-  if (!(spec.thickness > 0.0)) throw_usage_error(fmt::format("wall.thickness: must be > 0, got {} m", spec.thickness));
+  if (!(spec.thickness > 0.0) && !(spec.thickness_ratio > 0.0))
+    throw_usage_error(fmt::format("wall.thickness: must be > 0, got {} m", spec.thickness));
   if (!(spec.mesh_size > 0.0)) throw_usage_error(fmt::format("wall.mesh_size: must be > 0, got {} m", spec.mesh_size));
   if (!(spec.support >= 0.0)) throw_usage_error(fmt::format("wall.support: must be >= 0, got {} Pa/m", spec.support));
-  const Vec3 axis = p1 - p0;
-  mesh::TetMesh m = solid::mesh_tube_wall({radius, radius + spec.thickness, axis.norm(), spec.mesh_size, false});
-  // Along z from the origin → from p0 along the vessel.
-  const Eigen::Matrix3d rotation =
-      Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), axis.normalized()).toRotationMatrix();
-  for (Vec3& x : m.nodes) x = p0 + rotation * x;
+  mesh::TetMesh m = solid::mesh_network_wall(net, {spec.thickness, spec.thickness_ratio, spec.mesh_size});
   mesh_seconds_ = m.mesh_seconds;
   solid_ = std::make_unique<solid::ElasticSolid>(std::move(m), law);
-  solid_->hold(solid_->mesh().group_named("end_0"));
-  solid_->hold(solid_->mesh().group_named("end_1"));
+  for (int e : net.ends()) solid_->hold(solid_->mesh().group_named(fmt::format("end_{}", e)));
   if (spec.support > 0.0) solid_->support(solid_->mesh().group_named("outer"), spec.support);
   solid_->linearize();
   lumen_ = std::make_unique<solid::LumenCompliance>(*solid_, solid_->mesh().group_named("lumen"));
@@ -43,6 +39,17 @@ DeformableWall::DeformableWall(const Vec3& p0, const Vec3& p1, double radius, co
   load_ = displacement_;
   seconds_ += since(t0);
 }
+
+namespace {
+vessels::Network straight_vessel(const Vec3& p0, const Vec3& p1, double radius) {
+  vessels::Centerlines c;
+  c.branches.push_back({"vessel", {p0, p1}, {radius, radius}});
+  return vessels::Network::build(c, {.max_segment_length = (p1 - p0).norm()});
+}
+}  // namespace
+
+DeformableWall::DeformableWall(const Vec3& p0, const Vec3& p1, double radius, const WallSpec& spec)
+    : DeformableWall(straight_vessel(p0, p1, radius), spec) {}
 
 DeformableWall::~DeformableWall() = default;
 
@@ -111,7 +118,15 @@ void DeformableWall::write_vtu(const std::filesystem::path& path, const Eigen::V
   mesh::PointField displacement{"displacement", 3, std::vector<double>(state.data(), state.data() + 3 * n)};
   mesh::PointField magnitude{"displacement_magnitude", 1, {}};
   for (size_t k = 0; k < n; ++k) magnitude.values.push_back(state.segment<3>(3 * static_cast<Eigen::Index>(k)).norm());
-  mesh::write_vtu(path, mesh(), {displacement, magnitude});
+  // The Cauchy stress (a 3 × 3 tensor a node, row by row) and its von Mises equivalent.
+  mesh::PointField stress{"stress", 9, {}}, von_mises{"von_mises_stress", 1, {}};
+  for (const Eigen::Matrix3d& sigma : solid_->nodal_stress(state)) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) stress.values.push_back(sigma(r, c));
+    const Eigen::Matrix3d dev = sigma - sigma.trace() / 3.0 * Eigen::Matrix3d::Identity();
+    von_mises.values.push_back(std::sqrt(1.5 * dev.cwiseProduct(dev).sum()));
+  }
+  mesh::write_vtu(path, mesh(), {displacement, magnitude, stress, von_mises});
 }
 
 }  // namespace flowire::coupling

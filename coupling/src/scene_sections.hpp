@@ -140,8 +140,8 @@ void check_fem(const config::Config& scene, const flow::FlowSolver* flow, const 
 // ---- wall: (config_wall.cpp)
 void declare_wall_keys(config::Schema& schema);
 /// @brief The vessel wall as an elastic solid (wall:), null without the section.
-/// @throws flowire::Error (input) naming the key at fault, or the vessels where the network is
-/// not one straight vessel of one radius; (input) without gmsh in the build.
+/// @throws flowire::Error (input) naming the key at fault, or the vessels where no tube can be
+/// built along the network; (input) without gmsh in the build.
 [[nodiscard]] std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& scene, const vessels::Network& net,
                                                              nlohmann::json& facts);
 

@@ -60,6 +60,46 @@ void for_face_points(const mesh::TetMesh& m, int group, Visit&& visit) {
 
 }  // namespace
 
+std::vector<Mat3> ElasticSolid::nodal_stress(const Eigen::VectorXd& u) const {
+  // Each tetrahedron's stress at its own ten nodes (the P2 map's gradient there), averaged over
+  // the tetrahedra a node belongs to.
+  static constexpr std::array<std::array<double, 3>, 10> kNodes{{{0, 0, 0},
+                                                                 {1, 0, 0},
+                                                                 {0, 1, 0},
+                                                                 {0, 0, 1},
+                                                                 {0.5, 0, 0},
+                                                                 {0.5, 0.5, 0},
+                                                                 {0, 0.5, 0},
+                                                                 {0, 0, 0.5},
+                                                                 {0.5, 0, 0.5},
+                                                                 {0, 0.5, 0.5}}};
+  std::vector<Mat3> sigma(static_cast<size_t>(mesh_.num_nodes()), Mat3::Zero());
+  std::vector<int> count(static_cast<size_t>(mesh_.num_nodes()), 0);
+  for (const auto& tet : mesh_.tets) {
+    for (size_t k = 0; k < 10; ++k) {
+      double dref[10][3];
+      element::tet_p2_grad(kNodes[k], dref);
+      Mat3 jac = Mat3::Zero();
+      for (int a = 0; a < 10; ++a)
+        for (int b = 0; b < 3; ++b)
+          jac.col(b) += mesh_.nodes[static_cast<size_t>(tet[static_cast<size_t>(a)])] * dref[a][b];
+      const Mat3 inv = jac.inverse();
+      double g[30];
+      for (int a = 0; a < 10; ++a)
+        for (int b = 0; b < 3; ++b)
+          g[3 * a + b] = dref[a][0] * inv(0, b) + dref[a][1] * inv(1, b) + dref[a][2] * inv(2, b);
+      const Mat3 h = displacement_gradient(g, tet, u);
+      const Mat3 f = Mat3::Identity() + h;
+      const auto node = static_cast<size_t>(tet[k]);
+      sigma[node] += law_.stress(h) * f.transpose() / f.determinant();
+      ++count[node];
+    }
+  }
+  for (size_t n = 0; n < sigma.size(); ++n)
+    if (count[n] > 0) sigma[n] /= count[n];
+  return sigma;
+}
+
 struct ElasticSolid::Factor {
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
   bool analysed = false;

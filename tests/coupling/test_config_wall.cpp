@@ -1,6 +1,11 @@
 // The wall: section (coupling/src/config_wall.cpp): its keys, the wall they build, and each
 // refusal naming the key or the vessels at fault.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "flowire/coupling/deformable_wall.hpp"
 #include "flowire/vessels/generators.hpp"
@@ -31,13 +36,53 @@ TEST(ConfigWall, TheWallOfAStraightVesselIsBuiltWithItsThicknessFromTheRadius) {
   const auto c = test::scene("wall:\n  thickness_ratio: 0.2\n  youngs_modulus: 2 MPa\n  mesh_size: 2 mm\n");
   const auto wall = make_scene_wall(c, tube(), facts);
   ASSERT_NE(wall, nullptr);
-  EXPECT_NEAR(facts["wall"]["thickness"].get<double>(), 0.2 * 3e-3, 1e-15);
+  EXPECT_NEAR(facts["wall"]["thinnest"].get<double>(), 0.2 * 3e-3, 1e-15);
+  EXPECT_DOUBLE_EQ(facts["wall"]["thickness_ratio"].get<double>(), 0.2);
   EXPECT_DOUBLE_EQ(facts["wall"]["youngs_modulus"].get<double>(), 2e6);
   EXPECT_DOUBLE_EQ(facts["wall"]["poisson_ratio"].get<double>(), 0.45);
   EXPECT_GT(facts["wall"]["tets"].get<int>(), 0);
   const auto* deformable = dynamic_cast<const DeformableWall*>(wall.get());
   ASSERT_NE(deformable, nullptr);
   EXPECT_EQ(deformable->mesh().num_nodes(), facts["wall"]["nodes"].get<int>());
+}
+
+TEST(ConfigWall, TheWallOfABifurcationHoldsEveryEndAndItsLumenIsTheNetworksCapsules) {
+  const auto y = vessels::Network::build(
+      vessels::y_bifurcation({.parent_radius = 3e-3, .parent_length = 20e-3, .child_length = 20e-3}),
+      {.max_segment_length = 5e-3});
+  nlohmann::json facts;
+  const auto wall = make_scene_wall(test::scene("wall:\n  thickness: 0.6 mm\n  mesh_size: 1.5 mm\n"), y, facts);
+  const auto* deformable = dynamic_cast<const DeformableWall*>(wall.get());
+  ASSERT_NE(deformable, nullptr);
+  const mesh::TetMesh& m = deformable->mesh();
+  // Every lumen node lies on the union of the network's capsules (what the wire's contact sees),
+  // every outer node 0.6 mm outside it.
+  const int lumen = m.group_named("lumen"), outer = m.group_named("outer");
+  auto distance = [&](const Vec3& x) {
+    double d = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < y.num_segments(); ++k) {
+      const auto& seg = y.segment(k);
+      const Vec3 a = y.node(seg.node_from), b = y.node(seg.node_to);
+      const double t = std::clamp((x - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+      d = std::min(d, (x - (a + t * (b - a))).norm() - seg.radius);
+    }
+    return d;
+  };
+  double worst_lumen = 0.0, worst_outer = 0.0;
+  int faces_lumen = 0;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    for (int node : m.faces[f]) {
+      const Vec3& x = m.nodes[static_cast<size_t>(node)];
+      if (m.face_group[f] == lumen) worst_lumen = std::max(worst_lumen, std::abs(distance(x)));
+      if (m.face_group[f] == outer) worst_outer = std::max(worst_outer, std::abs(distance(x) - 0.6e-3));
+    }
+    faces_lumen += m.face_group[f] == lumen ? 1 : 0;
+  }
+  EXPECT_GT(faces_lumen, 100);
+  EXPECT_LT(worst_lumen, 1e-6);
+  EXPECT_LT(worst_outer, 1e-6);
+  // Held at its three ends, the wall's tangent is definite (it was factorized): each end a group.
+  for (int e : y.ends()) EXPECT_GE(m.group_named(fmt::format("end_{}", e)), 0);
 }
 
 TEST(ConfigWall, RefusesWhatItCannotBuildNamingTheKey) {
@@ -49,11 +94,15 @@ TEST(ConfigWall, RefusesWhatItCannotBuildNamingTheKey) {
   const auto with_catheter = test::scene("catheter: {}\nwall: {}\n");
   EXPECT_NE(test::input_error([&] { (void)make_scene_wall(with_catheter, tube(), facts); }).find("catheter"),
             std::string::npos);
-  const auto y = vessels::Network::build(vessels::y_bifurcation({}), {.max_segment_length = 5e-3});
-  EXPECT_NE(test::input_error([&] { (void)make_scene_wall(test::scene("wall: {}\n"), y, facts); }).find("3 branches"),
-            std::string::npos);
+  // A centerline that turns back on itself: no tube can be built along it.
+  vessels::Centerlines hairpin;
+  hairpin.branches.push_back({"hairpin", {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.0005, 0)}, {1e-3, 1e-3, 1e-3}});
+  const auto folded = vessels::Network::build(hairpin, {.max_segment_length = 0.02, .max_chord_deviation = 0.0});
+  EXPECT_NE(
+      test::input_error([&] { (void)make_scene_wall(test::scene("wall: {}\n"), folded, facts); }).find("turns back"),
+      std::string::npos);
   for (const char* bad :
-       {"wall:\n  thickness: 0 mm\n", "wall:\n  youngs_modulus: -1 MPa\n", "wall:\n  support: 1 Pa\n"})
+       {"wall:\n  thickness: 0 mm\n", "wall:\n  youngs_modulus: -1 MPa\n", "wall:\n  support_stiffness: 1 Pa\n"})
     EXPECT_NE(test::input_error([&] { (void)test::scene(bad); }).find("scene.yaml:2: wall."), std::string::npos) << bad;
   EXPECT_FALSE(facts.contains("wall")) << "nothing reported of a wall that was refused";
 }

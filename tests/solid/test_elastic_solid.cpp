@@ -68,6 +68,22 @@ TEST(ElasticSolid, NothingMovesWhenNothingPushes) {
   EXPECT_EQ(s.displacement().cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(ElasticSolid, NodalStressOfAHomogeneousStrainIsHookes) {
+  // u = ε x, ε small and symmetric: every node's Cauchy stress is λ tr(ε) I + 2μ ε to O(|ε|²),
+  // on curved quadratic elements too (the displacement is in their space exactly).
+  const ElasticSolid s = quarter_tube(1e-3, 2e-3);
+  Mat3 eps;
+  eps << 2e-6, 1e-6, -0.5e-6, 1e-6, -3e-6, 0.7e-6, -0.5e-6, 0.7e-6, 1.5e-6;
+  Eigen::VectorXd u(s.num_dofs());
+  for (int n = 0; n < s.mesh().num_nodes(); ++n) u.segment<3>(3 * n) = eps * s.mesh().nodes[static_cast<size_t>(n)];
+  const NeoHookean law = NeoHookean::from_young_poisson(1e6, 0.45);
+  const Mat3 hooke = law.lambda * eps.trace() * Mat3::Identity() + 2.0 * law.mu * eps;
+  double worst = 0.0;
+  for (const Mat3& sigma : s.nodal_stress(u)) worst = std::max(worst, (sigma - hooke).cwiseAbs().maxCoeff());
+  EXPECT_LT(worst, 1e-4 * hooke.cwiseAbs().maxCoeff());
+  EXPECT_GT(hooke.cwiseAbs().maxCoeff(), 1.0) << "a stress that is not trivially zero";
+}
+
 double lame_radial(double r, double p, double E, double nu) {
   const double c = p * kA * kA / (E * (kB * kB - kA * kA));
   return (1 + nu) * c * ((1 - 2 * nu) * r + kB * kB / r);

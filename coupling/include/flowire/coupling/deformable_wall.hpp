@@ -12,8 +12,9 @@
 /// (K⁻¹ + C)⁻¹ of the contacts exactly (a low-rank term off its band). At the end of a step
 /// the wire's contact forces, normal and friction, load the wall with their opposites (Newton's
 /// third law) and the wall's displacement field is solved for the outputs.
-/// This version builds the wall of a straight vessel of one radius; the contact sees the
-/// wall's displacement along its normal (the wall's tangential motion is not seen).
+/// The wall is built around a network's lumen, the union of its capsules (the surface the
+/// wire's contact sees: solid::mesh_network_wall), every end held; the contact sees the wall's
+/// displacement along its normal (the wall's tangential motion is not seen).
 #include <Eigen/Dense>
 
 #include <memory>
@@ -23,6 +24,7 @@
 #include "flowire/coupling/compliant_wall.hpp"
 #include "flowire/coupling/interaction.hpp"
 #include "flowire/mesh/tet_mesh.hpp"
+#include "flowire/vessels/network.hpp"
 
 namespace flowire::solid {
 class ElasticSolid;
@@ -34,8 +36,9 @@ namespace flowire::coupling {
 
 /// @brief The wall's material, size and support.
 struct WallSpec {
-  double thickness = 0.0;       ///< [m]
-  double youngs_modulus = 0.0;  ///< [Pa]
+  double thickness = 0.0;        ///< [m]; 0: thickness_ratio × the local radius
+  double thickness_ratio = 0.0;  ///< used where thickness is 0
+  double youngs_modulus = 0.0;   ///< [Pa]
   double poisson_ratio = 0.45;
   double support = 0.0;    ///< elastic support of the outer surface [Pa/m]
   double mesh_size = 0.0;  ///< target tetrahedron size [m]
@@ -43,8 +46,11 @@ struct WallSpec {
 
 class DeformableWall final : public CompliantWall {
  public:
+  /// @brief The wall around the lumen of @p net (its capsules), every end held.
+  /// @throws flowire::Error (usage) for a non-positive size, thickness or modulus, a ratio
+  /// ν ∉ (−1, 0.5); (input) for a network a tube cannot be built along.
+  DeformableWall(const vessels::Network& net, const WallSpec& spec);
   /// @brief The wall of the straight vessel from @p p0 to @p p1 of lumen radius @p radius.
-  /// @throws flowire::Error (usage) for a non-positive size or modulus, a ratio ν ∉ (−1, 0.5)
   DeformableWall(const Vec3& p0, const Vec3& p1, double radius, const WallSpec& spec);
   ~DeformableWall() override;
   DeformableWall(const DeformableWall&) = delete;
@@ -73,8 +79,9 @@ class DeformableWall final : public CompliantWall {
   /// @brief Largest displacement, ever and now, the load now, columns solved, seconds.
   [[nodiscard]] nlohmann::json summary() const override;
   [[nodiscard]] Eigen::VectorXd state() const override { return displacement(); }
-  /// @brief The 10-node tetrahedra (VTK_QUADRATIC_TETRA) with point data `displacement` [m]
-  /// and `displacement_magnitude` [m]; warp by the vector to see the deformed wall.
+  /// @brief The 10-node tetrahedra (VTK_QUADRATIC_TETRA) with point data `displacement` [m],
+  /// `displacement_magnitude` [m], `stress` (the Cauchy stress, 9 components) [Pa] and
+  /// `von_mises_stress` [Pa]; warp by the vector to see the deformed wall.
   void write_vtu(const std::filesystem::path& path, const Eigen::VectorXd& state) const override;
 
  private:

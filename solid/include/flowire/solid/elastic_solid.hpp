@@ -66,6 +66,9 @@ class ElasticSolid {
   /// @brief Nodal forces (N), 3 a node, added to the pressure loads; zero until set.
   [[nodiscard]] Eigen::VectorXd& nodal_forces() { return nodal_forces_; }
 
+  /// @brief The Cauchy stress σ = P Fᵀ / J at every node under displacement @p u (3 a node),
+  /// the mean over the tetrahedra that share the node of each one's stress there [Pa].
+  [[nodiscard]] std::vector<Mat3> nodal_stress(const Eigen::VectorXd& u) const;
   /// @brief Π(u); +∞ when an element is inverted at a quadrature point.
   [[nodiscard]] double energy(const Eigen::VectorXd& u) const;
   /// @brief ∇Π(u) (every component, held ones included).

@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""Pictures of a run with a deformable wall around a vessel that winds in the plane z = 0: the
+wall's displacement seen from above at the frame where it is largest, and the wall's section
+by the plane z = 0 at rest and deformed (to scale), with the wire. Usage: plot_tortuous.py OUT_DIR  (writes OUT_DIR/wall.png)."""
+import glob
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def read_vtu(path):
+    text = open(path).read()
+
+    def block(start):
+        body = text[text.index(">", start) + 1:text.index("</DataArray>", start)]
+        return np.array(body.split(), dtype=float)
+
+    points = block(text.index("<DataArray", text.index("<Points>"))).reshape(-1, 3)
+    return points, block(text.index('Name="displacement"')).reshape(-1, 3)
+
+
+def main():
+    out = sys.argv[1] if len(sys.argv) > 1 else "."
+    frames = sorted(glob.glob(os.path.join(out, "wall_*.vtu")))
+    if not frames:
+        sys.exit(f"plot_tortuous.py: no wall_*.vtu in {out}")
+    states = [read_vtu(f) for f in frames]
+    largest = max(range(len(states)), key=lambda k: np.linalg.norm(states[k][1], axis=1).max())
+    x, u = states[largest]
+    mag = np.linalg.norm(u, axis=1)
+    # The wall's section by the plane z = 0 (its nodes within a quarter millimetre of it).
+    thickness_band = np.abs(x[:, 2]) < 0.25e-3
+    fig, (a, b) = plt.subplots(2, 1, figsize=(10, 8))
+    order = np.argsort(mag)
+    sc = a.scatter(x[order, 0] * 1e3, x[order, 1] * 1e3, c=mag[order] * 1e3, s=4, cmap="viridis")
+    fig.colorbar(sc, ax=a, label="|displacement| [mm]")
+    a.set_aspect("equal")
+    a.set_xlabel("x [mm]")
+    a.set_ylabel("y [mm]")
+    a.set_title(f"wall seen from above, frame {largest}: largest displacement {mag.max() * 1e3:.3f} mm")
+    s = thickness_band
+    b.scatter(x[s, 0] * 1e3, x[s, 1] * 1e3, s=2, c="0.6", label="wall at rest (section z = 0)")
+    b.scatter((x[s, 0] + u[s, 0]) * 1e3, (x[s, 1] + u[s, 1]) * 1e3, s=2, c="C3", label=f"deformed, frame {largest}")
+    wire_csv = os.path.join(out, "wire.csv")
+    if os.path.exists(wire_csv):
+        data = np.genfromtxt(wire_csv, delimiter=",", names=True)
+        times = np.unique(data["time"])
+        t = times[min(largest, len(times) - 1)]
+        w = data[data["time"] == t]
+        b.plot(w["x"] * 1e3, w["y"] * 1e3, "C0", lw=2, label=f"wire, t = {t:.2f} s")
+    b.set_aspect("equal")
+    b.set_xlabel("x [mm]")
+    b.set_ylabel("y [mm]")
+    b.legend(loc="upper right", fontsize=8, markerscale=4)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "wall.png"), dpi=120)
+    print(os.path.join(out, "wall.png"))
+
+
+if __name__ == "__main__":
+    main()
