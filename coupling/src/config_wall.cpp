@@ -39,6 +39,12 @@ void declare_wall_keys(config::Schema& s) {
       .positive();
   s.add("wall.model", Type::Enum, "neo_hookean", D::None,
         "the wall's law: neo_hookean (compressible; the contact condenses it linearized about rest)", {"neo_hookean"});
+  s.add("wall.blood_pressure", Type::Bool, "false", D::None,
+        "the flow's blood pressure loads the wall's lumen (a dead load, less wall.reference_pressure; the wall is "
+        "linear about rest, so it inflates by K^-1 f_p and the wire meets it there); needs flow:");
+  s.add("wall.reference_pressure", Type::Number, "0 Pa", D::Pressure,
+        "the pressure at which the rest geometry was taken (imaged): the wall is loaded by the blood pressure less "
+        "this");
   s.add("wall.mesh_size", Type::Number, "", D::Length, "target tetrahedron size (default: twice the thickness)")
       .positive();
 }

@@ -173,6 +173,10 @@ void CoSimulation::add_wall_forces(const rod::WireSpec& spec, int entry, nlohman
       if (!forces_->contact().enabled)
         throw_input_error(c.where("wall"), "a deformable wall needs the wall contact (contact.enabled: true)");
       forces_->set_deformable(wall_.get());
+      wall_blood_pressure_ = c.boolean("wall.blood_pressure");
+      wall_reference_pressure_ = c.number("wall.reference_pressure");
+      if (wall_blood_pressure_ && !fsolver_)
+        throw_input_error(c.where("wall.blood_pressure"), "the blood pressure needs the scene's flow: section");
     }
     introduce(*forces_);
     sim_->add_external(forces_);
@@ -272,6 +276,7 @@ void CoSimulation::start() {
     occlude();  // the vertices are located once the wire has settled or stepped
     fsolver_->advance(0.0);
     t_flow_ += seconds_since(tf);
+    press_wall();
   }
   if (sim_ && is_static_) {
     const auto tr = Clock::now();
@@ -295,7 +300,17 @@ void CoSimulation::start() {
     occlude();
     fsolver_->advance(0.0);
     t_flow_ += seconds_since(tf);
+    press_wall();
   }
+}
+
+void CoSimulation::press_wall() {
+  if (!wall_ || !wall_blood_pressure_) return;
+  const auto tf = Clock::now();  // counted with the flow frame it belongs to
+  std::vector<double> p(static_cast<size_t>(net_->num_nodes()));
+  fsolver_->node_pressures(p);
+  wall_->set_blood_pressure(p, wall_reference_pressure_);
+  t_flow_ += seconds_since(tf);
 }
 
 void CoSimulation::step() {
@@ -306,6 +321,7 @@ void CoSimulation::step() {
     occlude();
     fsolver_->advance(t1);
     t_flow_ += seconds_since(tf);
+    press_wall();
   }
   if (sim_) {
     if (schedule_) {

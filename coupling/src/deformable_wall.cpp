@@ -5,8 +5,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "flowire/common/error.hpp"
 #include "flowire/mesh/vtu.hpp"
@@ -20,7 +22,7 @@ using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
-DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec) {
+DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec) : net_(net) {
   const auto t0 = Clock::now();
   const solid::NeoHookean law = solid::NeoHookean::from_young_poisson(spec.youngs_modulus, spec.poisson_ratio,
                                                                       "wall.youngs_modulus / wall.poisson_ratio");
@@ -63,6 +65,12 @@ void DeformableWall::anchor(std::span<const Vec3> points, std::span<const Vec3> 
   at.reserve(points.size());
   for (const Vec3& p : points) at.push_back(lumen_->locate(p));
   compliance_ = lumen_->compliance(at, normals);
+  offsets_.resize(0);
+  if (pressure_field_.size() > 0) {
+    offsets_.resize(static_cast<Eigen::Index>(at.size()));
+    for (size_t j = 0; j < at.size(); ++j)
+      offsets_[static_cast<Eigen::Index>(j)] = normals[j].dot(lumen_->interpolate(at[j], pressure_field_));
+  }
   seconds_ += since(t0);
 }
 
@@ -80,10 +88,77 @@ void DeformableWall::load(std::span<const Vec3> points, std::span<const Vec3> fo
   seconds_ += since(t0);
 }
 
+void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, double reference) {
+  if (static_cast<int>(node_pressures.size()) != net_.num_nodes())
+    throw_usage_error(
+        fmt::format("wall: {} node pressures for a network of {} nodes", node_pressures.size(), net_.num_nodes()));
+  // Unchanged pressures (a steady flow) leave the wall as it is.
+  double largest = std::abs(reference),
+         change = node_pressures_.empty() ? 1.0 : std::abs(reference - reference_pressure_);
+  for (size_t k = 0; k < node_pressures.size(); ++k) {
+    largest = std::max(largest, std::abs(node_pressures[k]));
+    if (!node_pressures_.empty()) change = std::max(change, std::abs(node_pressures[k] - node_pressures_[k]));
+  }
+  if (!node_pressures_.empty() && change <= 1e-12 * largest) return;
+  const auto t0 = Clock::now();
+  node_pressures_.assign(node_pressures.begin(), node_pressures.end());
+  reference_pressure_ = reference;
+  if (pressure_basis_.size() == 0) {
+    // The pressure at a lumen point: along the nearest segment, between its nodes' pressures,
+    // so the load is linear in them, f = B p: B once, a product and a back-substitution a change.
+    pressure_basis_ =
+        solid_->pressure_basis(solid_->mesh().group_named("lumen"), net_.num_nodes(),
+                               [this](const Vec3& x, std::vector<std::pair<int, double>>& w) {
+                                 int best = -1;
+                                 double best_d = std::numeric_limits<double>::infinity(), best_t = 0.0;
+                                 for (int k = 0; k < net_.num_segments(); ++k) {
+                                   const auto& seg = net_.segment(k);
+                                   const Vec3 a = net_.node(seg.node_from), d = net_.node(seg.node_to) - a;
+                                   const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+                                   const double dist = (x - a - t * d).norm();
+                                   if (dist < best_d) best_d = dist, best = k, best_t = t;
+                                 }
+                                 const auto& seg = net_.segment(best);
+                                 w.emplace_back(seg.node_from, 1.0 - best_t);
+                                 w.emplace_back(seg.node_to, best_t);
+                               });
+  }
+  if (pressure_response_.size() == 0) {
+    // The lumen's response to each unit node pressure, K⁻¹B on the lumen's nodes, solved once
+    // (a back-substitution of this wall costs as much as ten of these products): the wall then
+    // follows a pulsatile pressure at a product a step, and its full field is solved only for an
+    // output frame.
+    for (size_t f = 0; f < solid_->mesh().faces.size(); ++f)
+      if (solid_->mesh().face_group[f] == solid_->mesh().group_named("lumen"))
+        for (int node : solid_->mesh().faces[f]) lumen_nodes_.push_back(node);
+    std::sort(lumen_nodes_.begin(), lumen_nodes_.end());
+    lumen_nodes_.erase(std::unique(lumen_nodes_.begin(), lumen_nodes_.end()), lumen_nodes_.end());
+    Eigen::MatrixXd x = Eigen::MatrixXd(pressure_basis_);
+    solid_->tangent_solve(x);
+    pressure_response_.resize(3 * static_cast<Eigen::Index>(lumen_nodes_.size()), x.cols());
+    for (size_t a = 0; a < lumen_nodes_.size(); ++a)
+      pressure_response_.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = x.middleRows<3>(3 * lumen_nodes_[a]);
+    pressure_field_ = Eigen::VectorXd::Zero(solid_->num_dofs());
+  }
+  Eigen::VectorXd p(net_.num_nodes());
+  for (int k = 0; k < net_.num_nodes(); ++k) p[k] = node_pressures_[static_cast<size_t>(k)] - reference;
+  pressure_load_ = pressure_basis_ * p;
+  const Eigen::VectorXd lumen = pressure_response_ * p;
+  max_pressure_displacement_ = 0.0;
+  for (size_t a = 0; a < lumen_nodes_.size(); ++a) {
+    const Vec3 ua = lumen.segment<3>(3 * static_cast<Eigen::Index>(a));
+    pressure_field_.segment<3>(3 * lumen_nodes_[a]) = ua;  // (the lumen's nodes only: what the contacts read)
+    max_pressure_displacement_ = std::max(max_pressure_displacement_, ua.norm());
+  }
+  field_current_ = false;
+  seconds_ += since(t0);
+}
+
 void DeformableWall::solve_field() const {
   if (field_current_) return;
   const auto t0 = Clock::now();
   Eigen::MatrixXd u = load_;
+  if (pressure_load_.size() > 0) u.col(0) += pressure_load_;
   solid_->tangent_solve(u);
   displacement_ = u.col(0);
   max_displacement_ = 0.0;
@@ -110,6 +185,8 @@ nlohmann::json DeformableWall::summary() const {
           {"final_max_displacement", max_displacement_},
           {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
           {"compliance_columns", compliance_columns()},
+          {"blood_pressure_max_lumen_displacement",
+           pressure_field_.size() > 0 ? nlohmann::json(max_pressure_displacement_) : nlohmann::json(nullptr)},
           {"seconds", seconds_}};
 }
 

@@ -124,12 +124,17 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
   wall_shift_.setZero(m);
   if (m == 0) return;
   const Eigen::MatrixXd& c = deformable_->compliance();
-  // λ = k·max(0, δ − C λ): an LCP with the P-matrix K⁻¹ + C; active sets from those pressed
-  // into the rest wall, dropping negative forces and adding the contacts the wall's motion
-  // still leaves penetrated, until none changes.
+  // The wall's normal displacement before any contact force (the blood pressure's), o: the
+  // contacts meet the wall there, their penetration δ − o.
+  const Eigen::VectorXd& o = deformable_->offsets();
+  auto gap = [&](Eigen::Index j) {
+    return candidates_[static_cast<size_t>(j)].penetration - (o.size() == m ? o[j] : 0.0);
+  };
+  // λ = k·max(0, δ − o − C λ): an LCP with the P-matrix K⁻¹ + C; active sets from those pressed
+  // into the (pressed-out) rest wall, dropping negative forces and adding the contacts the
+  // wall's motion still leaves penetrated, until none changes.
   std::vector<char> active(static_cast<size_t>(m));
-  for (Eigen::Index j = 0; j < m; ++j)
-    active[static_cast<size_t>(j)] = candidates_[static_cast<size_t>(j)].penetration > 0.0;
+  for (Eigen::Index j = 0; j < m; ++j) active[static_cast<size_t>(j)] = gap(j) > 0.0;
   std::vector<Eigen::Index> idx;
   Eigen::MatrixXd a;
   Eigen::LLT<Eigen::MatrixXd> llt;
@@ -145,7 +150,7 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
       for (Eigen::Index r = 0; r < na; ++r) {
         const Candidate& cr = candidates_[static_cast<size_t>(idx[static_cast<size_t>(r)])];
         a(r, r) += 1.0 / cr.stiffness;
-        b[r] = cr.penetration;
+        b[r] = gap(idx[static_cast<size_t>(r)]);
       }
       llt.compute(a);
       const Eigen::VectorXd l = llt.solve(b);
@@ -157,13 +162,14 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
     if (!changed) {
       wall_shift_ = c * lambda_;
       for (Eigen::Index j = 0; j < m; ++j)
-        if (!active[static_cast<size_t>(j)] && candidates_[static_cast<size_t>(j)].penetration - wall_shift_[j] > 0.0)
+        if (!active[static_cast<size_t>(j)] && gap(j) - wall_shift_[j] > 0.0)
           active[static_cast<size_t>(j)] = 1, changed = true;
     }
     if (!changed) break;
   }
   lambda_ = lambda_.cwiseMax(0.0);
   wall_shift_ = c * lambda_;
+  if (o.size() == m) wall_shift_ += o;  // the wall's whole normal displacement there
   idx.clear();
   for (Eigen::Index j = 0; j < m; ++j)
     if (lambda_[j] > 0.0) idx.push_back(j);
@@ -183,7 +189,7 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
     const Candidate& cj = candidates_[static_cast<size_t>(j)];
     const double l = lambda_[j];
     const auto k = static_cast<size_t>(cj.vertex);
-    energy += 0.5 * l * cj.penetration;  // ½ λᵀ(K⁻¹ + C)λ = ½ λ·δ
+    energy += 0.5 * l * gap(j);  // ½ λᵀ(K⁻¹ + C)λ = ½ λ·(δ − o)
     const Vec3 f = -l * cj.normal;
     out.add_conservative_force(cj.vertex, f);
     out.add_position_jacobian(cj.vertex, -(s(r, r) * cj.normal * cj.normal.transpose() + l * cj.hessian));

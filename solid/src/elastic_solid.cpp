@@ -219,6 +219,28 @@ void ElasticSolid::set_pressure(int group, std::function<double(const Vec3&)> pr
   });
 }
 
+Eigen::SparseMatrix<double> ElasticSolid::pressure_basis(
+    int group, int fields,
+    const std::function<void(const Vec3&, std::vector<std::pair<int, double>>&)>& weights) const {
+  if (group < 0 || group >= static_cast<int>(mesh_.groups.size()))
+    throw_usage_error(fmt::format("wall: no boundary group {}", group));
+  std::vector<Eigen::Triplet<double>> trip;
+  std::vector<std::pair<int, double>> w;
+  for_face_points(mesh_, group, [&](size_t f, const double* nval, const Vec3& x, const Vec3& area) {
+    w.clear();
+    weights(x, w);
+    for (const auto& [k, wk] : w) {
+      if (k < 0 || k >= fields) throw_usage_error(fmt::format("wall: pressure field {} of {}", k, fields));
+      for (int a = 0; a < 6; ++a)
+        for (int c = 0; c < 3; ++c)
+          trip.emplace_back(3 * mesh_.faces[f][static_cast<size_t>(a)] + c, k, -wk * nval[a] * area[c]);
+    }
+  });
+  Eigen::SparseMatrix<double> b(num_dofs(), fields);
+  b.setFromTriplets(trip.begin(), trip.end());
+  return b;
+}
+
 double ElasticSolid::elastic_energy(const Eigen::VectorXd& u) const {
   double e = 0.0;
   for (size_t t = 0; t < mesh_.tets.size(); ++t)

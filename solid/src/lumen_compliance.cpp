@@ -240,6 +240,14 @@ Vec3 LumenCompliance::displacement(const LumenPoint& at, std::span<const LumenPo
   return u;
 }
 
+Vec3 LumenCompliance::interpolate(const LumenPoint& at, const Eigen::VectorXd& field) const {
+  const auto w = weights(at);
+  const auto& face = solid_.mesh().faces[static_cast<size_t>(at.face)];
+  Vec3 v = Vec3::Zero();
+  for (int a = 0; a < 6; ++a) v += w[static_cast<size_t>(a)] * field.segment<3>(3 * face[static_cast<size_t>(a)]);
+  return v;
+}
+
 Eigen::VectorXd LumenCompliance::nodal_forces(std::span<const LumenPoint> points, std::span<const Vec3> forces) const {
   const auto& m = solid_.mesh();
   Eigen::VectorXd f = Eigen::VectorXd::Zero(solid_.num_dofs());

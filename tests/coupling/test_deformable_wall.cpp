@@ -234,6 +234,77 @@ TEST(DeformableWall, AStiffWallIsTheRigidWall) {
   EXPECT_LT(worst, 1e-7);
 }
 
+TEST(DeformableWall, TheBloodPressureInflatesTheWallAndTheWireLiesWhereItWent) {
+  // A uniform 2 kPa inflates the tube (held ends: plane strain away from them) by Lamé's radial
+  // displacement at the lumen; the wire lying along the wall under a body load then sits that
+  // much farther out, its total contact force the same (it balances the same load).
+  const vessels::Network net = tube();
+  const WallSpec spec = soft_wall(2e6);
+  const double p = 2e3, a = kR, b = kR + kThickness, nu = spec.poisson_ratio, E = spec.youngs_modulus;
+  const double lame = (1 + nu) * p * a * a / (E * (b * b - a * a)) * ((1 - 2 * nu) * a + b * b / a);
+  DeformableWall dry(Vec3::Zero(), Vec3(kLength, 0, 0), kR, spec);
+  DeformableWall wet(Vec3::Zero(), Vec3(kLength, 0, 0), kR, spec);
+  const std::vector<double> pressures(2, p);  // the wall's own straight network: two nodes
+  wet.set_blood_pressure(pressures, 0.0);
+  // The lumen at mid-length, all round: its radial displacement against Lamé's.
+  double worst = 0.0;
+  int seen = 0;
+  const auto& m = wet.mesh();
+  const Eigen::VectorXd& u = wet.displacement();
+  for (int n = 0; n < m.num_nodes(); ++n) {
+    const Vec3& x = m.nodes[static_cast<size_t>(n)];
+    const double r = std::hypot(x.y(), x.z());
+    if (std::abs(x.x() - 0.5 * kLength) > 2e-3 || std::abs(r - a) > 1e-7) continue;
+    const double ur = (u[3 * n + 1] * x.y() + u[3 * n + 2] * x.z()) / r;
+    worst = std::max(worst, std::abs(ur - lame));
+    ++seen;
+  }
+  ASSERT_GT(seen, 8);
+  EXPECT_LT(worst, 0.05 * lame) << "Lamé " << lame * 1e6 << " um";
+  EXPECT_EQ(wet.summary()["blood_pressure_max_lumen_displacement"].get<double>() > 0.9 * lame, true);
+
+  // The wire lying along the inflated wall meets it where the pressure and its own forces put it:
+  // solve the same wall, linear, under the pressure and the opposites of the wire's final forces,
+  // and compare the lumen's radial displacement under each contact with the one the contact
+  // assumed (the wire's distance from the axis + its radius − R − the penalty's sink λ/k).
+  const Pressed at_rest = press(net, &dry, true), inflated = press(net, &wet, true);
+  ASSERT_TRUE(at_rest.converged);
+  ASSERT_TRUE(inflated.converged);
+  solid::ElasticSolid full(wet.mesh(), solid::NeoHookean::from_young_poisson(E, nu));
+  full.hold(full.mesh().group_named("end_0"));
+  full.hold(full.mesh().group_named("end_1"));
+  full.set_pressure(full.mesh().group_named("lumen"), p);
+  full.linearize();
+  solid::LumenCompliance lumen(full, full.mesh().group_named("lumen"));
+  std::vector<solid::LumenPoint> points;
+  std::vector<Vec3> loads, along;
+  std::vector<double> expected;
+  for (size_t i = 0; i < inflated.positions.size(); ++i) {
+    if (inflated.contact_force[i].norm() == 0.0) continue;
+    const Vec3& x = inflated.positions[i];
+    const double r = std::hypot(x.y(), x.z());
+    const Vec3 radial(0.0, x.y() / r, x.z() / r);
+    points.push_back(lumen.locate(Vec3(x.x(), kR * radial.y(), kR * radial.z())));
+    loads.push_back(-inflated.contact_force[i]);
+    along.push_back(radial);
+    expected.push_back(r + 0.2e-3 - kR - inflated.contact_force[i].norm() / 3e4);
+  }
+  ASSERT_GT(points.size(), 10u);
+  Eigen::MatrixXd field = lumen.nodal_forces(points, loads) + full.loads();
+  full.tangent_solve(field);
+  double off = 0.0, largest = 0.0;
+  for (size_t j = 0; j < points.size(); ++j) {
+    off = std::max(off, std::abs(along[j].dot(lumen.interpolate(points[j], field.col(0))) - expected[j]));
+    largest = std::max(largest, std::abs(expected[j]));
+  }
+  EXPECT_LT(off, 0.01 * largest) << "largest " << largest * 1e6 << " um";
+  // And the inflation is seen: the wire lies farther out than against the dry wall.
+  double moved = 0.0;
+  for (size_t i = 0; i < at_rest.positions.size(); ++i)
+    moved = std::max(moved, inflated.positions[i].y() - at_rest.positions[i].y());
+  EXPECT_GT(moved, 0.3 * lame);
+}
+
 TEST(DeformableWall, RefusesAWallThatCannotBe) {
   auto build = [](double thickness, double E, double nu, double support) {
     const WallSpec spec{thickness, 0.0, E, nu, support, 0.5e-3};

@@ -84,6 +84,23 @@ TEST(ElasticSolid, NodalStressOfAHomogeneousStrainIsHookes) {
   EXPECT_GT(hooke.cwiseAbs().maxCoeff(), 1.0) << "a stress that is not trivially zero";
 }
 
+TEST(ElasticSolid, APressureBasisGivesTheLoadOfTheSameField) {
+  // p(X) = (1 − s) p₀ + s p₁ along the tube (s = z / length): the basis's product with (p₀, p₁)
+  // is the load set_pressure builds from the field itself, face point by face point.
+  ElasticSolid s = quarter_tube(1e-3, 3e-3);
+  const int lumen = s.mesh().group_named("lumen");
+  const double length = 3e-3, p0 = 1300.0, p1 = -450.0;
+  const auto b = s.pressure_basis(lumen, 2, [&](const Vec3& x, std::vector<std::pair<int, double>>& w) {
+    w.emplace_back(0, 1.0 - x.z() / length);
+    w.emplace_back(1, x.z() / length);
+  });
+  s.set_pressure(lumen, [&](const Vec3& x) { return (1.0 - x.z() / length) * p0 + x.z() / length * p1; });
+  const Eigen::VectorXd direct = s.loads();
+  const Eigen::VectorXd product = b * Eigen::Vector2d(p0, p1);
+  EXPECT_GT(direct.norm(), 0.0);
+  EXPECT_LT((product - direct).norm(), 1e-12 * direct.norm());
+}
+
 double lame_radial(double r, double p, double E, double nu) {
   const double c = p * kA * kA / (E * (kB * kB - kA * kA));
   return (1 + nu) * c * ((1 - 2 * nu) * r + kB * kB / r);

@@ -159,10 +159,12 @@ TEST(SceneRanges, PhysicalQuantitiesHaveTheSignTheyMustHave) {
     const auto has = [&](const char* part) { return name.find(part) != std::string::npos; };
     const auto& r = key.range;
     if (name.ends_with("radius") || name == "radius_ratio" || has("density") || has("viscosity") ||
-        has("youngs_modulus") || has("mesh_size") || has("period") || name == "dt" || has("stiffness")) {
+        has("youngs_modulus") || has("mesh_size") || has("period") || name == "dt" ||
+        (has("stiffness") && name != "support_stiffness")) {
       ++checked;
       EXPECT_TRUE(r.lower >= 0.0 && (r.lower > 0.0 || r.lower_open)) << key.path << " must be declared positive";
-    } else if (has("length") || has("friction") || has("damping") || key.dim == flowire::units::Dimension::Time) {
+    } else if (has("length") || has("friction") || has("damping") || name == "support_stiffness" ||
+               key.dim == flowire::units::Dimension::Time) {  // (a tissue support of 0: none)
       ++checked;
       EXPECT_GE(r.lower, 0.0) << key.path << " must be declared non-negative";
     }

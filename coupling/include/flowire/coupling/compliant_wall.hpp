@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <span>
+#include <vector>
 
 #include "flowire/coupling/interaction.hpp"
 
@@ -21,6 +22,13 @@ class CompliantWall {
   virtual void anchor(std::span<const Vec3> points, std::span<const Vec3> normals) = 0;
   /// @brief C (m × m) of the anchored points [m/N]: symmetric positive definite.
   [[nodiscard]] virtual const Eigen::MatrixXd& compliance() const = 0;
+  /// @brief (m, or empty: none) the anchored points' displacement along their normals before any
+  /// contact force, under the wall's other loads (the blood pressure) [m].
+  [[nodiscard]] virtual const Eigen::VectorXd& offsets() const = 0;
+  /// @brief The blood pressure on the lumen from the network's node pressures (the flow's; the
+  /// pressure along a segment interpolated between its nodes), less @p reference (the pressure
+  /// at which the rest geometry was taken) [Pa]. A wall that does not take it ignores it.
+  virtual void set_blood_pressure(std::span<const double> node_pressures, double reference) = 0;
   /// @brief The wall under forces @p forces at lumen points @p points (the opposites of the
   /// wire's contact forces) at the end of a step (its displacement field is solved when asked).
   virtual void load(std::span<const Vec3> points, std::span<const Vec3> forces) = 0;

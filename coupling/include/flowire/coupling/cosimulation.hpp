@@ -147,6 +147,8 @@ class CoSimulation {
   void occlude();
   void shield_wire();
   config::Config scene_;
+  /// The flow's node pressures onto the wall (wall.blood_pressure), after each flow solve.
+  void press_wall();
   std::optional<vessels::Network> net_;
   std::unique_ptr<flow::FlowSolver> fsolver_;
   std::unique_ptr<rod::RodSimulator> sim_;
@@ -156,6 +158,8 @@ class CoSimulation {
   double surface_smoothing_ = 0.0;
   std::shared_ptr<VesselForces> forces_;
   std::unique_ptr<CompliantWall> wall_;  // wall:, null without
+  bool wall_blood_pressure_ = false;     // wall.blood_pressure: the flow's pressure loads the wall
+  double wall_reference_pressure_ = 0.0;
   std::shared_ptr<TipForces> tip_forces_;
   std::unique_ptr<WireOcclusion> occlusion_;
   // catheter: (catheter.hpp): its rod, wall forces and the contact with the wire in its lumen

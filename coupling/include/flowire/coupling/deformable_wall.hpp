@@ -16,6 +16,7 @@
 /// wire's contact sees: solid::mesh_network_wall), every end held; the contact sees the wall's
 /// displacement along its normal (the wall's tangential motion is not seen).
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 
 #include <memory>
 #include <span>
@@ -61,6 +62,13 @@ class DeformableWall final : public CompliantWall {
   void anchor(std::span<const Vec3> points, std::span<const Vec3> normals) override;
   /// @brief C (m × m) of the anchored points [m/N].
   [[nodiscard]] const Eigen::MatrixXd& compliance() const override { return compliance_; }
+  /// @brief The anchored points' normal displacement under the blood pressure [m] (empty
+  /// before any pressure was set).
+  [[nodiscard]] const Eigen::VectorXd& offsets() const override { return offsets_; }
+  /// @brief The blood pressure as a dead load on the lumen (linear about rest: its displacement
+  /// field u_p = K⁻¹ f_p, one back-substitution, redone only when the pressures change), which the
+  /// contacts meet and the outputs add.
+  void set_blood_pressure(std::span<const double> node_pressures, double reference) override;
   /// @brief The wall under forces @p forces at lumen points @p points (the wire's contact forces'
   /// opposites): its displacement field, largest displacement and total load.
   void load(std::span<const Vec3> points, std::span<const Vec3> forces) override;
@@ -88,6 +96,16 @@ class DeformableWall final : public CompliantWall {
   std::unique_ptr<solid::ElasticSolid> solid_;
   std::unique_ptr<solid::LumenCompliance> lumen_;
   Eigen::MatrixXd compliance_;
+  Eigen::VectorXd offsets_;            ///< (anchored points) normal displacement under the pressure
+  Eigen::VectorXd pressure_field_;     ///< (3 a node) the lumen's displacement under the blood pressure (0 elsewhere)
+  Eigen::VectorXd pressure_load_;      ///< (3 a node) the blood pressure's nodal forces
+  Eigen::MatrixXd pressure_response_;  ///< (3 lumen nodes × network nodes) K⁻¹B on the lumen
+  std::vector<int> lumen_nodes_;
+  std::vector<double> node_pressures_;  ///< the last pressures set (to skip unchanged ones)
+  double reference_pressure_ = 0.0;
+  vessels::Network net_;                        ///< for the pressure along the lumen
+  Eigen::SparseMatrix<double> pressure_basis_;  ///< nodal forces per unit network-node pressure
+  double max_pressure_displacement_ = 0.0;
   /// Solve the displacement field of the last load if not yet done.
   void solve_field() const;
   Eigen::VectorXd load_;  ///< nodal forces of the last load

@@ -63,6 +63,14 @@ class ElasticSolid {
   /// @brief A pressure field p(X) (Pa) over `group`'s reference faces (the blood pressure
   /// along a vessel, a band load), integrated with the 6-point rule on each curved face.
   void set_pressure(int group, std::function<double(const Vec3&)> pressure);
+  /// @brief The nodal forces (N, 3 a node) of a pressure on `group`'s reference faces that is a
+  /// linear combination of `fields` basis pressures, p(X) = Σ_k w_k(X) p_k: the matrix B
+  /// (3 nodes × fields) with f = B p. @p weights(X, out) lists the (k, w_k(X)) at X. For a load
+  /// that changes often (the blood pressure of a pulsatile flow): one pass over the faces, then a
+  /// product per change.
+  [[nodiscard]] Eigen::SparseMatrix<double> pressure_basis(
+      int group, int fields,
+      const std::function<void(const Vec3&, std::vector<std::pair<int, double>>&)>& weights) const;
   /// @brief Nodal forces (N), 3 a node, added to the pressure loads; zero until set.
   [[nodiscard]] Eigen::VectorXd& nodal_forces() { return nodal_forces_; }
 

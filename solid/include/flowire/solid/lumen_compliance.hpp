@@ -45,6 +45,9 @@ class LumenCompliance {
   Eigen::MatrixXd compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions);
   /// @brief The displacement at @p at under forces @p forces at @p points (the kept columns).
   Vec3 displacement(const LumenPoint& at, std::span<const LumenPoint> points, std::span<const Vec3> forces);
+  /// @brief A nodal field (3 a node of the solid, e.g. a displacement) at a lumen point, by the
+  /// face's shape functions.
+  [[nodiscard]] Vec3 interpolate(const LumenPoint& at, const Eigen::VectorXd& field) const;
   /// @brief Nodal forces (3 a node of the solid) of forces @p forces at @p points.
   [[nodiscard]] Eigen::VectorXd nodal_forces(std::span<const LumenPoint> points, std::span<const Vec3> forces) const;
   /// @brief Solve the columns the faces of @p points still lack, many at a time.
