@@ -12,16 +12,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-
-def read_vtu(path):
-    text = open(path).read()
-
-    def block(start):
-        body = text[text.index(">", start) + 1:text.index("</DataArray>", start)]
-        return np.array(body.split(), dtype=float)
-
-    points = block(text.index("<DataArray", text.index("<Points>"))).reshape(-1, 3)
-    return points, block(text.index('Name="displacement"')).reshape(-1, 3)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "deformable_wall"))
+from plot_wall import read_vtu  # noqa: E402  (the wall's points and displacement from a wall_*.vtu)
 
 
 def main():

@@ -48,6 +48,16 @@ inline double clamp_inserted(double L, const RodModel& m, bool& clamped) {
   return std::clamp(L, lo, hi);
 }
 
+/// The state's configuration (positions, angles, frames, reference twists) set to copies kept
+/// elsewhere (a step's start, the line search's accepted iterate).
+inline void set_configuration(RodState& s, const std::vector<Vec3>& x, const std::vector<double>& theta,
+                              const std::vector<EdgeFrame>& frame, const std::vector<double>& twist) {
+  s.x = x;
+  s.theta = theta;
+  s.frame = frame;
+  s.ref_twist = twist;
+}
+
 /// Edge frames of @p frame_from parallel-transported to the edges of @p x_new, and the reference
 /// twists at the vertices between them (carried on from @p twist_from); in place is allowed.
 void transport_frames_to(const std::vector<Vec3>& x_new, const std::vector<EdgeFrame>& frame_from,

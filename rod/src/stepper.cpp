@@ -496,10 +496,7 @@ StepReport TimeStepper::relax_to_static(double load_scale, int budget) {
 
 void TimeStepper::rewind_to_step_start() {
   const Work& w = *work_;
-  body_.state.x = w.x0;
-  body_.state.theta = w.theta0;
-  body_.state.frame = w.frame0;
-  body_.state.ref_twist = w.twist0;
+  detail::set_configuration(body_.state, w.x0, w.theta0, w.frame0, w.twist0);
 }
 
 int TimeStepper::static_hessian_negative_eigenvalues() {

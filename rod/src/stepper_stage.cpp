@@ -120,10 +120,7 @@ void TimeStepper::keep_iterate() {
 
 void TimeStepper::back_to_kept_iterate() {
   const Work& w = *work_;
-  body_.state.x = w.x_accepted;
-  body_.state.theta = w.theta_accepted;
-  body_.state.frame = w.frame_accepted;
-  body_.state.ref_twist = w.twist_accepted;
+  detail::set_configuration(body_.state, w.x_accepted, w.theta_accepted, w.frame_accepted, w.twist_accepted);
 }
 
 void TimeStepper::move_along(const Eigen::Ref<const Eigen::VectorXd>& dq, double alpha) {

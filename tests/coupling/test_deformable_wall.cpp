@@ -121,6 +121,28 @@ TEST(DeformableWall, TheWirePushesTheWallOutAndTheWallPushesBack) {
   EXPECT_GT(on_wire.norm(), 0.01);
 }
 
+/// Where a pressed wire's contacts put the wall, as the contact assumed it: for each vertex in
+/// contact, its lumen point (radially out from the axis), the force on the wall there, the
+/// radial direction, and the wall's radial displacement the contact assumed (the wire's distance
+/// from the axis + its radius − R − the penalty's sink λ/k).
+struct ContactSites {
+  std::vector<solid::LumenPoint> points;
+  std::vector<Vec3> loads, along;
+  std::vector<double> expected;
+  ContactSites(const Pressed& p, const solid::LumenCompliance& lumen) {
+    for (size_t i = 0; i < p.positions.size(); ++i) {
+      if (p.contact_force[i].norm() == 0.0) continue;
+      const Vec3& x = p.positions[i];
+      const double r = std::hypot(x.y(), x.z());
+      const Vec3 radial(0.0, x.y() / r, x.z() / r);
+      points.push_back(lumen.locate(Vec3(x.x(), kR * radial.y(), kR * radial.z())));
+      loads.push_back(-p.contact_force[i]);
+      along.push_back(radial);
+      expected.push_back(r + 0.2e-3 - kR - p.contact_force[i].norm() / 3e4);
+    }
+  }
+};
+
 class DeformableWallAgainstFullSolve : public ::testing::TestWithParam<bool> {};
 
 TEST_P(DeformableWallAgainstFullSolve, TheContactsWallIsTheFullSolidsUnderTheWiresForces) {
@@ -138,21 +160,11 @@ TEST_P(DeformableWallAgainstFullSolve, TheContactsWallIsTheFullSolidsUnderTheWir
   full.hold(full.mesh().group_named("end_1"));
   full.linearize();
   solid::LumenCompliance lumen(full, full.mesh().group_named("lumen"));
-  std::vector<solid::LumenPoint> points;
-  std::vector<Vec3> loads;
-  std::vector<double> expected;  // the wall's radial displacement the contact assumed
-  std::vector<Vec3> along;       // the direction the contact reads it along: the capsule's normal
-  for (size_t i = 0; i < soft.positions.size(); ++i) {
-    if (soft.contact_force[i].norm() == 0.0) continue;
-    const Vec3& x = soft.positions[i];
-    const double r = std::hypot(x.y(), x.z());
-    const Vec3 radial(0.0, x.y() / r, x.z() / r);
-    points.push_back(lumen.locate(Vec3(x.x(), kR * radial.y(), kR * radial.z())));
-    loads.push_back(-soft.contact_force[i]);
-    // penetration into the rest wall = the penalty's sink λ/k + the wall's displacement w
-    expected.push_back(r + 0.2e-3 - kR - soft.contact_force[i].norm() / 3e4);
-    along.push_back(radial);
-  }
+  const ContactSites sites(soft, lumen);
+  const auto& points = sites.points;
+  const auto& loads = sites.loads;
+  const auto& along = sites.along;
+  const auto& expected = sites.expected;
   ASSERT_FALSE(points.empty());
   // The same wall linear (what the contact condenses) and nonlinear (neo-Hookean, large
   // displacements): the first checks the condensation, the second what linearizing costs.
@@ -276,21 +288,12 @@ TEST(DeformableWall, TheBloodPressureInflatesTheWallAndTheWireLiesWhereItWent) {
   full.set_pressure(full.mesh().group_named("lumen"), p);
   full.linearize();
   solid::LumenCompliance lumen(full, full.mesh().group_named("lumen"));
-  std::vector<solid::LumenPoint> points;
-  std::vector<Vec3> loads, along;
-  std::vector<double> expected;
-  for (size_t i = 0; i < inflated.positions.size(); ++i) {
-    if (inflated.contact_force[i].norm() == 0.0) continue;
-    const Vec3& x = inflated.positions[i];
-    const double r = std::hypot(x.y(), x.z());
-    const Vec3 radial(0.0, x.y() / r, x.z() / r);
-    points.push_back(lumen.locate(Vec3(x.x(), kR * radial.y(), kR * radial.z())));
-    loads.push_back(-inflated.contact_force[i]);
-    along.push_back(radial);
-    expected.push_back(r + 0.2e-3 - kR - inflated.contact_force[i].norm() / 3e4);
-  }
+  const ContactSites sites(inflated, lumen);
+  const auto& points = sites.points;
+  const auto& along = sites.along;
+  const auto& expected = sites.expected;
   ASSERT_GT(points.size(), 10u);
-  Eigen::MatrixXd field = lumen.nodal_forces(points, loads) + full.loads();
+  Eigen::MatrixXd field = lumen.nodal_forces(points, sites.loads) + full.loads();
   full.tangent_solve(field);
   double off = 0.0, largest = 0.0;
   for (size_t j = 0; j < points.size(); ++j) {
