@@ -21,7 +21,7 @@ void declare_wall_keys(config::Schema& s) {
   s.add("wall", Type::Section, "", D::None,
         "the vessel wall as an elastic solid that the wire pushes and that pushes back (neo-Hookean, meshed with "
         "gmsh around the network's tubes, the lumen the wire's contact sees, every end held; linear about its "
-        "rest state, its compliance condensed onto the wire's contacts; not with a catheter)");
+        "rest state, its compliance condensed onto the contacts of the wire and of the catheter)");
   s.add("wall.thickness", Type::Number, "", D::Length, "wall thickness (default: thickness_ratio × radius)").positive();
   s.add("wall.thickness_ratio", Type::Number, "0.15", D::None, "wall thickness as a fraction of the lumen radius")
       .positive();
@@ -66,8 +66,6 @@ double breathing_period(const vessels::Network& net, const WallSpec& spec, doubl
 std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const vessels::Network& net,
                                                nlohmann::json& facts) {
   if (!c.has_section("wall")) return nullptr;
-  if (c.has_section("catheter"))
-    throw_input_error(c.where("wall"), "a deformable wall is not yet available with a catheter");
   const double nu = c.number("wall.poisson_ratio");
   if (!(nu > -1.0 && nu < 0.5))
     throw_input_error(c.where("wall.poisson_ratio"),

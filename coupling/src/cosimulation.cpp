@@ -185,6 +185,7 @@ void CoSimulation::add_wall_forces(const rod::WireSpec& spec, int entry, nlohman
     cath_forces_ = make_vessel_forces(c, *index_, catheter_rod_spec(*cath_spec_, spec), fsolver_.get());
     if (cath_forces_) {
       if (surface_) cath_forces_->set_surface(surface_.get(), wall_smoothing);
+      if (wall_) cath_forces_->set_deformable(wall_.get());  // the same wall as the wire's
       introduce(*cath_forces_);
       cath_->add_external(cath_forces_);
     }

@@ -59,31 +59,48 @@ const mesh::TetMesh& DeformableWall::mesh() const { return solid_->mesh(); }
 
 int DeformableWall::compliance_columns() const { return lumen_->solved_nodes(); }
 
-void DeformableWall::anchor(std::span<const Vec3> points, std::span<const Vec3> normals) {
+CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const Vec3> points,
+                                               std::span<const Vec3> normals) {
   const auto t0 = Clock::now();
   std::vector<solid::LumenPoint> at;
   at.reserve(points.size());
   for (const Vec3& p : points) at.push_back(lumen_->locate(p));
-  compliance_ = lumen_->compliance(at, normals);
-  offsets_.resize(0);
-  if (pressure_field_.size() > 0) {
-    offsets_.resize(static_cast<Eigen::Index>(at.size()));
-    for (size_t j = 0; j < at.size(); ++j)
-      offsets_[static_cast<Eigen::Index>(j)] = normals[j].dot(lumen_->interpolate(at[j], pressure_field_));
+  Anchored a;
+  a.compliance = lumen_->compliance(at, normals);
+  const bool pressed = pressure_field_.size() > 0;
+  bool others = false;
+  for (const auto& [who, l] : loads_) others = others || (who != body && !l->points.empty());
+  if (pressed || others) {
+    a.offsets = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(at.size()));
+    for (size_t j = 0; j < at.size(); ++j) {
+      Vec3 u = pressed ? lumen_->interpolate(at[j], pressure_field_) : Vec3::Zero();
+      for (const auto& [who, l] : loads_)  // (their columns were solved when they were anchored)
+        if (who != body && !l->points.empty()) u += lumen_->displacement(at[j], l->points, l->forces);
+      a.offsets[static_cast<Eigen::Index>(j)] = normals[j].dot(u);
+    }
   }
   seconds_ += since(t0);
+  return a;
 }
 
-void DeformableWall::load(std::span<const Vec3> points, std::span<const Vec3> forces) {
+void DeformableWall::load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces) {
   const auto t0 = Clock::now();
-  std::vector<solid::LumenPoint> at;
-  at.reserve(points.size());
-  load_total_.setZero();
+  auto it = std::find_if(loads_.begin(), loads_.end(), [&](const auto& e) { return e.first == body; });
+  if (it == loads_.end()) it = loads_.insert(loads_.end(), {body, std::make_unique<BodyLoad>()});
+  BodyLoad& l = *it->second;
+  l.points.clear();
+  l.forces.assign(forces.begin(), forces.end());
+  l.total.setZero();
   for (size_t j = 0; j < points.size(); ++j) {
-    at.push_back(lumen_->locate(points[j]));
-    load_total_ += forces[j];
+    l.points.push_back(lumen_->locate(points[j]));
+    l.total += forces[j];
   }
-  load_ = lumen_->nodal_forces(at, forces);
+  load_.setZero();
+  load_total_.setZero();
+  for (const auto& [who, b] : loads_) {
+    if (!b->points.empty()) load_ += lumen_->nodal_forces(b->points, b->forces);
+    load_total_ += b->total;
+  }
   field_current_ = false;
   seconds_ += since(t0);
 }

@@ -113,7 +113,7 @@ void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wal
     points.push_back(rod.position(i) - d * n);  // the rest wall's closest point
     normals.push_back(n);
   }
-  deformable_->anchor(points, normals);
+  anchored_ = deformable_->anchor(this, points, normals);
   lambda_.setZero(static_cast<Eigen::Index>(candidates_.size()));
   wall_shift_.setZero(static_cast<Eigen::Index>(candidates_.size()));
 }
@@ -123,10 +123,10 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
   lambda_.setZero(m);
   wall_shift_.setZero(m);
   if (m == 0) return;
-  const Eigen::MatrixXd& c = deformable_->compliance();
-  // The wall's normal displacement before any contact force (the blood pressure's), o: the
-  // contacts meet the wall there, their penetration δ − o.
-  const Eigen::VectorXd& o = deformable_->offsets();
+  const Eigen::MatrixXd& c = anchored_.compliance;
+  // The wall's normal displacement before this body's contact forces (the blood pressure's and
+  // the other bodies' last forces'), o: the contacts meet the wall there, their penetration δ − o.
+  const Eigen::VectorXd& o = anchored_.offsets;
   auto gap = [&](Eigen::Index j) {
     return candidates_[static_cast<size_t>(j)].penetration - (o.size() == m ? o[j] : 0.0);
   };
@@ -250,7 +250,7 @@ void WallContact::end_step(const rod::RodView& rod, Wall& wall, InteractionStats
   }
   if (deformable_) {
     if (wall_shift_.size() > 0) max_shift_ = std::max(max_shift_, wall_shift_.maxCoeff());
-    deformable_->load(wall_points, wall_forces);
+    deformable_->load(this, wall_points, wall_forces);
     anchors_stale_ = true;
   }
 }

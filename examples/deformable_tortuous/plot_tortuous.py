@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Pictures of a run with a deformable wall around a vessel that winds in the plane z = 0: the
 wall's displacement seen from above at the frame where it is largest, and the wall's section
-by the plane z = 0 at rest and deformed (to scale), with the wire. Usage: plot_tortuous.py OUT_DIR  (writes OUT_DIR/wall.png)."""
+by the plane z = 0 at rest and deformed (to scale), with the wire (and a catheter, if any). Usage: plot_tortuous.py OUT_DIR  (writes OUT_DIR/wall.png)."""
 import glob
 import os
 import sys
@@ -38,13 +38,15 @@ def main():
     s = thickness_band
     b.scatter(x[s, 0] * 1e3, x[s, 1] * 1e3, s=2, c="0.6", label="wall at rest (section z = 0)")
     b.scatter((x[s, 0] + u[s, 0]) * 1e3, (x[s, 1] + u[s, 1]) * 1e3, s=2, c="C3", label=f"deformed, frame {largest}")
-    wire_csv = os.path.join(out, "wire.csv")
-    if os.path.exists(wire_csv):
-        data = np.genfromtxt(wire_csv, delimiter=",", names=True)
+    for name, style in (("wire", dict(color="C0", lw=2)), ("catheter", dict(color="C2", lw=5, alpha=0.6))):
+        path = os.path.join(out, f"{name}.csv")
+        if not os.path.exists(path):
+            continue
+        data = np.genfromtxt(path, delimiter=",", names=True)
         times = np.unique(data["time"])
         t = times[min(largest, len(times) - 1)]
         w = data[data["time"] == t]
-        b.plot(w["x"] * 1e3, w["y"] * 1e3, "C0", lw=2, label=f"wire, t = {t:.2f} s")
+        b.plot(w["x"] * 1e3, w["y"] * 1e3, label=f"{name}, t = {t:.2f} s", **style)
     b.set_aspect("equal")
     b.set_xlabel("x [mm]")
     b.set_ylabel("y [mm]")

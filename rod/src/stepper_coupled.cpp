@@ -62,6 +62,20 @@ void TimeStepper::coupled_matrix(std::vector<Eigen::Triplet<double>>& out, int o
     for (int i = j; i <= std::min(nd - 1, j + b); ++i)
       if (!held(i) && w.H.lower(i, j) != 0.0) out.emplace_back(offset + i, offset + j, w.H.lower(i, j));
   }
+  // The external forces' stiffness off the band (a deformable wall's contacts coupled through
+  // it), U R Uᵀ, lower triangle.
+  const LowRankStiffness& lr = w.coupled;
+  for (int p = 0; p < lr.rank(); ++p)
+    for (int q = 0; q < lr.rank(); ++q) {
+      const int rp = lr.dofs[static_cast<size_t>(p)], cq = lr.dofs[static_cast<size_t>(q)];
+      if (rp < cq || held(rp) || held(cq) || lr.core(p, q) == 0.0) continue;
+      const Mat3 block =
+          lr.core(p, q) * lr.directions[static_cast<size_t>(p)] * lr.directions[static_cast<size_t>(q)].transpose();
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (block(i, j) != 0.0 && (rp > cq || i >= j))
+            out.emplace_back(offset + rp + i, offset + cq + j, block(i, j));
+    }
 }
 
 void TimeStepper::coupled_velocities(std::vector<Eigen::Vector3d>& out) const {

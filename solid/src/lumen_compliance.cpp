@@ -223,6 +223,7 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
 Vec3 LumenCompliance::displacement(const LumenPoint& at, std::span<const LumenPoint> points,
                                    std::span<const Vec3> forces) {
   const auto& m = solid_.mesh();
+  prefetch(points);
   const auto wa = weights(at);
   const auto& face_a = m.faces[static_cast<size_t>(at.face)];
   Vec3 u = Vec3::Zero();

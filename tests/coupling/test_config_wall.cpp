@@ -91,9 +91,6 @@ TEST(ConfigWall, RefusesWhatItCannotBuildNamingTheKey) {
   EXPECT_NE(
       test::input_error([&] { (void)make_scene_wall(nu, tube(), facts); }).find("scene.yaml:2: wall.poisson_ratio"),
       std::string::npos);
-  const auto with_catheter = test::scene("catheter: {}\nwall: {}\n");
-  EXPECT_NE(test::input_error([&] { (void)make_scene_wall(with_catheter, tube(), facts); }).find("catheter"),
-            std::string::npos);
   // A centerline that turns back on itself: no tube can be built along it.
   vessels::Centerlines hairpin;
   hairpin.branches.push_back({"hairpin", {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.0005, 0)}, {1e-3, 1e-3, 1e-3}});

@@ -308,6 +308,42 @@ TEST(DeformableWall, TheBloodPressureInflatesTheWallAndTheWireLiesWhereItWent) {
   EXPECT_GT(moved, 0.3 * lame);
 }
 
+TEST(DeformableWall, TwoBodiesLoadOneWallAndEachMeetsWhereTheOtherMovedIt) {
+  // A wire and a catheter on one wall: each body's forces replace only its own, the wall carries
+  // both, and a body's anchors are offset by the wall's displacement under the other's forces
+  // (the same as the wall's full field there), not under its own.
+  DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, soft_wall(2e6));
+  const int wire = 0, catheter = 0;  // two identities
+  const void* a = &wire;
+  const void* b = &catheter;
+  const std::vector<Vec3> pa = {Vec3(10e-3, kR, 0)}, fa = {Vec3(0, 0.02, 0)};
+  const std::vector<Vec3> pb = {Vec3(20e-3, 0, -kR)}, fb = {Vec3(0, 0, -0.03)};
+  wall.load(a, pa, fa);
+  wall.load(b, pb, fb);
+  wall.load(a, pa, fa);  // replaces a's, keeps b's
+  EXPECT_LT((wall.load_total() - Vec3(0, 0.02, -0.03)).norm(), 1e-15);
+  // b's anchors near a's load: offset by a's displacement only.
+  const std::vector<Vec3> near = {Vec3(11e-3, kR, 0), Vec3(9e-3, 0.7 * kR, 0.714 * kR)};
+  std::vector<Vec3> normals;
+  for (const Vec3& x : near) normals.push_back(Vec3(0, x.y(), x.z()).normalized());
+  const auto at_b = wall.anchor(b, near, normals);
+  DeformableWall only_a(Vec3::Zero(), Vec3(kLength, 0, 0), kR, soft_wall(2e6));
+  only_a.load(a, pa, fa);
+  solid::ElasticSolid probe(only_a.mesh(), solid::NeoHookean::from_young_poisson(2e6, 0.45));
+  solid::LumenCompliance lumen(probe, probe.mesh().group_named("lumen"));
+  ASSERT_EQ(at_b.offsets.size(), 2);
+  for (int j = 0; j < 2; ++j) {
+    const double full = normals[static_cast<size_t>(j)].dot(
+        lumen.interpolate(lumen.locate(near[static_cast<size_t>(j)]), only_a.displacement()));
+    EXPECT_NEAR(at_b.offsets[j], full, 1e-6 * std::abs(full) + 1e-12) << j;
+    EXPECT_GT(std::abs(full), 1e-7);
+  }
+  // a's own anchors are not offset by a's own forces (it solves them in its step): by b's only.
+  const auto at_a = wall.anchor(a, near, normals);
+  ASSERT_EQ(at_a.offsets.size(), 2);
+  EXPECT_LT(std::abs(at_a.offsets[0]), 0.1 * std::abs(at_b.offsets[0]));
+}
+
 TEST(DeformableWall, RefusesAWallThatCannotBe) {
   auto build = [](double thickness, double E, double nu, double support) {
     const WallSpec spec{thickness, 0.0, E, nu, support, 0.5e-3};

@@ -17,21 +17,26 @@ namespace flowire::coupling {
 class CompliantWall {
  public:
   virtual ~CompliantWall() = default;
-  /// @brief The step's candidate contacts: their points on the rest lumen (the wall's closest
-  /// points) and the lumen's outward normals there. Computes their compliance along the normals.
-  virtual void anchor(std::span<const Vec3> points, std::span<const Vec3> normals) = 0;
-  /// @brief C (m × m) of the anchored points [m/N]: symmetric positive definite.
-  [[nodiscard]] virtual const Eigen::MatrixXd& compliance() const = 0;
-  /// @brief (m, or empty: none) the anchored points' displacement along their normals before any
-  /// contact force, under the wall's other loads (the blood pressure) [m].
-  [[nodiscard]] virtual const Eigen::VectorXd& offsets() const = 0;
+  /// @brief What one body's contact condenses of the wall for a step: the compliance between
+  /// its anchored points, and their normal displacement before its own forces act [m].
+  struct Anchored {
+    Eigen::MatrixXd compliance;  ///< C (m × m) [m/N], symmetric positive definite
+    /// (m) along each normal: the blood pressure's displacement plus that of the other bodies'
+    /// last forces on the wall (a catheter's under the wire's, and the converse), held for the step.
+    Eigen::VectorXd offsets;
+  };
+  /// @brief The step's candidate contacts of body @p body (a wire, a catheter: any stable
+  /// identity): their points on the rest lumen (the wall's closest points) and the lumen's
+  /// outward normals there.
+  virtual Anchored anchor(const void* body, std::span<const Vec3> points, std::span<const Vec3> normals) = 0;
+  /// @brief The forces @p forces at lumen points @p points that body @p body puts on the wall (the
+  /// opposites of its contact forces) at the end of a step: they replace that body's last ones,
+  /// and the wall carries every body's (its displacement field is solved when asked).
+  virtual void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces) = 0;
   /// @brief The blood pressure on the lumen from the network's node pressures (the flow's; the
   /// pressure along a segment interpolated between its nodes), less @p reference (the pressure
   /// at which the rest geometry was taken) [Pa]. A wall that does not take it ignores it.
   virtual void set_blood_pressure(std::span<const double> node_pressures, double reference) = 0;
-  /// @brief The wall under forces @p forces at lumen points @p points (the opposites of the
-  /// wire's contact forces) at the end of a step (its displacement field is solved when asked).
-  virtual void load(std::span<const Vec3> points, std::span<const Vec3> forces) = 0;
   /// @brief What a run reports of the wall (summary.json's `wall`).
   [[nodiscard]] virtual nlohmann::json summary() const = 0;
   /// @brief The wall's state now (its displacement field), for an output frame.

@@ -20,6 +20,7 @@
 
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "flowire/coupling/compliant_wall.hpp"
@@ -57,21 +58,16 @@ class DeformableWall final : public CompliantWall {
   DeformableWall(const DeformableWall&) = delete;
   DeformableWall& operator=(const DeformableWall&) = delete;
 
-  /// @brief The step's candidate contacts: their points on the rest lumen (the wall's closest
-  /// points) and the lumen's outward normals there. Computes their compliance along the normals.
-  void anchor(std::span<const Vec3> points, std::span<const Vec3> normals) override;
-  /// @brief C (m × m) of the anchored points [m/N].
-  [[nodiscard]] const Eigen::MatrixXd& compliance() const override { return compliance_; }
-  /// @brief The anchored points' normal displacement under the blood pressure [m] (empty
-  /// before any pressure was set).
-  [[nodiscard]] const Eigen::VectorXd& offsets() const override { return offsets_; }
+  /// @brief Body @p body's candidate contacts: their compliance along the normals, and the
+  /// normal displacement there of the blood pressure and of the other bodies' last loads.
+  Anchored anchor(const void* body, std::span<const Vec3> points, std::span<const Vec3> normals) override;
   /// @brief The blood pressure as a dead load on the lumen (linear about rest: its displacement
   /// field u_p = K⁻¹ f_p, one back-substitution, redone only when the pressures change), which the
   /// contacts meet and the outputs add.
   void set_blood_pressure(std::span<const double> node_pressures, double reference) override;
-  /// @brief The wall under forces @p forces at lumen points @p points (the wire's contact forces'
-  /// opposites): its displacement field, largest displacement and total load.
-  void load(std::span<const Vec3> points, std::span<const Vec3> forces) override;
+  /// @brief Body @p body's forces on the wall (its contact forces' opposites), replacing its last
+  /// ones: with every other body's, the wall's load (displacement field, total load).
+  void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces) override;
   /// @brief The solid's mesh in the scene's frame, and its displacement (3 a node) [m] under
   /// the last load (solved on first request after a load: one back-substitution).
   [[nodiscard]] const mesh::TetMesh& mesh() const;
@@ -95,8 +91,13 @@ class DeformableWall final : public CompliantWall {
  private:
   std::unique_ptr<solid::ElasticSolid> solid_;
   std::unique_ptr<solid::LumenCompliance> lumen_;
-  Eigen::MatrixXd compliance_;
-  Eigen::VectorXd offsets_;            ///< (anchored points) normal displacement under the pressure
+  /// Each body's last forces on the wall: where (on the lumen) and how much.
+  struct BodyLoad {
+    std::vector<solid::LumenPoint> points;
+    std::vector<Vec3> forces;
+    Vec3 total = Vec3::Zero();
+  };
+  std::vector<std::pair<const void*, std::unique_ptr<BodyLoad>>> loads_;
   Eigen::VectorXd pressure_field_;     ///< (3 a node) the lumen's displacement under the blood pressure (0 elsewhere)
   Eigen::VectorXd pressure_load_;      ///< (3 a node) the blood pressure's nodal forces
   Eigen::MatrixXd pressure_response_;  ///< (3 lumen nodes × network nodes) K⁻¹B on the lumen

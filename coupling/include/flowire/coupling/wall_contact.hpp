@@ -86,6 +86,7 @@ class WallContact {
   void solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> tally, InteractionStats& stats);
   double energy_ = 0.0;
   CompliantWall* deformable_ = nullptr;
+  CompliantWall::Anchored anchored_;  ///< the step's compliance and offsets at the candidates
   bool anchors_stale_ = true;
   struct Candidate {
     int vertex = -1;

@@ -43,7 +43,8 @@ class LumenCompliance {
   /// @brief C (m × m): the displacement along @p directions[i] at @p points[i] under a unit
   /// force along @p directions[j] at @p points[j] [m/N].
   Eigen::MatrixXd compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions);
-  /// @brief The displacement at @p at under forces @p forces at @p points (the kept columns).
+  /// @brief The displacement at @p at under forces @p forces at @p points (the kept columns;
+  /// those the points' faces still lack solved first).
   Vec3 displacement(const LumenPoint& at, std::span<const LumenPoint> points, std::span<const Vec3> forces);
   /// @brief A nodal field (3 a node of the solid, e.g. a displacement) at a lumen point, by the
   /// face's shape functions.
