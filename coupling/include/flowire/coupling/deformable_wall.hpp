@@ -80,7 +80,8 @@ class DeformableWall final : public CompliantWall {
   [[nodiscard]] int compliance_columns() const;
   [[nodiscard]] double seconds() const { return seconds_; }
   [[nodiscard]] double mesh_seconds() const { return mesh_seconds_; }
-  /// @brief Largest displacement, ever and now, the load now, columns solved, seconds.
+  /// @brief Largest displacement, ever and now (and whether it went beyond the wall's thickness,
+  /// the linear wall's range: warned once), the load now, columns solved, seconds.
   [[nodiscard]] nlohmann::json summary() const override;
   [[nodiscard]] Eigen::VectorXd state() const override { return displacement(); }
   /// @brief The 10-node tetrahedra (VTK_QUADRATIC_TETRA) with point data `displacement` [m],
@@ -114,6 +115,8 @@ class DeformableWall final : public CompliantWall {
   mutable bool field_current_ = true;
   Vec3 load_total_ = Vec3::Zero();
   mutable double max_displacement_ = 0.0, max_ever_ = 0.0, seconds_ = 0.0;
+  double thinnest_ = 0.0;              ///< the wall's least thickness [m]
+  mutable bool warned_range_ = false;  ///< a run beyond the linear range said so once
   double mesh_seconds_ = 0.0;
 };
 
