@@ -2,7 +2,6 @@
 """Pictures of a run with a deformable wall around a vessel that winds in the plane z = 0: the
 wall's displacement seen from above at the frame where it is largest, and the wall's section
 by the plane z = 0 at rest and deformed (to scale), with the wire (and a catheter, if any). Usage: plot_tortuous.py OUT_DIR  (writes OUT_DIR/wall.png)."""
-import glob
 import os
 import sys
 
@@ -13,17 +12,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "deformable_wall"))
-from plot_wall import read_vtu  # noqa: E402  (the wall's points and displacement from a wall_*.vtu)
+from plot_wall import largest_frame  # noqa: E402  (the wall frame where it moved most)
 
 
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else "."
-    frames = sorted(glob.glob(os.path.join(out, "wall_*.vtu")))
-    if not frames:
-        sys.exit(f"plot_tortuous.py: no wall_*.vtu in {out}")
-    states = [read_vtu(f) for f in frames]
-    largest = max(range(len(states)), key=lambda k: np.linalg.norm(states[k][1], axis=1).max())
-    x, u = states[largest]
+    largest, x, u = largest_frame(out, "plot_tortuous.py")
     mag = np.linalg.norm(u, axis=1)
     # The wall's section by the plane z = 0 (its nodes within a quarter millimetre of it).
     thickness_band = np.abs(x[:, 2]) < 0.25e-3

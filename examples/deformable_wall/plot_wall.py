@@ -27,14 +27,19 @@ def read_vtu(path):
     return np.array(body.split(), dtype=float).reshape(-1, 3), array("displacement", 3)
 
 
-def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else "."
+def largest_frame(out, script):
+    """The wall frame of OUT where the displacement is largest: (its index, points, displacement)."""
     frames = sorted(glob.glob(os.path.join(out, "wall_*.vtu")))
     if not frames:
-        sys.exit(f"plot_wall.py: no wall_*.vtu in {out}")
+        sys.exit(f"{script}: no wall_*.vtu in {out}")
     states = [read_vtu(f) for f in frames]
     largest = max(range(len(states)), key=lambda k: np.linalg.norm(states[k][1], axis=1).max())
-    x, u = states[largest]
+    return (largest, *states[largest])
+
+
+def main():
+    out = sys.argv[1] if len(sys.argv) > 1 else "."
+    largest, x, u = largest_frame(out, "plot_wall.py")
     radius = np.hypot(x[:, 1], x[:, 2])
     lumen = radius < radius.min() + 1e-6 + 0.02 * (radius.max() - radius.min())
     theta = np.degrees(np.arctan2(x[:, 2], x[:, 1]))

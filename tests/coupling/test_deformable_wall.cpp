@@ -121,6 +121,12 @@ TEST(DeformableWall, TheWirePushesTheWallOutAndTheWallPushesBack) {
   EXPECT_GT(on_wire.norm(), 0.01);
 }
 
+/// The wall's solid held at both ends of the straight vessel, as DeformableWall holds it.
+void hold_ends(solid::ElasticSolid& s) {
+  s.hold(s.mesh().group_named("end_0"));
+  s.hold(s.mesh().group_named("end_1"));
+}
+
 /// Where a pressed wire's contacts put the wall, as the contact assumed it: for each vertex in
 /// contact, its lumen point (radially out from the axis), the force on the wall there, the
 /// radial direction, and the wall's radial displacement the contact assumed (the wire's distance
@@ -156,8 +162,7 @@ TEST_P(DeformableWallAgainstFullSolve, TheContactsWallIsTheFullSolidsUnderTheWir
   const Pressed soft = press(net, &wall, GetParam());
   ASSERT_TRUE(soft.converged);
   solid::ElasticSolid full(wall.mesh(), solid::NeoHookean::from_young_poisson(spec.youngs_modulus, spec.poisson_ratio));
-  full.hold(full.mesh().group_named("end_0"));
-  full.hold(full.mesh().group_named("end_1"));
+  hold_ends(full);
   full.linearize();
   solid::LumenCompliance lumen(full, full.mesh().group_named("lumen"));
   const ContactSites sites(soft, lumen);
@@ -283,8 +288,7 @@ TEST(DeformableWall, TheBloodPressureInflatesTheWallAndTheWireLiesWhereItWent) {
   ASSERT_TRUE(at_rest.converged);
   ASSERT_TRUE(inflated.converged);
   solid::ElasticSolid full(wet.mesh(), solid::NeoHookean::from_young_poisson(E, nu));
-  full.hold(full.mesh().group_named("end_0"));
-  full.hold(full.mesh().group_named("end_1"));
+  hold_ends(full);
   full.set_pressure(full.mesh().group_named("lumen"), p);
   full.linearize();
   solid::LumenCompliance lumen(full, full.mesh().group_named("lumen"));
