@@ -20,8 +20,9 @@ void declare_wall_keys(config::Schema& s) {
   using D = units::Dimension;
   s.add("wall", Type::Section, "", D::None,
         "the vessel wall as an elastic solid that the wire pushes and that pushes back (neo-Hookean, meshed with "
-        "gmsh around the network's tubes, the lumen the wire's contact sees, every end held; linear about its "
-        "rest state, its compliance condensed onto the contacts of the wire and of the catheter)");
+        "gmsh around the lumen the wire's contact sees: vessels.surface where given, else the network's tubes; "
+        "every end held; linear about its rest state, its compliance condensed onto the contacts of the wire and "
+        "of the catheter)");
   s.add("wall.thickness", Type::Number, "", D::Length, "wall thickness (default: thickness_ratio × radius)").positive();
   s.add("wall.thickness_ratio", Type::Number, "0.15", D::None, "wall thickness as a fraction of the lumen radius")
       .positive();
@@ -42,10 +43,17 @@ void declare_wall_keys(config::Schema& s) {
   s.add("wall.blood_pressure", Type::Bool, "false", D::None,
         "the flow's blood pressure loads the wall's lumen (a dead load, less wall.reference_pressure; the wall is "
         "linear about rest, so it inflates by K^-1 f_p and the wire meets it there); needs flow:");
+  s.add("wall.flow_radii", Type::Bool, "false", D::None,
+        "the flow's segments widen with the wall: each segment's radius r becomes r + its lumen's mean radial "
+        "displacement (the blood pressure's and the wire's), its resistance (r/(r+u))^4 of Poiseuille's; the wall "
+        "of the last step, as the occlusion; needs flow.solver superposition or sparse, not flow.model rlc (whose "
+        "compliance widens its segments already)");
   s.add("wall.reference_pressure", Type::Number, "0 Pa", D::Pressure,
         "the pressure at which the rest geometry was taken (imaged): the wall is loaded by the blood pressure less "
         "this");
-  s.add("wall.mesh_size", Type::Number, "", D::Length, "target tetrahedron size (default: twice the thickness)")
+  s.add("wall.mesh_size", Type::Number, "", D::Length,
+        "target tetrahedron size (default: twice the thinnest wall; around vessels.surface, twice the local "
+        "thickness)")
       .positive();
 }
 
@@ -64,7 +72,7 @@ double breathing_period(const vessels::Network& net, const WallSpec& spec, doubl
 #endif
 
 std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const vessels::Network& net,
-                                               nlohmann::json& facts) {
+                                               const vessels::LumenSurface* surface, nlohmann::json& facts) {
   if (!c.has_section("wall")) return nullptr;
   const double nu = c.number("wall.poisson_ratio");
   if (!(nu > -1.0 && nu < 0.5))
@@ -75,27 +83,29 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
   double rmin = std::numeric_limits<double>::infinity();
   for (int k = 0; k < net.num_segments(); ++k) rmin = std::min(rmin, net.segment(k).radius);
   const double thinnest = thickness > 0.0 ? thickness : ratio * rmin;
-  const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : 2.0 * thinnest;
+  // Around a surface, without a size: twice the local thickness (the aorta's and a branch's differ).
+  const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : surface ? 0.0 : 2.0 * thinnest;
 #ifdef FLOWIRE_HAVE_SOLID
   WallSpec spec{thickness, thickness > 0.0 ? 0.0 : ratio,      c.number("wall.youngs_modulus"),
                 nu,        c.number("wall.support_stiffness"), mesh_size};
-  auto wall = std::make_unique<DeformableWall>(net, spec);
+  auto wall = std::make_unique<DeformableWall>(net, spec, surface);
   facts["wall"] = {{"thickness", thickness > 0.0 ? nlohmann::json(thickness) : nlohmann::json(nullptr)},
                    {"thickness_ratio", thickness > 0.0 ? nlohmann::json(nullptr) : nlohmann::json(ratio)},
-                   {"thinnest", thinnest},
+                   {"thinnest", wall->thinnest()},
                    {"youngs_modulus", spec.youngs_modulus},
                    {"poisson_ratio", nu},
                    {"support_stiffness", spec.support},
                    {"density", c.number("wall.density")},
                    {"model", c.string("wall.model")},
                    {"breathing_period", breathing_period(net, spec, c.number("wall.density"))},
-                   {"mesh_size", mesh_size},
+                   {"mesh_size", mesh_size > 0.0 ? nlohmann::json(mesh_size) : nlohmann::json("2 x local thickness")},
                    {"nodes", wall->mesh().num_nodes()},
                    {"tets", wall->mesh().num_tets()},
                    {"mesh_seconds", wall->mesh_seconds()}};
   return wall;
 #else
   (void)facts;
+  (void)surface;
   (void)mesh_size;
   throw_input_error(c.where("wall"), "this build has no gmsh (FLOWIRE_WITH_FEM off): a deformable wall needs it");
 #endif

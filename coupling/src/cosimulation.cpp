@@ -164,12 +164,23 @@ void CoSimulation::add_wall_forces(const rod::WireSpec& spec, int entry, nlohman
     info = surface_info_;
     wall_smoothing = surface_smoothing_;
     if (surface_) forces_->set_surface(surface_.get(), wall_smoothing), s["surface"] = info;
-    wall_ = make_scene_wall(c, *net_, s);
+    // (checked before the wall is meshed: a scene refused should not cost the mesh)
+    if (c.has_section("wall")) {
+      wall_flow_radii_ = c.boolean("wall.flow_radii");
+      if (wall_flow_radii_ && !fsolver_)
+        throw_input_error(c.where("wall.flow_radii"), "the flow's radii need the scene's flow: section");
+      if (wall_flow_radii_ && !fsolver_->supports_occlusion())
+        throw_input_error(c.where("wall.flow_radii"),
+                          fmt::format("the {} flow solver keeps its matrix: the wall's widening needs flow.solver "
+                                      "superposition or sparse",
+                                      fsolver_->name()));
+      if (wall_flow_radii_ && c.string_or("flow.model", "") == "rlc")
+        throw_input_error(c.where("wall.flow_radii"),
+                          "flow.model rlc widens its segments by its own compliance already (flow.wall); the "
+                          "wall's widening is for the quasi-steady model");
+    }
+    wall_ = make_scene_wall(c, *net_, surface_.get(), s);
     if (wall_) {
-      if (surface_)
-        throw_input_error(c.where("wall"),
-                          "a deformable wall is built around the network's vessel, not yet around "
-                          "vessels.surface");
       if (!forces_->contact().enabled)
         throw_input_error(c.where("wall"), "a deformable wall needs the wall contact (contact.enabled: true)");
       forces_->set_deformable(wall_.get());
@@ -237,24 +248,43 @@ void CoSimulation::shield_wire() {
 }
 
 void CoSimulation::occlude() {
-  if (!occlusion_) return;
-  const auto positions = sim_->positions();
-  if (cath_ && cath_forces_) {
-    // The catheter, and the wire up to the first vertex inside it (the part beyond its tip).
-    shield_wire();
-    const auto& inside = forces_->shielded();
-    int exposed = 0;
-    while (exposed < sim_->first_clamped_vertex() &&
-           !(static_cast<size_t>(exposed) < inside.size() && inside[static_cast<size_t>(exposed)]))
-      ++exposed;
-    fsolver_->set_occlusion(
-        occlusion_->update({{positions, exposed, forces_->segments(), sim_->discretization().edge_radius},
-                            {cath_->positions(), cath_->first_clamped_vertex(), cath_forces_->segments(),
-                             cath_->discretization().edge_radius}}));
-    return;
+  if (!occlusion_ && !wall_flow_radii_) return;
+  std::vector<flow::SegmentOcclusion> o;
+  if (occlusion_) {
+    const auto positions = sim_->positions();
+    std::span<const flow::SegmentOcclusion> wire;
+    if (cath_ && cath_forces_) {
+      // The catheter, and the wire up to the first vertex inside it (the part beyond its tip).
+      shield_wire();
+      const auto& inside = forces_->shielded();
+      int exposed = 0;
+      while (exposed < sim_->first_clamped_vertex() &&
+             !(static_cast<size_t>(exposed) < inside.size() && inside[static_cast<size_t>(exposed)]))
+        ++exposed;
+      wire = occlusion_->update({{positions, exposed, forces_->segments(), sim_->discretization().edge_radius},
+                                 {cath_->positions(), cath_->first_clamped_vertex(), cath_forces_->segments(),
+                                  cath_->discretization().edge_radius}});
+    } else {
+      wire = occlusion_->update(positions, sim_->first_clamped_vertex(), forces_->segments(),
+                                sim_->discretization().edge_radius);
+    }
+    o.assign(wire.begin(), wire.end());
   }
-  fsolver_->set_occlusion(occlusion_->update(positions, sim_->first_clamped_vertex(), forces_->segments(),
-                                             sim_->discretization().edge_radius));
+  if (wall_flow_radii_) {
+    // The wall's last state widens each segment from r to r + u: Poiseuille's resistance by
+    // (r/(r + u))⁴, the inertance by (r/(r + u))² (staggered, as the occlusion: the flow of a
+    // step sees the wall of the last).
+    const std::vector<double> widening = wall_->segment_widening();
+    if (o.empty()) o.assign(static_cast<size_t>(net_->num_segments()), flow::SegmentOcclusion{});
+    for (size_t k = 0; k < o.size(); ++k) {
+      const double r = net_->segment(static_cast<int>(k)).radius;
+      const double scale = r / std::max(r + widening[k], 0.05 * r);
+      o[k].resistance_factor *= std::pow(scale, 4);
+      o[k].inertance_factor *= scale * scale;
+      max_widening_ = std::max(max_widening_, std::abs(widening[k]) / r);
+    }
+  }
+  fsolver_->set_occlusion(o);
 }
 
 CoSimulation::~CoSimulation() = default;

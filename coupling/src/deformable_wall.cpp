@@ -1,4 +1,5 @@
-// The wall around a network's lumen as an elastic solid: meshed by solid::mesh_network_wall,
+// The wall around a network's lumen, or around an image's lumen surface, as an elastic solid:
+// meshed by solid::mesh_network_wall or solid::mesh_surface_wall,
 // ends held, supported outside, linearized at rest; the step's contacts anchored on its lumen
 // and their compliance condensed; loaded at the end of a step.
 #include "flowire/coupling/deformable_wall.hpp"
@@ -15,6 +16,7 @@
 #include "flowire/mesh/vtu.hpp"
 #include "flowire/solid/elastic_solid.hpp"
 #include "flowire/solid/lumen_compliance.hpp"
+#include "flowire/solid/surface_wall.hpp"
 #include "flowire/solid/tube_wall.hpp"
 
 namespace flowire::coupling {
@@ -23,25 +25,46 @@ using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
-DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec) : net_(net) {
-  thinnest_ = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < net.num_segments(); ++k)
-    thinnest_ =
-        std::min(thinnest_, spec.thickness > 0.0 ? spec.thickness : spec.thickness_ratio * net.segment(k).radius);
+DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec, const vessels::LumenSurface* surface)
+    : net_(net) {
   const auto t0 = Clock::now();
   const solid::NeoHookean law = solid::NeoHookean::from_young_poisson(spec.youngs_modulus, spec.poisson_ratio,
                                                                       "wall.youngs_modulus / wall.poisson_ratio");
   if (!(spec.thickness > 0.0) && !(spec.thickness_ratio > 0.0))
     throw_usage_error(fmt::format("wall.thickness: must be > 0, got {} m", spec.thickness));
-  if (!(spec.mesh_size > 0.0)) throw_usage_error(fmt::format("wall.mesh_size: must be > 0, got {} m", spec.mesh_size));
+  if (!(spec.mesh_size > 0.0) && !surface)
+    throw_usage_error(fmt::format("wall.mesh_size: must be > 0, got {} m", spec.mesh_size));
   if (!(spec.support >= 0.0)) throw_usage_error(fmt::format("wall.support: must be >= 0, got {} Pa/m", spec.support));
-  mesh::TetMesh m = solid::mesh_network_wall(net, {spec.thickness, spec.thickness_ratio, spec.mesh_size});
+  mesh::TetMesh m;
+  if (surface) {
+    solid::SurfaceWall sw;
+    sw.thickness = spec.thickness;
+    sw.thickness_ratio = spec.thickness_ratio;
+    sw.mesh_size = spec.mesh_size;
+    solid::SurfaceWallStats stats;
+    m = solid::mesh_surface_wall(*surface, net, sw, &stats);
+    thinnest_ = stats.min_thickness;
+    lumen_facts_ = {{"lumen", "surface"},
+                    {"lumen_vertices", stats.lumen_vertices},
+                    {"thinned_vertices", stats.thinned_vertices},
+                    {"min_thickness", stats.min_thickness},
+                    {"max_thickness", stats.max_thickness}};
+  } else {
+    thinnest_ = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < net.num_segments(); ++k)
+      thinnest_ =
+          std::min(thinnest_, spec.thickness > 0.0 ? spec.thickness : spec.thickness_ratio * net.segment(k).radius);
+    m = solid::mesh_network_wall(net, {spec.thickness, spec.thickness_ratio, spec.mesh_size});
+    lumen_facts_ = {{"lumen", "network"}};
+  }
   mesh_seconds_ = m.mesh_seconds;
   solid_ = std::make_unique<solid::ElasticSolid>(std::move(m), law);
-  for (int e : net.ends()) solid_->hold(solid_->mesh().group_named(fmt::format("end_{}", e)));
+  for (size_t g = 0; g < solid_->mesh().groups.size(); ++g)  // every end held
+    if (solid_->mesh().groups[g].name.rfind("end_", 0) == 0) solid_->hold(static_cast<int>(g));
   if (spec.support > 0.0) solid_->support(solid_->mesh().group_named("outer"), spec.support);
   solid_->linearize();
   lumen_ = std::make_unique<solid::LumenCompliance>(*solid_, solid_->mesh().group_named("lumen"));
+  measure_thickness();
   displacement_ = Eigen::VectorXd::Zero(solid_->num_dofs());
   load_ = displacement_;
   seconds_ += since(t0);
@@ -164,6 +187,7 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
   }
   Eigen::VectorXd p(net_.num_nodes());
   for (int k = 0; k < net_.num_nodes(); ++k) p[k] = node_pressures_[static_cast<size_t>(k)] - reference;
+  last_pressure_ = p;
   pressure_load_ = pressure_basis_ * p;
   const Eigen::VectorXd lumen = pressure_response_ * p;
   max_pressure_displacement_ = 0.0;
@@ -174,6 +198,94 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
   }
   field_current_ = false;
   seconds_ += since(t0);
+}
+
+void DeformableWall::measure_thickness() {
+  // Each lumen vertex's wall thickness: its distance to the nearest vertex of the outer surface
+  // (within the outer surface's element size of the true thickness).
+  const mesh::TetMesh& m = solid_->mesh();
+  const int lumen = m.group_named("lumen"), outer = m.group_named("outer");
+  std::vector<int> in, out;
+  for (size_t f = 0; f < m.faces.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      if (m.face_group[f] == lumen) in.push_back(m.faces[f][static_cast<size_t>(k)]);
+      if (m.face_group[f] == outer) out.push_back(m.faces[f][static_cast<size_t>(k)]);
+    }
+  for (auto* v : {&in, &out}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
+  local_thickness_.clear();
+  for (int a : in) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int b : out)
+      best = std::min(best, (m.nodes[static_cast<size_t>(a)] - m.nodes[static_cast<size_t>(b)]).squaredNorm());
+    local_thickness_.emplace_back(a, std::sqrt(best));
+  }
+}
+
+std::vector<double> DeformableWall::segment_widening() {
+  const auto t0 = Clock::now();
+  const int segments = net_.num_segments();
+  if (widening_.size() == 0) {
+    // w_s: each lumen vertex's radial direction about its nearest segment's axis, averaged.
+    const mesh::TetMesh& m = solid_->mesh();
+    std::vector<std::vector<std::pair<int, Vec3>>> of(static_cast<size_t>(segments));
+    for (const auto& [node, thickness] : local_thickness_) {
+      (void)thickness;
+      const Vec3& x = m.nodes[static_cast<size_t>(node)];
+      int best = -1;
+      double best_d = std::numeric_limits<double>::infinity();
+      Vec3 radial = Vec3::UnitX();
+      for (int k = 0; k < segments; ++k) {
+        const auto& seg = net_.segment(k);
+        const Vec3 a = net_.node(seg.node_from), d = net_.node(seg.node_to) - a;
+        const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+        const Vec3 r = x - a - t * d;
+        const double dist = r.norm();
+        if (dist < best_d) best_d = dist, best = k, radial = r.normalized();
+      }
+      of[static_cast<size_t>(best)].emplace_back(node, radial);
+    }
+    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(solid_->num_dofs(), segments);
+    segment_has_nodes_.assign(static_cast<size_t>(segments), 0);
+    for (int k = 0; k < segments; ++k) {
+      const auto& nodes = of[static_cast<size_t>(k)];
+      segment_has_nodes_[static_cast<size_t>(k)] = nodes.empty() ? 0 : 1;
+      for (const auto& [node, radial] : nodes) w.block<3, 1>(3 * node, k) = radial / static_cast<double>(nodes.size());
+    }
+    solid_->tangent_solve(w);
+    widening_ = std::move(w);
+    if (pressure_basis_.size() > 0) widening_pressure_ = widening_.transpose() * pressure_basis_;
+  }
+  if (widening_pressure_.size() == 0 && pressure_basis_.size() > 0)
+    widening_pressure_ = widening_.transpose() * pressure_basis_;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(segments);
+  for (Eigen::Index i = 0; i < load_.size(); ++i)  // the bodies' forces: a few nonzero entries
+    if (load_[i] != 0.0) u += load_[i] * widening_.row(i).transpose();
+  if (last_pressure_.size() > 0) u += widening_pressure_ * last_pressure_;
+  // Segments without vertices of their own: their neighbours' mean (a few passes).
+  std::vector<double> out(u.data(), u.data() + segments);
+  std::vector<char> known = segment_has_nodes_;
+  for (int pass = 0; pass < 8; ++pass) {
+    bool filled = false;
+    for (int k = 0; k < segments; ++k) {
+      if (known[static_cast<size_t>(k)]) continue;
+      double sum = 0.0;
+      int n = 0;
+      for (int end : {net_.segment(k).node_from, net_.segment(k).node_to}) {
+        const auto [b, e] = net_.node_segments(end);
+        for (auto it = b; it != e; ++it)
+          if (*it != k && known[static_cast<size_t>(*it)] == 1) sum += out[static_cast<size_t>(*it)], ++n;
+      }
+      if (n > 0) out[static_cast<size_t>(k)] = sum / n, known[static_cast<size_t>(k)] = 2, filled = true;
+    }
+    for (char& c : known)
+      if (c == 2) c = 1;
+    if (!filled) break;
+  }
+  seconds_ += since(t0);
+  return out;
 }
 
 void DeformableWall::solve_field() const {
@@ -187,6 +299,8 @@ void DeformableWall::solve_field() const {
   for (int n = 0; n < solid_->mesh().num_nodes(); ++n)
     max_displacement_ = std::max(max_displacement_, displacement_.segment<3>(3 * n).norm());
   max_ever_ = std::max(max_ever_, max_displacement_);
+  for (const auto& [node, t] : local_thickness_)
+    max_ratio_ever_ = std::max(max_ratio_ever_, displacement_.segment<3>(3 * node).norm() / t);
   field_current_ = true;
   seconds_ += since(t0);
 }
@@ -204,23 +318,28 @@ double DeformableWall::max_displacement() const {
 nlohmann::json DeformableWall::summary() const {
   solve_field();
   // The wall is linear about rest: 6% off the nonlinear solid at half its thickness
-  // (docs/deformable-wall.md), more beyond. Say so when a run went beyond the thickness.
-  const bool beyond = max_ever_ > thinnest_;
+  // (docs/deformable-wall.md), more beyond. Say so when a run went beyond the thickness where
+  // it moved (each lumen vertex's displacement against its own thickness).
+  const bool beyond = max_ratio_ever_ > 1.0;
   if (beyond && !warned_range_) {
     warned_range_ = true;
     warn(
-        fmt::format("wall: it moved {:.3g} mm, more than its thickness ({:.3g} mm): the wall is linear about its "
-                    "rest state, and its displacements and forces are approximate beyond that",
-                    max_ever_ * 1e3, thinnest_ * 1e3));
+        fmt::format("wall: it moved {:.3g} times its thickness where it moved most relative to it (largest "
+                    "displacement {:.3g} mm): the wall is linear about its rest state, and its displacements "
+                    "and forces are approximate beyond its thickness",
+                    max_ratio_ever_, max_ever_ * 1e3));
   }
-  return {{"max_displacement", max_ever_},  // over the output frames and the end
-          {"beyond_linear_range", beyond},
-          {"final_max_displacement", max_displacement_},
-          {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
-          {"compliance_columns", compliance_columns()},
-          {"blood_pressure_max_lumen_displacement",
-           pressure_field_.size() > 0 ? nlohmann::json(max_pressure_displacement_) : nlohmann::json(nullptr)},
-          {"seconds", seconds_}};
+  nlohmann::json j = lumen_facts_;
+  j.update({{"max_displacement", max_ever_},  // over the output frames and the end
+            {"beyond_linear_range", beyond},
+            {"max_displacement_over_thickness", max_ratio_ever_},
+            {"final_max_displacement", max_displacement_},
+            {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
+            {"compliance_columns", compliance_columns()},
+            {"blood_pressure_max_lumen_displacement",
+             pressure_field_.size() > 0 ? nlohmann::json(max_pressure_displacement_) : nlohmann::json(nullptr)},
+            {"seconds", seconds_}});
+  return j;
 }
 
 void DeformableWall::write_vtu(const std::filesystem::path& path, const Eigen::VectorXd& state) const {

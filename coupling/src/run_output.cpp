@@ -261,7 +261,11 @@ RunSeconds add_run_summary(const config::Config& c, const CoSimulation& cosim, n
     calls["rod_steps"] = sim ? sim->solver_totals().steps : 0;
     calls["catheter_steps"] = cosim.catheter() ? cosim.catheter()->solver_totals().steps : 0;
   }
-  if (cosim.wall()) s["wall"].update(cosim.wall()->summary());
+  if (cosim.wall()) {
+    s["wall"].update(cosim.wall()->summary());
+    s["wall"]["flow_radii"] = cosim.wall_widens_flow();
+    if (cosim.wall_widens_flow()) s["wall"]["flow_max_relative_widening"] = cosim.max_flow_widening();
+  }
   if (sim) {
     s["wire"] = {{"vertices", sim->vertex_count()},
                  {"inserted_length", sim->inserted_length()},

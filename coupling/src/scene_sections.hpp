@@ -139,10 +139,13 @@ void check_fem(const config::Config& scene, const flow::FlowSolver* flow, const 
 
 // ---- wall: (config_wall.cpp)
 void declare_wall_keys(config::Schema& schema);
-/// @brief The vessel wall as an elastic solid (wall:), null without the section.
-/// @throws flowire::Error (input) naming the key at fault, or the vessels where no tube can be
-/// built along the network; (input) without gmsh in the build.
+/// @brief The vessel wall as an elastic solid (wall:), null without the section: around
+/// @p surface (vessels.surface) where given, else around the network's tubes.
+/// @throws flowire::Error (input) naming the key at fault, the vessels where no tube can be
+/// built along the network, the surface and the place where no wall can be grown around it;
+/// (input) without gmsh in the build.
 [[nodiscard]] std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& scene, const vessels::Network& net,
+                                                             const vessels::LumenSurface* surface,
                                                              nlohmann::json& facts);
 
 // ---- output: (run_output.cpp)

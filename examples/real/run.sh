@@ -15,7 +15,8 @@ if [ ! -d "$shared" ]; then
 fi
 if command -v xvfb-run >/dev/null; then RUN=(xvfb-run -a -s "-screen 0 1024x768x24"); else RUN=(); fi
 mkdir -p "$OUT"
-for scene in feelpp_arch vmtk_abdominal simvascular_aorta aneurisk_ica aortofemoral_deck; do
+for scene in feelpp_arch feelpp_arch_wall vmtk_abdominal simvascular_aorta aneurisk_ica aortofemoral_deck; do
   "${RUN[@]}" "$FLOWIRE" run "$here/$scene.yaml" --out "$OUT/$scene" --set output.png=true
 done
-echo "pictures: $OUT/*/network.png; open $OUT/*/wire.pvd with the surfaces of $shared in ParaView"
+"${PYTHON:-/usr/bin/python3}" "$here/plot_real_wall.py" "$OUT/feelpp_arch_wall"
+echo "pictures: $OUT/*/network.png, $OUT/feelpp_arch_wall/wall.png; open $OUT/*/wire.pvd (and $OUT/feelpp_arch_wall/wall.pvd) with the surfaces of $shared in ParaView"

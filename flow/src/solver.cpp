@@ -61,9 +61,9 @@ void FlowSolver::set_occlusion(std::span<const SegmentOcclusion> occlusion) {
   bool changed = occlusion_.empty();
   for (size_t s = 0; s < occlusion.size(); ++s) {
     const auto& o = occlusion[s];
-    if (!(o.resistance_factor >= 1.0) || !(o.inertance_factor >= 1.0) || !(o.gradient_factor >= 1.0) ||
+    if (!(o.resistance_factor > 0.0) || !(o.inertance_factor > 0.0) || !(o.gradient_factor >= 1.0) ||
         !std::isfinite(o.resistance_factor) || !std::isfinite(o.inertance_factor) || !std::isfinite(o.gradient_factor))
-      throw_usage_error(fmt::format("flow: occlusion of segment {}: factors {}, {}, {} must be finite and >= 1", s,
+      throw_usage_error(fmt::format("flow: occlusion of segment {}: factors {}, {} must be finite and > 0, {} >= 1", s,
                                     o.resistance_factor, o.inertance_factor, o.gradient_factor));
     if (!changed && (o.resistance_factor != occlusion_[s].resistance_factor ||
                      o.inertance_factor != occlusion_[s].inertance_factor))

@@ -4,6 +4,7 @@
 #include "flowire/mesh/extract.hpp"
 
 #include <fmt/format.h>
+#include <Eigen/Dense>
 
 #include <algorithm>
 #include <array>
@@ -166,6 +167,55 @@ void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vecto
   }
   for (char o : oriented)
     if (!o) throw_numerical_error(fmt::format("{}: a boundary triangle has no tetrahedron", at));
+}
+
+namespace {
+/// Whether the curved tetrahedron's Jacobian is non-positive at a quadrature point or a vertex.
+bool folded(const TetMesh& m, const std::array<int, 10>& t) {
+  double grads[10][3];
+  auto det_at = [&](const std::array<double, 3>& xi) {
+    element::tet_p2_grad(xi, grads);
+    Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < 10; ++k)
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) j(a, b) += m.nodes[static_cast<size_t>(t[static_cast<size_t>(k)])][a] * grads[k][b];
+    return j.determinant();
+  };
+  for (const element::QuadPoint& q : element::tet_quadrature())
+    if (!(det_at(q.xi) > 0.0)) return true;
+  for (const std::array<double, 3>& v : {std::array<double, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}})
+    if (!(det_at(v) > 0.0)) return true;
+  return false;
+}
+}  // namespace
+
+int repair_edge_nodes(TetMesh& mesh) {
+  // gmsh places the edge nodes on the reparametrized surface; where it cannot (a handful
+  // on a patch seam, left at 1e21) the edge node goes to the chord midpoint.
+  for (const auto& t : mesh.tets)
+    for (size_t k = 0; k < kTetEdges.size(); ++k) {
+      Vec3& x = mesh.nodes[static_cast<size_t>(t[4 + k])];
+      const Vec3& a = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][0])])];
+      const Vec3& b = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][1])])];
+      if (!x.allFinite() || (x - 0.5 * (a + b)).norm() > 0.5 * (b - a).norm()) x = 0.5 * (a + b);
+    }
+  // A curved element that a rough surface folds (non-positive Jacobian at a quadrature point or
+  // a vertex) gets straight edges; repeated while any is left.
+  int total = 0;
+  for (int pass = 0; pass < 8; ++pass) {
+    int straightened = 0;
+    for (const auto& t : mesh.tets) {
+      if (!folded(mesh, t)) continue;
+      for (size_t k = 0; k < kTetEdges.size(); ++k)
+        mesh.nodes[static_cast<size_t>(t[4 + k])] =
+            0.5 * (mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][0])])] +
+                   mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][1])])]);
+      ++straightened;
+    }
+    total += straightened;
+    if (straightened == 0) break;
+  }
+  return total;
 }
 
 }  // namespace flowire::mesh

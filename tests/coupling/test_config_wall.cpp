@@ -27,14 +27,14 @@ TEST(ConfigWall, DeclaresTheWallKeysOfTheScene) {
 
 TEST(ConfigWall, NoSectionNoWall) {
   nlohmann::json facts;
-  EXPECT_EQ(make_scene_wall(test::scene("wire: {}\n"), tube(), facts), nullptr);
+  EXPECT_EQ(make_scene_wall(test::scene("wire: {}\n"), tube(), nullptr, facts), nullptr);
   EXPECT_FALSE(facts.contains("wall"));
 }
 
 TEST(ConfigWall, TheWallOfAStraightVesselIsBuiltWithItsThicknessFromTheRadius) {
   nlohmann::json facts;
   const auto c = test::scene("wall:\n  thickness_ratio: 0.2\n  youngs_modulus: 2 MPa\n  mesh_size: 2 mm\n");
-  const auto wall = make_scene_wall(c, tube(), facts);
+  const auto wall = make_scene_wall(c, tube(), nullptr, facts);
   ASSERT_NE(wall, nullptr);
   EXPECT_NEAR(facts["wall"]["thinnest"].get<double>(), 0.2 * 3e-3, 1e-15);
   EXPECT_DOUBLE_EQ(facts["wall"]["thickness_ratio"].get<double>(), 0.2);
@@ -51,7 +51,8 @@ TEST(ConfigWall, TheWallOfABifurcationHoldsEveryEndAndItsLumenIsTheNetworksCapsu
       vessels::y_bifurcation({.parent_radius = 3e-3, .parent_length = 20e-3, .child_length = 20e-3}),
       {.max_segment_length = 5e-3});
   nlohmann::json facts;
-  const auto wall = make_scene_wall(test::scene("wall:\n  thickness: 0.6 mm\n  mesh_size: 1.5 mm\n"), y, facts);
+  const auto wall =
+      make_scene_wall(test::scene("wall:\n  thickness: 0.6 mm\n  mesh_size: 1.5 mm\n"), y, nullptr, facts);
   const auto* deformable = dynamic_cast<const DeformableWall*>(wall.get());
   ASSERT_NE(deformable, nullptr);
   const mesh::TetMesh& m = deformable->mesh();
@@ -88,16 +89,18 @@ TEST(ConfigWall, TheWallOfABifurcationHoldsEveryEndAndItsLumenIsTheNetworksCapsu
 TEST(ConfigWall, RefusesWhatItCannotBuildNamingTheKey) {
   nlohmann::json facts;
   const auto nu = test::scene("wall:\n  poisson_ratio: 0.5\n");
-  EXPECT_NE(
-      test::input_error([&] { (void)make_scene_wall(nu, tube(), facts); }).find("scene.yaml:2: wall.poisson_ratio"),
-      std::string::npos);
+  EXPECT_NE(test::input_error([&] {
+              (void)make_scene_wall(nu, tube(), nullptr, facts);
+            }).find("scene.yaml:2: wall.poisson_ratio"),
+            std::string::npos);
   // A centerline that turns back on itself: no tube can be built along it.
   vessels::Centerlines hairpin;
   hairpin.branches.push_back({"hairpin", {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.0005, 0)}, {1e-3, 1e-3, 1e-3}});
   const auto folded = vessels::Network::build(hairpin, {.max_segment_length = 0.02, .max_chord_deviation = 0.0});
-  EXPECT_NE(
-      test::input_error([&] { (void)make_scene_wall(test::scene("wall: {}\n"), folded, facts); }).find("turns back"),
-      std::string::npos);
+  EXPECT_NE(test::input_error([&] {
+              (void)make_scene_wall(test::scene("wall: {}\n"), folded, nullptr, facts);
+            }).find("turns back"),
+            std::string::npos);
   for (const char* bad :
        {"wall:\n  thickness: 0 mm\n", "wall:\n  youngs_modulus: -1 MPa\n", "wall:\n  support_stiffness: 1 Pa\n"})
     EXPECT_NE(test::input_error([&] { (void)test::scene(bad); }).find("scene.yaml:2: wall."), std::string::npos) << bad;

@@ -61,6 +61,12 @@ TEST(FlowOcclusion, AWireThroughATubeCarriesTheAnnularPoiseuilleFlow) {
     // Taking the wire out restores the empty tube exactly.
     solver->set_occlusion(uniform(net, 1.0, 0.0));
     EXPECT_NEAR(solver->segment_flow(0), empty, 1e-13 * empty);
+    // A tube widened by 2% (a wall that yields: factor (1/1.02)^4 < 1) carries 1.02^4 the flow.
+    std::vector<SegmentOcclusion> widened(static_cast<size_t>(net.num_segments()));
+    for (auto& w : widened) w.resistance_factor = std::pow(1.0 / 1.02, 4);
+    solver->set_occlusion(widened);
+    EXPECT_NEAR(solver->segment_flow(0), empty * std::pow(1.02, 4), 1e-12 * empty);
+    solver->set_occlusion(uniform(net, 1.0, 0.0));
   }
 }
 
@@ -193,7 +199,8 @@ TEST(FlowOcclusion, SolversThatKeepTheirMatrixAndBadFactorsAreRefused) {
   EXPECT_THROW(dense->set_occlusion(uniform(net, 2.0)), Error);
   spec.solver = SolverKind::Superposition;
   auto sup = make_solver(net, spec);
-  EXPECT_THROW(sup->set_occlusion(uniform(net, 0.5)), Error);
+  EXPECT_THROW(sup->set_occlusion(uniform(net, 0.5)), Error);  // (a gradient factor below 1)
+  EXPECT_THROW(sup->set_occlusion(uniform(net, 0.0)), Error);
   EXPECT_THROW(sup->set_occlusion(uniform(net, std::nan(""))), Error);
   EXPECT_THROW(sup->set_occlusion(std::vector<SegmentOcclusion>(1)), Error);
   // An unchanged occlusion costs nothing.

@@ -32,6 +32,61 @@ double box_distance2(const Eigen::AlignedBox3d& b, const Vec3& x) {
 
 }  // namespace
 
+int clip_surface(std::vector<Vec3>& points, std::vector<std::array<int, 3>>& triangles, const Vec3& origin,
+                 const Vec3& out, double reach, double eps) {
+  const size_t np = points.size();
+  std::vector<double> d(np, -1.0);
+  for (size_t i = 0; i < np; ++i) {
+    const Vec3 r = points[i] - origin;
+    if (r.norm() > reach) continue;
+    d[i] = r.dot(out);
+    if (std::abs(d[i]) < eps) d[i] = 0.0;
+  }
+  std::unordered_map<std::uint64_t, int> cut;
+  auto cut_point = [&](int a, int b) {  // d[a] <= 0 < d[b]
+    if (d[static_cast<size_t>(a)] == 0.0) return a;
+    auto [it, fresh] = cut.try_emplace(edge_key(a, b), -1);
+    if (fresh) {
+      const double t = d[static_cast<size_t>(a)] / (d[static_cast<size_t>(a)] - d[static_cast<size_t>(b)]);
+      it->second = static_cast<int>(points.size());
+      const Vec3 x =
+          points[static_cast<size_t>(a)] + t * (points[static_cast<size_t>(b)] - points[static_cast<size_t>(a)]);
+      points.push_back(x);
+    }
+    return it->second;
+  };
+  std::vector<std::array<int, 3>> kept;
+  kept.reserve(triangles.size());
+  int touched = 0;
+  for (const auto& t : triangles) {
+    int beyond = 0;
+    for (int v : t) beyond += d[static_cast<size_t>(v)] > 0.0 ? 1 : 0;
+    if (beyond == 0) {
+      kept.push_back(t);
+      continue;
+    }
+    ++touched;
+    if (beyond == 3) continue;
+    std::vector<int> poly;  // the kept part, in the triangle's order
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)];
+      const bool ina = d[static_cast<size_t>(a)] <= 0.0, inb = d[static_cast<size_t>(b)] <= 0.0;
+      if (ina) poly.push_back(a);
+      if (ina != inb) {
+        const int c = ina ? cut_point(a, b) : cut_point(b, a);
+        if (poly.empty() || poly.back() != c) poly.push_back(c);
+      }
+    }
+    if (poly.size() > 1 && poly.front() == poly.back()) poly.pop_back();
+    for (size_t k = 1; k + 1 < poly.size(); ++k) {
+      const std::array<int, 3> tri{poly[0], poly[k], poly[k + 1]};
+      if (tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2]) kept.push_back(tri);
+    }
+  }
+  triangles = std::move(kept);
+  return touched;
+}
+
 int remove_end_caps(SurfaceMesh& mesh, const std::vector<VesselEnd>& ends) {
   std::vector<std::array<int, 3>> kept;
   kept.reserve(mesh.triangles.size());

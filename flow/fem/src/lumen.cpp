@@ -22,6 +22,7 @@
 #include "flowire/flow/fem/element.hpp"
 #include "flowire/mesh/extract.hpp"
 #include "flowire/mesh/gmsh_session.hpp"
+#include "flowire/vessels/surface.hpp"
 #include "mesh_broadcast.hpp"
 
 #ifdef FLOWIRE_HAVE_VTK
@@ -102,57 +103,7 @@ std::unordered_map<std::uint64_t, EdgeUse> edge_uses(const SurfaceMesh& s) {
 /// the plane (split where they cross it; the cut points are shared, so the result stays
 /// conforming). Returns the number of triangles touched.
 int clip_end(SurfaceMesh& s, const Vec3& origin, const Vec3& out, double reach, double eps) {
-  const size_t np = s.points.size();
-  std::vector<double> d(np, -1.0);
-  for (size_t i = 0; i < np; ++i) {
-    const Vec3 r = s.points[i] - origin;
-    if (r.norm() > reach) continue;
-    d[i] = r.dot(out);
-    if (std::abs(d[i]) < eps) d[i] = 0.0;
-  }
-  std::unordered_map<std::uint64_t, int> cut;
-  auto cut_point = [&](int a, int b) {  // d[a] <= 0 < d[b]
-    if (d[static_cast<size_t>(a)] == 0.0) return a;
-    auto [it, fresh] = cut.try_emplace(edge_key(a, b), -1);
-    if (fresh) {
-      const double t = d[static_cast<size_t>(a)] / (d[static_cast<size_t>(a)] - d[static_cast<size_t>(b)]);
-      it->second = static_cast<int>(s.points.size());
-      const Vec3 x =
-          s.points[static_cast<size_t>(a)] + t * (s.points[static_cast<size_t>(b)] - s.points[static_cast<size_t>(a)]);
-      s.points.push_back(x);
-    }
-    return it->second;
-  };
-  std::vector<std::array<int, 3>> kept;
-  kept.reserve(s.triangles.size());
-  int touched = 0;
-  for (const auto& t : s.triangles) {
-    int beyond = 0;
-    for (int v : t) beyond += d[static_cast<size_t>(v)] > 0.0 ? 1 : 0;
-    if (beyond == 0) {
-      kept.push_back(t);
-      continue;
-    }
-    ++touched;
-    if (beyond == 3) continue;
-    std::vector<int> poly;  // the kept part, in the triangle's order
-    for (int k = 0; k < 3; ++k) {
-      const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)];
-      const bool ina = d[static_cast<size_t>(a)] <= 0.0, inb = d[static_cast<size_t>(b)] <= 0.0;
-      if (ina) poly.push_back(a);
-      if (ina != inb) {
-        const int c = ina ? cut_point(a, b) : cut_point(b, a);
-        if (poly.empty() || poly.back() != c) poly.push_back(c);
-      }
-    }
-    if (poly.size() > 1 && poly.front() == poly.back()) poly.pop_back();
-    for (size_t k = 1; k + 1 < poly.size(); ++k) {
-      const std::array<int, 3> tri{poly[0], poly[k], poly[k + 1]};
-      if (tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2]) kept.push_back(tri);
-    }
-  }
-  s.triangles = std::move(kept);
-  return touched;
+  return vessels::clip_surface(s.points, s.triangles, origin, out, reach, eps);
 }
 
 /// Closed surface without flat caps (an image's level set rounded at its ends): cut every
@@ -475,24 +426,6 @@ LumenSurface prepare_lumen(const Network& net, SurfaceMesh s, const LumenOptions
 
 namespace {
 
-/// Whether the curved tetrahedron's Jacobian is non-positive at a quadrature point or a vertex.
-bool folded(const TetMesh& m, const std::array<int, 10>& t) {
-  double grads[10][3];
-  auto det_at = [&](const std::array<double, 3>& xi) {
-    tet_p2_grad(xi, grads);
-    Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
-    for (int k = 0; k < 10; ++k)
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) j(a, b) += m.nodes[static_cast<size_t>(t[static_cast<size_t>(k)])][a] * grads[k][b];
-    return j.determinant();
-  };
-  for (const QuadPoint& q : tet_quadrature())
-    if (!(det_at(q.xi) > 0.0)) return true;
-  for (const std::array<double, 3>& v : {std::array<double, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}})
-    if (!(det_at(v) > 0.0)) return true;
-  return false;
-}
-
 TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOptions& opt) {
   const auto start = std::chrono::steady_clock::now();
   const std::string& at = lumen.surface.source;
@@ -594,29 +527,7 @@ TetMesh mesh_lumen(const Network& net, const LumenSurface& lumen, const MeshOpti
   }
   mesh::generate(opt);
   mesh::extract_mesh(mesh, surfs, surf_group, at);
-  // gmsh places the edge nodes on the reparametrized surface; where it cannot (a handful
-  // on a patch seam, left at 1e21) the edge node goes to the chord midpoint.
-  for (const auto& t : mesh.tets)
-    for (size_t k = 0; k < kTetEdges.size(); ++k) {
-      Vec3& x = mesh.nodes[static_cast<size_t>(t[4 + k])];
-      const Vec3& a = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][0])])];
-      const Vec3& b = mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][1])])];
-      if (!x.allFinite() || (x - 0.5 * (a + b)).norm() > 0.5 * (b - a).norm()) x = 0.5 * (a + b);
-    }
-  // A curved element that the rough image-derived surface folds (non-positive Jacobian at a
-  // quadrature point or a vertex) gets straight edges; repeated while any is left.
-  for (int pass = 0; pass < 8; ++pass) {
-    int straightened = 0;
-    for (const auto& t : mesh.tets) {
-      if (!folded(mesh, t)) continue;
-      for (size_t k = 0; k < kTetEdges.size(); ++k)
-        mesh.nodes[static_cast<size_t>(t[4 + k])] =
-            0.5 * (mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][0])])] +
-                   mesh.nodes[static_cast<size_t>(t[static_cast<size_t>(kTetEdges[k][1])])]);
-      ++straightened;
-    }
-    if (straightened == 0) break;
-  }
+  mesh::repair_edge_nodes(mesh);
   mesh.mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return mesh;
 }

@@ -37,6 +37,10 @@ class CompliantWall {
   /// pressure along a segment interpolated between its nodes), less @p reference (the pressure
   /// at which the rest geometry was taken) [Pa]. A wall that does not take it ignores it.
   virtual void set_blood_pressure(std::span<const double> node_pressures, double reference) = 0;
+  /// @brief Each network segment's widening [m]: the mean radial displacement of the lumen about
+  /// the segment's axis under the wall's load now (the blood pressure and every body's forces).
+  /// Empty for a wall that does not know the network's segments.
+  [[nodiscard]] virtual std::vector<double> segment_widening() { return {}; }
   /// @brief What a run reports of the wall (summary.json's `wall`).
   [[nodiscard]] virtual nlohmann::json summary() const = 0;
   /// @brief The wall's state now (its displacement field), for an output frame.

@@ -120,6 +120,9 @@ class CoSimulation {
   [[nodiscard]] const LumenContact* lumen_contact() const { return lumen_.get(); }
   /// @brief The deformable vessel wall (wall:), null without.
   [[nodiscard]] const CompliantWall* wall() const { return wall_.get(); }
+  /// @brief With wall.flow_radii, the largest relative widening |u|/r a segment of the flow took.
+  [[nodiscard]] double max_flow_widening() const { return max_widening_; }
+  [[nodiscard]] bool wall_widens_flow() const { return wall_flow_radii_; }
   /// @brief Catheter steps that did not converge; coupled static solves that did not.
   [[nodiscard]] int catheter_unconverged_steps() const { return cath_failures_; }
   /// @brief The last coupled static solve of wire and catheter (sweeps, imbalance).
@@ -160,6 +163,8 @@ class CoSimulation {
   std::unique_ptr<CompliantWall> wall_;  // wall:, null without
   bool wall_blood_pressure_ = false;     // wall.blood_pressure: the flow's pressure loads the wall
   double wall_reference_pressure_ = 0.0;
+  bool wall_flow_radii_ = false;  // wall.flow_radii: the flow's segments widen with the wall
+  double max_widening_ = 0.0;     // the largest |u|/r a segment took
   std::shared_ptr<TipForces> tip_forces_;
   std::unique_ptr<WireOcclusion> occlusion_;
   // catheter: (catheter.hpp): its rod, wall forces and the contact with the wire in its lumen

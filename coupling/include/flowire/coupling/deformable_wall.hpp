@@ -12,9 +12,9 @@
 /// (K⁻¹ + C)⁻¹ of the contacts exactly (a low-rank term off its band). At the end of a step
 /// the wire's contact forces, normal and friction, load the wall with their opposites (Newton's
 /// third law) and the wall's displacement field is solved for the outputs.
-/// The wall is built around a network's lumen, the union of its capsules (the surface the
-/// wire's contact sees: solid::mesh_network_wall), every end held; the contact sees the wall's
-/// displacement along its normal (the wall's tangential motion is not seen).
+/// The wall is built around the lumen the wire's contact sees: a network's capsules
+/// (solid::mesh_network_wall) or an image's lumen surface (solid::mesh_surface_wall), every end held; the contact sees
+/// the wall's displacement along its normal (the wall's tangential motion is not seen).
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
@@ -27,6 +27,7 @@
 #include "flowire/coupling/interaction.hpp"
 #include "flowire/mesh/tet_mesh.hpp"
 #include "flowire/vessels/network.hpp"
+#include "flowire/vessels/surface.hpp"
 
 namespace flowire::solid {
 class ElasticSolid;
@@ -43,15 +44,17 @@ struct WallSpec {
   double youngs_modulus = 0.0;   ///< [Pa]
   double poisson_ratio = 0.45;
   double support = 0.0;    ///< elastic support of the outer surface [Pa/m]
-  double mesh_size = 0.0;  ///< target tetrahedron size [m]
+  double mesh_size = 0.0;  ///< target tetrahedron size [m]; around a surface, 0: twice the local thickness
 };
 
 class DeformableWall final : public CompliantWall {
  public:
-  /// @brief The wall around the lumen of @p net (its capsules), every end held.
+  /// @brief The wall around the lumen of @p net (its capsules), or around @p surface (a scene's
+  /// `vessels.surface`: solid::mesh_surface_wall, its ends named by @p net's), every end held.
   /// @throws flowire::Error (usage) for a non-positive size, thickness or modulus, a ratio
-  /// ν ∉ (−1, 0.5); (input) for a network a tube cannot be built along.
-  DeformableWall(const vessels::Network& net, const WallSpec& spec);
+  /// ν ∉ (−1, 0.5); (input) for a network a tube cannot be built along, a surface no wall can
+  /// be grown around (naming the file and the place).
+  DeformableWall(const vessels::Network& net, const WallSpec& spec, const vessels::LumenSurface* surface = nullptr);
   /// @brief The wall of the straight vessel from @p p0 to @p p1 of lumen radius @p radius.
   DeformableWall(const Vec3& p0, const Vec3& p1, double radius, const WallSpec& spec);
   ~DeformableWall() override;
@@ -65,6 +68,13 @@ class DeformableWall final : public CompliantWall {
   /// field u_p = K⁻¹ f_p, one back-substitution, redone only when the pressures change), which the
   /// contacts meet and the outputs add.
   void set_blood_pressure(std::span<const double> node_pressures, double reference) override;
+  /// @brief The mean radial displacement of each segment's lumen vertices about its axis, by
+  /// reciprocity: ū_s = w_sᵀ K⁻¹ f = (K⁻¹ w_s)ᵀ f with w_s the mean over the segment's lumen
+  /// vertices of their radial directions, K⁻¹ W solved once (one back-substitution of as many
+  /// columns as segments) and kept; a call is then a product with the load's nonzero entries and
+  /// with the pressure's (K⁻¹W)ᵀB. A segment without lumen vertices of its own (shorter than the
+  /// wall's elements) takes the mean of its neighbours'.
+  [[nodiscard]] std::vector<double> segment_widening() override;
   /// @brief Body @p body's forces on the wall (its contact forces' opposites), replacing its last
   /// ones: with every other body's, the wall's load (displacement field, total load).
   void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces) override;
@@ -80,6 +90,8 @@ class DeformableWall final : public CompliantWall {
   [[nodiscard]] int compliance_columns() const;
   [[nodiscard]] double seconds() const { return seconds_; }
   [[nodiscard]] double mesh_seconds() const { return mesh_seconds_; }
+  /// @brief The wall's least thickness [m] (around a surface, after thinning for room).
+  [[nodiscard]] double thinnest() const { return thinnest_; }
   /// @brief Largest displacement, ever and now (and whether it went beyond the wall's thickness,
   /// the linear wall's range: warned once), the load now, columns solved, seconds.
   [[nodiscard]] nlohmann::json summary() const override;
@@ -115,9 +127,18 @@ class DeformableWall final : public CompliantWall {
   mutable bool field_current_ = true;
   Vec3 load_total_ = Vec3::Zero();
   mutable double max_displacement_ = 0.0, max_ever_ = 0.0, seconds_ = 0.0;
+  mutable double max_ratio_ever_ = 0.0;                  ///< the largest lumen displacement over the local thickness
+  std::vector<std::pair<int, double>> local_thickness_;  ///< (lumen vertices) node, the wall's thickness there [m]
+  /// Each lumen vertex's thickness: the distance to the outer surface's nearest vertex.
+  void measure_thickness();
   double thinnest_ = 0.0;              ///< the wall's least thickness [m]
   mutable bool warned_range_ = false;  ///< a run beyond the linear range said so once
   double mesh_seconds_ = 0.0;
+  nlohmann::json lumen_facts_;         ///< what the wall was grown around (summary)
+  Eigen::MatrixXd widening_;           ///< (dofs × segments) K⁻¹W, empty until first asked
+  Eigen::MatrixXd widening_pressure_;  ///< (segments × network nodes) (K⁻¹W)ᵀB
+  std::vector<char> segment_has_nodes_;
+  Eigen::VectorXd last_pressure_;  ///< the network-node pressures less the reference of the last set
 };
 
 }  // namespace flowire::coupling

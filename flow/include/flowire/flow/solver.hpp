@@ -53,8 +53,10 @@ struct SegmentState {
 /// (annulus.hpp). The default value is an empty segment.
 struct SegmentOcclusion {
   double occupied_fraction = 0.0;  ///< occupied axial length / segment length, in [0, 1]
-  double resistance_factor = 1.0;  ///< resistance with the body / without, ≥ 1
-  double inertance_factor = 1.0;   ///< inertance with the body / without, ≥ 1 (flow.model: rlc)
+  /// resistance now / the empty rigid segment's: ≥ 1 with a body in it, < 1 where a wall that
+  /// yields has widened it (coupling: wall.flow_radii), > 0
+  double resistance_factor = 1.0;
+  double inertance_factor = 1.0;  ///< inertance now / the empty rigid segment's, > 0 (flow.model: rlc)
   /// pressure gradient where the body lies / the empty tube's at equal flow (≥ 1): the
   /// undisturbed velocity that the drag law sees there is the empty tube's profile under
   /// that gradient

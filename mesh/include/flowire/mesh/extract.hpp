@@ -18,4 +18,10 @@ namespace flowire::mesh {
 void extract_mesh(TetMesh& mesh, const gmsh::vectorpair& surfs, const std::vector<int>& surf_group,
                   const std::string& at);
 
+/// Edge nodes gmsh could not place on a curved surface (not finite, or farther from their
+/// edge's midpoint than half its length) moved to the midpoint, and every tetrahedron whose
+/// curved map folds (a non-positive Jacobian at a quadrature point or a vertex) given straight
+/// edges, until none is left. Returns the number of tetrahedra straightened.
+int repair_edge_nodes(TetMesh& mesh);
+
 }  // namespace flowire::mesh

@@ -63,6 +63,14 @@ struct VesselEnd {
 };
 int remove_end_caps(SurfaceMesh& mesh, const std::vector<VesselEnd>& ends);
 
+/// @brief Cut a triangulated surface by the plane through @p origin normal to @p out near
+/// @p origin: triangles with a vertex within @p reach of it lose their part beyond the plane (on
+/// the side @p out points to), split where they cross it; the cut points are shared, so the
+/// result stays conforming. Vertices within @p eps of the plane count as on it.
+/// @return the number of triangles touched.
+int clip_surface(std::vector<Vec3>& points, std::vector<std::array<int, 3>>& triangles, const Vec3& origin,
+                 const Vec3& out, double reach, double eps);
+
 /// @brief Where the closest surface point lies.
 enum class Feature : std::uint8_t { Face, Edge, Vertex };
 
