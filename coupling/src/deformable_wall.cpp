@@ -302,6 +302,13 @@ void DeformableWall::solve_field() const {
   for (const auto& [node, t] : local_thickness_)
     max_ratio_ever_ = std::max(max_ratio_ever_, displacement_.segment<3>(3 * node).norm() / t);
   field_current_ = true;
+  // The linear wall's field as a deformation: an element turned inside out is no wall any more.
+  if (!std::isfinite(solid_->energy(displacement_)))
+    throw_numerical_error(
+        fmt::format("wall: the wall's displacement (largest {:.3g} mm, {:.3g} times its thickness where it moved "
+                    "most relative to it) turns an element inside out: the wall linear about rest cannot carry "
+                    "these loads (a stiffer or thicker wall, wall.support_stiffness, or less force on it)",
+                    max_displacement_ * 1e3, max_ratio_ever_));
   seconds_ += since(t0);
 }
 

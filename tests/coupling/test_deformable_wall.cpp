@@ -103,6 +103,23 @@ WallSpec soft_wall(double E) { return {kThickness, 0.0, E, 0.45, 0.0, 1e-3}; }
 
 double tip_offset(const Pressed& p) { return p.positions.front().y(); }
 
+TEST(DeformableWall, AWallTurnedInsideOutIsANumericalFailure) {
+  // The linear wall under a point force far beyond its range: its field inverts the elements
+  // under the force, which is reported, not drawn. A force 10⁴ times smaller is carried.
+  DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, soft_wall(0.5e6));
+  const std::vector<Vec3> at = {Vec3(0.5 * kLength, kR, 0)};
+  wall.load(&wall, at, std::vector<Vec3>{Vec3(0, 1e-4, 0)});
+  EXPECT_GT(wall.max_displacement(), 0.0);
+  wall.load(&wall, at, std::vector<Vec3>{Vec3(0, 1.0, 0)});
+  try {
+    (void)wall.displacement();
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Numerical);
+    EXPECT_NE(std::string(e.what()).find("inside out"), std::string::npos) << e.what();
+  }
+}
+
 TEST(DeformableWall, TheWirePushesTheWallOutAndTheWallPushesBack) {
   const vessels::Network net = tube();
   const Pressed rigid = press(net, nullptr);
