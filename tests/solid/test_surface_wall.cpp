@@ -11,6 +11,7 @@
 #include <numbers>
 #include <string>
 
+#include "faceted_tube.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/solid/elastic_solid.hpp"
 #include "flowire/vessels/io.hpp"
@@ -22,24 +23,8 @@ namespace {
 using vessels::Vec3;
 constexpr double kR = 3e-3, kL = 30e-3, kT = 0.6e-3;
 
-/// A tube of n facets around and m rings along z from −L/2 to L/2 (alternate rings turned by
-/// half a facet), open at both ends, and its network: one straight branch of radius R.
-vessels::LumenSurface faceted_tube(int n, int m) {
-  vessels::SurfaceMesh mesh;
-  for (int j = 0; j <= m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const double a = 2.0 * std::numbers::pi * i / n + (j % 2) * std::numbers::pi / n;
-      mesh.vertices.emplace_back(kR * std::cos(a), kR * std::sin(a), kL * j / m - 0.5 * kL);
-    }
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * n + i, b = j * n + (i + 1) % n, c = (j + 1) * n + i, d = (j + 1) * n + (i + 1) % n;
-      mesh.triangles.push_back({a, b, c});
-      mesh.triangles.push_back({b, d, c});
-    }
-  mesh.source = "faceted tube";
-  return vessels::LumenSurface(std::move(mesh), {Vec3::Zero()});
-}
+/// A tube of n facets around and m rings along z from −L/2 to L/2, open at both ends.
+vessels::LumenSurface faceted_tube(int n, int m) { return flowire::test::faceted_tube(n, m, kR, kL); }
 
 std::string end_name(int node) { return "end_" + std::to_string(node); }
 

@@ -1,5 +1,5 @@
 #pragma once
-// A faceted tube as a lumen surface, for the contact tests: radius R along z from −L/2 to L/2,
+// A faceted tube as a lumen surface, for the contact and wall tests: radius R along z from −L/2 to L/2,
 // n facets around (alternate rings turned by half a facet), m rings, open at both ends.
 #include <cmath>
 #include <numbers>
