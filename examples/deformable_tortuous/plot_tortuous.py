@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "deformable_wall"))
-from plot_wall import largest_frame  # noqa: E402  (the wall frame where it moved most)
+from plot_wall import largest_frame, rod_at_frame  # noqa: E402  (the wall frame where it moved most)
 
 
 def main():
@@ -33,13 +33,10 @@ def main():
     b.scatter(x[s, 0] * 1e3, x[s, 1] * 1e3, s=2, c="0.6", label="wall at rest (section z = 0)")
     b.scatter((x[s, 0] + u[s, 0]) * 1e3, (x[s, 1] + u[s, 1]) * 1e3, s=2, c="C3", label=f"deformed, frame {largest}")
     for name, style in (("wire", dict(color="C0", lw=2)), ("catheter", dict(color="C2", lw=5, alpha=0.6))):
-        path = os.path.join(out, f"{name}.csv")
-        if not os.path.exists(path):
+        rod = rod_at_frame(out, name, largest)
+        if not rod:
             continue
-        data = np.genfromtxt(path, delimiter=",", names=True)
-        times = np.unique(data["time"])
-        t = times[min(largest, len(times) - 1)]
-        w = data[data["time"] == t]
+        w, t = rod
         b.plot(w["x"] * 1e3, w["y"] * 1e3, label=f"{name}, t = {t:.2f} s", **style)
     b.set_aspect("equal")
     b.set_xlabel("x [mm]")

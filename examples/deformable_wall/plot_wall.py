@@ -37,6 +37,18 @@ def largest_frame(out, script):
     return (largest, *states[largest])
 
 
+def rod_at_frame(out, name, frame):
+    """The rod NAME (wire, catheter) of OUT at output frame FRAME, from NAME.csv: (its rows, the
+    time), or None without the file."""
+    path = os.path.join(out, f"{name}.csv")
+    if not os.path.exists(path):
+        return None
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    times = np.unique(data["time"])
+    t = times[min(frame, len(times) - 1)]
+    return data[data["time"] == t], t
+
+
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else "."
     largest, x, u = largest_frame(out, "plot_wall.py")
@@ -55,12 +67,9 @@ def main():
     xs, ys = x[side][order], u[side][order]
     b.plot(xs[:, 0] * 1e3, xs[:, 1] * 1e3, "k--", label="lumen at rest")
     b.plot((xs[:, 0] + ys[:, 0]) * 1e3, (xs[:, 1] + ys[:, 1]) * 1e3, "C3", label=f"lumen, frame {largest}")
-    wires = sorted(glob.glob(os.path.join(out, "wire.csv")))
-    if wires:
-        data = np.genfromtxt(wires[0], delimiter=",", names=True)
-        times = np.unique(data["time"])
-        t = times[min(largest, len(times) - 1)]
-        w = data[data["time"] == t]
+    rod = rod_at_frame(out, "wire", largest)
+    if rod:
+        w, t = rod
         b.plot(w["x"] * 1e3, w["y"] * 1e3, "C0", lw=2, label=f"wire, t = {t:.2f} s")
     b.set_xlabel("x [mm]")
     b.set_ylabel("y [mm]")

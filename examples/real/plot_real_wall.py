@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "deformable_wall"))
-from plot_wall import largest_frame  # noqa: E402  (the wall frame where it moved most)
+from plot_wall import largest_frame, rod_at_frame  # noqa: E402  (the wall frame where it moved most)
 
 
 def main():
@@ -27,12 +27,9 @@ def main():
     e1, e2, e3 = axes
     p = (x - centre) @ np.array([e1, e2]).T
     wire = None
-    path = os.path.join(out, "wire.csv")
-    if os.path.exists(path):
-        data = np.genfromtxt(path, delimiter=",", names=True)
-        times = np.unique(data["time"])
-        t = times[min(largest, len(times) - 1)]
-        w = data[data["time"] == t]
+    rod = rod_at_frame(out, "wire", largest)
+    if rod:
+        w, t = rod
         wire = (np.column_stack([w["x"], w["y"], w["z"]]) - centre) @ np.array([e1, e2]).T, t
     fig, (a, b) = plt.subplots(1, 2, figsize=(13, 6))
     order = np.argsort(mag)
