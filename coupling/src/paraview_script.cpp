@@ -66,6 +66,20 @@ def load(folder=HERE, view=None):
         display.ColorArrayName = ["POINTS", ""]  # one solid colour
         display.AmbientColor = display.DiffuseColor = [0.15, 0.15, 0.15]
         shown.update(wire=wire, wire_tube=wire_tube, wire_display=display)
+    if WALL:
+        wall = OpenDataFile(os.path.join(folder, WALL))
+        RenameSource("wall", wall)
+        warped = WarpByVector(registrationName="wall, deformed", Input=wall)
+        warped.Vectors = ["POINTS", "displacement"]  # to scale: the wall where it is
+        display = Show(warped, view)
+        ColorBy(display, ("POINTS", "displacement_magnitude"))
+        lut = GetColorTransferFunction("displacement_magnitude")
+        lut.ApplyPreset("Viridis (matplotlib)", True)
+        display.RescaleTransferFunctionToDataRange(True, False)
+        display.Opacity = 0.35  # the wire shows through
+        display.SetScalarBarVisibility(view, True)
+        GetScalarBar(lut, view).Title = "wall displacement [m]"
+        shown.update(wall=wall, wall_warped=warped, wall_display=display)
     scene = GetAnimationScene()
     scene.UpdateAnimationUsingDataTimeSteps()
     view.OrientationAxesVisibility = 1
@@ -99,18 +113,20 @@ if __name__ == "__main__":
 }  // namespace
 
 bool write_paraview_script(const std::filesystem::path& dir, const ParaViewScene& s) {
-  if (s.network.empty() && s.wire.empty()) return false;
+  if (s.network.empty() && s.wire.empty() && s.wall.empty()) return false;
   std::string text =
       "# ParaView view of this run, written by flowire: the vessel network as tubes of the vessels'\n"
-      "# own radii, coloured by blood pressure (by radius without flow), with the wire (drawn thicker).\n"
+      "# own radii, coloured by blood pressure (by radius without flow), with the wire (drawn thicker)\n"
+      "# and, where the scene has one, the wall that yields, warped by its displacement.\n"
       "#   paraview --script=view.py                  (in the ParaView window)\n"
       "#   pvpython view.py                           (a render window)\n"
       "#   pvpython --force-offscreen-rendering view.py --screenshot view.png   (a picture)\n"
       "import os\nimport sys\n\nfrom paraview.simple import *  # noqa: F401,F403\n\n";
   text += fmt::format(
       "NETWORK = {}\nWIRE = {}\nWIRE_DRAW_RADIUS = {:.6g}  # [m] 3 x the wire radius, at least 1.2 mm\n"
-      "TITLE = {}\n",
-      py_string(s.network), py_string(s.wire), std::max(3.0 * s.wire_radius, 1.2e-3), py_string(s.title));
+      "WALL = {}\nTITLE = {}\n",
+      py_string(s.network), py_string(s.wire), std::max(3.0 * s.wire_radius, 1.2e-3), py_string(s.wall),
+      py_string(s.title));
   text += kBody;
   write_text_atomically(dir / "view.py", text);
   return true;

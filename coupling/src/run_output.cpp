@@ -137,6 +137,7 @@ ParaViewScene paraview_scene(const config::Config& c, const std::filesystem::pat
   const std::string network = network_series ? "network.pvd" : "network.vtp";
   if (c.has_section("vessels") && std::filesystem::exists(out / network)) pv.network = network;
   if (wire && std::filesystem::exists(out / "wire.pvd")) pv.wire = "wire.pvd", pv.wire_radius = c.number("wire.radius");
+  if (c.has_section("wall") && std::filesystem::exists(out / "wall.pvd")) pv.wall = "wall.pvd";
   pv.title = c.string_or("name", "");
   return pv;
 }

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -60,6 +61,23 @@ TEST(ParaViewScript, PythonReadsBackTheFilesRadiusAndAnAwkwardTitle) {
   EXPECT_EQ(c["WIRE"], "wire.pvd");
   EXPECT_EQ(c["TITLE"], s.title);
   EXPECT_NEAR(c["WIRE_DRAW_RADIUS"].get<double>(), 1.35e-3, 1e-9);
+  EXPECT_EQ(c["WALL"], "");  // no wall: the script's `if WALL:` skips it
+}
+
+TEST(ParaViewScript, AWallThatYieldsIsShownWarpedByItsDisplacement) {
+  if (!have_python()) GTEST_SKIP() << "python3 not found";
+  const auto dir = flowire::testing::scratch_dir("paraview_script_wall");
+  ParaViewScene s;
+  s.wire = "wire.pvd";
+  s.wall = "wall.pvd";
+  ASSERT_TRUE(write_paraview_script(dir, s));
+  const auto c = python_constants(dir / "view.py", dir / "constants.json");
+  ASSERT_FALSE(c.is_null());
+  EXPECT_EQ(c["WALL"], "wall.pvd");
+  std::ifstream in(dir / "view.py");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("WarpByVector"), std::string::npos);
+  EXPECT_NE(text.find("\"displacement_magnitude\""), std::string::npos);
 }
 
 TEST(ParaViewScript, AThinWireIsDrawnAtLeastOnePointTwoMillimetres) {

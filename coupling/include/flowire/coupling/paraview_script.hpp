@@ -15,6 +15,7 @@ namespace flowire::coupling {
 struct ParaViewScene {
   std::string network;       ///< network.vtp or network.pvd
   std::string wire;          ///< wire.pvd
+  std::string wall;          ///< wall.pvd (a wall that yields: warped by its displacement)
   double wire_radius = 0.0;  ///< [m]; drawn at max(3 × radius, 1.2 mm) to be seen, as network.png does
   std::string title;
 };
