@@ -405,4 +405,42 @@ void BM_DeformableWallPush(benchmark::State& state) {
 }
 BENCHMARK(BM_DeformableWallPush)->ArgName("deformable")->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1);
 
+/// The wall of a real anatomy against its rigid surface: the Feel++ arch with a 400-vertex wire
+/// (0.25 mm segments, 10 cm inside) pushed at 2 cm/s for 100 steps of 10 ms through the scene
+/// runner, examples/real/feelpp_arch.yaml (arg 0, the rigid surface) or feelpp_arch_wall.yaml
+/// (arg 1: the wall grown around the same surface, the blood pressure on it, the flow's radii
+/// from it). Counters as BM_DeformableWallPush's.
+void BM_RealArchWall(benchmark::State& state) {
+  const auto data = feelpp_arch_data(state);
+  if (data.empty()) return;
+  const auto scene = std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR) /
+                     (state.range(0) == 0 ? "examples/real/feelpp_arch.yaml" : "examples/real/feelpp_arch_wall.yaml");
+  const std::vector<std::string> sets = {
+      "vessels.file=" + (data / "centerlinesAORTA.vtk").string(),
+      "vessels.surface=" + (data / "aorta2.stl").string(),
+      "wire.segment_length=0.25mm",
+      "insertion.initial_length=10cm",
+      "insertion.max_length=14cm",
+      "insertion.speed=2cm/s",
+      "solve.duration=1s",
+      "output.vtk=false",
+      "output.csv=false",
+      "output.png=false",
+      "output.dir=" + (std::filesystem::temp_directory_path() / "flowire-bench-real-wall").string()};
+  std::ifstream in(scene);
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json summary;
+  for (auto _ : state) {
+    const auto cfg = config::load_config_text(text.str(), scene.string(), coupling::scene_schema(), sets);
+    summary = coupling::run_scene(cfg).summary;
+  }
+  run_counters(state, summary);
+  if (summary.contains("wall")) {
+    state.counters["wall_seconds"] = summary["wall"]["seconds"].get<double>();
+    state.counters["compliance_columns"] = summary["wall"]["compliance_columns"].get<double>();
+  }
+}
+BENCHMARK(BM_RealArchWall)->ArgName("deformable")->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1);
+
 }  // namespace
