@@ -42,6 +42,10 @@ void tag_groups_and_set_options(int volume, const char* volume_name, const std::
     gmsh::model::addPhysicalGroup(2, tags, tag);
     gmsh::model::setPhysicalName(2, tag, groups[gi].name);
   }
+  set_common_options(algorithm3d);
+}
+
+void set_common_options(int algorithm3d) {
   gmsh::option::setNumber("General.NumThreads", 1);
   gmsh::option::setNumber("Mesh.Algorithm3D", algorithm3d);
   gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
@@ -50,6 +54,7 @@ void tag_groups_and_set_options(int volume, const char* volume_name, const std::
   gmsh::option::setNumber("Mesh.ElementOrder", 1);
   gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
   gmsh::option::setNumber("Mesh.LcIntegrationPrecision", 1e-3);
+  gmsh::option::setNumber("Mesh.RandomSeed", 1);
 }
 
 bool set_size_bounds(double mesh_size, double size_factor) {

@@ -11,8 +11,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <deque>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <numeric>
 #include <string>
@@ -265,10 +267,7 @@ vessels::LumenSurface remesh_lumen(const vessels::LumenSurface& lumen, const ves
   gmsh::model::mesh::addElementsByType(1, 2, tri_tags, tri_nodes);
   gmsh::model::mesh::classifySurfaces(40.0 * std::numbers::pi / 180.0, true, true, std::numbers::pi);
   gmsh::model::mesh::createGeometry();
-  gmsh::option::setNumber("General.NumThreads", 1);
-  gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
-  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
-  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+  mesh::set_common_options(1);
   if (!mesh::set_size_bounds(wall.mesh_size, 1.0)) {
     auto index = std::make_shared<vessels::SpatialIndex>(net, 4);
     gmsh::model::mesh::setSizeCallback([index, &net, wall](int, int, double px, double py, double pz) {
@@ -449,9 +448,70 @@ TetMesh mesh_wall(const vessels::LumenSurface& given, const vessels::Network& ne
 }
 }  // namespace
 
+namespace {
+struct Kept {
+  std::uint64_t key;
+  TetMesh mesh;
+  SurfaceWallStats stats;
+};
+std::pair<std::mutex, std::deque<Kept>>& kept_walls() {
+  static std::pair<std::mutex, std::deque<Kept>> walls;
+  return walls;
+}
+
+/// A digest of everything a wall is built from (FNV-1a over the bytes).
+std::uint64_t digest(const vessels::LumenSurface& lumen, const vessels::Network& net, const SurfaceWall& wall) {
+  std::uint64_t h = 1469598103934665603ULL;
+  auto mix = [&h](const void* data, size_t bytes) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (size_t k = 0; k < bytes; ++k) h = (h ^ b[k]) * 1099511628211ULL;
+  };
+  mix(lumen.vertices().data(), lumen.vertices().size() * sizeof(Vec3));
+  mix(lumen.triangles().data(), lumen.triangles().size() * sizeof(std::array<int, 3>));
+  for (int k = 0; k < net.num_nodes(); ++k) mix(net.node(k).data(), sizeof(Vec3));
+  for (int k = 0; k < net.num_segments(); ++k) {
+    const auto& s = net.segment(k);
+    mix(&s.node_from, sizeof(int));
+    mix(&s.node_to, sizeof(int));
+    mix(&s.radius, sizeof(double));
+  }
+  for (double v : {wall.thickness, wall.thickness_ratio, wall.mesh_size, wall.size_per_thickness})
+    mix(&v, sizeof(double));
+  return h;
+}
+}  // namespace
+
 TetMesh mesh_surface_wall(const vessels::LumenSurface& lumen, const vessels::Network& net, const SurfaceWall& wall,
                           SurfaceWallStats* stats) {
-  return mesh::guarded(lumen.source(), [&] { return mesh_wall(lumen, net, wall, stats); });
+  // gmsh's reparametrization of an image's surface does not give the same mesh twice in one
+  // process (its partitions of the surface differ from one build to the next), so a study or a
+  // fit that runs the same scene again would see another wall each time: the last few walls
+  // are kept and given again for the same surface, network and sizes.
+  auto& [lock, kept] = kept_walls();
+  const std::uint64_t key = digest(lumen, net, wall);
+  {
+    const std::lock_guard<std::mutex> guard(lock);
+    for (const Kept& k : kept)
+      if (k.key == key) {
+        if (stats) *stats = k.stats;
+        TetMesh m = k.mesh;
+        m.mesh_seconds = 0.0;
+        return m;
+      }
+  }
+  SurfaceWallStats built;
+  TetMesh m = mesh::guarded(lumen.source(), [&] { return mesh_wall(lumen, net, wall, &built); });
+  if (stats) *stats = built;
+  const std::lock_guard<std::mutex> guard(lock);
+  kept.push_back({key, m, built});
+  if (kept.size() > 4) kept.pop_front();
+  return m;
+}
+
+void forget_kept_walls() {
+  auto& [lock, kept] = kept_walls();
+  const std::lock_guard<std::mutex> guard(lock);
+  kept.clear();
 }
 
 }  // namespace flowire::solid

@@ -14,6 +14,7 @@
 #include "faceted_tube.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/solid/elastic_solid.hpp"
+#include "flowire/solid/tube_wall.hpp"
 #include "flowire/vessels/io.hpp"
 #include "flowire_test.hpp"
 
@@ -154,6 +155,28 @@ TEST(SurfaceWall, ARealBifurcationsWallIsThinnedAtItsCarinaNotCrossed) {
   EXPECT_LT(worst_lumen, 0.1 * stats.min_thickness);
   // The solid is whole: its volume that of the lumen's area times the thickness, roughly.
   EXPECT_GT(m.volume(), 0.0);
+}
+
+TEST(SurfaceWall, TheSameSurfaceGivesTheSameWallWhateverWasMeshedBefore) {
+  // gmsh keeps its options from one model to the next within a process (a study, a fit, the
+  // Python module): a wall must not depend on what was meshed before it. (The kept walls are
+  // forgotten before the second, so that it is built again rather than given back.)
+  const vessels::LumenSurface lumen = faceted_tube(32, 12);
+  const vessels::Network net = tube_network();
+  const mesh::TetMesh first = mesh_surface_wall(lumen, net, wall_of(kT, 0.0, 0.0));
+  (void)mesh_tube_wall({kR, kR + kT, kL, 1.5e-3, true});  // another build between
+  forget_kept_walls();
+  const mesh::TetMesh again = mesh_surface_wall(lumen, net, wall_of(kT, 0.0, 0.0));
+  EXPECT_GT(again.mesh_seconds, 0.0);  // built, not kept
+  ASSERT_EQ(first.num_nodes(), again.num_nodes());
+  ASSERT_EQ(first.num_tets(), again.num_tets());
+  for (size_t k = 0; k < first.nodes.size(); ++k) EXPECT_EQ(first.nodes[k], again.nodes[k]) << k;
+  // The same inputs again: the kept wall, at no cost.
+  SurfaceWallStats stats;
+  const mesh::TetMesh kept = mesh_surface_wall(lumen, net, wall_of(kT, 0.0, 0.0), &stats);
+  EXPECT_EQ(kept.mesh_seconds, 0.0);
+  EXPECT_EQ(kept.num_tets(), again.num_tets());
+  EXPECT_GT(stats.lumen_vertices, 0);
 }
 
 TEST(SurfaceWall, RefusesWhatNoWallCanBeGrownAround) {

@@ -28,6 +28,10 @@ class GmshModel {
 void tag_groups_and_set_options(int volume, const char* volume_name, const std::vector<BoundaryGroup>& groups,
                                 const gmsh::vectorpair& surfs, const std::vector<int>& surf_group, int algorithm3d);
 
+/// The meshing options every build sets (gmsh keeps its options from one model to the next in a
+/// process: a build that left any of them unset would mesh differently after another build).
+void set_common_options(int algorithm3d);
+
 /// Mesh size bounds: `mesh_size` everywhere when it is > 0 (returns true); otherwise open
 /// bounds for a size callback of `size_factor` × the local radius (returns false).
 /// @throws flowire::Error (usage) when neither is positive.

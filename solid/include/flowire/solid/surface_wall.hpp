@@ -40,10 +40,15 @@ struct SurfaceWallStats {
 };
 
 /// @brief Mesh the wall around @p lumen (normals out of the lumen, open at the network's ends).
+/// The last four walls built in the process are kept: the same surface, network and sizes give
+/// the same mesh again (mesh_seconds 0), which gmsh alone does not in one process.
 /// @throws flowire::Error (usage) for a non-positive thickness or size; (input) naming the
 /// surface for a non-manifold edge, a pinched open end, an open end no network end lies near or
 /// two open ends at one network end, an open end whose ring cannot be told from the lumen.
 mesh::TetMesh mesh_surface_wall(const vessels::LumenSurface& lumen, const vessels::Network& net,
                                 const SurfaceWall& wall, SurfaceWallStats* stats = nullptr);
+
+/// @brief Forget the kept walls (the next call builds anew).
+void forget_kept_walls();
 
 }  // namespace flowire::solid
