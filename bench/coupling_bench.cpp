@@ -324,6 +324,30 @@ void run_counters(benchmark::State& state, const nlohmann::json& summary) {
   state.counters["ms_per_step"] = 1e3 * (t["total"].get<double>() - t["setup"].get<double>()) / steps;
   state.counters["newton_per_step"] = summary["wire"]["solver"]["newton_iterations_per_step"].get<double>();
   state.counters["unconverged"] = summary["wire"]["unconverged_steps"].get<double>();
+  if (summary.contains("wall")) {
+    state.counters["wall_seconds"] = summary["wall"]["seconds"].get<double>();
+    state.counters["compliance_columns"] = summary["wall"]["compliance_columns"].get<double>();
+  }
+}
+
+/// Run the scene @p text (read from @p scene) with @p sets through the scene runner in the
+/// benchmark's loop, and record run_counters of its summary.
+void run_scene_text(benchmark::State& state, const std::string& text, const std::filesystem::path& scene,
+                    const std::vector<std::string>& sets) {
+  nlohmann::json summary;
+  for (auto _ : state) {
+    const auto cfg = config::load_config_text(text, scene.string(), coupling::scene_schema(), sets);
+    summary = coupling::run_scene(cfg).summary;
+  }
+  run_counters(state, summary);
+}
+
+/// The same for the scene file @p scene.
+void run_scene_file(benchmark::State& state, const std::filesystem::path& scene, const std::vector<std::string>& sets) {
+  std::ifstream in(scene);
+  std::stringstream text;
+  text << in.rdbuf();
+  run_scene_text(state, text.str(), scene, sets);
 }
 
 /// The driven variants on a real lumen: the Feel++ aortic arch with its own surface as the
@@ -351,15 +375,7 @@ void BM_RealArchDriven(benchmark::State& state) {
                  : drive == Drive::Pulled ? "insertion.speed=-2cm/s"
                                           : "insertion.speed=2cm/s");
   if (drive == Drive::Turned) sets.push_back("insertion.rotation_speed=3.14159");
-  std::ifstream in(scene);
-  std::stringstream text;
-  text << in.rdbuf();
-  nlohmann::json summary;
-  for (auto _ : state) {
-    const auto cfg = config::load_config_text(text.str(), scene.string(), coupling::scene_schema(), sets);
-    summary = coupling::run_scene(cfg).summary;
-  }
-  run_counters(state, summary);
+  run_scene_file(state, scene, sets);
 }
 BENCHMARK(BM_RealArchDriven)
     ->ArgName("drive")
@@ -389,19 +405,9 @@ void BM_DeformableWallPush(benchmark::State& state) {
     }
     text.erase(a, b - a);
   }
-  const std::vector<std::string> sets = {
-      "solve.duration=1s", "output.vtk=false", "output.csv=false", "output.png=false",
-      "output.dir=" + (std::filesystem::temp_directory_path() / "flowire-bench-wall").string()};
-  nlohmann::json summary;
-  for (auto _ : state) {
-    const auto cfg = config::load_config_text(text, scene.string(), coupling::scene_schema(), sets);
-    summary = coupling::run_scene(cfg).summary;
-  }
-  run_counters(state, summary);
-  if (summary.contains("wall")) {
-    state.counters["wall_seconds"] = summary["wall"]["seconds"].get<double>();
-    state.counters["compliance_columns"] = summary["wall"]["compliance_columns"].get<double>();
-  }
+  run_scene_text(state, text, scene,
+                 {"solve.duration=1s", "output.vtk=false", "output.csv=false", "output.png=false",
+                  "output.dir=" + (std::filesystem::temp_directory_path() / "flowire-bench-wall").string()});
 }
 BENCHMARK(BM_DeformableWallPush)->ArgName("deformable")->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1);
 
@@ -427,19 +433,7 @@ void BM_RealArchWall(benchmark::State& state) {
       "output.csv=false",
       "output.png=false",
       "output.dir=" + (std::filesystem::temp_directory_path() / "flowire-bench-real-wall").string()};
-  std::ifstream in(scene);
-  std::stringstream text;
-  text << in.rdbuf();
-  nlohmann::json summary;
-  for (auto _ : state) {
-    const auto cfg = config::load_config_text(text.str(), scene.string(), coupling::scene_schema(), sets);
-    summary = coupling::run_scene(cfg).summary;
-  }
-  run_counters(state, summary);
-  if (summary.contains("wall")) {
-    state.counters["wall_seconds"] = summary["wall"]["seconds"].get<double>();
-    state.counters["compliance_columns"] = summary["wall"]["compliance_columns"].get<double>();
-  }
+  run_scene_file(state, scene, sets);
 }
 BENCHMARK(BM_RealArchWall)->ArgName("deformable")->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1);
 
