@@ -249,7 +249,8 @@ void CoSimulation::shield_wire() {
 
 void CoSimulation::occlude() {
   if (!occlusion_ && !wall_flow_radii_) return;
-  std::vector<flow::SegmentOcclusion> o;
+  std::vector<flow::SegmentOcclusion>& o = segment_factors_;  // (kept: no allocation a frame)
+  o.clear();
   if (occlusion_) {
     const auto positions = sim_->positions();
     std::span<const flow::SegmentOcclusion> wire;

@@ -256,9 +256,8 @@ std::vector<double> DeformableWall::segment_widening() {
     }
     solid_->tangent_solve(w);
     widening_ = std::move(w);
-    if (pressure_basis_.size() > 0) widening_pressure_ = widening_.transpose() * pressure_basis_;
   }
-  if (widening_pressure_.size() == 0 && pressure_basis_.size() > 0)
+  if (widening_pressure_.size() == 0 && pressure_basis_.size() > 0)  // (the pressure may come later)
     widening_pressure_ = widening_.transpose() * pressure_basis_;
   Eigen::VectorXd u = Eigen::VectorXd::Zero(segments);
   for (Eigen::Index i = 0; i < load_.size(); ++i)  // the bodies' forces: a few nonzero entries

@@ -1,7 +1,7 @@
-// The wall around a triangulated lumen surface: the lumen offset along its smoothed normals by
-// the wall's thickness (reduced where the lumen leaves no room), closed by a ring at each open
-// end, handed to gmsh as one discrete shell, classified into its patches, remeshed and filled
-// with quadratic tetrahedra; each patch named by the shell triangles it holds.
+// The wall around a triangulated lumen surface: its open ends cut square, the lumen remeshed by
+// gmsh at the wall's element size, offset along its smoothed normals by the wall's thickness
+// (reduced where the lumen leaves no room), closed by a ring at each open end; the lumen, the
+// offset and the rings handed to gmsh as discrete surfaces and filled with quadratic tetrahedra.
 #include "flowire/solid/surface_wall.hpp"
 
 #include <fmt/format.h>
@@ -10,7 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <deque>
 #include <limits>
 #include <memory>
@@ -31,11 +30,8 @@ namespace {
 
 using mesh::BoundaryGroup;
 using mesh::TetMesh;
+using vessels::mm;
 using vessels::Vec3;
-
-std::string mm(const Vec3& x) {
-  return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z());
-}
 
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
@@ -88,6 +84,21 @@ std::vector<std::vector<int>> open_loops(const vessels::LumenSurface& lumen,
     loops.push_back(std::move(loop));
   }
   return loops;
+}
+
+/// The network end @p e's segment and its unit axis out of the vessel.
+std::pair<const vessels::Segment*, Vec3> end_axis(const vessels::Network& net, int e) {
+  const auto& seg = net.segment(*net.node_segments(e).first);
+  const int other = seg.node_from == e ? seg.node_to : seg.node_from;
+  return {&seg, (net.node(e) - net.node(other)).normalized()};
+}
+
+/// Points inside the lumen that orient a surface built from it: the segments' midpoints.
+std::vector<Vec3> segment_midpoints(const vessels::Network& net) {
+  std::vector<Vec3> inside;
+  for (int k = 0; k < net.num_segments(); ++k)
+    inside.push_back(0.5 * (net.node(net.segment(k).node_from) + net.node(net.segment(k).node_to)));
+  return inside;
 }
 
 /// The nominal thickness at @p x: the wall's, or its ratio × the radius of the nearest segment.
@@ -212,10 +223,8 @@ vessels::LumenSurface square_ends(const vessels::LumenSurface& lumen, const vess
   for (const auto& [key, count] : uses)
     if (count == 1) rim[key >> 32] = rim[key & 0xffffffffu] = 1;
   for (int e : net.ends()) {
-    const auto& seg = net.segment(*net.node_segments(e).first);
-    const int other = seg.node_from == e ? seg.node_to : seg.node_from;
-    const Vec3 out = (net.node(e) - net.node(other)).normalized();
-    const double r = seg.radius;
+    const auto [seg, out] = end_axis(net, e);
+    const double r = seg->radius;
     double innermost = std::numeric_limits<double>::infinity(), outermost = -innermost, reach = 0.0;
     for (size_t v = 0; v < x.size(); ++v)
       if (rim[v] && (x[v] - net.node(e)).norm() < 3.0 * r) {
@@ -241,10 +250,7 @@ vessels::LumenSurface square_ends(const vessels::LumenSurface& lumen, const vess
     }
     m.triangles.push_back(t);
   }
-  std::vector<Vec3> inside;
-  for (int k = 0; k < net.num_segments(); ++k)
-    inside.push_back(0.5 * (net.node(net.segment(k).node_from) + net.node(net.segment(k).node_to)));
-  return vessels::LumenSurface(std::move(m), inside);
+  return vessels::LumenSurface(std::move(m), segment_midpoints(net));
 }
 
 /// The lumen triangulated anew by gmsh at the wall's element size (the image's triangles are
@@ -290,10 +296,7 @@ vessels::LumenSurface remesh_lumen(const vessels::LumenSurface& lumen, const ves
   gmsh::model::mesh::getElementsByType(2, etags, enodes, -1);
   for (size_t e = 0; e < etags.size(); ++e)
     m.triangles.push_back({index_of.at(enodes[3 * e]), index_of.at(enodes[3 * e + 1]), index_of.at(enodes[3 * e + 2])});
-  std::vector<Vec3> inside;
-  for (int k = 0; k < net.num_segments(); ++k)
-    inside.push_back(0.5 * (net.node(net.segment(k).node_from) + net.node(net.segment(k).node_to)));
-  return vessels::LumenSurface(std::move(m), inside);
+  return vessels::LumenSurface(std::move(m), segment_midpoints(net));
 }
 
 /// Each boundary face's edge nodes moved onto @p surface (gmsh places them on its own
@@ -326,16 +329,15 @@ Ends name_ends(const vessels::LumenSurface& lumen, const vessels::Network& net,
     double best = std::numeric_limits<double>::infinity();
     for (int end : net.ends())
       if (const double d = (net.node(end) - c).norm(); d < best) best = d, e = end;
-    const auto& seg = net.segment(*net.node_segments(e).first);
-    if (best > 3.0 * seg.radius)
+    const auto [seg, axis] = end_axis(net, e);
+    if (best > 3.0 * seg->radius)
       throw_input_error(fmt::format("{}: open end at {}", lumen.source(), mm(c)),
                         fmt::format("no end of the network {} lies within three radii of it", net.source()));
     if (std::find(ends.node.begin(), ends.node.end(), e) != ends.node.end())
       throw_input_error(fmt::format("{}: open end at {}", lumen.source(), mm(c)),
                         fmt::format("two open ends lie at the network's end node {}", e));
-    const int other = seg.node_from == e ? seg.node_to : seg.node_from;
     ends.node.push_back(e);
-    ends.axis.push_back((net.node(e) - net.node(other)).normalized());
+    ends.axis.push_back(axis);
   }
   return ends;
 }

@@ -293,6 +293,10 @@ void Network::finalize() {
     if (deg[i] == 0) throw_input_error(source_, fmt::format("node {} is not connected to any segment", i));
 }
 
+std::string mm(const Vec3& x) {
+  return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z());
+}
+
 std::vector<int> Network::ends() const {
   std::vector<int> out;
   for (int i = 0; i < num_nodes(); ++i)

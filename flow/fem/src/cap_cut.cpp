@@ -12,11 +12,8 @@ namespace flowire::flow::fem {
 namespace {
 
 using vessels::Branch;
+using vessels::mm;
 using vessels::Segment;
-
-std::string mm(const Vec3& x) {
-  return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z());
-}
 
 /// The end's branch as nodes and segments from the end inwards: chain.nodes[0] = end,
 /// chain.segments[i] joins chain.nodes[i] and chain.nodes[i + 1].

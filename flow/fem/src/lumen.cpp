@@ -43,14 +43,12 @@
 namespace flowire::flow::fem {
 namespace {
 
+using vessels::mm;
+
 /// The angle between two faces' normals beyond which gmsh splits patches (the cap rims), and
 /// the rim angle below which an open end is cut again square (a margin above it).
 constexpr double kCreaseAngle = 40.0 * std::numbers::pi / 180.0;
 constexpr double kRimAngle = 45.0 * std::numbers::pi / 180.0;
-
-std::string mm(const Vec3& x) {
-  return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z());
-}
 
 std::string lower_extension(const std::string& path) {
   std::string e = std::filesystem::path(path).extension().string();

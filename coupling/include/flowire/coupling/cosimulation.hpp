@@ -31,7 +31,8 @@
 
 namespace flowire::flow {
 class FlowSolver;
-}
+struct SegmentOcclusion;
+}  // namespace flowire::flow
 namespace flowire::rod {
 class RodSimulator;
 }
@@ -163,8 +164,9 @@ class CoSimulation {
   std::unique_ptr<CompliantWall> wall_;  // wall:, null without
   bool wall_blood_pressure_ = false;     // wall.blood_pressure: the flow's pressure loads the wall
   double wall_reference_pressure_ = 0.0;
-  bool wall_flow_radii_ = false;  // wall.flow_radii: the flow's segments widen with the wall
-  double max_widening_ = 0.0;     // the largest |u|/r a segment took
+  bool wall_flow_radii_ = false;                         // wall.flow_radii: the flow's segments widen with the wall
+  double max_widening_ = 0.0;                            // the largest |u|/r a segment took
+  std::vector<flow::SegmentOcclusion> segment_factors_;  // the occlusion and widening of each segment
   std::shared_ptr<TipForces> tip_forces_;
   std::unique_ptr<WireOcclusion> occlusion_;
   // catheter: (catheter.hpp): its rod, wall forces and the contact with the wire in its lumen

@@ -5,6 +5,11 @@
 /// outwards by the wall's thickness, closed at every open end by the ring between the end's
 /// loop and its offset.
 ///
+/// The lumen. Each open end is first cut square to its vessel (by the plane normal to the
+/// network end's axis just inside the rim's innermost point), and the lumen triangulated anew by
+/// gmsh at the wall's element size (the image's triangles are small and uneven, and their offset
+/// folds).
+///
 /// The offset. Each lumen vertex moves along its normal (the angle-weighted mean of its faces'
 /// outward normals, smoothed over its neighbours twice so that the facets' noise does not crease
 /// the outer surface; at an open end turned into the end's plane, so that the end ring is that

@@ -17,6 +17,9 @@ namespace flowire::vessels {
 
 using Vec3 = Eigen::Vector3d;
 
+/// @brief A point as messages name it: "(x, y, z) mm", two decimals.
+[[nodiscard]] std::string mm(const Vec3& x);
+
 /// @brief One centerline branch as read from a file: points and radius at each point (m).
 struct Polyline {
   std::string name;
