@@ -174,7 +174,7 @@ nlohmann::json run_fem_geometry(const config::Config& c, const std::filesystem::
 }
 
 /// Input checks of the fem: section that need the flow spec, done at setup.
-void check_fem(const config::Config& c, const flow::FlowSolver* fs, const vessels::Network* net) {
+void check_fem(const config::Config& c, const flow::FlowSolver* fs, [[maybe_unused]] const vessels::Network* net) {
   if (!fem_on_network(c)) return check_fem_geometry(c);
   if (!fs) throw_input_error(c.where("fem"), "fem: compares the flow, so the scene needs a flow: section");
   if (c.string("fem.geometry") == "lumen") {

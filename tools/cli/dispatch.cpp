@@ -1,12 +1,12 @@
 // The dispatcher of independent tasks over threads and MPI ranks (dispatch.hpp), and the child
 // processes that run them.
 #include "dispatch.hpp"
+#include "programs.hpp"
 
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sched.h>
 #include <spawn.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -40,9 +40,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-/// The variable that tells a child which process started it (follow_parent).
-constexpr const char* kParentVariable = "FLOWIRE_PARENT_PID";
 
 /// Variables of MPI launchers: a child that kept them would try to join the launcher's job.
 bool launcher_variable(std::string_view entry) {
@@ -107,7 +104,10 @@ int run_child(const std::vector<std::string>& args, const fs::path& log) {
       posix_spawn_file_actions_destroy(&fa);
       return -1;
     }
-    const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), envp.data());
+    // A `run` starts in the scene runner, which hands what it cannot run to this program.
+    static const fs::path runner = sibling_program("flowire-run");
+    const bool run = args.size() > 1 && args[1] == "run" && !runner.empty();
+    const int rc = posix_spawn(&pid, run ? runner.c_str() : "/proc/self/exe", &fa, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&fa);
     if (rc != 0) return -1;
     g_children.insert(pid);
@@ -127,14 +127,6 @@ int run_child(const std::vector<std::string>& args, const fs::path& log) {
 void signal_children(int signal) {
   std::lock_guard<std::mutex> lock(g_children_mutex);
   for (const pid_t pid : g_children) ::kill(pid, signal);
-}
-
-void follow_parent() {
-  const char* parent = std::getenv(kParentVariable);
-  if (!parent) return;
-  const long pid = std::strtol(parent, nullptr, 10);
-  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-  if (static_cast<long>(::getppid()) != pid) std::raise(SIGTERM);  // it ended before prctl
 }
 
 bool launched_by_mpi() {

@@ -20,21 +20,19 @@
 
 namespace flowire::cli {
 
+/// @brief The variable that tells a child which process started it (follow_parent, programs.hpp).
+inline constexpr const char* kParentVariable = "FLOWIRE_PARENT_PID";
+
 /// @brief Run this program with @p args (argv[0] first) as a child process, stdin from
 /// /dev/null, stdout and stderr to @p log; wait for it and return its exit status (128 + the
 /// signal if one ended it, -1 if it could not be started). The child gets this process's
 /// environment without the MPI launcher's variables (OMPI_*, PMIX_*, PMI_*), so that a child
 /// that uses MPI (PETSc) starts as a singleton of its own, and it ends (SIGTERM) when this
-/// process ends (follow_parent). No file descriptor other than 0, 1 and 2 is passed on.
+/// process ends (follow_parent, programs.hpp). No file descriptor other than 0, 1 and 2 is passed on.
 int run_child(const std::vector<std::string>& args, const std::filesystem::path& log);
 
 /// @brief Send @p signal to every child process that run_child is waiting for.
 void signal_children(int signal);
-
-/// @brief In a child started by run_child: end by SIGTERM when the parent ends (a study killed
-/// by SIGKILL leaves no run behind). Does nothing in a process that run_child did not start.
-/// Call from main after install_interrupt_handlers.
-void follow_parent();
 
 /// @brief True if an MPI launcher (mpirun/mpiexec of Open MPI or MPICH, srun) started this
 /// process: its environment carries the launcher's rank variables.

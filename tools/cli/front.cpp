@@ -1,7 +1,8 @@
 // The flowire command line's front. `flowire run MODEL.json [--out DIR]` (an svZeroDSolver
 // model) and `flowire run MODEL.yaml [--out DIR]` for an openBF model run here, in a program that loads no rendering,
 // PETSc or gmsh library: loading those takes longer than simulating a model of thousands of vessels. Every other
-// command line is handed unchanged to flowire-full (beside this program, or where it is installed). Exit status as
+// command line is handed unchanged to flowire-run (a scene's run, programs.hpp) or to flowire-full (beside this
+// program, or where it is installed). Exit status as
 // flowire-full: 0 success; 2 bad usage or bad input; 3 numerical failure.
 #include <unistd.h>
 
@@ -16,6 +17,7 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/output.hpp"
 #include "flowire/flow/openbf.hpp"
+#include "programs.hpp"
 #include "svzerod_command.hpp"
 
 namespace {
@@ -81,21 +83,21 @@ int main(int argc, char** argv) {
       return error_exit(std::string("unexpected failure: ") + e.what(), 3);
     }
   }
+  // A run starts in the scene runner (flowire-run: no gmsh, no PETSc), which hands what it cannot
+  // run to flowire-full; every other command goes to flowire-full.
+  const bool run = argc > 1 && std::string_view(argv[1]) == "run";
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  std::vector<fs::path> candidates;
+  std::vector<fs::path> dirs;
   if (!ec) {
-    candidates.push_back(self.parent_path() / "flowire-full");                                // build tree
-    candidates.push_back(self.parent_path().parent_path() / "libexec/flowire/flowire-full");  // installed, moved
+    dirs.push_back(self.parent_path());                                    // build tree
+    dirs.push_back(self.parent_path().parent_path() / "libexec/flowire");  // installed, moved
   }
-  candidates.push_back(fs::path(FLOWIRE_LIBEXECDIR) / "flowire-full");
-  for (const auto& p : candidates) {
-    if (access(p.c_str(), X_OK) == 0) {
-      execv(p.c_str(), argv);
-      std::perror(("flowire: error: cannot start " + p.string()).c_str());
-      return 3;
-    }
-  }
+  dirs.emplace_back(FLOWIRE_LIBEXECDIR);
+  for (const char* name :
+       run ? std::vector<const char*>{"flowire-run", "flowire-full"} : std::vector<const char*>{"flowire-full"})
+    for (const auto& d : dirs)
+      if (access((d / name).c_str(), X_OK) == 0) return flowire::cli::exec_program(d / name, argv);
   std::fprintf(stderr, "flowire: error: flowire-full is neither beside this program nor in %s\n", FLOWIRE_LIBEXECDIR);
   return 3;
 }

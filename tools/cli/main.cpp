@@ -21,93 +21,25 @@
 #include "flowire/common/units.hpp"
 #include "flowire/coupling/scene.hpp"
 #include "flowire/coupling/trace_compare.hpp"
-#include "flowire/flow/openbf.hpp"
-#include "flowire/flow/output.hpp"
 #include "flowire/vessels/io.hpp"
+#include "programs.hpp"
+#include "run_command.hpp"
 #include "study_command.hpp"
 #include "study_file.hpp"
-#include "svzerod_command.hpp"
-#include "terminal_line.hpp"
 
 namespace {
 
 using flowire::Error;
 using flowire::ErrorKind;
-
-int error_exit(const std::string& message, int status) {
-  std::fprintf(stderr, "flowire: error: %s\n", message.c_str());
-  return status;
-}
-
-void print_warnings() {
-  for (const auto& w : flowire::take_warnings()) std::fprintf(stderr, "flowire: warning: %s\n", w.c_str());
-}
+using flowire::cli::error_exit;
+using flowire::cli::launcher_rank;
+using flowire::cli::print_warnings;
 
 flowire::vessels::ReadOptions read_options(const std::string& unit, double max_seg) {
   flowire::vessels::ReadOptions ro;
   ro.length_unit = unit;
   if (max_seg > 0) ro.build.max_segment_length = max_seg;
   return ro;
-}
-
-/// The run's progress on the terminal line, redrawn at most 5 times a second.
-class ProgressLine {
- public:
-  [[nodiscard]] bool enabled() const { return line_.enabled(); }
-  void update(const flowire::coupling::Progress& p) {
-    if (p.steps <= 0 || (p.wall_seconds - last_ < 0.2 && p.step < p.steps)) return;
-    last_ = p.wall_seconds;
-    const double done = static_cast<double>(p.step) / static_cast<double>(p.steps);
-    const double eta = done > 0 ? p.wall_seconds * (1.0 - done) / done : 0.0;
-    line_.draw(fmt::format("flowire: {:5.1f}%  t = {:.4g} of {:.4g} s  elapsed {:.0f} s  ETA {:.0f} s", 100.0 * done,
-                           p.time, p.duration, p.wall_seconds, eta));
-  }
-  void clear() { line_.clear(); }
-
- private:
-  flowire::cli::TerminalLine line_;
-  double last_ = -1.0;
-};
-
-/// The rank of this process in an MPI job started by mpirun (0 otherwise), from the variables
-/// the launchers set (Open MPI, PMIx, MPICH's Hydra): known before MPI itself is started.
-int launcher_rank() {
-  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"})
-    if (const char* v = std::getenv(name); v && *v) return std::atoi(v);
-  return 0;
-}
-
-int cmd_run(const std::string& scene, const std::string& out, const std::vector<std::string>& sets,
-            const std::string& network_out) {
-  namespace fs = std::filesystem;
-  // Under mpirun every rank runs the scene and rank 0 alone writes it (and holds its folder),
-  // from the start: PETSc, which also says so, may start only late in the run (the FEM).
-  if (launcher_rank() != 0) flowire::set_writes_outputs(false);
-  const bool model = fs::path(scene).extension() == ".json";
-  flowire::check_input_file(scene, model ? flowire::input_limit::kTable : flowire::input_limit::kScene,
-                            model ? "an svZeroDSolver model (JSON)" : "a scene (YAML)");
-  const bool openbf_model = !model && flowire::flow::openbf::is_model(scene);
-  if (!network_out.empty() && !openbf_model)
-    flowire::throw_usage_error("--network-out writes the layout of an openBF model; " + scene + " is not one");
-  if (model) return flowire::cli::run_svzerod(scene, out, sets);
-  if (openbf_model)
-    return flowire::cli::run_openbf(
-        scene, out, sets, network_out,
-        [](const std::vector<flowire::flow::WaveformSeries>& series, const std::string& title,
-           const std::filesystem::path& png) { flowire::flow::render_waveforms_png(series, title, png); });
-  const auto cfg = flowire::coupling::load_scene(scene, sets, out);
-  flowire::coupling::RunOptions options;
-  ProgressLine line;
-  if (line.enabled()) options.progress = [&line](const flowire::coupling::Progress& p) { line.update(p); };
-  const auto res = flowire::coupling::run_scene(cfg, options);
-  line.clear();
-  print_warnings();
-  const auto& s = res.summary;
-  if (!flowire::writes_outputs()) return 0;  // an MPI rank other than 0: rank 0 reports
-  std::printf("flowire: %s: %s in %.3f s, %d steps; outputs in %s\n", scene.c_str(),
-              s.value("status", std::string("ok")).c_str(), s["timings"].value("total", 0.0), s.value("steps", 0),
-              res.out_dir.c_str());
-  return 0;
 }
 
 int cmd_calibrate(const std::string& scene, const std::string& out, const std::vector<std::string>& sets,
@@ -214,19 +146,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   app.set_help_all_flag("--help-all", "help for every command");
 
-  std::string scene, out;
-  std::vector<std::string> sets;
-  auto* run = app.add_subcommand("run", "run a scene: YAML scene file or svZeroDSolver JSON model");
-  run->add_option(
-         "scene", scene,
-         "scene file (.yaml), svZeroDSolver model (.json) or openBF model (.yaml with a network: of sn/tn vessels)")
-      ->required();
-  run->add_option("--out", out, "output folder (overrides output.dir)");
-  run->add_option("--set", sets, "override a scene key: --set flow.solver=sparse (repeatable)")
-      ->allow_extra_args(false);
-  std::string network_out;
-  run->add_option("--network-out", network_out,
-                  "openBF models: also write the model's network laid out in 3D (.vtp: radius, branch names)");
+  flowire::cli::RunArgs run_args;
+  auto* run = flowire::cli::add_run_command(app, run_args);
 
   auto* network = app.add_subcommand("network", "read, inspect and convert vessel networks");
   network->require_subcommand(1);
@@ -322,7 +243,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*run) return cmd_run(scene, out, sets, network_out);
+    if (*run) return flowire::cli::cmd_run(run_args);
     if (*info) return cmd_info(file, unit, max_seg, json);
     if (*convert) return cmd_convert(in, outfile, unit, max_seg);
     if (*compare) return cmd_compare(ta, tb, cmp_out, spacing, rows, cmp_plot);

@@ -30,6 +30,13 @@ const config::Schema& scene_schema();
 config::Config load_scene(const std::string& file, const std::vector<std::string>& overrides,
                           const std::string& out_dir = {});
 
+/// @brief The parts of a scene this build of the library cannot run, each named by the key that
+/// asks for it: `wall` (an elastic wall, meshed with gmsh), `fem` (gmsh and PETSc),
+/// `flow.solver: petsc`. Empty where the library was built with all of them. The scene runner
+/// (flowire-run, built without gmsh and PETSc so that it starts in a tenth of the time) hands a
+/// scene that needs one to the full program before it reads or writes anything else.
+std::vector<std::string> unbuilt_scene_parts(const config::Config& scene);
+
 /// @brief Build the vessel network a scene describes (`vessels.file` or `vessels.generator`),
 /// with its radii from the sections of `vessels.surface` where the scene has one
 /// (`vessels.radius`, vessels/sections.hpp).
