@@ -88,11 +88,12 @@ const mesh::TetMesh& DeformableWall::mesh() const { return solid_->mesh(); }
 int DeformableWall::compliance_columns() const { return lumen_->solved_nodes(); }
 
 CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const Vec3> points,
-                                               std::span<const Vec3> normals) {
+                                               std::span<const Vec3> normals, std::span<const double> radii) {
   const auto t0 = Clock::now();
   std::vector<solid::LumenPoint> at;
   at.reserve(points.size());
-  for (const Vec3& p : points) at.push_back(lumen_->locate(p));
+  for (size_t j = 0; j < points.size(); ++j)
+    at.push_back(lumen_->locate_patch(points[j], j < radii.size() ? radii[j] : 0.0));
   Anchored a;
   a.compliance = lumen_->compliance(at, normals);
   const bool pressed = pressure_field_.size() > 0;
@@ -111,7 +112,8 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
   return a;
 }
 
-void DeformableWall::load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces) {
+void DeformableWall::load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces,
+                          std::span<const double> radii) {
   const auto t0 = Clock::now();
   auto it = std::find_if(loads_.begin(), loads_.end(), [&](const auto& e) { return e.first == body; });
   if (it == loads_.end()) it = loads_.insert(loads_.end(), {body, std::make_unique<BodyLoad>()});
@@ -120,7 +122,7 @@ void DeformableWall::load(const void* body, std::span<const Vec3> points, std::s
   l.forces.assign(forces.begin(), forces.end());
   l.total.setZero();
   for (size_t j = 0; j < points.size(); ++j) {
-    l.points.push_back(lumen_->locate(points[j]));
+    l.points.push_back(lumen_->locate_patch(points[j], j < radii.size() ? radii[j] : 0.0));
     l.total += forces[j];
   }
   load_.setZero();

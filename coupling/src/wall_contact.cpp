@@ -99,6 +99,7 @@ void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wal
   candidate_of_.assign(static_cast<size_t>(rod.vertex_count()), -1);
   candidates_.clear();
   std::vector<Vec3> points, normals;
+  std::vector<double> radii;
   // Within reach: four wire radii, the wall's largest displacement at a contact so far twice, and 1 mm of
   // motion within the step (a vertex that comes into contact from farther during a solve
   // meets the rest wall there, and the candidates are anchored again at the next evaluation).
@@ -112,8 +113,9 @@ void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wal
     candidates_.push_back({i});
     points.push_back(rod.position(i) - d * n);  // the rest wall's closest point
     normals.push_back(n);
+    radii.push_back(a);  // the wire presses on the wall over its own width
   }
-  anchored_ = deformable_->anchor(this, points, normals);
+  anchored_ = deformable_->anchor(this, points, normals, radii);
   lambda_.setZero(static_cast<Eigen::Index>(candidates_.size()));
   wall_shift_.setZero(static_cast<Eigen::Index>(candidates_.size()));
 }
@@ -217,6 +219,7 @@ void WallContact::end_step(const rod::RodView& rod, Wall& wall, InteractionStats
   lagged_ = params_.enabled;
   for (int i = 0; i < n; ++i) lag_normal_force_[static_cast<size_t>(i)] = 0.0;
   std::vector<Vec3> wall_points, wall_forces;
+  std::vector<double> wall_radii;
   for (int i = 0; i < free; ++i) {
     const auto k = static_cast<size_t>(i);
     const double a = rod.vertex_radius(i, wire_radius_);
@@ -236,6 +239,7 @@ void WallContact::end_step(const rod::RodView& rod, Wall& wall, InteractionStats
     if (deformable_ && k < tally.size() && (tally[k] - intro_force_[k]).squaredNorm() > 0.0) {
       wall_points.push_back(rod.position(i) - w.contact_distance * w.normal);
       wall_forces.push_back(-(tally[k] - intro_force_[k]));  // the wall's share, opposite
+      wall_radii.push_back(a);
     }
     if (!w.measured) continue;
     const double d = w.distance - shift;
@@ -250,7 +254,7 @@ void WallContact::end_step(const rod::RodView& rod, Wall& wall, InteractionStats
   }
   if (deformable_) {
     if (wall_shift_.size() > 0) max_shift_ = std::max(max_shift_, wall_shift_.maxCoeff());
-    deformable_->load(this, wall_points, wall_forces);
+    deformable_->load(this, wall_points, wall_forces, wall_radii);
     anchors_stale_ = true;
   }
 }

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
+#include <unordered_map>
 
 #include "flowire/common/element.hpp"
 #include "flowire/common/error.hpp"
@@ -156,22 +158,61 @@ LumenPoint LumenCompliance::locate(const Vec3& x) const {
     // Every face not yet visited lies farther than `ring` cells from x.
     if (best.face >= 0 && std::sqrt(best_d2) <= ring * cell_) break;
   }
+  if (best.face >= 0) {
+    std::array<double, 6> w{};
+    element::tri_p2({best.bary[1], best.bary[2], 0.0}, w.data());
+    best.weights.reserve(6);
+    for (int a = 0; a < 6; ++a)
+      best.weights.emplace_back(m.faces[static_cast<size_t>(best.face)][static_cast<size_t>(a)],
+                                w[static_cast<size_t>(a)]);
+  }
   return best;
 }
 
-std::array<double, 6> LumenCompliance::weights(const LumenPoint& p) const {
-  std::array<double, 6> w{};
-  element::tri_p2({p.bary[1], p.bary[2], 0.0}, w.data());
-  return w;
+LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
+  LumenPoint centre = locate(x);
+  if (!(radius > 0.0) || centre.face < 0) return centre;
+  const auto& m = solid_.mesh();
+  // Rings of samples as fine as the faces at the centre (their longest edge), at least three:
+  // ring k (k = 1..K) covers radii [(k−1)ρ/K, kρ/K] with 6(k−1) samples at its centroid radius
+  // (the first, a disc, one at the centre), each weighted by its share of the disc's area.
+  const auto& f = m.faces[static_cast<size_t>(centre.face)];
+  double edge = 0.0;
+  for (int i = 0; i < 3; ++i)
+    edge = std::max(edge, (m.nodes[static_cast<size_t>(f[static_cast<size_t>(i)])] -
+                           m.nodes[static_cast<size_t>(f[static_cast<size_t>((i + 1) % 3)])])
+                              .norm());
+  const int rings = std::clamp(static_cast<int>(std::ceil(2.0 * radius / std::max(edge, 1e-300))), 3, 24);
+  const Vec3 n = centre.normal;
+  const Vec3 e1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
+  const Vec3 e2 = n.cross(e1);
+  std::unordered_map<int, double> acc;
+  auto add = [&](const Vec3& y, double w) {
+    for (const auto& [node, wn] : locate(y).weights) acc[node] += w * wn;
+  };
+  const double dr = 1.0 / rings;
+  add(centre.point, dr * dr);
+  for (int k = 2; k <= rings; ++k) {
+    const double ri = (k - 1) * dr, ro = k * dr;
+    const double rc = radius * (2.0 / 3.0) * (ro * ro * ro - ri * ri * ri) / (ro * ro - ri * ri);
+    const int count = 6 * (k - 1);
+    const double w = (ro * ro - ri * ri) / count;
+    for (int j = 0; j < count; ++j) {
+      const double phi = (2.0 * std::numbers::pi * (j + 0.5 * (k % 2))) / count;
+      add(centre.point + rc * (std::cos(phi) * e1 + std::sin(phi) * e2), w);
+    }
+  }
+  centre.weights.assign(acc.begin(), acc.end());
+  std::sort(centre.weights.begin(), centre.weights.end());
+  return centre;
 }
 
 const Eigen::MatrixXd& LumenCompliance::column(int node) const { return columns_.at(node); }
 
 void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
-  const auto& m = solid_.mesh();
   std::vector<int> missing;
   for (const auto& p : points)
-    for (int node : m.faces[static_cast<size_t>(p.face)])
+    for (const auto& [node, w] : p.weights)
       if (!columns_.count(node) && std::find(missing.begin(), missing.end(), node) == missing.end())
         missing.push_back(node);
   // Many right-hand sides per back-substitution: the supernodal solve then works on blocks.
@@ -193,26 +234,20 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
 }
 
 Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
-  const auto& m = solid_.mesh();
   prefetch(points);
   const auto n = static_cast<Eigen::Index>(points.size());
   Eigen::MatrixXd c(n, n);
   for (Eigen::Index j = 0; j < n; ++j) {
     const auto& pj = points[static_cast<size_t>(j)];
-    const auto wj = weights(pj);
-    const auto& face_j = m.faces[static_cast<size_t>(pj.face)];
     for (Eigen::Index i = 0; i < n; ++i) {
       const auto& pi = points[static_cast<size_t>(i)];
-      const auto wi = weights(pi);
-      const auto& face_i = m.faces[static_cast<size_t>(pi.face)];
+      const Vec3& di = directions[static_cast<size_t>(i)];
       double sum = 0.0;
-      for (int b = 0; b < 6; ++b) {
-        const Eigen::MatrixXd& col = column(face_j[static_cast<size_t>(b)]);
-        const Vec3 load = wj[static_cast<size_t>(b)] * directions[static_cast<size_t>(j)];
-        for (int a = 0; a < 6; ++a) {
-          const int row = lumen_index_[static_cast<size_t>(face_i[static_cast<size_t>(a)])];
-          sum += wi[static_cast<size_t>(a)] * directions[static_cast<size_t>(i)].dot(col.middleRows<3>(3 * row) * load);
-        }
+      for (const auto& [node_b, wb] : pj.weights) {
+        const Eigen::MatrixXd& col = column(node_b);
+        const Vec3 load = wb * directions[static_cast<size_t>(j)];
+        for (const auto& [node_a, wa] : pi.weights)
+          sum += wa * di.dot(col.middleRows<3>(3 * lumen_index_[static_cast<size_t>(node_a)]) * load);
       }
       c(i, j) = sum;  // (each entry from its own column: the symmetry is Maxwell–Betti's, not imposed)
     }
@@ -222,41 +257,28 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
 
 Vec3 LumenCompliance::displacement(const LumenPoint& at, std::span<const LumenPoint> points,
                                    std::span<const Vec3> forces) {
-  const auto& m = solid_.mesh();
   prefetch(points);
-  const auto wa = weights(at);
-  const auto& face_a = m.faces[static_cast<size_t>(at.face)];
   Vec3 u = Vec3::Zero();
-  for (size_t j = 0; j < points.size(); ++j) {
-    const auto wj = weights(points[j]);
-    const auto& face_j = m.faces[static_cast<size_t>(points[j].face)];
-    for (int b = 0; b < 6; ++b) {
-      const Eigen::MatrixXd& col = column(face_j[static_cast<size_t>(b)]);
-      const Vec3 load = wj[static_cast<size_t>(b)] * forces[j];
-      for (int a = 0; a < 6; ++a)
-        u += wa[static_cast<size_t>(a)] *
-             (col.middleRows<3>(3 * lumen_index_[static_cast<size_t>(face_a[static_cast<size_t>(a)])]) * load);
+  for (size_t j = 0; j < points.size(); ++j)
+    for (const auto& [node_b, wb] : points[j].weights) {
+      const Eigen::MatrixXd& col = column(node_b);
+      const Vec3 load = wb * forces[j];
+      for (const auto& [node_a, wa] : at.weights)
+        u += wa * (col.middleRows<3>(3 * lumen_index_[static_cast<size_t>(node_a)]) * load);
     }
-  }
   return u;
 }
 
 Vec3 LumenCompliance::interpolate(const LumenPoint& at, const Eigen::VectorXd& field) const {
-  const auto w = weights(at);
-  const auto& face = solid_.mesh().faces[static_cast<size_t>(at.face)];
   Vec3 v = Vec3::Zero();
-  for (int a = 0; a < 6; ++a) v += w[static_cast<size_t>(a)] * field.segment<3>(3 * face[static_cast<size_t>(a)]);
+  for (const auto& [node, w] : at.weights) v += w * field.segment<3>(3 * node);
   return v;
 }
 
 Eigen::VectorXd LumenCompliance::nodal_forces(std::span<const LumenPoint> points, std::span<const Vec3> forces) const {
-  const auto& m = solid_.mesh();
   Eigen::VectorXd f = Eigen::VectorXd::Zero(solid_.num_dofs());
-  for (size_t j = 0; j < points.size(); ++j) {
-    const auto w = weights(points[j]);
-    const auto& face = m.faces[static_cast<size_t>(points[j].face)];
-    for (int b = 0; b < 6; ++b) f.segment<3>(3 * face[static_cast<size_t>(b)]) += w[static_cast<size_t>(b)] * forces[j];
-  }
+  for (size_t j = 0; j < points.size(); ++j)
+    for (const auto& [node, w] : points[j].weights) f.segment<3>(3 * node) += w * forces[j];
   return f;
 }
 

@@ -30,6 +30,8 @@ void check(const TubeWall& t) {
         fmt::format("tube wall: need 0 < inner_radius < outer_radius, got {} and {}", t.inner_radius, t.outer_radius));
   if (!(t.length > 0.0)) throw_usage_error(fmt::format("tube wall: length must be > 0, got {}", t.length));
   if (!(t.mesh_size > 0.0)) throw_usage_error(fmt::format("tube wall: mesh_size must be > 0, got {}", t.mesh_size));
+  if (!(t.refine_size >= 0.0 && t.refine_size <= t.mesh_size))
+    throw_usage_error(fmt::format("tube wall: refine_size must lie in [0, mesh_size], got {}", t.refine_size));
 }
 
 TetMesh mesh_tube(const TubeWall& t) {
@@ -84,7 +86,19 @@ TetMesh mesh_tube(const TubeWall& t) {
     surf_group[k] = g;
   }
   mesh::tag_groups_and_set_options(vols[0].second, "wall", m.groups, surfs, surf_group, 1);
-  gmsh::option::setNumber("Mesh.MeshSizeMin", t.mesh_size);
+  if (t.refine_size > 0.0) {
+    const Vec3& c = t.refine_at;
+    const int field = gmsh::model::mesh::field::add("MathEval");
+    gmsh::model::mesh::field::setString(
+        field, "F",
+        // (below refine_size within refine_radius: Mesh.MeshSizeMin holds it there)
+        fmt::format("{:.17g} + 0.5 * (Sqrt((x - {:.17g})^2 + (y - {:.17g})^2 + (z - {:.17g})^2) - {:.17g})",
+                    t.refine_size, c.x(), c.y(), c.z(), t.refine_radius));
+    gmsh::model::mesh::field::setAsBackgroundMesh(field);
+    gmsh::option::setNumber("Mesh.MeshSizeMin", t.refine_size);
+  } else {
+    gmsh::option::setNumber("Mesh.MeshSizeMin", t.mesh_size);
+  }
   gmsh::option::setNumber("Mesh.MeshSizeMax", t.mesh_size);
   mesh::generate(mesh::MeshOptions{});
   mesh::extract_mesh(m, surfs, surf_group, "tube wall");

@@ -164,7 +164,8 @@ struct ContactSites {
       const Vec3& x = p.positions[i];
       const double r = std::hypot(x.y(), x.z());
       const Vec3 radial(0.0, x.y() / r, x.z() / r);
-      points.push_back(lumen.locate(Vec3(x.x(), kR * radial.y(), kR * radial.z())));
+      // (the wire, of radius 0.2 mm, presses over its footprint: the mean displacement there)
+      points.push_back(lumen.locate_patch(Vec3(x.x(), kR * radial.y(), kR * radial.z()), 0.2e-3));
       loads.push_back(-p.contact_force[i]);
       along.push_back(radial);
       expected.push_back(r + 0.2e-3 - kR - p.contact_force[i].norm() / 3e4);
@@ -204,12 +205,7 @@ TEST_P(DeformableWallAgainstFullSolve, TheContactsWallIsTheFullSolidsUnderTheWir
   // direction, not the flat face's normal: a face of the lumen's triangulation can lean a few
   // degrees from it, and the friction's axial load moves the wall axially.)
   auto radial_at = [&](const solid::LumenPoint& p, const Vec3& n, const Eigen::VectorXd& u_all) {
-    double w[6];
-    element::tri_p2({p.bary[1], p.bary[2], 0.0}, w);
-    Vec3 u = Vec3::Zero();
-    for (int a = 0; a < 6; ++a)
-      u += w[a] * u_all.segment<3>(3 * full.mesh().faces[static_cast<size_t>(p.face)][static_cast<size_t>(a)]);
-    return u.dot(n);  // outwards
+    return lumen.interpolate(p, u_all).dot(n);  // outwards
   };
   double worst_linear = 0.0, worst_nonlinear = 0.0, largest = 0.0;
   for (size_t j = 0; j < points.size(); ++j) {
@@ -223,9 +219,9 @@ TEST_P(DeformableWallAgainstFullSolve, TheContactsWallIsTheFullSolidsUnderTheWir
       "by %.3g mm, the nonlinear one by %.3g mm\n",
       points.size(), largest * 1e3, worst_linear * 1e3, worst_nonlinear * 1e3);
   // One concentrated contact (the tip) reads the compliance where the contact was anchored,
-  // which the tip has slid from within the solve: a point load's compliance varies within a
-  // face, so 5% there; many contacts spread the load and agree to 1%.
-  EXPECT_LT(worst_linear, (GetParam() ? 0.01 : 0.05) * largest);
+  // which the tip has slid from within the solve (measured 1.9% over the wire's footprint, 2.0%
+  // as a point load); many contacts agree to 1% (0.1%).
+  EXPECT_LT(worst_linear, (GetParam() ? 0.01 : 0.03) * largest);
   EXPECT_LT(worst_nonlinear, 0.1 * largest);  // displacements of half the wall's thickness
   if (GetParam()) {
     EXPECT_GT(points.size(), 10u);

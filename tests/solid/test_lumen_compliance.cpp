@@ -72,6 +72,36 @@ TEST(LumenCompliance, LocatesTheNearestLumenPointAsASearchOfEveryFaceDoes) {
   }
 }
 
+TEST(LumenCompliance, APatchSharesAForceAsAUniformPressureOverTheDisc) {
+  ElasticSolid s = supported_tube();
+  s.linearize();
+  LumenCompliance c(s, s.mesh().group_named("lumen"));
+  const auto& m = s.mesh();
+  for (const Vec3& x : probe_points()) {
+    const LumenPoint point = c.locate(x), patch = c.locate_patch(x, 0.5e-3);
+    EXPECT_EQ(point.weights.size(), 6u);
+    EXPECT_EQ(c.locate_patch(x, 0.0).weights, point.weights);
+    EXPECT_EQ(patch.face, point.face);
+    EXPECT_GT(patch.weights.size(), 6u);
+    double sum = 0.0;
+    Vec3 centroid = Vec3::Zero();
+    for (const auto& [node, w] : patch.weights) {
+      sum += w;
+      centroid += w * m.nodes[static_cast<size_t>(node)];
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+    // The pressure's resultant acts at the disc's centre (to the lumen's sagitta over the disc,
+    // ρ²/2a = 0.06 mm here, along the normal).
+    const Vec3 off = centroid - point.point;
+    EXPECT_LT((off - off.dot(point.normal) * point.normal).norm(), 0.02e-3);
+    EXPECT_LT(std::abs(off.dot(point.normal)), 0.07e-3);
+    // Spread, it moves the wall less on the mean than at a point.
+    const std::vector<Vec3> out{-point.normal};
+    EXPECT_LT(c.compliance(std::vector<LumenPoint>{patch}, out)(0, 0),
+              0.95 * c.compliance(std::vector<LumenPoint>{point}, out)(0, 0));
+  }
+}
+
 TEST(LumenCompliance, IsReciprocalAndIsTheFullSolvesResponse) {
   ElasticSolid s = supported_tube();
   s.linearize();

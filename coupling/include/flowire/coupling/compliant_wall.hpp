@@ -26,13 +26,17 @@ class CompliantWall {
     Eigen::VectorXd offsets;
   };
   /// @brief The step's candidate contacts of body @p body (a wire, a catheter: any stable
-  /// identity): their points on the rest lumen (the wall's closest points) and the lumen's
-  /// outward normals there.
-  virtual Anchored anchor(const void* body, std::span<const Vec3> points, std::span<const Vec3> normals) = 0;
+  /// identity): their points on the rest lumen (the wall's closest points), the lumen's outward
+  /// normals there, and the radius of the body at each (its force presses on a disc of that
+  /// radius, whose mean displacement the compliance gives; none or 0: a point).
+  virtual Anchored anchor(const void* body, std::span<const Vec3> points, std::span<const Vec3> normals,
+                          std::span<const double> radii = {}) = 0;
   /// @brief The forces @p forces at lumen points @p points that body @p body puts on the wall (the
-  /// opposites of its contact forces) at the end of a step: they replace that body's last ones,
-  /// and the wall carries every body's (its displacement field is solved when asked).
-  virtual void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces) = 0;
+  /// opposites of its contact forces), each over a disc of its @p radii as anchor's, at the end of
+  /// a step: they replace that body's last ones, and the wall carries every body's (its
+  /// displacement field is solved when asked).
+  virtual void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces,
+                    std::span<const double> radii = {}) = 0;
   /// @brief The blood pressure on the lumen from the network's node pressures (the flow's; the
   /// pressure along a segment interpolated between its nodes), less @p reference (the pressure
   /// at which the rest geometry was taken) [Pa]. A wall that does not take it ignores it.

@@ -63,7 +63,8 @@ class DeformableWall final : public CompliantWall {
 
   /// @brief Body @p body's candidate contacts: their compliance along the normals, and the
   /// normal displacement there of the blood pressure and of the other bodies' last loads.
-  Anchored anchor(const void* body, std::span<const Vec3> points, std::span<const Vec3> normals) override;
+  Anchored anchor(const void* body, std::span<const Vec3> points, std::span<const Vec3> normals,
+                  std::span<const double> radii = {}) override;
   /// @brief The blood pressure as a dead load on the lumen (linear about rest: its displacement
   /// field u_p = K⁻¹ f_p, one back-substitution, redone only when the pressures change), which the
   /// contacts meet and the outputs add.
@@ -77,7 +78,8 @@ class DeformableWall final : public CompliantWall {
   [[nodiscard]] std::vector<double> segment_widening() override;
   /// @brief Body @p body's forces on the wall (its contact forces' opposites), replacing its last
   /// ones: with every other body's, the wall's load (displacement field, total load).
-  void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces) override;
+  void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces,
+            std::span<const double> radii = {}) override;
   /// @brief The solid's mesh in the scene's frame, and its displacement (3 a node) [m] under
   /// the last load (solved on first request after a load: one back-substitution).
   [[nodiscard]] const mesh::TetMesh& mesh() const;

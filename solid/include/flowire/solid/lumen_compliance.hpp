@@ -5,10 +5,14 @@
 ///
 /// About the wall's current state (ElasticSolid::linearize), the displacement under small
 /// extra loads is linear: u = K⁻¹ f. A force λ along n at a lumen point p is distributed to the
-/// six nodes of the curved face it lies on by the face's shape functions, f = Σ_b N_b(ξ) n λ,
-/// and the lumen's displacement at another point q is read the same way, u(q) = Σ_a N_a(ζ) u_a.
-/// The compliance between points is then C_pq = Σ_a Σ_b N_a(ζ) N_b(ξ) m_qᵀ G_ab n_p with G_ab
-/// the 3 × 3 block of K⁻¹ between nodes a and b. Columns of K⁻¹ are solved per lumen node
+/// lumen's nodes by weights w_b: at a point, the six nodes of the curved face it lies on by the
+/// face's shape functions, w_b = N_b(ξ); over a patch (a disc of radius ρ about p: the footprint
+/// of a wire of that radius), the shape functions' mean over the disc, w_b = (1/πρ²)∫ N_b dA, so
+/// f = Σ_b w_b n λ, and the lumen's displacement at q is read with q's weights, u(q) = Σ_a w_a u_a
+/// (the patch's mean). The compliance is then C_pq = Σ_a Σ_b w^q_a w^p_b m_qᵀ G_ab n_p with G_ab
+/// the 3 × 3 block of K⁻¹ between nodes a and b. At a point it grows without bound as the mesh is
+/// refined (a point load's displacement is singular in 3D); over a patch it converges to the
+/// solid's (tests/solid: the mesh study through PETSc). Columns of K⁻¹ are solved per lumen node
 /// (three right-hand sides, one back-substitution with the kept factorization) the first time a
 /// point near that node asks, and kept restricted to the lumen's nodes: a wire that slides
 /// along the wall pays only for the nodes it reaches. By Maxwell–Betti C is symmetric, and it is
@@ -18,18 +22,23 @@
 #include <array>
 #include <span>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "flowire/solid/elastic_solid.hpp"
 
 namespace flowire::solid {
 
-/// @brief A point on the lumen: its face, its barycentric coordinates there, the point itself.
+/// @brief A point on the lumen (its face, its barycentric coordinates there, the point itself),
+/// and the weights by which a force there is shared among the lumen's nodes.
 struct LumenPoint {
   int face = -1;                 ///< index into the mesh's faces
   std::array<double, 3> bary{};  ///< on the face's vertices (the flat triangle's projection)
   Vec3 point = Vec3::Zero();     ///< the projected point [m]
   Vec3 normal = Vec3::UnitX();   ///< the flat face's outward normal (out of the solid: into the lumen)
+  /// (mesh node, weight) summing to 1: the face's six shape functions at the point, or their mean
+  /// over a patch (LumenCompliance::locate_patch)
+  std::vector<std::pair<int, double>> weights;
 };
 
 class LumenCompliance {
@@ -40,6 +49,11 @@ class LumenCompliance {
 
   /// @brief The lumen point nearest to @p x.
   [[nodiscard]] LumenPoint locate(const Vec3& x) const;
+  /// @brief The lumen point nearest to @p x with the weights of a uniform pressure over the disc
+  /// of radius @p radius about it in its tangent plane (each sample of the disc projected onto the
+  /// lumen; rings as fine as the faces there, at least three): what a wire of that radius presses
+  /// on. A radius of 0 is the point (locate).
+  [[nodiscard]] LumenPoint locate_patch(const Vec3& x, double radius) const;
   /// @brief C (m × m): the displacement along @p directions[i] at @p points[i] under a unit
   /// force along @p directions[j] at @p points[j] [m/N].
   Eigen::MatrixXd compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions);
@@ -59,8 +73,6 @@ class LumenCompliance {
   void clear() { columns_.clear(); }
 
  private:
-  /// Shape function weights of the face's six nodes at a point.
-  [[nodiscard]] std::array<double, 6> weights(const LumenPoint& p) const;
   /// The kept column block of lumen node `node` (solved by prefetch): (3 × lumen nodes) × 3.
   [[nodiscard]] const Eigen::MatrixXd& column(int node) const;
 

@@ -20,6 +20,12 @@ struct TubeWall {
   double length = 0.0;        ///< along z (m)
   double mesh_size = 0.0;     ///< target tetrahedron size (m)
   bool quarter = false;       ///< only x ≥ 0, y ≥ 0
+  /// Finer about one point (where a load acts; a mesh study): the size is `refine_size` within
+  /// `refine_radius` of `refine_at` and grows by half the distance beyond, up to mesh_size
+  /// (refine_size 0: uniform).
+  double refine_size = 0.0;
+  double refine_radius = 0.0;
+  vessels::Vec3 refine_at = vessels::Vec3::Zero();
 };
 
 /// @brief Mesh the wall into 10-node tetrahedra whose boundary nodes lie on the cylinders.
