@@ -362,8 +362,15 @@ void CoSimulation::step() {
       sim_->set_rotation_speed(rotation_speed_);
       sim_->set_insertion_speed(insertion_speed_);
     }
-    if (sim_->inserted_length() >= max_length_ && insertion_speed_ > 0.0)
-      sim_->set_insertion_speed(insertion_speed_ = 0.0);
+    if (insertion_speed_ > 0.0 && std::isfinite(max_length_)) {
+      // The step that reaches insertion.max_length ends on it (fed only what is left), not a
+      // step's feed beyond it.
+      const double room = max_length_ - sim_->inserted_length();
+      if (room <= 1e-12 * std::max(1.0, std::abs(max_length_)))
+        sim_->set_insertion_speed(insertion_speed_ = 0.0);
+      else if (insertion_speed_ * dt_ > room)
+        sim_->set_insertion_speed(room / dt_);
+    }
     if (sim_->inserted_length() >= max_length_ && sim_->push_force() > 0.0) sim_->set_push_force(0.0);  // held there
     const auto tr = Clock::now();
     rod::StepReport rep;
