@@ -51,6 +51,10 @@ void declare_wall_keys(config::Schema& s) {
   s.add("wall.reference_pressure", Type::Number, "0 Pa", D::Pressure,
         "the pressure at which the rest geometry was taken (imaged): the wall is loaded by the blood pressure less "
         "this");
+  s.add("wall.*", Type::Section, "", D::None,
+        "a branch's wall, by the branch's name, where it differs from the rest (each tetrahedron takes the branch "
+        "of the segment nearest it)");
+  s.add("wall.*.youngs_modulus", Type::Number, "", D::Pressure, "this branch: the wall's Young's modulus").positive();
   s.add("wall.mesh_size", Type::Number, "", D::Length,
         "target tetrahedron size (default: twice the thinnest wall; around vessels.surface, twice the local "
         "thickness)")
@@ -87,12 +91,34 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
   const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : surface ? 0.0 : 2.0 * thinnest;
 #ifdef FLOWIRE_HAVE_SOLID
   WallSpec spec{thickness, thickness > 0.0 ? 0.0 : ratio,      c.number("wall.youngs_modulus"),
-                nu,        c.number("wall.support_stiffness"), mesh_size};
+                nu,        c.number("wall.support_stiffness"), mesh_size,
+                {}};
+  // Branches with a modulus of their own (wall.<branch>.youngs_modulus).
+  nlohmann::json branch_moduli = nlohmann::json::object();
+  for (const auto& [path, value] : c.values()) {
+    if (value.type != config::Type::Section || path.rfind("wall.", 0) != 0) continue;
+    const std::string name = path.substr(std::string("wall.").size());
+    if (name.find('.') != std::string::npos) continue;
+    int branch = -1;
+    for (int b = 0; b < net.num_branches(); ++b)
+      if (net.branches()[static_cast<size_t>(b)].name == name) branch = b;
+    if (branch < 0) {
+      std::string names;
+      for (const auto& b : net.branches())
+        if (!b.name.empty()) names += (names.empty() ? "" : ", ") + b.name;
+      throw_input_error(c.where(path),
+                        fmt::format("no branch named '{}' (branches: {})", name, names.empty() ? "none named" : names));
+    }
+    if (!c.has(path + ".youngs_modulus")) continue;
+    spec.branch_youngs_modulus.emplace_back(branch, c.number(path + ".youngs_modulus"));
+    branch_moduli[name] = spec.branch_youngs_modulus.back().second;
+  }
   auto wall = std::make_unique<DeformableWall>(net, spec, surface);
   facts["wall"] = {{"thickness", thickness > 0.0 ? nlohmann::json(thickness) : nlohmann::json(nullptr)},
                    {"thickness_ratio", thickness > 0.0 ? nlohmann::json(nullptr) : nlohmann::json(ratio)},
                    {"thinnest", wall->thinnest()},
                    {"youngs_modulus", spec.youngs_modulus},
+                   {"branch_youngs_modulus", branch_moduli},
                    {"poisson_ratio", nu},
                    {"support_stiffness", spec.support},
                    {"density", c.number("wall.density")},

@@ -59,6 +59,7 @@ DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec
   }
   mesh_seconds_ = m.mesh_seconds;
   solid_ = std::make_unique<solid::ElasticSolid>(std::move(m), law);
+  if (!spec.branch_youngs_modulus.empty()) assign_branch_laws(spec);
   for (size_t g = 0; g < solid_->mesh().groups.size(); ++g)  // every end held
     if (solid_->mesh().groups[g].name.rfind("end_", 0) == 0) solid_->hold(static_cast<int>(g));
   if (spec.support > 0.0) solid_->support(solid_->mesh().group_named("outer"), spec.support);
@@ -68,6 +69,37 @@ DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec
   displacement_ = Eigen::VectorXd::Zero(solid_->num_dofs());
   load_ = displacement_;
   seconds_ += since(t0);
+}
+
+void DeformableWall::assign_branch_laws(const WallSpec& spec) {
+  // One law per branch given; each tetrahedron the branch of the segment nearest its centroid
+  // (a junction's tetrahedra split between its branches where their axes are equally near).
+  std::vector<solid::NeoHookean> laws{solid_->law()};
+  std::vector<int> law_of_branch(static_cast<size_t>(net_.num_branches()), 0);
+  for (const auto& [branch, modulus] : spec.branch_youngs_modulus) {
+    if (branch < 0 || branch >= net_.num_branches())
+      throw_usage_error(fmt::format("wall: no branch {} in a network of {}", branch, net_.num_branches()));
+    law_of_branch[static_cast<size_t>(branch)] = static_cast<int>(laws.size());
+    laws.push_back(solid::NeoHookean::from_young_poisson(modulus, spec.poisson_ratio,
+                                                         "wall.<branch>.youngs_modulus / wall.poisson_ratio"));
+  }
+  const auto& m = solid_->mesh();
+  std::vector<int> tet_law(m.tets.size(), 0);
+  for (size_t t = 0; t < m.tets.size(); ++t) {
+    Vec3 c = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) c += 0.25 * m.nodes[static_cast<size_t>(m.tets[t][static_cast<size_t>(k)])];
+    double best = std::numeric_limits<double>::infinity();
+    int seg = 0;
+    for (int k = 0; k < net_.num_segments(); ++k) {
+      const auto& sg = net_.segment(k);
+      const Vec3 a = net_.node(sg.node_from), ab = net_.node(sg.node_to) - a;
+      const double u = std::clamp((c - a).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+      const double d2 = (a + u * ab - c).squaredNorm();
+      if (d2 < best) best = d2, seg = k;
+    }
+    tet_law[t] = law_of_branch[static_cast<size_t>(net_.segment(seg).branch)];
+  }
+  solid_->set_laws(std::move(laws), std::move(tet_law));
 }
 
 namespace {

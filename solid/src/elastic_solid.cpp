@@ -75,7 +75,8 @@ std::vector<Mat3> ElasticSolid::nodal_stress(const Eigen::VectorXd& u) const {
                                                                  {0, 0.5, 0.5}}};
   std::vector<Mat3> sigma(static_cast<size_t>(mesh_.num_nodes()), Mat3::Zero());
   std::vector<int> count(static_cast<size_t>(mesh_.num_nodes()), 0);
-  for (const auto& tet : mesh_.tets) {
+  for (size_t t = 0; t < mesh_.tets.size(); ++t) {
+    const auto& tet = mesh_.tets[t];
     for (size_t k = 0; k < 10; ++k) {
       double dref[10][3];
       element::tet_p2_grad(kNodes[k], dref);
@@ -91,7 +92,7 @@ std::vector<Mat3> ElasticSolid::nodal_stress(const Eigen::VectorXd& u) const {
       const Mat3 h = displacement_gradient(g, tet, u);
       const Mat3 f = Mat3::Identity() + h;
       const auto node = static_cast<size_t>(tet[k]);
-      sigma[node] += law_.stress(h) * f.transpose() / f.determinant();
+      sigma[node] += law_of(static_cast<int>(t)).stress(h) * f.transpose() / f.determinant();
       ++count[node];
     }
   }
@@ -100,14 +101,28 @@ std::vector<Mat3> ElasticSolid::nodal_stress(const Eigen::VectorXd& u) const {
   return sigma;
 }
 
+void ElasticSolid::set_laws(std::vector<NeoHookean> laws, std::vector<int> tet_law) {
+  if (laws.empty() || tet_law.size() != mesh_.tets.size())
+    throw_usage_error(fmt::format("wall: {} laws for {} tetrahedra", tet_law.size(), mesh_.tets.size()));
+  for (const auto& l : laws)
+    if (!(l.mu > 0.0) || !(l.lambda > -2.0 / 3.0 * l.mu))
+      throw_usage_error("wall: the material needs μ > 0 and a positive bulk modulus");
+  for (int i : tet_law)
+    if (i < 0 || i >= static_cast<int>(laws.size()))
+      throw_usage_error(fmt::format("wall: law {} of {}", i, laws.size()));
+  laws_ = std::move(laws);
+  tet_law_ = std::move(tet_law);
+  linearized_ = false;
+}
+
 struct ElasticSolid::Factor {
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
   bool analysed = false;
 };
 
 ElasticSolid::ElasticSolid(mesh::TetMesh mesh, NeoHookean law)
-    : mesh_(std::move(mesh)), law_(law), factor_(std::make_unique<Factor>()) {
-  if (!(law_.mu > 0.0) || !(law_.lambda > -2.0 / 3.0 * law_.mu))
+    : mesh_(std::move(mesh)), laws_{law}, factor_(std::make_unique<Factor>()) {
+  if (!(law.mu > 0.0) || !(law.lambda > -2.0 / 3.0 * law.mu))
     throw_usage_error("wall: the material needs μ > 0 and a positive bulk modulus");
   const int n = num_dofs();
   const auto nt = static_cast<size_t>(mesh_.num_tets());
@@ -246,7 +261,7 @@ double ElasticSolid::elastic_energy(const Eigen::VectorXd& u) const {
   for (size_t t = 0; t < mesh_.tets.size(); ++t)
     for (int q = 0; q < kQuad; ++q) {
       const double* g = &geometry_[(t * kQuad + static_cast<size_t>(q)) * kGeom];
-      e += g[30] * law_.energy(displacement_gradient(g, mesh_.tets[t], u));
+      e += g[30] * law_of(static_cast<int>(t)).energy(displacement_gradient(g, mesh_.tets[t], u));
     }
   return e;
 }
@@ -263,7 +278,7 @@ Eigen::VectorXd ElasticSolid::gradient(const Eigen::VectorXd& u) const {
     const auto& tet = mesh_.tets[t];
     for (int q = 0; q < kQuad; ++q) {
       const double* g = &geometry_[(t * kQuad + static_cast<size_t>(q)) * kGeom];
-      const Mat3 P = law_.stress(displacement_gradient(g, tet, u)) * g[30];
+      const Mat3 P = law_of(static_cast<int>(t)).stress(displacement_gradient(g, tet, u)) * g[30];
       for (int k = 0; k < 10; ++k)
         grad.segment<3>(3 * tet[static_cast<size_t>(k)]) += P * Vec3(g[3 * k], g[3 * k + 1], g[3 * k + 2]);
     }
@@ -279,7 +294,7 @@ void ElasticSolid::assemble_hessian(const Eigen::VectorXd& u, Eigen::SparseMatri
     const int* scatter = &scatter_[t * 300];
     for (int q = 0; q < kQuad; ++q) {
       const double* g = &geometry_[(t * kQuad + static_cast<size_t>(q)) * kGeom];
-      const Tangent A = law_.tangent(displacement_gradient(g, tet, u)) * g[30];
+      const Tangent A = law_of(static_cast<int>(t)).tangent(displacement_gradient(g, tet, u)) * g[30];
       // Y_l(a + 3B, c) = Σ_D A(a + 3B, c + 3D) ∂N_l/∂X_D; K(3k + a, 3l + c) = Σ_B ∂N_k/∂X_B Y_l(a + 3B, c).
       for (int l = 0; l < 10; ++l) {
         Eigen::Matrix<double, 9, 3> y;

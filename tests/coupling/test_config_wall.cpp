@@ -104,7 +104,30 @@ TEST(ConfigWall, RefusesWhatItCannotBuildNamingTheKey) {
   for (const char* bad :
        {"wall:\n  thickness: 0 mm\n", "wall:\n  youngs_modulus: -1 MPa\n", "wall:\n  support_stiffness: 1 Pa\n"})
     EXPECT_NE(test::input_error([&] { (void)test::scene(bad); }).find("scene.yaml:2: wall."), std::string::npos) << bad;
+  // A branch's modulus for a branch the network does not have: named, with the branches it has.
+  const auto unknown = test::scene("wall:\n  mesh_size: 3 mm\n  aorta:\n    youngs_modulus: 3 MPa\n");
+  const std::string msg = test::input_error([&] { (void)make_scene_wall(unknown, tube(), nullptr, facts); });
+  EXPECT_NE(msg.find(": wall.aorta: "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("no branch named 'aorta'"), std::string::npos) << msg;
+  EXPECT_NE(test::input_error([&] {
+              (void)test::scene("wall:\n  b:\n    youngs_modulus: 0 Pa\n");
+            }).find("wall.b.youngs_modulus"),
+            std::string::npos);
   EXPECT_FALSE(facts.contains("wall")) << "nothing reported of a wall that was refused";
+}
+
+TEST(ConfigWall, ABranchsModulusIsTakenByItsWallAndReported) {
+  nlohmann::json facts;
+  const auto net = tube();
+  const std::string name = net.branches().front().name;
+  ASSERT_FALSE(name.empty());
+  const auto c = test::scene(
+      fmt::format("wall:\n  thickness_ratio: 0.2\n  mesh_size: 2 mm\n  {}:\n    youngs_modulus: 3 MPa\n", name));
+  const auto wall = make_scene_wall(c, net, nullptr, facts);
+  ASSERT_NE(wall, nullptr);
+  EXPECT_DOUBLE_EQ(facts["wall"]["branch_youngs_modulus"][name].get<double>(), 3e6);
+  const auto* deformable = dynamic_cast<const DeformableWall*>(wall.get());
+  ASSERT_NE(deformable, nullptr);
 }
 
 }  // namespace

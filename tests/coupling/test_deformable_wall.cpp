@@ -99,7 +99,7 @@ vessels::Network tube() {
                                  {.max_segment_length = 1e-3});
 }
 
-WallSpec soft_wall(double E) { return {kThickness, 0.0, E, 0.45, 0.0, 1e-3}; }
+WallSpec soft_wall(double E) { return {kThickness, 0.0, E, 0.45, 0.0, 1e-3, {}}; }
 
 double tip_offset(const Pressed& p) { return p.positions.front().y(); }
 
@@ -369,7 +369,7 @@ TEST(DeformableWall, TwoBodiesLoadOneWallAndEachMeetsWhereTheOtherMovedIt) {
 
 TEST(DeformableWall, RefusesAWallThatCannotBe) {
   auto build = [](double thickness, double E, double nu, double support) {
-    const WallSpec spec{thickness, 0.0, E, nu, support, 0.5e-3};
+    const WallSpec spec{thickness, 0.0, E, nu, support, 0.5e-3, {}};
     DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, spec);
   };
   EXPECT_THROW(build(0.0, 1e6, 0.45, 0.0), Error);
@@ -433,5 +433,56 @@ TEST(DeformableWall, TheFlowsRadiiNeedAQuasiSteadyFlow) {
             std::string::npos);
 }
 
+}  // namespace
+}  // namespace flowire::coupling
+
+namespace flowire::coupling {
+namespace {
+TEST(DeformableWall, EachBranchsWallHasItsOwnModulus) {
+  // A straight vessel of two branches, the distal one's wall three times as stiff: a uniform
+  // 2 kPa inflates each half by Lamé's displacement with its own modulus (away from the joint
+  // and the held ends), and nothing changes where no branch is given a modulus of its own.
+  vessels::Centerlines c;
+  const double mid = 0.5 * kLength;
+  c.branches.push_back({"proximal", {Vec3::Zero(), Vec3(mid, 0, 0)}, {kR, kR}});
+  c.branches.push_back({"distal", {Vec3(mid, 0, 0), Vec3(kLength, 0, 0)}, {kR, kR}});
+  const vessels::Network net = vessels::Network::build(c, {.max_segment_length = 2e-3});
+  ASSERT_EQ(net.num_branches(), 2);
+  WallSpec spec = soft_wall(1e6);
+  const int distal = net.branches()[0].name == "distal" ? 0 : 1;
+  spec.branch_youngs_modulus = {{distal, 3e6}};
+  DeformableWall wall(net, spec);
+  const double p = 2e3, a = kR, b = kR + kThickness, nu = spec.poisson_ratio;
+  auto lame = [&](double E) { return (1 + nu) * p * a * a / (E * (b * b - a * a)) * ((1 - 2 * nu) * a + b * b / a); };
+  wall.set_blood_pressure(std::vector<double>(static_cast<size_t>(net.num_nodes()), p), 0.0);
+  const auto& m = wall.mesh();
+  const Eigen::VectorXd& u = wall.displacement();
+  auto radial_at = [&](double x0) {
+    double sum = 0.0;
+    int seen = 0;
+    for (int n = 0; n < m.num_nodes(); ++n) {
+      const Vec3& x = m.nodes[static_cast<size_t>(n)];
+      const double r = std::hypot(x.y(), x.z());
+      if (std::abs(x.x() - x0) > 1.5e-3 || std::abs(r - a) > 1e-6) continue;
+      sum += (u[3 * n + 1] * x.y() + u[3 * n + 2] * x.z()) / r;
+      ++seen;
+    }
+    EXPECT_GT(seen, 8) << x0;
+    return sum / std::max(seen, 1);
+  };
+  const double soft = radial_at(0.25 * kLength), stiff = radial_at(0.75 * kLength);  // proximal, distal
+  EXPECT_NEAR(soft, lame(1e6), 0.05 * lame(1e6));
+  EXPECT_NEAR(stiff, lame(3e6), 0.05 * lame(3e6));
+  EXPECT_NEAR(soft / stiff, 3.0, 0.15);
+  std::printf("proximal %.4g um (Lame %.4g), distal %.4g um (Lame %.4g)\n", soft * 1e6, lame(1e6) * 1e6, stiff * 1e6,
+              lame(3e6) * 1e6);
+  EXPECT_THROW(DeformableWall(net,
+                              [&] {
+                                WallSpec bad = spec;
+                                bad.branch_youngs_modulus = {{5, 3e6}};
+                                return bad;
+                              }()),
+               Error);
+}
 }  // namespace
 }  // namespace flowire::coupling

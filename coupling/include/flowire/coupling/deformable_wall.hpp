@@ -45,6 +45,9 @@ struct WallSpec {
   double poisson_ratio = 0.45;
   double support = 0.0;    ///< elastic support of the outer surface [Pa/m]
   double mesh_size = 0.0;  ///< target tetrahedron size [m]; around a surface, 0: twice the local thickness
+  /// (branch index, Young's modulus [Pa]) of branches whose wall differs from youngs_modulus: each
+  /// tetrahedron takes the modulus of the branch of the segment nearest its centroid
+  std::vector<std::pair<int, double>> branch_youngs_modulus;
 };
 
 class DeformableWall final : public CompliantWall {
@@ -133,6 +136,8 @@ class DeformableWall final : public CompliantWall {
   std::vector<std::pair<int, double>> local_thickness_;  ///< (lumen vertices) node, the wall's thickness there [m]
   /// Each lumen vertex's thickness: the distance to the outer surface's nearest vertex.
   void measure_thickness();
+  /// The solid's laws per tetrahedron from spec.branch_youngs_modulus.
+  void assign_branch_laws(const WallSpec& spec);
   double thinnest_ = 0.0;              ///< the wall's least thickness [m]
   mutable bool warned_range_ = false;  ///< a run beyond the linear range said so once
   double mesh_seconds_ = 0.0;

@@ -50,7 +50,17 @@ class ElasticSolid {
   ElasticSolid& operator=(ElasticSolid&&) noexcept;
 
   [[nodiscard]] const mesh::TetMesh& mesh() const { return mesh_; }
-  [[nodiscard]] const NeoHookean& law() const { return law_; }
+  /// @brief The law every tetrahedron has unless set_laws gave it another.
+  [[nodiscard]] const NeoHookean& law() const { return laws_.front(); }
+  /// @brief Tetrahedron @p t's law.
+  [[nodiscard]] const NeoHookean& law_of(int t) const {
+    return laws_[tet_law_.empty() ? 0 : static_cast<size_t>(tet_law_[static_cast<size_t>(t)])];
+  }
+  /// @brief Laws per tetrahedron: tetrahedron t has @p laws[@p tet_law[t]] (a wall whose vessels
+  /// differ in stiffness). The first law stays law(). Before linearize/solve.
+  /// @throws flowire::Error (usage) for a law without μ > 0 and a positive bulk modulus, or
+  /// indices that are not one per tetrahedron into @p laws.
+  void set_laws(std::vector<NeoHookean> laws, std::vector<int> tet_law);
   [[nodiscard]] int num_dofs() const { return 3 * mesh_.num_nodes(); }
 
   /// @brief Hold the chosen displacement components of every node of boundary group `group` at 0.
@@ -111,7 +121,8 @@ class ElasticSolid {
   double elastic_energy(const Eigen::VectorXd& u) const;
 
   mesh::TetMesh mesh_;
-  NeoHookean law_;
+  std::vector<NeoHookean> laws_;         ///< [0] the solid's law
+  std::vector<int> tet_law_;             ///< (tets) index into laws_; empty: all the first
   std::vector<double> geometry_;         ///< per tet and quadrature point: ∇_X N (10×3) and weight·det J
   Eigen::SparseMatrix<double> pattern_;  ///< the tangent's pattern (values zero)
   std::vector<int> scatter_;             ///< per tet, node pair (k, l), column c: index of entry (3k, 3l+c)
