@@ -100,14 +100,11 @@ std::shared_ptr<TipForces> make_tip_forces(const config::Config& c, const vessel
     if (!net) throw_input_error(c.where("coupling.steering"), "steering needs a vessels: section");
     if (!c.has("coupling.steering.branch")) throw_input_error(c.where("coupling.steering"), "steering needs branch");
     const auto& name = c.string("coupling.steering.branch");
-    const vessels::Branch* target = nullptr;
-    std::string names;
-    for (const auto& b : net->branches()) {
-      if (b.name == name) target = &b;
-      names += (names.empty() ? "" : ", ") + b.name;
-    }
-    if (!target)
-      throw_input_error(c.where("coupling.steering.branch"), fmt::format("no branch '{}' (branches: {})", name, names));
+    const int found = net->branch_named(name);
+    if (found < 0)
+      throw_input_error(c.where("coupling.steering.branch"),
+                        fmt::format("no branch '{}' (branches: {})", name, net->branch_names()));
+    const vessels::Branch* target = &net->branch(found);
     // The point `offset` along the branch from its first node.
     double left = c.number("coupling.steering.offset");
     vessels::Vec3 p = net->node(target->nodes.front());

@@ -99,16 +99,9 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
     if (value.type != config::Type::Section || path.rfind("wall.", 0) != 0) continue;
     const std::string name = path.substr(std::string("wall.").size());
     if (name.find('.') != std::string::npos) continue;
-    int branch = -1;
-    for (int b = 0; b < net.num_branches(); ++b)
-      if (net.branches()[static_cast<size_t>(b)].name == name) branch = b;
-    if (branch < 0) {
-      std::string names;
-      for (const auto& b : net.branches())
-        if (!b.name.empty()) names += (names.empty() ? "" : ", ") + b.name;
-      throw_input_error(c.where(path),
-                        fmt::format("no branch named '{}' (branches: {})", name, names.empty() ? "none named" : names));
-    }
+    const int branch = net.branch_named(name);
+    if (branch < 0)
+      throw_input_error(c.where(path), fmt::format("no branch named '{}' (branches: {})", name, net.branch_names()));
     if (!c.has(path + ".youngs_modulus")) continue;
     spec.branch_youngs_modulus.emplace_back(branch, c.number(path + ".youngs_modulus"));
     branch_moduli[name] = spec.branch_youngs_modulus.back().second;

@@ -616,15 +616,9 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
     const std::string name = path.substr(std::string("flow.wall.").size());
     if (name.find('.') != std::string::npos) continue;
     BranchWall w;
-    for (size_t b = 0; b < net.branches().size(); ++b)
-      if (net.branches()[b].name == name) w.branch = static_cast<int>(b);
-    if (w.branch < 0) {
-      std::string names;
-      for (const auto& b : net.branches())
-        if (!b.name.empty()) names += (names.empty() ? "" : ", ") + b.name;
-      throw_input_error(cfg.where(path),
-                        fmt::format("no branch named '{}' (branches: {})", name, names.empty() ? "none named" : names));
-    }
+    w.branch = net.branch_named(name);
+    if (w.branch < 0)
+      throw_input_error(cfg.where(path), fmt::format("no branch named '{}' (branches: {})", name, net.branch_names()));
     if (cfg.has(path + ".thickness") && cfg.has(path + ".thickness_ratio"))
       throw_input_error(cfg.where(path), fmt::format("{}: give thickness or thickness_ratio, not both", path));
     w.youngs_modulus = cfg.number_or(path + ".youngs_modulus", s.wall_youngs_modulus);

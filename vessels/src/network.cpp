@@ -297,6 +297,20 @@ std::string mm(const Vec3& x) {
   return fmt::format("({:.2f}, {:.2f}, {:.2f}) mm", 1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z());
 }
 
+int Network::branch_named(const std::string& name) const {
+  int found = -1;
+  for (size_t b = 0; b < branches_.size(); ++b)
+    if (branches_[b].name == name) found = static_cast<int>(b);
+  return found;
+}
+
+std::string Network::branch_names() const {
+  std::string names;
+  for (const auto& b : branches_)
+    if (!b.name.empty()) names += (names.empty() ? "" : ", ") + b.name;
+  return names.empty() ? "none named" : names;
+}
+
 std::vector<int> Network::ends() const {
   std::vector<int> out;
   for (int i = 0; i < num_nodes(); ++i)

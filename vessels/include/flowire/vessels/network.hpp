@@ -104,6 +104,11 @@ class Network {
   [[nodiscard]] const Branch& branch(int b) const { return branches_[static_cast<size_t>(b)]; }
   [[nodiscard]] const std::vector<Branch>& branches() const { return branches_; }
   [[nodiscard]] const std::string& source() const { return source_; }
+  /// @brief The branch named @p name (the last of that name), −1 if there is none.
+  [[nodiscard]] int branch_named(const std::string& name) const;
+  /// @brief The named branches' names, comma-separated, or "none named": what a message about a
+  /// branch name that is not there lists.
+  [[nodiscard]] std::string branch_names() const;
 
   /// @brief Segments incident to node i (CSR view).
   [[nodiscard]] std::pair<const int*, const int*> node_segments(int i) const {
