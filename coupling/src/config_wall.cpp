@@ -54,7 +54,17 @@ void declare_wall_keys(config::Schema& s) {
   s.add("wall.*", Type::Section, "", D::None,
         "a branch's wall, by the branch's name, where it differs from the rest (each tetrahedron takes the branch "
         "of the segment nearest it)");
-  s.add("wall.*.youngs_modulus", Type::Number, "", D::Pressure, "this branch: the wall's Young's modulus").positive();
+  s.add("wall.*.youngs_modulus", Type::Number, "", D::Pressure,
+        "this branch: the wall's Young's modulus (default: the flow's wall of this branch, flow.wall.<branch> or an "
+        "openBF model's E, where the scene has one; else wall.youngs_modulus)")
+      .positive();
+  s.add("wall.*.thickness", Type::Number, "", D::Length,
+        "this branch: the wall's thickness (default: the flow's wall of this branch, flow.wall.<branch> or an openBF "
+        "model's h0, where the scene has one; else the wall section's)")
+      .positive();
+  s.add("wall.*.thickness_ratio", Type::Number, "", D::None,
+        "this branch: the wall's thickness as a fraction of the lumen radius, where it has no thickness")
+      .positive();
   s.add("wall.mesh_size", Type::Number, "", D::Length,
         "target tetrahedron size (default: twice the thinnest wall; around vessels.surface, twice the local "
         "thickness)")
@@ -67,16 +77,22 @@ namespace {
 /// t held by its hoop stiffness and the tissue's support: ω² = (E/R² + k/t)/ρ (plane stress).
 double breathing_period(const vessels::Network& net, const WallSpec& spec, double density) {
   double radius = 0.0;
-  for (int k = 0; k < net.num_segments(); ++k) radius = std::max(radius, net.segment(k).radius);
-  const double t = spec.thickness > 0.0 ? spec.thickness : spec.thickness_ratio * radius;
-  const double omega2 = (spec.youngs_modulus / (radius * radius) + spec.support / t) / density;
+  int branch = -1;
+  for (int k = 0; k < net.num_segments(); ++k)
+    if (net.segment(k).radius > radius) radius = net.segment(k).radius, branch = net.segment(k).branch;
+  const double t = spec.thickness_at(branch, radius);
+  double modulus = spec.youngs_modulus;
+  for (const auto& [b, e] : spec.branch_youngs_modulus)
+    if (b == branch) modulus = e;
+  const double omega2 = (modulus / (radius * radius) + spec.support / t) / density;
   return 2.0 * std::acos(-1.0) / std::sqrt(omega2);
 }
 }  // namespace
 #endif
 
 std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const vessels::Network& net,
-                                               const vessels::LumenSurface* surface, nlohmann::json& facts) {
+                                               const vessels::LumenSurface* surface, nlohmann::json& facts,
+                                               std::span<const flow::BranchWall> flow_walls) {
   if (!c.has_section("wall")) return nullptr;
   const double nu = c.number("wall.poisson_ratio");
   if (!(nu > -1.0 && nu < 0.5))
@@ -84,17 +100,18 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
                       fmt::format("must lie in (-1, 0.5) for the compressible law, got {}", nu));
   const double thickness = c.has("wall.thickness") ? c.number("wall.thickness") : 0.0;
   const double ratio = c.number("wall.thickness_ratio");
-  double rmin = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < net.num_segments(); ++k) rmin = std::min(rmin, net.segment(k).radius);
-  const double thinnest = thickness > 0.0 ? thickness : ratio * rmin;
-  // Around a surface, without a size: twice the local thickness (the aorta's and a branch's differ).
-  const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : surface ? 0.0 : 2.0 * thinnest;
 #ifdef FLOWIRE_HAVE_SOLID
-  WallSpec spec{thickness, thickness > 0.0 ? 0.0 : ratio,      c.number("wall.youngs_modulus"),
-                nu,        c.number("wall.support_stiffness"), mesh_size,
+  WallSpec spec{thickness,
+                thickness > 0.0 ? 0.0 : ratio,
+                c.number("wall.youngs_modulus"),
+                nu,
+                c.number("wall.support_stiffness"),
+                0.0,
+                {},
                 {}};
-  // Branches with a modulus of their own (wall.<branch>.youngs_modulus).
-  nlohmann::json branch_moduli = nlohmann::json::object();
+  // Branches with a wall of their own: wall.<branch>, else the flow's wall of that branch.
+  nlohmann::json branch_moduli = nlohmann::json::object(), branch_thickness = nlohmann::json::object();
+  std::vector<int> named;
   for (const auto& [path, value] : c.values()) {
     if (value.type != config::Type::Section || path.rfind("wall.", 0) != 0) continue;
     const std::string name = path.substr(std::string("wall.").size());
@@ -102,16 +119,43 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
     const int branch = net.branch_named(name);
     if (branch < 0)
       throw_input_error(c.where(path), fmt::format("no branch named '{}' (branches: {})", name, net.branch_names()));
-    if (!c.has(path + ".youngs_modulus")) continue;
-    spec.branch_youngs_modulus.emplace_back(branch, c.number(path + ".youngs_modulus"));
-    branch_moduli[name] = spec.branch_youngs_modulus.back().second;
+    named.push_back(branch);
+    const flow::BranchWall* fw = nullptr;
+    for (const auto& w : flow_walls)
+      if (w.branch == branch) fw = &w;
+    if (c.has(path + ".youngs_modulus") || (fw && fw->youngs_modulus > 0.0))
+      spec.branch_youngs_modulus.emplace_back(
+          branch, c.has(path + ".youngs_modulus") ? c.number(path + ".youngs_modulus") : fw->youngs_modulus);
+    if (c.has(path + ".thickness") || c.has(path + ".thickness_ratio"))
+      spec.branch_thickness.push_back({branch, c.has(path + ".thickness") ? c.number(path + ".thickness") : 0.0,
+                                       c.has(path + ".thickness_ratio") ? c.number(path + ".thickness_ratio") : 0.0});
+    else if (fw && (fw->thickness > 0.0 || fw->thickness_ratio > 0.0))
+      spec.branch_thickness.push_back({branch, fw->thickness, fw->thickness_ratio});
   }
+  for (const auto& w : flow_walls) {  // the flow's branch walls the wall section does not name
+    if (w.branch < 0 || std::find(named.begin(), named.end(), w.branch) != named.end()) continue;
+    if (w.youngs_modulus > 0.0) spec.branch_youngs_modulus.emplace_back(w.branch, w.youngs_modulus);
+    if (w.thickness > 0.0 || w.thickness_ratio > 0.0)
+      spec.branch_thickness.push_back({w.branch, w.thickness, w.thickness_ratio});
+  }
+  for (const auto& [branch, modulus] : spec.branch_youngs_modulus) branch_moduli[net.branch(branch).name] = modulus;
+  for (const auto& b : spec.branch_thickness)
+    branch_thickness[net.branch(b.branch).name] =
+        b.thickness > 0.0 ? nlohmann::json{{"thickness", b.thickness}} : nlohmann::json{{"thickness_ratio", b.ratio}};
+  // Around a surface, without a size: twice the local thickness (the aorta's and a branch's differ);
+  // around the network's tubes, twice the thinnest wall.
+  double thinnest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < net.num_segments(); ++k)
+    thinnest = std::min(thinnest, spec.thickness_at(net.segment(k).branch, net.segment(k).radius));
+  const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : surface ? 0.0 : 2.0 * thinnest;
+  spec.mesh_size = mesh_size;
   auto wall = std::make_unique<DeformableWall>(net, spec, surface);
   facts["wall"] = {{"thickness", thickness > 0.0 ? nlohmann::json(thickness) : nlohmann::json(nullptr)},
                    {"thickness_ratio", thickness > 0.0 ? nlohmann::json(nullptr) : nlohmann::json(ratio)},
                    {"thinnest", wall->thinnest()},
                    {"youngs_modulus", spec.youngs_modulus},
                    {"branch_youngs_modulus", branch_moduli},
+                   {"branch_thickness", branch_thickness},
                    {"poisson_ratio", nu},
                    {"support_stiffness", spec.support},
                    {"density", c.number("wall.density")},
@@ -125,7 +169,10 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
 #else
   (void)facts;
   (void)surface;
-  (void)mesh_size;
+  (void)flow_walls;
+  (void)thickness;
+  (void)ratio;
+  (void)net;
   throw_input_error(c.where("wall"), "this build has no gmsh (FLOWIRE_WITH_FEM off): a deformable wall needs it");
 #endif
 }

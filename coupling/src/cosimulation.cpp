@@ -179,7 +179,9 @@ void CoSimulation::add_wall_forces(const rod::WireSpec& spec, int entry, nlohman
                           "flow.model rlc widens its segments by its own compliance already (flow.wall); the "
                           "wall's widening is for the quasi-steady model");
     }
-    wall_ = make_scene_wall(c, *net_, surface_.get(), s);
+    std::span<const flow::BranchWall> flow_walls;
+    if (fsolver_) flow_walls = fsolver_->spec().branch_walls;
+    wall_ = make_scene_wall(c, *net_, surface_.get(), s, flow_walls);
     if (wall_) {
       if (!forces_->contact().enabled)
         throw_input_error(c.where("wall"), "a deformable wall needs the wall contact (contact.enabled: true)");

@@ -41,6 +41,7 @@ DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec
     sw.thickness = spec.thickness;
     sw.thickness_ratio = spec.thickness_ratio;
     sw.mesh_size = spec.mesh_size;
+    sw.branches = spec.branch_thickness;
     solid::SurfaceWallStats stats;
     m = solid::mesh_surface_wall(*surface, net, sw, &stats);
     thinnest_ = stats.min_thickness;
@@ -52,9 +53,8 @@ DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec
   } else {
     thinnest_ = std::numeric_limits<double>::infinity();
     for (int k = 0; k < net.num_segments(); ++k)
-      thinnest_ =
-          std::min(thinnest_, spec.thickness > 0.0 ? spec.thickness : spec.thickness_ratio * net.segment(k).radius);
-    m = solid::mesh_network_wall(net, {spec.thickness, spec.thickness_ratio, spec.mesh_size});
+      thinnest_ = std::min(thinnest_, spec.thickness_at(net.segment(k).branch, net.segment(k).radius));
+    m = solid::mesh_network_wall(net, {spec.thickness, spec.thickness_ratio, spec.mesh_size, spec.branch_thickness});
     lumen_facts_ = {{"lumen", "network"}};
   }
   mesh_seconds_ = m.mesh_seconds;

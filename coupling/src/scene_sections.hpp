@@ -18,6 +18,7 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string_view>
 
 #include "flowire/common/config.hpp"
@@ -25,6 +26,7 @@
 #include "flowire/coupling/drag.hpp"
 #include "flowire/coupling/schedule.hpp"
 #include "flowire/coupling/vessel_forces.hpp"
+#include "flowire/flow/spec.hpp"
 #include "flowire/rod/model.hpp"
 #include "flowire/rod/simulator.hpp"
 #include "flowire/vessels/network.hpp"
@@ -144,9 +146,13 @@ void declare_wall_keys(config::Schema& schema);
 /// @throws flowire::Error (input) naming the key at fault, the vessels where no tube can be
 /// built along the network, the surface and the place where no wall can be grown around it;
 /// (input) without gmsh in the build.
+/// A branch's wall is its own (wall.<branch>.youngs_modulus, .thickness, .thickness_ratio), else
+/// the flow's wall of that branch (@p flow_walls: flow.wall.<branch>, or an openBF model's
+/// vessels), else the wall section's.
 [[nodiscard]] std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& scene, const vessels::Network& net,
                                                              const vessels::LumenSurface* surface,
-                                                             nlohmann::json& facts);
+                                                             nlohmann::json& facts,
+                                                             std::span<const flow::BranchWall> flow_walls = {});
 
 // ---- output: (run_output.cpp)
 void declare_output_keys(config::Schema& schema);

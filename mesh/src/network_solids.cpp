@@ -104,7 +104,10 @@ NetworkSolids make_network_solids(const vessels::Network& net, const std::string
     const auto& ps = at_node[static_cast<size_t>(n)];
     if (ps.size() < 2) continue;
     double rmax = 0.0;
-    for (int p : ps) rmax = std::max(rmax, g.pieces[static_cast<size_t>(p)].radius);
+    int widest = -1;
+    for (int p : ps)
+      if (g.pieces[static_cast<size_t>(p)].radius > rmax)
+        rmax = g.pieces[static_cast<size_t>(p)].radius, widest = g.pieces[static_cast<size_t>(p)].branch;
     if (ps.size() == 2) {
       const Vec3 u = out_dir(ps[0], n), v = out_dir(ps[1], n);
       const double c = std::clamp(-u.dot(v), -1.0, 1.0);
@@ -126,7 +129,7 @@ NetworkSolids make_network_solids(const vessels::Network& net, const std::string
                                           turn * 180.0 / std::numbers::pi, reach * 1e3, lmin * 1e3));
     }
     g.sphere_at[static_cast<size_t>(n)] = rmax;
-    g.spheres.push_back({n, rmax});
+    g.spheres.push_back({n, rmax, widest});
   }
   // End pieces must reach past the sphere at their other end.
   for (int n = 0; n < net.num_nodes(); ++n) {
@@ -197,16 +200,16 @@ NetworkSolids make_network_solids(const vessels::Network& net, const std::string
 }
 
 gmsh::vectorpair add_network_solids(const vessels::Network& net, const NetworkSolids& solids,
-                                    const std::function<double(double)>& grown) {
+                                    const GrownRadius& grown) {
   namespace occ = gmsh::model::occ;
   gmsh::vectorpair out;
   for (const NetworkPiece& p : solids.pieces) {
     const Vec3 a = net.node(p.a), d = net.node(p.b) - a;
-    out.push_back({3, occ::addCylinder(a.x(), a.y(), a.z(), d.x(), d.y(), d.z(), grown(p.radius))});
+    out.push_back({3, occ::addCylinder(a.x(), a.y(), a.z(), d.x(), d.y(), d.z(), grown(p.radius, p.branch))});
   }
   for (const NetworkSphere& s : solids.spheres) {
     const Vec3 c = net.node(s.node);
-    out.push_back({3, occ::addSphere(c.x(), c.y(), c.z(), grown(s.radius))});
+    out.push_back({3, occ::addSphere(c.x(), c.y(), c.z(), grown(s.radius, s.branch))});
   }
   if (out.size() > 1) {
     gmsh::vectorpair fused;
@@ -218,15 +221,15 @@ gmsh::vectorpair add_network_solids(const vessels::Network& net, const NetworkSo
 }
 
 double distance_to_network_solid_surfaces(const vessels::Network& net, const NetworkSolids& solids,
-                                          const vessels::Vec3& x, const std::function<double(double)>& grown) {
+                                          const vessels::Vec3& x, const GrownRadius& grown) {
   double best = std::numeric_limits<double>::infinity();
   for (const NetworkPiece& p : solids.pieces) {
     const Vec3 a = net.node(p.a), d = net.node(p.b) - a;
     const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-    best = std::min(best, std::abs((x - (a + t * d)).norm() - grown(p.radius)));
+    best = std::min(best, std::abs((x - (a + t * d)).norm() - grown(p.radius, p.branch)));
   }
   for (const NetworkSphere& s : solids.spheres)
-    best = std::min(best, std::abs((x - net.node(s.node)).norm() - grown(s.radius)));
+    best = std::min(best, std::abs((x - net.node(s.node)).norm() - grown(s.radius, s.branch)));
   return best;
 }
 

@@ -101,13 +101,15 @@ std::vector<Vec3> segment_midpoints(const vessels::Network& net) {
   return inside;
 }
 
-/// The nominal thickness at @p x: the wall's, or its ratio × the radius of the nearest segment.
+/// The nominal thickness at @p x: the nearest segment's branch's, the wall's, or its ratio × that
+/// segment's radius.
 double nominal_thickness(const vessels::SpatialIndex& index, const vessels::Network& net, const SurfaceWall& wall,
                          const Vec3& x, int& hint) {
-  if (wall.thickness > 0.0) return wall.thickness;
+  if (wall.thickness > 0.0 && wall.branches.empty()) return wall.thickness;
   const vessels::Location at = index.locate(x, hint);
   hint = at.segment;
-  return wall.thickness_ratio * net.segment(at.segment).radius;
+  const auto& seg = net.segment(at.segment);
+  return wall_thickness_at(wall.thickness, wall.thickness_ratio, wall.branches, seg.branch, seg.radius);
 }
 
 /// The thickness at each vertex, the normals it is offset along; counts what was thinned.
@@ -348,6 +350,12 @@ TetMesh mesh_wall(const vessels::LumenSurface& given, const vessels::Network& ne
     throw_usage_error(fmt::format("surface wall: the thickness must be > 0, got {} m", wall.thickness));
   if (!(wall.mesh_size > 0.0) && !(wall.size_per_thickness > 0.0))
     throw_usage_error("surface wall: mesh_size or size_per_thickness must be > 0");
+  for (const BranchThickness& b : wall.branches)
+    if (b.branch < 0 || b.branch >= net.num_branches() || !(b.thickness > 0.0 || b.ratio > 0.0))
+      throw_usage_error(
+          fmt::format("surface wall: branch {}'s thickness {} m / ratio {} (a branch of {}, one of "
+                      "them > 0)",
+                      b.branch, b.thickness, b.ratio, net.num_branches()));
   const auto start = std::chrono::steady_clock::now();
   const std::string& at = given.source();
   const vessels::LumenSurface squared = square_ends(given, net);
@@ -476,9 +484,15 @@ std::uint64_t digest(const vessels::LumenSurface& lumen, const vessels::Network&
     mix(&s.node_from, sizeof(int));
     mix(&s.node_to, sizeof(int));
     mix(&s.radius, sizeof(double));
+    mix(&s.branch, sizeof(int));
   }
   for (double v : {wall.thickness, wall.thickness_ratio, wall.mesh_size, wall.size_per_thickness})
     mix(&v, sizeof(double));
+  for (const BranchThickness& b : wall.branches) {
+    mix(&b.branch, sizeof(int));
+    mix(&b.thickness, sizeof(double));
+    mix(&b.ratio, sizeof(double));
+  }
   return h;
 }
 }  // namespace

@@ -161,8 +161,10 @@ TetMesh mesh_network(const vessels::Network& net, const NetworkWall& w, const me
                      const std::string& at) {
   const bool swept = sweepable(net, solids);
   const auto start = std::chrono::steady_clock::now();
-  auto grown = [&](double r) { return r + (w.thickness > 0.0 ? w.thickness : w.thickness_ratio * r); };
-  auto same = [](double r) { return r; };
+  const mesh::GrownRadius grown = [&](double r, int branch) {
+    return r + wall_thickness_at(w.thickness, w.thickness_ratio, w.branches, branch, r);
+  };
+  const mesh::GrownRadius same = [](double r, int) { return r; };
   const std::vector<int> ends = net.ends();
   TetMesh m;
   m.groups.push_back({BoundaryGroup::Kind::Wall, -1, "lumen"});
@@ -172,7 +174,8 @@ TetMesh mesh_network(const vessels::Network& net, const NetworkWall& w, const me
   mesh::GmshModel model(false);
   namespace occ = gmsh::model::occ;
   if (swept) {
-    add_swept_annulus(net, same(solids.pieces.front().radius), grown(solids.pieces.front().radius));
+    const auto& front = solids.pieces.front();
+    add_swept_annulus(net, same(front.radius, front.branch), grown(front.radius, front.branch));
   } else {
     const gmsh::vectorpair outer = mesh::add_network_solids(net, solids, grown);
     const gmsh::vectorpair inner = mesh::add_network_solids(net, solids, same);
@@ -190,7 +193,7 @@ TetMesh mesh_network(const vessels::Network& net, const NetworkWall& w, const me
   // Each face by where a point of its surface lies: on an end's plane (an annulus about the end
   // node), on one of the lumen's cylinders or spheres, or on one of the outer ones.
   double rmin = std::numeric_limits<double>::infinity();
-  for (const auto& p : solids.pieces) rmin = std::min(rmin, grown(p.radius) - p.radius);
+  for (const auto& p : solids.pieces) rmin = std::min(rmin, grown(p.radius, p.branch) - p.radius);
   const double tol = 0.25 * rmin;
   std::vector<int> surf_group(surfs.size(), -1);
   for (size_t k = 0; k < surfs.size(); ++k) {
@@ -211,6 +214,24 @@ TetMesh mesh_network(const vessels::Network& net, const NetworkWall& w, const me
       surf_group[k] = 0;
     } else if (mesh::distance_to_network_solid_surfaces(net, solids, x, grown) < tol) {
       surf_group[k] = 1;
+    } else if (type == "Plane") {
+      // A step between collinear pieces (a radius or a branch's thickness changes), an annulus
+      // whose parametric middle may lie in its hole: by a point of its rim, which lies on the
+      // pieces it joins.
+      gmsh::vectorpair rim;
+      gmsh::model::getBoundary({surfs[k]}, rim, false, false, false);
+      double rim_lumen = std::numeric_limits<double>::infinity(), rim_outer = rim_lumen;
+      if (!rim.empty()) {
+        std::vector<double> clo, chi, cxyz;
+        gmsh::model::getParametrizationBounds(1, rim.front().second, clo, chi);
+        gmsh::model::getValue(1, rim.front().second, {0.5 * (clo[0] + chi[0])}, cxyz);
+        const Vec3 y(cxyz[0], cxyz[1], cxyz[2]);
+        rim_lumen = mesh::distance_to_network_solid_surfaces(net, solids, y, same);
+        rim_outer = mesh::distance_to_network_solid_surfaces(net, solids, y, grown);
+      }
+      if (std::min(rim_lumen, rim_outer) >= tol)
+        throw_numerical_error(fmt::format("{}: a plane face of the meshed wall lies on none of its surfaces", at));
+      surf_group[k] = rim_lumen < rim_outer ? 0 : 1;
     } else {
       throw_numerical_error(fmt::format("{}: a face of the meshed wall lies on none of its surfaces", at));
     }
@@ -234,9 +255,10 @@ TetMesh mesh_network(const vessels::Network& net, const NetworkWall& w, const me
     // capsules the wire's contact sees): radius r for the lumen, grown for the outer surface.
     const auto& br = net.branch(0);
     const double r = solids.pieces.front().radius;
+    const int branch = solids.pieces.front().branch;
     for (size_t f = 0; f < m.faces.size(); ++f) {
       if (m.face_group[f] > 1) continue;
-      const double target = m.face_group[f] == 0 ? same(r) : grown(r);
+      const double target = m.face_group[f] == 0 ? same(r, branch) : grown(r, branch);
       for (int node : m.faces[f]) {
         Vec3& x = m.nodes[static_cast<size_t>(node)];
         Vec3 nearest = x;
@@ -261,6 +283,10 @@ mesh::TetMesh mesh_network_wall(const vessels::Network& net, const NetworkWall& 
   if (!(wall.mesh_size > 0.0)) throw_usage_error(fmt::format("wall: mesh_size must be > 0, got {}", wall.mesh_size));
   if (!(wall.thickness > 0.0) && !(wall.thickness_ratio > 0.0))
     throw_usage_error("wall: thickness or thickness_ratio must be > 0");
+  for (const BranchThickness& b : wall.branches)
+    if (b.branch < 0 || b.branch >= net.num_branches() || !(b.thickness > 0.0 || b.ratio > 0.0))
+      throw_usage_error(fmt::format("wall: branch {}'s thickness {} m / ratio {} (a branch of {}, one of them > 0)",
+                                    b.branch, b.thickness, b.ratio, net.num_branches()));
   const mesh::NetworkSolids solids = mesh::make_network_solids(net, at);
   return mesh::guarded(at, [&] { return mesh_network(net, wall, solids, at); });
 }

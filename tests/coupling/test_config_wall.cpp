@@ -130,5 +130,41 @@ TEST(ConfigWall, ABranchsModulusIsTakenByItsWallAndReported) {
   ASSERT_NE(deformable, nullptr);
 }
 
+TEST(ConfigWall, ABranchsThicknessIsItsOwnElseTheFlowsWallOfThatBranch) {
+  // A Y bifurcation: one child's thickness from wall.<child>, the other's from the flow's wall of
+  // that branch (flow.wall.<branch>, or an openBF model's h0 and E), which wall.<branch> would
+  // override; the trunk keeps the section's. Reported per branch; the thinnest wall is the
+  // thinnest branch's, and the default mesh size twice it.
+  const auto y = vessels::Network::build(
+      vessels::y_bifurcation({.parent_radius = 3e-3, .parent_length = 20e-3, .child_length = 20e-3}),
+      {.max_segment_length = 5e-3});
+  ASSERT_EQ(y.num_branches(), 3);
+  std::vector<std::string> names;
+  for (const auto& b : y.branches()) names.push_back(b.name);
+  const int first = 1, second = 2;
+  const std::vector<flow::BranchWall> flow_walls = {{second, 2e6, 0.4e-3, 0.0}};
+  nlohmann::json facts;
+  const auto wall = make_scene_wall(
+      test::scene(fmt::format("wall:\n  thickness: 0.6 mm\n  {}:\n    thickness: 0.5 mm\n", names[first])), y, nullptr,
+      facts, flow_walls);
+  ASSERT_NE(wall, nullptr);
+  EXPECT_DOUBLE_EQ(facts["wall"]["branch_thickness"][names[first]]["thickness"].get<double>(), 0.5e-3);
+  EXPECT_DOUBLE_EQ(facts["wall"]["branch_thickness"][names[second]]["thickness"].get<double>(), 0.4e-3);
+  EXPECT_DOUBLE_EQ(facts["wall"]["branch_youngs_modulus"][names[second]].get<double>(), 2e6);
+  EXPECT_FALSE(facts["wall"]["branch_thickness"].contains(names[0]));
+  EXPECT_NEAR(facts["wall"]["thinnest"].get<double>(), 0.4e-3, 1e-15);
+  EXPECT_NEAR(facts["wall"]["mesh_size"].get<double>(), 0.8e-3, 1e-15);
+  // wall.<branch> before the flow's wall of it.
+  nlohmann::json again;
+  (void)make_scene_wall(test::scene(fmt::format("wall:\n  thickness: 0.6 mm\n  mesh_size: 1.5 mm\n  {}:\n    "
+                                                "thickness_ratio: 0.3\n",
+                                                names[second])),
+                        y, nullptr, again, flow_walls);
+  EXPECT_DOUBLE_EQ(again["wall"]["branch_thickness"][names[second]]["thickness_ratio"].get<double>(), 0.3);
+  EXPECT_NE(
+      test::input_error([&] { (void)test::scene("wall:\n  b:\n    thickness: 0 mm\n"); }).find("wall.b.thickness"),
+      std::string::npos);
+}
+
 }  // namespace
 }  // namespace flowire::coupling

@@ -99,7 +99,7 @@ vessels::Network tube() {
                                  {.max_segment_length = 1e-3});
 }
 
-WallSpec soft_wall(double E) { return {kThickness, 0.0, E, 0.45, 0.0, 1e-3, {}}; }
+WallSpec soft_wall(double E) { return {kThickness, 0.0, E, 0.45, 0.0, 1e-3, {}, {}}; }
 
 double tip_offset(const Pressed& p) { return p.positions.front().y(); }
 
@@ -369,7 +369,7 @@ TEST(DeformableWall, TwoBodiesLoadOneWallAndEachMeetsWhereTheOtherMovedIt) {
 
 TEST(DeformableWall, RefusesAWallThatCannotBe) {
   auto build = [](double thickness, double E, double nu, double support) {
-    const WallSpec spec{thickness, 0.0, E, nu, support, 0.5e-3, {}};
+    const WallSpec spec{thickness, 0.0, E, nu, support, 0.5e-3, {}, {}};
     DeformableWall wall(Vec3::Zero(), Vec3(kLength, 0, 0), kR, spec);
   };
   EXPECT_THROW(build(0.0, 1e6, 0.45, 0.0), Error);
@@ -480,6 +480,78 @@ TEST(DeformableWall, EachBranchsWallHasItsOwnModulus) {
                               [&] {
                                 WallSpec bad = spec;
                                 bad.branch_youngs_modulus = {{5, 3e6}};
+                                return bad;
+                              }()),
+               Error);
+}
+}  // namespace
+}  // namespace flowire::coupling
+
+namespace flowire::coupling {
+namespace {
+TEST(DeformableWall, EachBranchsWallHasItsOwnThickness) {
+  // A straight vessel of two branches, the distal one's wall twice as thick: its outer surface
+  // steps at the joint, and a uniform 2 kPa inflates each half by Lamé's displacement of its own
+  // thickness (away from the joint and the held ends). The proximal branch keeps the wall's.
+  vessels::Centerlines c;
+  const double mid = 0.5 * kLength;
+  c.branches.push_back({"proximal", {Vec3::Zero(), Vec3(mid, 0, 0)}, {kR, kR}});
+  c.branches.push_back({"distal", {Vec3(mid, 0, 0), Vec3(kLength, 0, 0)}, {kR, kR}});
+  const vessels::Network net = vessels::Network::build(c, {.max_segment_length = 2e-3});
+  ASSERT_EQ(net.num_branches(), 2);
+  WallSpec spec = soft_wall(1e6);
+  const int distal = net.branches()[0].name == "distal" ? 0 : 1;
+  spec.branch_thickness = {{distal, 2.0 * kThickness, 0.0}};
+  DeformableWall wall(net, spec);
+  const double p = 2e3, a = kR, nu = spec.poisson_ratio, E = spec.youngs_modulus;
+  auto lame = [&](double t) {
+    const double b = a + t;
+    return (1 + nu) * p * a * a / (E * (b * b - a * a)) * ((1 - 2 * nu) * a + b * b / a);
+  };
+  const auto& m = wall.mesh();
+  // The outer surface: kR + t on each side of the joint, the step between them outer surface
+  // too (were it lumen, the blood pressure would push the thick half along its axis).
+  const int outer = m.group_named("outer"), lumen = m.group_named("lumen");
+  double outer_proximal = 0.0, outer_distal = 0.0;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (m.face_group[f] == lumen)
+      for (int node : m.faces[f])
+        EXPECT_NEAR(std::hypot(m.nodes[static_cast<size_t>(node)].y(), m.nodes[static_cast<size_t>(node)].z()), kR,
+                    1e-6);
+    if (m.face_group[f] != outer) continue;
+    for (int node : m.faces[f]) {
+      const Vec3& x = m.nodes[static_cast<size_t>(node)];
+      const double r = std::hypot(x.y(), x.z());
+      if (x.x() < 0.4 * kLength) outer_proximal = std::max(outer_proximal, r);
+      if (x.x() > 0.6 * kLength) outer_distal = std::max(outer_distal, r);
+    }
+  }
+  EXPECT_NEAR(outer_proximal, kR + kThickness, 1e-3 * kR);
+  EXPECT_NEAR(outer_distal, kR + 2.0 * kThickness, 1e-3 * kR);
+  wall.set_blood_pressure(std::vector<double>(static_cast<size_t>(net.num_nodes()), p), 0.0);
+  const Eigen::VectorXd& u = wall.displacement();
+  auto radial_at = [&](double x0) {
+    double sum = 0.0;
+    int seen = 0;
+    for (int n = 0; n < m.num_nodes(); ++n) {
+      const Vec3& x = m.nodes[static_cast<size_t>(n)];
+      const double r = std::hypot(x.y(), x.z());
+      if (std::abs(x.x() - x0) > 1.5e-3 || std::abs(r - a) > 1e-6) continue;
+      sum += (u[3 * n + 1] * x.y() + u[3 * n + 2] * x.z()) / r;
+      ++seen;
+    }
+    EXPECT_GT(seen, 8) << x0;
+    return sum / std::max(seen, 1);
+  };
+  const double thin = radial_at(0.25 * kLength), thick = radial_at(0.75 * kLength);
+  EXPECT_NEAR(thin, lame(kThickness), 0.03 * lame(kThickness));
+  EXPECT_NEAR(thick, lame(2.0 * kThickness), 0.03 * lame(2.0 * kThickness));
+  std::printf("proximal %.4g um (Lame %.4g), distal %.4g um (Lame %.4g)\n", thin * 1e6, lame(kThickness) * 1e6,
+              thick * 1e6, lame(2.0 * kThickness) * 1e6);
+  EXPECT_THROW(DeformableWall(net,
+                              [&] {
+                                WallSpec bad = spec;
+                                bad.branch_thickness = {{distal, 0.0, 0.0}};
                                 return bad;
                               }()),
                Error);

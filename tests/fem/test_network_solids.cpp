@@ -34,8 +34,8 @@ TEST(NetworkSolids, TheDistanceToTheSurfacesIsZeroOnEachAndTheOffsetOutside) {
   const NetworkSolids s = make_network_solids(net, "test");
   ASSERT_EQ(s.pieces.size(), 2u);
   ASSERT_EQ(s.spheres.size(), 1u);
-  auto same = [](double r) { return r; };
-  auto grown = [](double r) { return r + 0.5e-3; };
+  auto same = [](double r, int) { return r; };
+  auto grown = [](double r, int) { return r + 0.5e-3; };
   // On the first cylinder's side, on the sphere at the bend (also where a cylinder covers it),
   // and half a millimetre outside.
   EXPECT_NEAR(distance_to_network_solid_surfaces(net, s, Vec3(0.01, 2e-3, 0), same), 0.0, 1e-15);

@@ -53,7 +53,7 @@ TetMesh mesh_geometry(const Network& net, const mesh::NetworkSolids& g, const Me
 
   GmshModel model(opt.verbose);
   namespace occ = gmsh::model::occ;
-  (void)mesh::add_network_solids(net, g, [](double r) { return r; });
+  (void)mesh::add_network_solids(net, g, [](double r, int) { return r; });
   occ::synchronize();
   gmsh::vectorpair vols, surfs;
   gmsh::model::getEntities(vols, 3);

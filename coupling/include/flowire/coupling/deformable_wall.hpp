@@ -26,6 +26,7 @@
 #include "flowire/coupling/compliant_wall.hpp"
 #include "flowire/coupling/interaction.hpp"
 #include "flowire/mesh/tet_mesh.hpp"
+#include "flowire/solid/wall_thickness.hpp"
 #include "flowire/vessels/network.hpp"
 #include "flowire/vessels/surface.hpp"
 
@@ -48,6 +49,12 @@ struct WallSpec {
   /// (branch index, Young's modulus [Pa]) of branches whose wall differs from youngs_modulus: each
   /// tetrahedron takes the modulus of the branch of the segment nearest its centroid
   std::vector<std::pair<int, double>> branch_youngs_modulus;
+  /// branches whose wall is thicker or thinner than the rest's (their own thickness or ratio)
+  std::vector<solid::BranchThickness> branch_thickness;
+  /// @brief The nominal thickness of branch @p branch's wall where its lumen radius is @p radius.
+  [[nodiscard]] double thickness_at(int branch, double radius) const {
+    return solid::wall_thickness_at(thickness, thickness_ratio, branch_thickness, branch, radius);
+  }
 };
 
 class DeformableWall final : public CompliantWall {

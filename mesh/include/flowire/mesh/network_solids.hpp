@@ -26,6 +26,7 @@ struct NetworkPiece {
 struct NetworkSphere {
   int node = -1;
   double radius = 0.0;
+  int branch = -1;  ///< the branch of the widest piece there
 };
 
 struct NetworkSolids {
@@ -40,16 +41,18 @@ struct NetworkSolids {
 /// @throws flowire::Error (input) naming @p at and the node, segment or branches at fault.
 [[nodiscard]] NetworkSolids make_network_solids(const vessels::Network& net, const std::string& at);
 
-/// @brief Add the solids to the current gmsh model (OpenCASCADE), each radius r as
-/// @p grown(r), and fuse them: the dim-tags of the union.
-gmsh::vectorpair add_network_solids(const vessels::Network& net, const NetworkSolids& solids,
-                                    const std::function<double(double)>& grown);
+/// @brief A solid's radius as built from its radius r and its branch (a wall's outer surface: r
+/// plus that branch's thickness).
+using GrownRadius = std::function<double(double radius, int branch)>;
+
+/// @brief Add the solids to the current gmsh model (OpenCASCADE), each radius r of branch b as
+/// @p grown(r, b), and fuse them: the dim-tags of the union.
+gmsh::vectorpair add_network_solids(const vessels::Network& net, const NetworkSolids& solids, const GrownRadius& grown);
 
 /// @brief Distance from @p x to the nearest of the solids' own surfaces (each cylinder's side,
 /// each sphere), grown by @p grown: 0 on any of them, also where another solid covers that part
 /// (a point of a face's untrimmed surface tells which surfaces the face belongs to).
 [[nodiscard]] double distance_to_network_solid_surfaces(const vessels::Network& net, const NetworkSolids& solids,
-                                                        const vessels::Vec3& x,
-                                                        const std::function<double(double)>& grown);
+                                                        const vessels::Vec3& x, const GrownRadius& grown);
 
 }  // namespace flowire::mesh

@@ -13,16 +13,17 @@
 /// The offset. Each lumen vertex moves along its normal (the angle-weighted mean of its faces'
 /// outward normals, smoothed over its neighbours twice so that the facets' noise does not crease
 /// the outer surface; at an open end turned into the end's plane, so that the end ring is that
-/// plane) by its thickness t: `thickness`, or `thickness_ratio` × the radius of the network
-/// segment nearest to it. Where the lumen's own shape leaves no room for t — between two
-/// branches near their carina, or inside a bend tighter than t — the offset sheets of the two
-/// sides would cross; there t is reduced until the point 1.25 t out along the normal still lies
-/// at least 0.9 × 1.25 t from the lumen (each side then keeps to its half of the tissue between
-/// them), and the thickness field is made to vary by at most 30% between neighbours.
+/// plane) by its thickness t: that of the branch of the network segment nearest to it where
+/// `branches` gives one, else `thickness`, or `thickness_ratio` × that segment's radius. Where the lumen's own shape
+/// leaves no room for t — between two branches near their carina, or inside a bend tighter than t — the offset sheets
+/// of the two sides would cross; there t is reduced until the point 1.25 t out along the normal still lies at least 0.9
+/// × 1.25 t from the lumen (each side then keeps to its half of the tissue between them), and the thickness field is
+/// made to vary by at most 30% between neighbours.
 ///
 /// Boundary groups: `lumen`, `outer`, and `end_<node>` for each open end, named by the
 /// network's end node whose point lies nearest to the end's loop.
 #include "flowire/mesh/tet_mesh.hpp"
+#include "flowire/solid/wall_thickness.hpp"
 #include "flowire/vessels/network.hpp"
 #include "flowire/vessels/surface.hpp"
 
@@ -34,6 +35,7 @@ struct SurfaceWall {
   /// Target tetrahedron size (m); ≤ 0: `size_per_thickness` × the local nominal thickness.
   double mesh_size = 0.0;
   double size_per_thickness = 2.0;
+  std::vector<BranchThickness> branches;  ///< branches whose wall differs
 };
 
 /// @brief What the offset did.

@@ -9,6 +9,7 @@
 /// Boundary groups, by name: `lumen`, `outer`, `end_0` (z = 0), `end_1` (z = length), and for
 /// a quarter `symmetry_x` (the plane x = 0) and `symmetry_y` (y = 0).
 #include "flowire/mesh/tet_mesh.hpp"
+#include "flowire/solid/wall_thickness.hpp"
 #include "flowire/vessels/network.hpp"
 
 namespace flowire::solid {
@@ -35,12 +36,15 @@ mesh::TetMesh mesh_tube_wall(const TubeWall& tube);
 /// @brief The wall around a network's lumen: the lumen is the union of the network's capsules
 /// (mesh/network_solids.hpp: a cylinder per run of collinear segments, a sphere at each bend and
 /// junction — the surface the wire's contact sees), the outer surface the same grown by the
-/// wall's thickness, which is `thickness` where > 0, else `thickness_ratio` × each piece's radius.
+/// wall's thickness, which is the piece's branch's own where `branches` gives one, else
+/// `thickness` where > 0, else `thickness_ratio` × each piece's radius (a junction's sphere takes
+/// the thickness of its widest branch; where two collinear pieces differ, the outer surface steps).
 /// Boundary groups: `lumen`, `outer`, and `end_<node>` for each end of the network (an annulus).
 struct NetworkWall {
-  double thickness = 0.0;        ///< (m) > 0: the same everywhere
-  double thickness_ratio = 0.0;  ///< used where thickness is 0: a fraction of the local radius
-  double mesh_size = 0.0;        ///< target tetrahedron size (m)
+  double thickness = 0.0;                 ///< (m) > 0: the same everywhere
+  double thickness_ratio = 0.0;           ///< used where thickness is 0: a fraction of the local radius
+  double mesh_size = 0.0;                 ///< target tetrahedron size (m)
+  std::vector<BranchThickness> branches;  ///< branches whose wall differs
 };
 /// @throws flowire::Error (usage) for a non-positive size or thickness; (input) naming the
 /// network for a network a tube cannot be built along (make_network_solids).
