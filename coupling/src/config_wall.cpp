@@ -48,6 +48,12 @@ void declare_wall_keys(config::Schema& s) {
         "displacement (the blood pressure's and the wire's), its resistance (r/(r+u))^4 of Poiseuille's; the wall "
         "of the last step, as the occlusion; needs flow.solver superposition or sparse, not flow.model rlc (whose "
         "compliance widens its segments already)");
+  s.add("wall.relinearize", Type::Number, "1", D::None,
+        "the wall is linear about a state: rest at first, then, once a point the wire presses has moved this "
+        "fraction of the wall's local thickness from that state, the neo-Hookean wall solved under its loads "
+        "(Newton) and linearized there (large displacements: a stiff wire straightening a vessel); 0: linear "
+        "about rest throughout")
+      .non_negative();
   s.add("wall.reference_pressure", Type::Number, "0 Pa", D::Pressure,
         "the pressure at which the rest geometry was taken (imaged): the wall is loaded by the blood pressure less "
         "this");
@@ -149,6 +155,7 @@ std::unique_ptr<CompliantWall> make_scene_wall(const config::Config& c, const ve
     thinnest = std::min(thinnest, spec.thickness_at(net.segment(k).branch, net.segment(k).radius));
   const double mesh_size = c.has("wall.mesh_size") ? c.number("wall.mesh_size") : surface ? 0.0 : 2.0 * thinnest;
   spec.mesh_size = mesh_size;
+  spec.relinearize = c.number("wall.relinearize");
   auto wall = std::make_unique<DeformableWall>(net, spec, surface);
   facts["wall"] = {{"thickness", thickness > 0.0 ? nlohmann::json(thickness) : nlohmann::json(nullptr)},
                    {"thickness_ratio", thickness > 0.0 ? nlohmann::json(nullptr) : nlohmann::json(ratio)},

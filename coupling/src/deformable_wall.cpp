@@ -35,6 +35,9 @@ DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec
   if (!(spec.mesh_size > 0.0) && !surface)
     throw_usage_error(fmt::format("wall.mesh_size: must be > 0, got {} m", spec.mesh_size));
   if (!(spec.support >= 0.0)) throw_usage_error(fmt::format("wall.support: must be >= 0, got {} Pa/m", spec.support));
+  if (!(spec.relinearize >= 0.0))
+    throw_usage_error(fmt::format("wall.relinearize: must be >= 0, got {}", spec.relinearize));
+  relinearize_ = spec.relinearize;
   mesh::TetMesh m;
   if (surface) {
     solid::SurfaceWall sw;
@@ -68,6 +71,8 @@ DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec
   measure_thickness();
   displacement_ = Eigen::VectorXd::Zero(solid_->num_dofs());
   load_ = displacement_;
+  base_ = displacement_;
+  base_u_ = displacement_;
   seconds_ += since(t0);
 }
 
@@ -128,14 +133,15 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
     at.push_back(lumen_->locate_patch(points[j], j < radii.size() ? radii[j] : 0.0));
   Anchored a;
   a.compliance = lumen_->compliance(at, normals);
-  const bool pressed = pressure_field_.size() > 0;
+  const bool pressed = pressure_field_.size() > 0, based = relinearizations_ > 0;
   bool others = false;
   for (const auto& [who, l] : loads_) others = others || (who != body && !l->points.empty());
-  if (pressed || others) {
+  if (pressed || others || based) {
     a.offsets = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(at.size()));
     for (size_t j = 0; j < at.size(); ++j) {
       Vec3 u = pressed ? lumen_->interpolate(at[j], pressure_field_) : Vec3::Zero();
-      for (const auto& [who, l] : loads_)  // (their columns were solved when they were anchored)
+      if (based) u += lumen_->interpolate(at[j], base_);  // the state the wall is linear about
+      for (const auto& [who, l] : loads_)                 // (their columns were solved when they were anchored)
         if (who != body && !l->points.empty()) u += lumen_->displacement(at[j], l->points, l->forces);
       a.offsets[static_cast<Eigen::Index>(j)] = normals[j].dot(u);
     }
@@ -165,6 +171,71 @@ void DeformableWall::load(const void* body, std::span<const Vec3> points, std::s
   }
   field_current_ = false;
   seconds_ += since(t0);
+  if (relinearize_ > 0.0 && moved_beyond_linearization()) relinearize();
+}
+
+bool DeformableWall::moved_beyond_linearization() {
+  const auto t0 = Clock::now();
+  // Each loaded point's displacement now (the base state's, the pressure's, every body's
+  // loads through the kept columns) against the state the wall was linearized about.
+  bool beyond = false;
+  for (const auto& [who, b] : loads_) {
+    (void)who;
+    for (const auto& at : b->points) {
+      Vec3 u = lumen_->interpolate(at, base_);
+      if (pressure_field_.size() > 0) u += lumen_->interpolate(at, pressure_field_);
+      for (const auto& [other, l] : loads_)
+        if (!l->points.empty()) u += lumen_->displacement(at, l->points, l->forces);
+      // (the thickness at the face's vertices, weighted by their shape functions' magnitudes: a
+      // quadratic face's vertex weights are negative near its middle)
+      double t = 0.0, w_sum = 0.0;
+      for (const auto& [node, w] : at.weights)
+        if (node_thickness_[static_cast<size_t>(node)] > 0.0)
+          t += std::abs(w) * node_thickness_[static_cast<size_t>(node)], w_sum += std::abs(w);
+      if (!(w_sum > 0.0)) continue;
+      if ((u - lumen_->interpolate(at, base_u_)).norm() > relinearize_ * t / w_sum) beyond = true;
+    }
+    if (beyond) break;
+  }
+  seconds_ += since(t0);
+  return beyond;
+}
+
+void DeformableWall::relinearize() {
+  const auto t0 = Clock::now();
+  Eigen::VectorXd f = load_;
+  if (pressure_load_.size() > 0) f += pressure_load_;
+  // From the linear estimate about the last state, Newton on the neo-Hookean solid under the
+  // loads as they stand (dead loads), then its tangent there.
+  Eigen::MatrixXd x = f;
+  solid_->tangent_solve(x);
+  solid_->set_displacement(base_ + x.col(0));
+  solid_->nodal_forces() = f;
+  const solid::SolveReport report = solid_->solve({.tolerance = 1e-6, .max_iterations = 30, .keep_tangent = true});
+  if (!report.converged)
+    throw_numerical_error(
+        fmt::format("wall: solving the wall under its loads to linearize it again did not converge "
+                    "({} Newton iterations, residual {:.3g} N): the wall cannot carry these loads "
+                    "(a stiffer or thicker wall, wall.support_stiffness, or less force on it)",
+                    report.iterations, report.residual));
+  if (report.iterations == 0) solid_->linearize();  // (else the last iteration's tangent is kept)
+  base_u_ = solid_->displacement();
+  x = f;
+  solid_->tangent_solve(x);
+  base_ = base_u_ - x.col(0);
+  lumen_->clear();  // the columns of the last tangent
+  if (pressure_response_.size() > 0) {
+    pressure_response_.resize(0, 0);
+    solve_pressure_response();
+  }
+  widening_.resize(0, 0);
+  widening_pressure_.resize(0, 0);
+  if (radial_.size() > 0) base_widening_ = radial_.transpose() * base_;
+  ++relinearizations_;
+  field_current_ = false;
+  const double spent = since(t0);
+  relinearize_seconds_ += spent;
+  seconds_ += spent;
 }
 
 void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, double reference) {
@@ -202,16 +273,28 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
                                  w.emplace_back(seg.node_to, best_t);
                                });
   }
+  Eigen::VectorXd p(net_.num_nodes());
+  for (int k = 0; k < net_.num_nodes(); ++k) p[k] = node_pressures_[static_cast<size_t>(k)] - reference;
+  last_pressure_ = p;
+  pressure_load_ = pressure_basis_ * p;
+  solve_pressure_response();
+  field_current_ = false;
+  seconds_ += since(t0);
+}
+
+void DeformableWall::solve_pressure_response() {
   if (pressure_response_.size() == 0) {
     // The lumen's response to each unit node pressure, K⁻¹B on the lumen's nodes, solved once
-    // (a back-substitution of this wall costs as much as ten of these products): the wall then
-    // follows a pulsatile pressure at a product a step, and its full field is solved only for an
-    // output frame.
-    for (size_t f = 0; f < solid_->mesh().faces.size(); ++f)
-      if (solid_->mesh().face_group[f] == solid_->mesh().group_named("lumen"))
-        for (int node : solid_->mesh().faces[f]) lumen_nodes_.push_back(node);
-    std::sort(lumen_nodes_.begin(), lumen_nodes_.end());
-    lumen_nodes_.erase(std::unique(lumen_nodes_.begin(), lumen_nodes_.end()), lumen_nodes_.end());
+    // a linearization (a back-substitution of this wall costs as much as ten of these
+    // products): the wall then follows a pulsatile pressure at a product a step, and its full
+    // field is solved only for an output frame.
+    if (lumen_nodes_.empty()) {
+      for (size_t f = 0; f < solid_->mesh().faces.size(); ++f)
+        if (solid_->mesh().face_group[f] == solid_->mesh().group_named("lumen"))
+          for (int node : solid_->mesh().faces[f]) lumen_nodes_.push_back(node);
+      std::sort(lumen_nodes_.begin(), lumen_nodes_.end());
+      lumen_nodes_.erase(std::unique(lumen_nodes_.begin(), lumen_nodes_.end()), lumen_nodes_.end());
+    }
     Eigen::MatrixXd x = Eigen::MatrixXd(pressure_basis_);
     solid_->tangent_solve(x);
     pressure_response_.resize(3 * static_cast<Eigen::Index>(lumen_nodes_.size()), x.cols());
@@ -219,19 +302,13 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
       pressure_response_.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = x.middleRows<3>(3 * lumen_nodes_[a]);
     pressure_field_ = Eigen::VectorXd::Zero(solid_->num_dofs());
   }
-  Eigen::VectorXd p(net_.num_nodes());
-  for (int k = 0; k < net_.num_nodes(); ++k) p[k] = node_pressures_[static_cast<size_t>(k)] - reference;
-  last_pressure_ = p;
-  pressure_load_ = pressure_basis_ * p;
-  const Eigen::VectorXd lumen = pressure_response_ * p;
+  const Eigen::VectorXd lumen = pressure_response_ * last_pressure_;
   max_pressure_displacement_ = 0.0;
   for (size_t a = 0; a < lumen_nodes_.size(); ++a) {
     const Vec3 ua = lumen.segment<3>(3 * static_cast<Eigen::Index>(a));
     pressure_field_.segment<3>(3 * lumen_nodes_[a]) = ua;  // (the lumen's nodes only: what the contacts read)
     max_pressure_displacement_ = std::max(max_pressure_displacement_, ua.norm());
   }
-  field_current_ = false;
-  seconds_ += since(t0);
 }
 
 void DeformableWall::measure_thickness() {
@@ -250,18 +327,20 @@ void DeformableWall::measure_thickness() {
     v->erase(std::unique(v->begin(), v->end()), v->end());
   }
   local_thickness_.clear();
+  node_thickness_.assign(static_cast<size_t>(m.num_nodes()), 0.0);
   for (int a : in) {
     double best = std::numeric_limits<double>::infinity();
     for (int b : out)
       best = std::min(best, (m.nodes[static_cast<size_t>(a)] - m.nodes[static_cast<size_t>(b)]).squaredNorm());
     local_thickness_.emplace_back(a, std::sqrt(best));
+    node_thickness_[static_cast<size_t>(a)] = std::sqrt(best);
   }
 }
 
 std::vector<double> DeformableWall::segment_widening() {
   const auto t0 = Clock::now();
   const int segments = net_.num_segments();
-  if (widening_.size() == 0) {
+  if (radial_.size() == 0) {
     // w_s: each lumen vertex's radial direction about its nearest segment's axis, averaged.
     const mesh::TetMesh& m = solid_->mesh();
     std::vector<std::vector<std::pair<int, Vec3>>> of(static_cast<size_t>(segments));
@@ -281,19 +360,26 @@ std::vector<double> DeformableWall::segment_widening() {
       }
       of[static_cast<size_t>(best)].emplace_back(node, radial);
     }
-    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(solid_->num_dofs(), segments);
+    std::vector<Eigen::Triplet<double>> entries;
     segment_has_nodes_.assign(static_cast<size_t>(segments), 0);
     for (int k = 0; k < segments; ++k) {
       const auto& nodes = of[static_cast<size_t>(k)];
       segment_has_nodes_[static_cast<size_t>(k)] = nodes.empty() ? 0 : 1;
-      for (const auto& [node, radial] : nodes) w.block<3, 1>(3 * node, k) = radial / static_cast<double>(nodes.size());
+      for (const auto& [node, radial] : nodes)
+        for (int c = 0; c < 3; ++c)
+          entries.emplace_back(3 * node + c, k, radial[c] / static_cast<double>(nodes.size()));
     }
-    solid_->tangent_solve(w);
-    widening_ = std::move(w);
+    radial_.resize(solid_->num_dofs(), segments);
+    radial_.setFromTriplets(entries.begin(), entries.end());
+    base_widening_ = radial_.transpose() * base_;
+  }
+  if (widening_.size() == 0) {  // K⁻¹W, again after each linearization
+    widening_ = Eigen::MatrixXd(radial_);
+    solid_->tangent_solve(widening_);
   }
   if (widening_pressure_.size() == 0 && pressure_basis_.size() > 0)  // (the pressure may come later)
     widening_pressure_ = widening_.transpose() * pressure_basis_;
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(segments);
+  Eigen::VectorXd u = base_widening_;
   for (Eigen::Index i = 0; i < load_.size(); ++i)  // the bodies' forces: a few nonzero entries
     if (load_[i] != 0.0) u += load_[i] * widening_.row(i).transpose();
   if (last_pressure_.size() > 0) u += widening_pressure_ * last_pressure_;
@@ -327,13 +413,16 @@ void DeformableWall::solve_field() const {
   Eigen::MatrixXd u = load_;
   if (pressure_load_.size() > 0) u.col(0) += pressure_load_;
   solid_->tangent_solve(u);
-  displacement_ = u.col(0);
+  displacement_ = base_ + u.col(0);
   max_displacement_ = 0.0;
   for (int n = 0; n < solid_->mesh().num_nodes(); ++n)
     max_displacement_ = std::max(max_displacement_, displacement_.segment<3>(3 * n).norm());
   max_ever_ = std::max(max_ever_, max_displacement_);
-  for (const auto& [node, t] : local_thickness_)
+  for (const auto& [node, t] : local_thickness_) {
     max_ratio_ever_ = std::max(max_ratio_ever_, displacement_.segment<3>(3 * node).norm() / t);
+    max_increment_ratio_ =
+        std::max(max_increment_ratio_, (displacement_.segment<3>(3 * node) - base_u_.segment<3>(3 * node)).norm() / t);
+  }
   field_current_ = true;
   // The linear wall's field as a deformation: an element turned inside out is no wall any more.
   if (!std::isfinite(solid_->energy(displacement_)))
@@ -357,22 +446,26 @@ double DeformableWall::max_displacement() const {
 
 nlohmann::json DeformableWall::summary() const {
   solve_field();
-  // The wall is linear about rest: 6% off the nonlinear solid at half its thickness
-  // (docs/deformable-wall.md), more beyond. Say so when a run went beyond the thickness where
-  // it moved (each lumen vertex's displacement against its own thickness).
-  const bool beyond = max_ratio_ever_ > 1.0;
+  // The wall is linear about the state it was last linearized about (rest, unless
+  // wall.relinearize solved it again under its loads): 6% off the nonlinear solid at half its
+  // thickness (docs/deformable-wall.md), more beyond. Say so when a run went beyond the
+  // thickness from that state where it moved (each lumen vertex against its own thickness).
+  const bool beyond = max_increment_ratio_ > 1.0;
   if (beyond && !warned_range_) {
     warned_range_ = true;
-    warn(
-        fmt::format("wall: it moved {:.3g} times its thickness where it moved most relative to it (largest "
-                    "displacement {:.3g} mm): the wall is linear about its rest state, and its displacements "
-                    "and forces are approximate beyond its thickness",
-                    max_ratio_ever_, max_ever_ * 1e3));
+    warn(fmt::format(
+        "wall: it moved {:.3g} times its thickness from the state it is linear about where it moved most relative "
+        "to it (largest displacement {:.3g} mm): its displacements and forces are approximate beyond its thickness{}",
+        max_increment_ratio_, max_ever_ * 1e3,
+        relinearize_ > 0.0 ? "" : " (wall.relinearize solves the wall again about its loaded state)"));
   }
   nlohmann::json j = lumen_facts_;
   j.update({{"max_displacement", max_ever_},  // over the output frames and the end
             {"beyond_linear_range", beyond},
             {"max_displacement_over_thickness", max_ratio_ever_},
+            {"max_increment_over_thickness", max_increment_ratio_},
+            {"relinearizations", relinearizations_},
+            {"relinearize_seconds", relinearize_seconds_},
             {"final_max_displacement", max_displacement_},
             {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
             {"compliance_columns", compliance_columns()},

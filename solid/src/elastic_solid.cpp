@@ -415,6 +415,7 @@ SolveReport ElasticSolid::solve(const SolveOptions& options) {
     report.residual = g.norm();
   }
   report.converged = true;
+  linearized_ = options.keep_tangent && report.iterations > 0;
   return report;
 }
 

@@ -514,10 +514,11 @@ TEST(DeformableWall, EachBranchsWallHasItsOwnThickness) {
   const int outer = m.group_named("outer"), lumen = m.group_named("lumen");
   double outer_proximal = 0.0, outer_distal = 0.0;
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    if (m.face_group[f] == lumen)
+    if (m.face_group[f] == lumen) {
       for (int node : m.faces[f])
         EXPECT_NEAR(std::hypot(m.nodes[static_cast<size_t>(node)].y(), m.nodes[static_cast<size_t>(node)].z()), kR,
                     1e-6);
+    }
     if (m.face_group[f] != outer) continue;
     for (int node : m.faces[f]) {
       const Vec3& x = m.nodes[static_cast<size_t>(node)];
@@ -555,6 +556,71 @@ TEST(DeformableWall, EachBranchsWallHasItsOwnThickness) {
                                 return bad;
                               }()),
                Error);
+}
+}  // namespace
+}  // namespace flowire::coupling
+
+namespace flowire::coupling {
+namespace {
+TEST(DeformableWall, ARelinearizedWallFollowsTheNonlinearSolidBeyondItsThickness) {
+  // A wire's footprint pushes a tube's wall outwards with a force that grows in 20 steps until
+  // the wall has moved more than four times its thickness. The reference: the same wall solved
+  // (neo-Hookean, Newton) under every step's load, each from the last equilibrium. A wall linear
+  // about rest departs from it; one linearized again whenever the footprint has moved a quarter of
+  // its thickness from its last linearization follows it, at every step, within a small fraction
+  // of that departure.
+  const double force = 0.15, radius = 0.445e-3, length = 16e-3;
+  const int steps = 20;
+  const Vec3 at(0.5 * length, kR, 0.0);
+  auto run = [&](double relinearize, bool reference) {
+    WallSpec spec = soft_wall(1e6);
+    spec.relinearize = relinearize;
+    DeformableWall wall(Vec3::Zero(), Vec3(length, 0, 0), kR, spec);
+    const auto& m = wall.mesh();
+    int nearest = 0;  // the footprint's centre: the lumen node nearest to it
+    for (int n = 1; n < m.num_nodes(); ++n)
+      if ((m.nodes[static_cast<size_t>(n)] - at).norm() < (m.nodes[static_cast<size_t>(nearest)] - at).norm())
+        nearest = n;
+    const std::vector<Vec3> points = {at};
+    const std::vector<double> radii = {radius};
+    std::vector<double> path;
+    for (int k = 1; k <= steps; ++k) {
+      wall.load(&wall, points, std::vector<Vec3>{Vec3(0, force * k / steps, 0)}, radii);
+      if (reference) wall.relinearize();
+      path.push_back(wall.displacement()[3 * nearest + 1]);
+    }
+    return std::pair{path, wall.relinearizations()};
+  };
+  const auto [exact, solves] = run(0.0, true);
+  const auto [linear, none] = run(0.0, false);
+  const auto [relinearized, count] = run(0.25, false);
+  const auto [finer, finer_count] = run(0.1, false);
+  auto largest_error = [&](const std::vector<double>& path) {
+    double e = 0.0;
+    for (int k = 0; k < steps; ++k) e = std::max(e, std::abs(path[k] - exact[k]) / exact[k]);
+    return e;
+  };
+  const double linear_error = largest_error(linear), error = largest_error(relinearized),
+               finer_error = largest_error(finer);
+  std::printf(
+      "footprint displacement at the last step: nonlinear %.4g mm, linear about rest %.4g mm, relinearized "
+      "at 0.25 t %.4g mm (%d linearizations), at 0.1 t %.4g mm (%d); largest error over the steps: linear "
+      "%.1f%%, relinearized %.2f%% and %.2f%%\n",
+      exact.back() * 1e3, linear.back() * 1e3, relinearized.back() * 1e3, count, finer.back() * 1e3, finer_count,
+      100 * linear_error, 100 * error, 100 * finer_error);
+  EXPECT_EQ(solves, steps);
+  EXPECT_EQ(none, 0);
+  EXPECT_GT(exact.back(), 2.0 * kThickness) << "the case is beyond the wall's thickness";
+  EXPECT_GT(count, 2);
+  EXPECT_LT(count, finer_count);
+  EXPECT_GT(linear_error, 0.3) << "the linear wall's departure is what is measured";
+  EXPECT_LT(error, 0.2 * linear_error);
+  EXPECT_LT(std::abs(relinearized.back() - exact.back()), 0.01 * exact.back());
+  // The departure between linearizations shrinks with the distance allowed, at least in proportion
+  // to it: the slope of the largest error against the fraction of the thickness.
+  const double slope = std::log(error / finer_error) / std::log(0.25 / 0.1);
+  std::printf("slope of the error against wall.relinearize: %.2f\n", slope);
+  EXPECT_GT(slope, 0.7);
 }
 }  // namespace
 }  // namespace flowire::coupling

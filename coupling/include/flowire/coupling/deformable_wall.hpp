@@ -51,6 +51,10 @@ struct WallSpec {
   std::vector<std::pair<int, double>> branch_youngs_modulus;
   /// branches whose wall is thicker or thinner than the rest's (their own thickness or ratio)
   std::vector<solid::BranchThickness> branch_thickness;
+  /// The wall is solved (nonlinear) and linearized again about its loaded state once a loaded
+  /// lumen point has moved this fraction of its local thickness from where the last
+  /// linearization left it; 0: linear about rest throughout.
+  double relinearize = 0.0;
   /// @brief The nominal thickness of branch @p branch's wall where its lumen radius is @p radius.
   [[nodiscard]] double thickness_at(int branch, double radius) const {
     return solid::wall_thickness_at(thickness, thickness_ratio, branch_thickness, branch, radius);
@@ -87,7 +91,9 @@ class DeformableWall final : public CompliantWall {
   /// wall's elements) takes the mean of its neighbours'.
   [[nodiscard]] std::vector<double> segment_widening() override;
   /// @brief Body @p body's forces on the wall (its contact forces' opposites), replacing its last
-  /// ones: with every other body's, the wall's load (displacement field, total load).
+  /// ones: with every other body's, the wall's load (displacement field, total load). Where a
+  /// loaded point has moved more than WallSpec::relinearize of its local thickness since the last
+  /// linearization, the wall is solved under its loads (neo-Hookean, Newton) and linearized there.
   void load(const void* body, std::span<const Vec3> points, std::span<const Vec3> forces,
             std::span<const double> radii = {}) override;
   /// @brief The solid's mesh in the scene's frame, and its displacement (3 a node) [m] under
@@ -104,6 +110,13 @@ class DeformableWall final : public CompliantWall {
   [[nodiscard]] double mesh_seconds() const { return mesh_seconds_; }
   /// @brief The wall's least thickness [m] (around a surface, after thinning for room).
   [[nodiscard]] double thinnest() const { return thinnest_; }
+  /// @brief Solve the wall under its current loads (the bodies' and the blood pressure, dead
+  /// loads) from the linear estimate, and linearize it there: its displacement is then
+  /// u = u_b + K_b⁻¹(f − f_b) about that state. @throws flowire::Error (numerical) when the
+  /// solid cannot carry the loads (an element would invert, Newton fails).
+  void relinearize();
+  /// @brief How many times the wall was linearized again about a loaded state.
+  [[nodiscard]] int relinearizations() const { return relinearizations_; }
   /// @brief Largest displacement, ever and now (and whether it went beyond the wall's thickness,
   /// the linear wall's range: warned once), the load now, columns solved, seconds.
   [[nodiscard]] nlohmann::json summary() const override;
@@ -153,6 +166,21 @@ class DeformableWall final : public CompliantWall {
   Eigen::MatrixXd widening_pressure_;  ///< (segments × network nodes) (K⁻¹W)ᵀB
   std::vector<char> segment_has_nodes_;
   Eigen::VectorXd last_pressure_;  ///< the network-node pressures less the reference of the last set
+  // The state the wall is linear about (rest until relinearize): u = base_ + K_b⁻¹ f with
+  // base_ = u_b − K_b⁻¹ f_b (0 at rest), f the loads (bodies' and pressure's nodal forces).
+  Eigen::VectorXd base_;                ///< (3 a node) u_b − K_b⁻¹ f_b
+  Eigen::VectorXd base_u_;              ///< (3 a node) u_b
+  Eigen::SparseMatrix<double> radial_;  ///< (dofs × segments) W, each segment's mean radial direction
+  Eigen::VectorXd base_widening_;       ///< (segments) Wᵀ base_
+  std::vector<double> node_thickness_;  ///< (nodes) the lumen's local thickness, 0 elsewhere
+  double relinearize_ = 0.0;            ///< WallSpec::relinearize
+  int relinearizations_ = 0;
+  double relinearize_seconds_ = 0.0;
+  mutable double max_increment_ratio_ = 0.0;  ///< largest |u − u_b| over the local thickness
+  /// Whether a loaded point moved beyond the relinearize fraction of its thickness from u_b.
+  bool moved_beyond_linearization();
+  /// The lumen's response to the blood pressure (K_b⁻¹B on the lumen's nodes) and its field.
+  void solve_pressure_response();
 };
 
 }  // namespace flowire::coupling

@@ -32,6 +32,9 @@ using vessels::Vec3;
 struct SolveOptions {
   double tolerance = 1e-10;  ///< |∇Π| ≤ tolerance × max(|loads|, |∇Π at the start|)
   int max_iterations = 50;
+  /// Keep the last iteration's factorized tangent for `tangent_solve` (as `linearize` would, at the
+  /// iterate before the last: within the tolerance's square of the tangent at the solution).
+  bool keep_tangent = false;
 };
 
 /// @brief What `solve` did.
