@@ -469,6 +469,7 @@ nlohmann::json DeformableWall::summary() const {
             {"final_max_displacement", max_displacement_},
             {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
             {"compliance_columns", compliance_columns()},
+            {"compliance_columns_dropped", lumen_->dropped_nodes()},
             {"blood_pressure_max_lumen_displacement",
              pressure_field_.size() > 0 ? nlohmann::json(max_pressure_displacement_) : nlohmann::json(nullptr)},
             {"seconds", seconds_}});

@@ -64,7 +64,7 @@ Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
 
 }  // namespace
 
-LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen) : solid_(solid) {
+LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen, double budget) : solid_(solid) {
   const auto& m = solid.mesh();
   if (lumen < 0 || lumen >= static_cast<int>(m.groups.size()))
     throw_usage_error(fmt::format("wall: no lumen group {}", lumen));
@@ -86,6 +86,9 @@ LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen) : solid_(
   }
   if (faces_.empty())
     throw_usage_error(fmt::format("wall: the lumen group '{}' has no face", m.groups[static_cast<size_t>(lumen)].name));
+  // A column: 3 × 3 numbers for each lumen node; at least a few hundred are kept (a step's contacts).
+  max_columns_ = std::max<size_t>(
+      256, static_cast<size_t>(budget / (9.0 * sizeof(double) * static_cast<double>(lumen_nodes_.size()))));
   cell_ = 2.0 * edge / static_cast<double>(faces_.size());
   const Vec3 extent = hi - lo;
   // No more than about 2 million cells.
@@ -210,11 +213,14 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
 const Eigen::MatrixXd& LumenCompliance::column(int node) const { return columns_.at(node); }
 
 void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
+  ++tick_;
   std::vector<int> missing;
   for (const auto& p : points)
-    for (const auto& [node, w] : p.weights)
+    for (const auto& [node, w] : p.weights) {
+      last_use_[node] = tick_;
       if (!columns_.count(node) && std::find(missing.begin(), missing.end(), node) == missing.end())
         missing.push_back(node);
+    }
   // Many right-hand sides per back-substitution: the supernodal solve then works on blocks.
   constexpr size_t kBatch = 64;
   for (size_t first = 0; first < missing.size(); first += kBatch) {
@@ -230,6 +236,22 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
             x.block<3, 3>(3 * lumen_nodes_[a], 3 * static_cast<Eigen::Index>(q));
       columns_.emplace(missing[first + q], std::move(kept));
     }
+  }
+  solved_ += static_cast<int>(missing.size());
+  if (columns_.size() <= max_columns_) return;
+  // Over the budget: drop the columns asked for longest ago (never those of this call).
+  std::vector<std::pair<std::uint64_t, int>> by_age;
+  for (const auto& [node, column] : columns_) {
+    (void)column;
+    const std::uint64_t used = last_use_[node];
+    if (used < tick_) by_age.emplace_back(used, node);
+  }
+  std::sort(by_age.begin(), by_age.end());
+  for (const auto& [used, node] : by_age) {
+    if (columns_.size() <= max_columns_) break;
+    columns_.erase(node);
+    last_use_.erase(node);
+    ++dropped_;
   }
 }
 

@@ -135,5 +135,38 @@ TEST(LumenCompliance, IsReciprocalAndIsTheFullSolvesResponse) {
   }
 }
 
+TEST(LumenCompliance, ColumnsDroppedForTheBudgetAreSolvedAgainAndGiveTheSameCompliance) {
+  // A budget of one byte keeps the fewest columns allowed (256 lumen nodes' worth): a sweep of
+  // patches along the tube asks for more, the oldest are dropped, and asking for the first
+  // points again solves them anew, to the same compliance as an unbounded budget's.
+  ElasticSolid s = supported_tube();
+  s.linearize();
+  LumenCompliance kept(s, s.mesh().group_named("lumen")), tight(s, s.mesh().group_named("lumen"), 1.0);
+  auto patch_at = [&](LumenCompliance& c, double z, double phi) {
+    return c.locate_patch(Vec3((kA - 0.05e-3) * std::cos(phi), (kA - 0.05e-3) * std::sin(phi), z), 0.445e-3);
+  };
+  auto compliance_at = [&](LumenCompliance& c, double z) {
+    std::vector<LumenPoint> p = {patch_at(c, z, 0.3), patch_at(c, z + 0.4e-3, 2.0)};
+    const std::vector<Vec3> d = {-p[0].normal, -p[1].normal};
+    return c.compliance(p, d);
+  };
+  const Eigen::MatrixXd first = compliance_at(tight, 2e-3);
+  for (int k = 0; k < 40; ++k) {  // a sweep along the tube and round it
+    const double z = 1.5e-3 + 9e-3 * k / 39.0;
+    for (int j = 0; j < 6; ++j) (void)compliance_at(tight, z + 0.1e-3 * j), (void)patch_at(tight, z, j);
+    std::vector<LumenPoint> ring;
+    std::vector<Vec3> d;
+    for (int j = 0; j < 6; ++j) ring.push_back(patch_at(tight, z, 1.05 * j)), d.push_back(-ring.back().normal);
+    (void)tight.compliance(ring, d);
+  }
+  EXPECT_GT(tight.dropped_nodes(), 0) << "the sweep went beyond the budget";
+  const int solved_before = tight.solved_nodes();
+  const Eigen::MatrixXd again = compliance_at(tight, 2e-3), unbounded = compliance_at(kept, 2e-3);
+  EXPECT_GT(tight.solved_nodes(), solved_before) << "the first points' columns were dropped and solved again";
+  EXPECT_LT((again - first).cwiseAbs().maxCoeff(), 1e-12 * first.cwiseAbs().maxCoeff());
+  EXPECT_LT((again - unbounded).cwiseAbs().maxCoeff(), 1e-12 * first.cwiseAbs().maxCoeff());
+  EXPECT_EQ(kept.dropped_nodes(), 0);
+}
+
 }  // namespace
 }  // namespace flowire::solid

@@ -15,11 +15,14 @@
 /// solid's (tests/solid: the mesh study through PETSc). Columns of K⁻¹ are solved per lumen node
 /// (three right-hand sides, one back-substitution with the kept factorization) the first time a
 /// point near that node asks, and kept restricted to the lumen's nodes: a wire that slides
-/// along the wall pays only for the nodes it reaches. By Maxwell–Betti C is symmetric, and it is
-/// positive definite where the points are distinct.
+/// along the wall pays only for the nodes it reaches. Each kept column is as long as the lumen
+/// (9 numbers a lumen node): beyond a memory budget the columns used longest ago are dropped (and
+/// solved again should the wire come back). By Maxwell–Betti C is symmetric, and it is positive
+/// definite where the points are distinct.
 #include <Eigen/Dense>
 
 #include <array>
+#include <cstdint>
 #include <span>
 #include <unordered_map>
 #include <utility>
@@ -45,7 +48,8 @@ class LumenCompliance {
  public:
   /// @param solid linearized (its tangent factorized); outlives this object
   /// @param lumen the boundary group the points lie on
-  LumenCompliance(const ElasticSolid& solid, int lumen);
+  /// @param budget bytes the kept columns may take (those used longest ago are dropped beyond it)
+  LumenCompliance(const ElasticSolid& solid, int lumen, double budget = 1024.0 * 1024.0 * 1024.0);
 
   /// @brief The lumen point nearest to @p x.
   [[nodiscard]] LumenPoint locate(const Vec3& x) const;
@@ -67,10 +71,15 @@ class LumenCompliance {
   [[nodiscard]] Eigen::VectorXd nodal_forces(std::span<const LumenPoint> points, std::span<const Vec3> forces) const;
   /// @brief Solve the columns the faces of @p points still lack, many at a time.
   void prefetch(std::span<const LumenPoint> points);
-  /// @brief Lumen nodes whose columns have been solved so far.
-  [[nodiscard]] int solved_nodes() const { return static_cast<int>(columns_.size()); }
+  /// @brief Columns solved so far (a lumen node's, three right-hand sides, each time it was
+  /// solved), and those dropped to keep within the budget.
+  [[nodiscard]] int solved_nodes() const { return solved_; }
+  [[nodiscard]] int dropped_nodes() const { return dropped_; }
   /// @brief Forget the kept columns (after the solid was linearized again).
-  void clear() { columns_.clear(); }
+  void clear() {
+    columns_.clear();
+    last_use_.clear();
+  }
 
  private:
   /// The kept column block of lumen node `node` (solved by prefetch): (3 × lumen nodes) × 3.
@@ -81,6 +90,10 @@ class LumenCompliance {
   std::vector<int> lumen_index_;  ///< (nodes) index among the lumen's nodes, −1 elsewhere
   std::vector<int> lumen_nodes_;  ///< the lumen's nodes
   std::unordered_map<int, Eigen::MatrixXd> columns_;
+  std::unordered_map<int, std::uint64_t> last_use_;  ///< per kept column, the prefetch that last asked
+  std::uint64_t tick_ = 0;
+  size_t max_columns_ = 0;  ///< the budget in columns
+  int solved_ = 0, dropped_ = 0;
   // A uniform grid of the lumen faces' bounding boxes for `locate`.
   Vec3 grid_origin_ = Vec3::Zero();
   double cell_ = 1.0;
