@@ -218,7 +218,7 @@ void DeformableWall::relinearize() {
                     "({} Newton iterations, residual {:.3g} N): the wall cannot carry these loads "
                     "(a stiffer or thicker wall, wall.support_stiffness, or less force on it)",
                     report.iterations, report.residual));
-  if (report.iterations == 0) solid_->linearize();  // (else the last iteration's tangent is kept)
+  if (!solid_->linearized()) solid_->linearize();  // (else the last iteration's tangent is kept)
   base_u_ = solid_->displacement();
   x = f;
   solid_->tangent_solve(x);

@@ -116,6 +116,7 @@ void ElasticSolid::set_laws(std::vector<NeoHookean> laws, std::vector<int> tet_l
 }
 
 struct ElasticSolid::Factor {
+  Factor() { llt.cholmod().print = 1; }  // an indefinite tangent is reported by the solid, not by CHOLMOD's print
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
   bool analysed = false;
 };
@@ -385,7 +386,8 @@ SolveReport ElasticSolid::solve(const SolveOptions& options) {
           fmt::format("wall: the residual became {} (iteration {})", report.residual, report.iterations));
     if (!factorize_tangent(u_))
       throw_numerical_error(
-          fmt::format("wall: the tangent stiffness is not positive definite at iteration {} (is the wall held?)",
+          fmt::format("wall: the tangent stiffness is not positive definite at iteration {} (is the wall held? or "
+                      "the loads beyond what it can carry)",
                       report.iterations));
     const Eigen::VectorXd step = -factor_->llt.solve(g);
     // Backtracking: the energy must not rise (Armijo), or, where its change is below its

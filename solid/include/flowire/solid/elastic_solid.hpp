@@ -112,6 +112,8 @@ class ElasticSolid {
   /// @brief x ← (∇²Π)⁻¹ x, column by column, with the factorization of the last `linearize`
   /// (held components of x are zeroed first and stay zero).
   void tangent_solve(Eigen::MatrixXd& x) const;
+  /// @brief Whether `tangent_solve` has a tangent (a `linearize`, or a `solve` that kept its own).
+  [[nodiscard]] bool linearized() const { return linearized_; }
   [[nodiscard]] const Eigen::VectorXd& displacement() const { return u_; }
   void set_displacement(const Eigen::VectorXd& u);
   [[nodiscard]] Vec3 displacement(int node) const { return u_.segment<3>(3 * node); }
