@@ -23,6 +23,26 @@ namespace flowire::coupling {
 namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// The segment of @p net nearest to @p x (by its axis), the parameter t ∈ [0, 1] of the nearest
+/// axis point along it, and x less that point.
+struct NearestSegment {
+  int segment = 0;
+  double t = 0.0;
+  Vec3 offset = Vec3::Zero();
+};
+NearestSegment nearest_segment(const vessels::Network& net, const Vec3& x) {
+  NearestSegment best;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < net.num_segments(); ++k) {
+    const auto& seg = net.segment(k);
+    const Vec3 a = net.node(seg.node_from), ab = net.node(seg.node_to) - a;
+    const double t = std::clamp((x - a).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+    const Vec3 r = x - a - t * ab;
+    if (r.squaredNorm() < best_d2) best_d2 = r.squaredNorm(), best = {k, t, r};
+  }
+  return best;
+}
 }  // namespace
 
 DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec, const vessels::LumenSurface* surface)
@@ -93,16 +113,7 @@ void DeformableWall::assign_branch_laws(const WallSpec& spec) {
   for (size_t t = 0; t < m.tets.size(); ++t) {
     Vec3 c = Vec3::Zero();
     for (int k = 0; k < 4; ++k) c += 0.25 * m.nodes[static_cast<size_t>(m.tets[t][static_cast<size_t>(k)])];
-    double best = std::numeric_limits<double>::infinity();
-    int seg = 0;
-    for (int k = 0; k < net_.num_segments(); ++k) {
-      const auto& sg = net_.segment(k);
-      const Vec3 a = net_.node(sg.node_from), ab = net_.node(sg.node_to) - a;
-      const double u = std::clamp((c - a).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
-      const double d2 = (a + u * ab - c).squaredNorm();
-      if (d2 < best) best = d2, seg = k;
-    }
-    tet_law[t] = law_of_branch[static_cast<size_t>(net_.segment(seg).branch)];
+    tet_law[t] = law_of_branch[static_cast<size_t>(net_.segment(nearest_segment(net_, c).segment).branch)];
   }
   solid_->set_laws(std::move(laws), std::move(tet_law));
 }
@@ -256,22 +267,13 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
   if (pressure_basis_.size() == 0) {
     // The pressure at a lumen point: along the nearest segment, between its nodes' pressures,
     // so the load is linear in them, f = B p: B once, a product and a back-substitution a change.
-    pressure_basis_ =
-        solid_->pressure_basis(solid_->mesh().group_named("lumen"), net_.num_nodes(),
-                               [this](const Vec3& x, std::vector<std::pair<int, double>>& w) {
-                                 int best = -1;
-                                 double best_d = std::numeric_limits<double>::infinity(), best_t = 0.0;
-                                 for (int k = 0; k < net_.num_segments(); ++k) {
-                                   const auto& seg = net_.segment(k);
-                                   const Vec3 a = net_.node(seg.node_from), d = net_.node(seg.node_to) - a;
-                                   const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-                                   const double dist = (x - a - t * d).norm();
-                                   if (dist < best_d) best_d = dist, best = k, best_t = t;
-                                 }
-                                 const auto& seg = net_.segment(best);
-                                 w.emplace_back(seg.node_from, 1.0 - best_t);
-                                 w.emplace_back(seg.node_to, best_t);
-                               });
+    pressure_basis_ = solid_->pressure_basis(solid_->mesh().group_named("lumen"), net_.num_nodes(),
+                                             [this](const Vec3& x, std::vector<std::pair<int, double>>& w) {
+                                               const NearestSegment near = nearest_segment(net_, x);
+                                               const auto& seg = net_.segment(near.segment);
+                                               w.emplace_back(seg.node_from, 1.0 - near.t);
+                                               w.emplace_back(seg.node_to, near.t);
+                                             });
   }
   Eigen::VectorXd p(net_.num_nodes());
   for (int k = 0; k < net_.num_nodes(); ++k) p[k] = node_pressures_[static_cast<size_t>(k)] - reference;
@@ -346,19 +348,8 @@ std::vector<double> DeformableWall::segment_widening() {
     std::vector<std::vector<std::pair<int, Vec3>>> of(static_cast<size_t>(segments));
     for (const auto& [node, thickness] : local_thickness_) {
       (void)thickness;
-      const Vec3& x = m.nodes[static_cast<size_t>(node)];
-      int best = -1;
-      double best_d = std::numeric_limits<double>::infinity();
-      Vec3 radial = Vec3::UnitX();
-      for (int k = 0; k < segments; ++k) {
-        const auto& seg = net_.segment(k);
-        const Vec3 a = net_.node(seg.node_from), d = net_.node(seg.node_to) - a;
-        const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-        const Vec3 r = x - a - t * d;
-        const double dist = r.norm();
-        if (dist < best_d) best_d = dist, best = k, radial = r.normalized();
-      }
-      of[static_cast<size_t>(best)].emplace_back(node, radial);
+      const NearestSegment near = nearest_segment(net_, m.nodes[static_cast<size_t>(node)]);
+      of[static_cast<size_t>(near.segment)].emplace_back(node, near.offset.normalized());
     }
     std::vector<Eigen::Triplet<double>> entries;
     segment_has_nodes_.assign(static_cast<size_t>(segments), 0);
