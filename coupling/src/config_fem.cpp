@@ -313,8 +313,10 @@ nlohmann::json calibrate_scene(const config::Config& c, const CalibrateOptions& 
   const vessels::Network net = build_scene_network(c);
   flow::FlowSpec spec = scene_flow(c, net);
   if (!spec.segment_laws.empty()) {
-    warn("calibrate: the scene's vessels.calibration is set aside; the fit starts from Poiseuille segments");
+    warn(fmt::format("calibrate: the scene's {} set aside; the fit starts from Poiseuille segments",
+                     spec.stenoses.empty() ? "vessels.calibration is" : "flow.losses are"));
     spec.segment_laws.clear();
+    spec.stenoses.clear();
     spec.total_pressure = false;
     spec.end_alpha.clear();
   }

@@ -87,6 +87,19 @@ void CoSimulation::build_flow(nlohmann::json& s) {
   // A calibration in total pressure: the network's nodes hold p + ½ρū² (its outlets their static values).
   if (!fsolver_->spec().segment_laws.empty())
     s["flow"]["pressure"] = fsolver_->spec().total_pressure ? "total" : "static";
+  if (scene_.string_or("flow.losses.stenosis", "none") != "none") {
+    nlohmann::json list = nlohmann::json::array();
+    for (const flow::Stenosis& st : fsolver_->spec().stenoses)
+      list.push_back({{"branch", net_->branch(st.branch).name},
+                      {"node", st.throat_node},
+                      {"s", st.s},
+                      {"throat_radius", st.throat_radius},
+                      {"reference_radius", st.reference_radius},
+                      {"area_reduction", st.area_reduction},
+                      {"coefficient", st.coefficient},
+                      {"segments", st.segments.size()}});
+    s["flow"]["losses"] = {{"stenosis", "young_tsai"}, {"stenoses", std::move(list)}};
+  }
 }
 
 void CoSimulation::build_wire(nlohmann::json& s) {

@@ -533,10 +533,6 @@ std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec) {
   resolve_nodes(spec, net);
   std::unique_ptr<FlowSolver> s;
   if (spec.model == Model::Rlc) {
-    if (spec.has_quadratic_losses())
-      throw_input_error("flow",
-                        "quadratic segment losses (a calibration) are for the quasi-steady poiseuille model; "
-                        "the rlc model takes their resistance factors only");
     s = detail::make_rlc_solver(net, std::move(spec));
   } else if (spec.has_quadratic_losses()) {
     // Superposition does not hold for a nonlinear network: every frame is solved by Newton.

@@ -15,6 +15,7 @@
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
 #include "flowire/common/input.hpp"
+#include "flowire/flow/losses.hpp"
 
 namespace flowire::flow {
 namespace {
@@ -474,6 +475,20 @@ void declare_scene_keys(config::Schema& s) {
   s.add("flow.wall.*.youngs_modulus", Type::Number, "", D::Pressure, "this branch: wall Young's modulus").positive();
   s.add("flow.wall.*.thickness", Type::Number, "", D::Length, "this branch: wall thickness").positive();
   s.add("flow.wall.*.thickness_ratio", Type::Number, "", D::None, "this branch: wall thickness / radius").positive();
+  s.add("flow.losses", Type::Section, "", D::None,
+        "losses beyond Poiseuille's law taken from the network's own geometry, each a published model "
+        "(docs/flow-losses.md); they make the network nonlinear (solved by Newton's method)");
+  s.add("flow.losses.stenosis", Type::Enum, "none", D::None,
+        "young_tsai: every narrowing of a branch's radius (a local minimum) loses K_t rho/2 (A0/As - 1)^2 U0|U0| "
+        "where its jet expands (Young & Tsai 1973; U0 = Q/A0, A0 the lower shoulder's area, As the throat's) | none",
+        {"none", "young_tsai"});
+  s.add("flow.losses.stenosis_threshold", Type::Number, "0.2", D::None,
+        "a radius minimum is a stenosis from this area reduction 1 - As/A0 against its lower shoulder")
+      .at_least(0.0)
+      .below(1.0);
+  s.add("flow.losses.expansion_coefficient", Type::Number, "1.52", D::None,
+        "Young & Tsai's K_t (1.52: their model stenoses; 1: the Borda-Carnot loss of a sudden expansion alone)")
+      .positive();
   s.add("flow.profile", Type::Enum, "laminar", D::None,
         "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
         "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
@@ -708,6 +723,11 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
       x.rd *= f;
       x.c /= f;
     }
+  }
+  if (cfg.string_or("flow.losses.stenosis", "none") == "young_tsai") {
+    s.stenoses = find_stenoses(net, s.density, cfg.number_or("flow.losses.stenosis_threshold", 0.2),
+                               cfg.number_or("flow.losses.expansion_coefficient", 1.52));
+    add_stenosis_losses(net, s.stenoses, s.segment_laws);
   }
   return s;
 }

@@ -138,9 +138,6 @@ TEST(NewtonSolver, RefusesQuadraticLossesWhereTheyCannotBeSolvedAndBadLaws) {
       EXPECT_NE(std::string(e.what()).find("quadratic"), std::string::npos) << e.what();
     }
   }
-  FlowSpec rlc = spec;
-  rlc.model = Model::Rlc;
-  EXPECT_THROW((void)make_solver(net, rlc), Error);
   FlowSpec wrong = spec;
   wrong.segment_laws.pop_back();
   EXPECT_THROW((void)make_solver(net, wrong), Error);

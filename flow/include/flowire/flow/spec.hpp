@@ -156,6 +156,18 @@ struct SegmentLaw {
   }
 };
 
+/// @brief One stenosis the network's radii show (`flow.losses.stenosis`, losses.hpp).
+struct Stenosis {
+  int branch = -1;
+  int throat_node = -1;
+  double s = 0.0;                 ///< m, the throat's arc length from the branch's first node
+  double throat_radius = 0.0;     ///< m
+  double reference_radius = 0.0;  ///< m, the lower shoulder
+  double area_reduction = 0.0;    ///< 1 − A_s/A₀
+  double coefficient = 0.0;       ///< K, Pa·s²/m⁶
+  std::vector<int> segments;      ///< where K is spread (the throat to its distal widening)
+};
+
 enum class Model { Poiseuille, Rlc };
 enum class SolverKind { Superposition, DenseInverse, Sparse, Petsc };
 /// @brief Inertance per segment in the rlc model.
@@ -196,6 +208,8 @@ struct FlowSpec {
   /// The factors scale the resistances of every model; a quadratic term makes the quasi-steady
   /// network nonlinear (solved by Newton's method each frame, solver "newton").
   std::vector<SegmentLaw> segment_laws;
+  /// The stenoses whose Young–Tsai losses the segment laws hold (`flow.losses.stenosis`, losses.hpp).
+  std::vector<Stenosis> stenoses;
   /// The segment laws are a calibration in total pressure (flow/calibration.hpp): the nodes hold
   /// p + ½ρū², but for the outlets (static values), and the laws of the segments that end at an
   /// outlet carry its dynamic pressure.

@@ -1,0 +1,44 @@
+#pragma once
+/// @file losses.hpp
+/// @brief Losses beyond Poiseuille's law that the network takes from its own geometry
+/// (`flow.losses`), each a published model added to the segments' laws (FlowSpec::segment_laws).
+///
+/// **Stenosis: Young & Tsai's expansion loss.** The jet that leaves a narrowing loses the kinetic
+/// energy of its excess velocity where it spreads again (Borda–Carnot), measured on model stenoses
+/// by Young & Tsai (J. Biomech. 6:395–410, 1973) as
+/// \f[ \Delta p_t = \frac{K_t\rho}{2}\Big(\frac{A_0}{A_s}-1\Big)^2 |U_0| U_0, \quad K_t = 1.52, \f]
+/// with U₀ = Q/A₀ the mean velocity in the unobstructed vessel, A₀ its area and A_s the throat's:
+/// a quadratic coefficient \f$ K = \frac{K_t\rho}{2A_0^2}(A_0/A_s-1)^2 \f$ (Pa·s²/m⁶), the form
+/// svZeroDSolver's `stenosis_coefficient` takes. The viscous part of their law (K_v) is not added:
+/// the network's segments already carry the Poiseuille resistance of the narrowed lumen, segment
+/// by segment. Young & Tsai's inertial term (K_u) is the rlc model's own inertance of those
+/// segments.
+///
+/// A stenosis is a local minimum of the radius along a branch whose narrowing, measured against
+/// the lower of the two shoulders that enclose it (the largest radius on each side before the
+/// lumen becomes narrower than the throat again: the minimum's prominence), reduces the area by at
+/// least a threshold. Its K is spread over the segments from the throat to where the lumen has
+/// widened 90% of the way to that shoulder (in the branch's own direction), in proportion to their
+/// lengths: there the jet expands.
+#include <vector>
+
+#include "flowire/flow/spec.hpp"
+#include "flowire/vessels/network.hpp"
+
+namespace flowire::flow {
+
+/// @brief Young & Tsai's expansion-loss coefficient K for a throat of radius @p throat_radius in a
+/// vessel of radius @p reference_radius (Pa·s²/m⁶; 0 where the throat is not narrower).
+[[nodiscard]] double young_tsai_coefficient(double density, double reference_radius, double throat_radius,
+                                            double expansion_coefficient = 1.52);
+
+/// @brief The stenoses of @p net: every local minimum of a branch's radius whose area reduction
+/// against its lower shoulder is at least @p min_area_reduction (in [0, 1)), with K for blood of
+/// @p density.
+[[nodiscard]] std::vector<Stenosis> find_stenoses(const Network& net, double density, double min_area_reduction,
+                                                  double expansion_coefficient = 1.52);
+
+/// @brief Add the stenoses' coefficients to @p laws (made one per segment if empty).
+void add_stenosis_losses(const Network& net, const std::vector<Stenosis>& stenoses, std::vector<SegmentLaw>& laws);
+
+}  // namespace flowire::flow

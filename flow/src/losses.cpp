@@ -1,0 +1,95 @@
+#include "flowire/flow/losses.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "flowire/common/error.hpp"
+
+namespace flowire::flow {
+
+double young_tsai_coefficient(double density, double reference_radius, double throat_radius,
+                              double expansion_coefficient) {
+  if (!(throat_radius > 0.0) || !(reference_radius > throat_radius)) return 0.0;
+  const double a0 = std::numbers::pi * reference_radius * reference_radius;
+  const double ratio = (reference_radius * reference_radius) / (throat_radius * throat_radius);
+  return expansion_coefficient * density / (2.0 * a0 * a0) * (ratio - 1.0) * (ratio - 1.0);
+}
+
+namespace {
+
+/// The radius at each node of branch @p b, in the branch's order, and the arc length there.
+void branch_profile(const Network& net, int b, std::vector<double>& r, std::vector<double>& s) {
+  const auto& br = net.branch(b);
+  const size_t m = br.segments.size();
+  r.assign(m + 1, 0.0);
+  s.assign(m + 1, 0.0);
+  for (size_t k = 0; k < m; ++k) {
+    const auto& seg = net.segment(br.segments[k]);
+    const bool forward = seg.node_from == br.nodes[k];
+    r[k] = forward ? seg.radius_from : seg.radius_to;
+    if (k + 1 == m) r[m] = forward ? seg.radius_to : seg.radius_from;
+    s[k + 1] = s[k] + seg.length;
+  }
+}
+
+}  // namespace
+
+std::vector<Stenosis> find_stenoses(const Network& net, double density, double min_area_reduction,
+                                    double expansion_coefficient) {
+  if (!(min_area_reduction >= 0.0 && min_area_reduction < 1.0))
+    throw_usage_error(fmt::format("stenosis losses: area reduction threshold {} is not in [0, 1)", min_area_reduction));
+  std::vector<Stenosis> out;
+  std::vector<double> r, s;
+  for (int b = 0; b < net.num_branches(); ++b) {
+    branch_profile(net, b, r, s);
+    const size_t m = r.size() - 1;
+    for (size_t k = 1; k < m; ++k) {
+      if (!(r[k] < r[k - 1])) continue;
+      size_t j = k;  // the throat may be a plateau k..j
+      while (j < m && r[j + 1] == r[k]) ++j;
+      if (j == m || !(r[j + 1] > r[k])) continue;
+      // The shoulders: the largest radius on each side before the lumen is narrower than the throat.
+      double left = r[k];
+      for (size_t i = k; i-- > 0 && r[i] >= r[k];) left = std::max(left, r[i]);
+      double right = r[k];
+      for (size_t i = j + 1; i <= m && r[i] >= r[k]; ++i) right = std::max(right, r[i]);
+      const double r0 = std::min(left, right);
+      const double reduction = 1.0 - (r[k] * r[k]) / (r0 * r0);
+      if (reduction < min_area_reduction || reduction <= 0.0) continue;
+      Stenosis st;
+      st.branch = b;
+      st.throat_node = net.branch(b).nodes[j];
+      st.s = s[j];
+      st.throat_radius = r[k];
+      st.reference_radius = r0;
+      st.area_reduction = reduction;
+      st.coefficient = young_tsai_coefficient(density, r0, r[k], expansion_coefficient);
+      // From the throat to where the lumen has widened 90% of the way to the shoulder (a ripple on
+      // the shoulder does not carry the loss on to its next crest).
+      const double widened = r[k] + 0.9 * (r0 - r[k]);
+      for (size_t i = j; i < m; ++i) {
+        st.segments.push_back(net.branch(b).segments[i]);
+        if (r[i + 1] >= widened) break;
+      }
+      out.push_back(std::move(st));
+      k = j;
+    }
+  }
+  return out;
+}
+
+void add_stenosis_losses(const Network& net, const std::vector<Stenosis>& stenoses, std::vector<SegmentLaw>& laws) {
+  if (stenoses.empty()) return;
+  if (laws.empty()) laws.assign(static_cast<size_t>(net.num_segments()), SegmentLaw{});
+  for (const Stenosis& st : stenoses) {
+    double length = 0.0;
+    for (int seg : st.segments) length += net.segment(seg).length;
+    for (int seg : st.segments)
+      laws[static_cast<size_t>(seg)].quadratic += st.coefficient * net.segment(seg).length / length;
+  }
+}
+
+}  // namespace flowire::flow

@@ -1,0 +1,209 @@
+// Losses beyond Poiseuille taken from the network's geometry (flow/losses.hpp): which narrowings
+// of a branch are stenoses and against which shoulder, and a stenosed vessel's pressure drop
+// through a whole scene (flow.losses) against Young & Tsai's law written out here term by term.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "flow_test_networks.hpp"
+#include "flowire/common/config.hpp"
+#include "flowire/common/error.hpp"
+#include "flowire/flow/losses.hpp"
+#include "flowire/flow/solver.hpp"
+#include "flowire/flow/spec.hpp"
+
+namespace flowire::flow {
+namespace {
+
+using test::flow_schema;
+constexpr double kPi = std::numbers::pi;
+constexpr double r0 = 2e-3;
+
+/// A straight vessel of radius r0 along x, sampled every 0.5 mm over [0, 80] mm, with a cosine
+/// stenosis of depth δ (throat radius (1 − δ) r0) and half-length 4 mm centred at each given x,
+/// a ripple of ±ripple·r0 everywhere, and (if taper) the last 6 mm narrowing to 0.6 r0.
+Network stenosed_vessel(const std::vector<std::pair<double, double>>& stenoses, double ripple, bool taper) {
+  vessels::Centerlines c;
+  vessels::Polyline p;
+  p.name = "stenosed";
+  for (int i = 0; i <= 160; ++i) {
+    const double x = 0.5e-3 * i;
+    double r = r0 * (1.0 + ripple * std::sin(2.0 * kPi * x / 3.1e-3));
+    for (const auto& [xc, delta] : stenoses)
+      if (std::abs(x - xc) <= 4e-3) r -= r0 * delta / 2.0 * (1.0 + std::cos(kPi * (x - xc) / 4e-3));
+    if (taper && x > 74e-3) r *= 1.0 - 0.4 * (x - 74e-3) / 6e-3;
+    p.points.emplace_back(x, 0.0, 0.0);
+    p.radii.push_back(r);
+  }
+  c.branches.push_back(p);
+  vessels::BuildOptions opt;
+  opt.max_segment_length = 0.5e-3;
+  opt.radius_change = 1e-3;  // every sample a node
+  return Network::build(c, opt);
+}
+
+TEST(FlowLosses, EachNarrowingPastTheThresholdIsOneStenosisMeasuredAgainstItsLowerShoulder) {
+  // 75% and 51% area reductions, a ±1% ripple (4% of area: no stenosis) and a tapering end
+  // (its minimum is the end node: no stenosis either).
+  const Network net = stenosed_vessel({{20e-3, 0.5}, {50e-3, 0.3}}, 0.01, true);
+  ASSERT_EQ(net.num_segments(), 160);
+  const std::vector<Stenosis> found = find_stenoses(net, 1060.0, 0.2);
+  ASSERT_EQ(found.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const double delta = i == 0 ? 0.5 : 0.3, xc = i == 0 ? 20e-3 : 50e-3;
+    const Stenosis& st = found[i];
+    EXPECT_NEAR(st.s, xc, 0.51e-3) << i;
+    // The throat: the sampled minimum, within the ripple of (1 − δ) r0; the shoulder within the ripple of r0.
+    EXPECT_NEAR(st.throat_radius, (1.0 - delta) * r0, 0.011 * r0) << i;
+    EXPECT_NEAR(st.reference_radius, r0, 0.011 * r0) << i;
+    const double ratio = std::pow(st.reference_radius / st.throat_radius, 2);
+    EXPECT_NEAR(st.area_reduction, 1.0 - 1.0 / ratio, 1e-14) << i;
+    // K = K_t ρ / (2 A0²) (A0/As − 1)², written out.
+    const double a0 = kPi * st.reference_radius * st.reference_radius;
+    EXPECT_NEAR(st.coefficient, 1.52 * 1060.0 / (2.0 * a0 * a0) * (ratio - 1.0) * (ratio - 1.0), 1e-9 * st.coefficient);
+    // Spread from the throat to where the lumen has widened 90% of the way to the shoulder: the distal half.
+    double spread = 0.0;
+    for (int seg : st.segments) spread += net.segment(seg).length;
+    EXPECT_GT(spread, 2.5e-3) << i;
+    EXPECT_LT(spread, 4.1e-3) << i;
+  }
+  EXPECT_GT(found[0].area_reduction, 0.73);
+  EXPECT_LT(found[1].area_reduction, 0.53);
+  // A higher threshold keeps the 75% one only; no threshold also counts the ripple's dips.
+  EXPECT_EQ(find_stenoses(net, 1060.0, 0.6).size(), 1u);
+  EXPECT_GT(find_stenoses(net, 1060.0, 0.0).size(), 10u);
+  EXPECT_THROW((void)find_stenoses(net, 1060.0, 1.0), Error);
+}
+
+TEST(FlowLosses, AStenosedVesselsDropThroughASceneIsPoiseuillePlusYoungAndTsaisExpansionLoss) {
+  const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false);
+  const double q = 2e-6;  // 2 mL/s: U0 = 0.16 m/s, Re 190 in the vessel
+  const auto scene = [&](const std::string& losses) {
+    return config::load_config_text("flow:\n  inlet: {node: 0, flow: 2 mL/s}\n  outlets: {pressure: 0}\n" + losses,
+                                    "stenosis.yaml", flow_schema());
+  };
+  const FlowSpec with = from_config(scene("  losses: {stenosis: young_tsai}\n"), net);
+  const FlowSpec without = from_config(scene(""), net);
+  ASSERT_EQ(with.stenoses.size(), 1u);
+  EXPECT_TRUE(without.stenoses.empty());
+  const auto s_with = make_solver(net, with);
+  const auto s_without = make_solver(net, without);
+  EXPECT_EQ(s_with->name(), "newton");
+  // Poiseuille: the frusta in series.
+  double poiseuille = 0.0;
+  for (const auto& seg : net.segments()) poiseuille += segment_resistance(with.viscosity, seg) * q;
+  // Young & Tsai: K_t ρ/2 (A0/As − 1)² U0², U0 = Q/A0, with the sampled throat (the minimum node) and r0.
+  double rs = r0;
+  for (const auto& seg : net.segments()) rs = std::min({rs, seg.radius_from, seg.radius_to});
+  const double u0 = q / (kPi * r0 * r0);
+  const double expansion = 1.52 * 1060.0 / 2.0 * std::pow(r0 * r0 / (rs * rs) - 1.0, 2) * u0 * u0;
+  const std::vector<int> ends = net.ends();
+  ASSERT_EQ(ends.size(), 2u);
+  const int inlet = 0, outlet = ends[0] == 0 ? ends[1] : ends[0];
+  ASSERT_TRUE(ends[0] == 0 || ends[1] == 0);
+  ASSERT_NEAR(s_without->segment_flow(0), q, 1e-12 * q);
+  EXPECT_NEAR(s_without->node_pressure(inlet) - s_without->node_pressure(outlet), poiseuille, 1e-9 * poiseuille);
+  EXPECT_NEAR(s_with->node_pressure(inlet) - s_with->node_pressure(outlet), poiseuille + expansion,
+              1e-8 * (poiseuille + expansion));
+  // At this flow the expansion loss is about the whole viscous drop of the 80 mm vessel.
+  EXPECT_GT(expansion, 0.5 * poiseuille);
+  // The throat's pressure carries the whole loss: it is spread over the segments distal to it.
+  const Stenosis& st = with.stenoses[0];
+  EXPECT_NEAR(s_with->node_pressure(st.throat_node) - s_without->node_pressure(st.throat_node), expansion,
+              1e-8 * expansion);
+}
+
+TEST(FlowLosses, TheRlcModelCarriesTheLossesWithSecondOrderInTime) {
+  // A rigid stenosed vessel under a pulsatile pressure that reverses the flow: one flow Q(t)
+  // through every segment, L Q̇ + R Q + K|Q|Q = Δp(t), against the periodic solution of that
+  // ODE by RK4 at 10 µs (written here), the rlc model at 10 and 5 ms.
+  const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false);
+  const double period = 0.8, p1 = 300.0, p2 = -60.0;
+  FlowSpec spec = default_spec(net, Waveform::sine(p1, p2, period));
+  spec.model = Model::Rlc;
+  spec.wall_youngs_modulus = 0.0;  // rigid: no compliance
+  spec.periodic_tolerance = 1e-10;
+  spec.stenoses = find_stenoses(net, spec.density, 0.2);
+  ASSERT_EQ(spec.stenoses.size(), 1u);
+  add_stenosis_losses(net, spec.stenoses, spec.segment_laws);
+  const int inlet = spec.inlets[0].node;
+  ASSERT_EQ(net.degree(inlet), 1);
+  double r = 0.0, l = 0.0, k = 0.0;
+  for (int s = 0; s < net.num_segments(); ++s) {
+    const auto& seg = net.segment(s);
+    r += segment_resistance(spec.viscosity, seg);
+    l += spec.density * seg.length / (kPi * seg.radius_from * seg.radius_to);
+    k += spec.segment_laws[static_cast<size_t>(s)].quadratic;
+  }
+  // Δp(t) = (p1 − p2)/2 sin(2πt/T) + (p1 + p2)/2 from the inlet to the outlet at 0 Pa.
+  const auto rhs = [&](double t, double q) {
+    const double dp = (p1 - p2) / 2.0 * std::sin(2.0 * kPi * t / period) + (p1 + p2) / 2.0;
+    return (dp - r * q - k * std::abs(q) * q) / l;
+  };
+  const int n_ref = 80000;  // 10 µs
+  const double h = period / n_ref;
+  double q = 0.0;
+  std::vector<double> ref(static_cast<size_t>(n_ref) + 1);
+  for (int cycle = 0; cycle < 30; ++cycle) {
+    for (int i = 0; i < n_ref; ++i) {
+      const double t = i * h;
+      ref[static_cast<size_t>(i)] = q;
+      const double k1 = rhs(t, q), k2 = rhs(t + h / 2, q + h / 2 * k1), k3 = rhs(t + h / 2, q + h / 2 * k2),
+                   k4 = rhs(t + h, q + h * k3);
+      q += h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+  }
+  ref.back() = q;
+  double qmin = 0.0;
+  for (double v : ref) qmin = std::min(qmin, v);
+  ASSERT_LT(qmin, 0.0);  // the flow reverses
+  std::vector<double> errors;
+  for (const double dt : {0.01, 0.005}) {
+    FlowSpec sp = spec;
+    sp.dt = dt;
+    const auto solver = make_solver(net, sp);
+    EXPECT_EQ(solver->name(), "rlc");
+    double worst = 0.0, scale = 0.0;
+    const int steps = static_cast<int>(std::lround(period / dt));
+    for (int i = 1; i <= steps; ++i) {
+      solver->advance(i * dt);
+      const double qr = ref[static_cast<size_t>(i * n_ref / steps)];
+      worst = std::max(worst, std::abs(solver->segment_flow(0) - qr));
+      scale = std::max(scale, std::abs(qr));
+    }
+    errors.push_back(worst / scale);
+    std::printf("rlc with losses, dt %.3g s: largest flow error over a period %.3e of the largest flow\n", dt,
+                worst / scale);
+  }
+  const double slope = std::log(errors[0] / errors[1]) / std::log(2.0);
+  std::printf("order in time %.2f\n", slope);
+  EXPECT_LT(errors[1], 2e-3);
+  EXPECT_GT(slope, 1.7);
+  EXPECT_LT(slope, 2.5);
+}
+
+TEST(FlowLosses, BadLossKeysAreRefusedNamingTheKey) {
+  const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false);
+  for (const auto& [text, fragment] : std::vector<std::pair<std::string, std::string>>{
+           {"  losses: {stenosis: yes}\n", "flow.losses.stenosis"},
+           {"  losses: {stenosis: young_tsai, stenosis_threshold: 1.0}\n", "flow.losses.stenosis_threshold"},
+           {"  losses: {stenosis: young_tsai, expansion_coefficient: -1}\n", "flow.losses.expansion_coefficient"},
+           {"  losses: {junctions: mynard}\n", "flow.losses.junctions"}}) {
+    try {
+      (void)from_config(config::load_config_text("flow:\n  outlets: {pressure: 0}\n" + text, "s.yaml", flow_schema()),
+                        net);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input) << e.what();
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("s.yaml"), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace flowire::flow
