@@ -98,8 +98,10 @@ void CoSimulation::build_flow(nlohmann::json& s) {
                       {"area_reduction", st.area_reduction},
                       {"coefficient", st.coefficient},
                       {"segments", st.segments.size()}});
-    s["flow"]["losses"] = {{"stenosis", "young_tsai"}, {"stenoses", std::move(list)}};
+    s["flow"]["losses"]["stenosis"] = {{"model", scene_.string("flow.losses.stenosis")}, {"stenoses", std::move(list)}};
   }
+  if (scene_.string_or("flow.losses.curvature", "none") != "none")
+    s["flow"]["losses"]["curvature"] = {{"model", "white"}, {"curved_segments", fsolver_->spec().curved_segments}};
 }
 
 void CoSimulation::build_wire(nlohmann::json& s) {

@@ -30,9 +30,10 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
   for (size_t s = 0; s < spec.segment_laws.size(); ++s) {
     const auto& law = spec.segment_laws[s];
     if (!(law.resistance_factor > 0.0) || !std::isfinite(law.resistance_factor) || !(law.quadratic >= 0.0) ||
-        !std::isfinite(law.quadratic))
-      throw_usage_error(fmt::format("flow: segment {}: resistance factor {} must be > 0 and quadratic {} >= 0", s,
-                                    law.resistance_factor, law.quadratic));
+        !std::isfinite(law.quadratic) || !(law.dean >= 0.0) || !std::isfinite(law.dean))
+      throw_usage_error(
+          fmt::format("flow: segment {}: resistance factor {} must be > 0, quadratic {} and Dean coefficient {} >= 0",
+                      s, law.resistance_factor, law.quadratic, law.dean));
   }
   Assembly a;
   resistance.resize(ne);

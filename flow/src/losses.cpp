@@ -9,6 +9,9 @@
 #include "flowire/common/error.hpp"
 
 namespace flowire::flow {
+namespace {
+constexpr double kDeanOnset = 11.6;  // White (1929): below this Dean number a bend adds no resistance
+}  // namespace
 
 double young_tsai_coefficient(double density, double reference_radius, double throat_radius,
                               double expansion_coefficient) {
@@ -79,6 +82,74 @@ std::vector<Stenosis> find_stenoses(const Network& net, double density, double m
     }
   }
   return out;
+}
+
+double dean_resistance_ratio(double de) {
+  if (!(de > kDeanOnset)) return 1.0;
+  const double x = std::pow(kDeanOnset / de, 0.45);
+  return 1.0 / (1.0 - std::pow(1.0 - x, 2.2));
+}
+
+double dean_resistance_ratio_slope(double de) {
+  if (!(de > kDeanOnset)) return 0.0;
+  const double x = std::pow(kDeanOnset / de, 0.45);
+  const double w = std::pow(1.0 - x, 2.2);
+  // dw/dDe = 2.2 (1 − x)^1.2 · 0.45 x / De;  φ = 1/(1 − w):  dφ/dDe = φ² dw/dDe
+  const double phi = 1.0 / (1.0 - w);
+  return phi * phi * 2.2 * std::pow(1.0 - x, 1.2) * 0.45 * x / de;
+}
+
+double SegmentLaw::curved_flow(double dp, double r, double straight) const {
+  // g(Q) = Δp(Q) − |Δp| on [0, |straight|] (φ ≥ 1 puts the root below the straight law's):
+  // Newton's method from the top, bisection where a step leaves the bracket.
+  const double target = std::abs(dp);
+  double lo = 0.0, hi = std::abs(straight), q = hi;
+  for (int it = 0; it < 100; ++it) {
+    const double g = pressure_drop(q, r) - target;
+    if (std::abs(g) <= 1e-14 * target) break;
+    (g > 0.0 ? hi : lo) = q;
+    double next = q - g / slope(q, r);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - q) <= 1e-16 * hi) break;
+    q = next;
+  }
+  return dp < 0.0 ? -q : q;
+}
+
+std::vector<double> segment_curvatures(const Network& net) {
+  std::vector<double> kappa(static_cast<size_t>(net.num_segments()), 0.0);
+  for (int b = 0; b < net.num_branches(); ++b) {
+    const auto& br = net.branch(b);
+    const size_t m = br.segments.size();
+    if (m < 2) continue;
+    // The turning angle at each interior node over the mean length of its two segments.
+    std::vector<double> node(m + 1, 0.0);
+    for (size_t k = 1; k < m; ++k) {
+      const Vec3 d0 = net.node(br.nodes[k]) - net.node(br.nodes[k - 1]);
+      const Vec3 d1 = net.node(br.nodes[k + 1]) - net.node(br.nodes[k]);
+      const double angle = std::atan2(d0.cross(d1).norm(), d0.dot(d1));
+      node[k] = angle / (0.5 * (d0.norm() + d1.norm()));
+    }
+    node[0] = node[1];  // a branch's ends turn into its neighbours: their own curvature is the next node's
+    node[m] = node[m - 1];
+    for (size_t k = 0; k < m; ++k) kappa[static_cast<size_t>(br.segments[k])] = 0.5 * (node[k] + node[k + 1]);
+  }
+  return kappa;
+}
+
+int add_curvature_losses(const Network& net, double density, double viscosity, std::vector<SegmentLaw>& laws) {
+  const std::vector<double> kappa = segment_curvatures(net);
+  int curved = 0;
+  for (int s = 0; s < net.num_segments(); ++s) {
+    const double k = kappa[static_cast<size_t>(s)];
+    if (!(k > 0.0)) continue;
+    if (laws.empty()) laws.assign(static_cast<size_t>(net.num_segments()), SegmentLaw{});
+    const double a = net.segment(s).radius;
+    // De = Re √(a/R), Re = ρ (Q/πa²)(2a)/μ
+    laws[static_cast<size_t>(s)].dean = 2.0 * density / (std::numbers::pi * a * viscosity) * std::sqrt(a * k);
+    ++curved;
+  }
+  return curved;
 }
 
 void add_stenosis_losses(const Network& net, const std::vector<Stenosis>& stenoses, std::vector<SegmentLaw>& laws) {

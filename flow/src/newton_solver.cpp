@@ -1,9 +1,12 @@
-// The quasi-steady network with quadratic losses: every segment obeys
-//   Δp = R Q + K |Q| Q     (R = f·R_P × the occlusion's factor, K ≥ 0; FlowSpec::segment_laws),
+// The quasi-steady network with nonlinear losses: every segment obeys
+//   Δp = R Q φ(c|Q|) + K |Q| Q     (R = f·R_P × the occlusion's factor, K ≥ 0, φ White's ratio of
+//                                    a bend, 1 where straight; FlowSpec::segment_laws),
 // mass is conserved at every node, and the boundary values are those of the linear model. The
-// flow of a segment as a function of its pressure difference is the root of that quadratic,
-//   Q(Δp) = 2 Δp / (R + √(R² + 4K|Δp|)),   dQ/dΔp = 1 / √(R² + 4K|Δp|),
-// increasing in Δp, so the node balance F(p) = Σ Q − injections is the gradient of a convex
+// flow of a segment as a function of its pressure difference is the root of that law (for a
+// straight segment that of a quadratic,
+//   Q(Δp) = 2 Δp / (R + √(R² + 4K|Δp|)),   dQ/dΔp = 1 / √(R² + 4K|Δp|);
+// for a curved one a scalar Newton iteration, SegmentLaw::flow), increasing in Δp, so the node
+// balance F(p) = Σ Q − injections is the gradient of a convex
 // function of the unknown pressures and its Jacobian is the nodal conductance matrix of the
 // tangent conductances dQ/dΔp: symmetric positive definite, with the pattern of the linear one.
 // Newton's method from the last frames' pressures extrapolated to the frame's time (the
@@ -184,7 +187,7 @@ class NewtonSolver final : public FrameSolver {
     }
     if (f_.lpNorm<Eigen::Infinity>() > kFloor * scale || !std::isfinite(norm))
       throw_numerical_error(
-          fmt::format("flow: Newton's method on the quadratic losses did not converge at t = {} s ({} iterations, node "
+          fmt::format("flow: Newton's method on the nonlinear losses did not converge at t = {} s ({} iterations, node "
                       "imbalance {:.3g} of the largest flow {:.3g} m³/s)",
                       t, it, f_.lpNorm<Eigen::Infinity>() / scale, scale));
   }

@@ -20,7 +20,7 @@
 namespace flowire::flow {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kLossTolerance = 1e-8;  // Newton's absolute tolerance with quadratic losses
+constexpr double kLossTolerance = 1e-8;  // Newton's absolute tolerance with nonlinear losses
 }  // namespace
 
 double segment_inertance(Inertance kind, double density, double length, double radius) {
@@ -112,13 +112,18 @@ class RlcBoundary final : public svzerod::Block {
   std::vector<double> values_;  // (rows × sources)
 };
 
-/// The segments' quadratic losses (FlowSpec::segment_laws: a stenosis, a calibration), K|Q|Q on
-/// each lossy segment's row (R Q + L Q̇ + K|Q|Q − p_from + p_to = 0): the system's only nonlinear
-/// terms, so that the integrator iterates Newton's method within a step where a scene has them.
+/// The segments' nonlinear losses (FlowSpec::segment_laws: a stenosis, a bend, a calibration):
+/// what each lossy segment's law adds to its linear drop R Q, Δp(Q) − R Q, on its row
+/// (R Q + L Q̇ − p_from + p_to + [Δp(Q) − R Q] = 0): the system's only nonlinear terms, so that the
+/// integrator iterates Newton's method within a step where a scene has them.
 class RlcLosses final : public svzerod::Block {
  public:
-  RlcLosses(std::vector<int> rows, std::vector<double> k)
-      : Block("rlc losses"), rows_(std::move(rows)), k_(std::move(k)) {}
+  struct Lossy {
+    int row = -1;  // the segment's flow unknown, which is also its row
+    SegmentLaw law;
+    double resistance = 0.0;  // R: f R_P
+  };
+  explicit RlcLosses(std::vector<Lossy> lossy) : Block("rlc losses"), lossy_(std::move(lossy)) {}
   [[nodiscard]] const char* type() const override { return "RlcLosses"; }
   [[nodiscard]] std::string check_connections() const override { return {}; }
   [[nodiscard]] int num_equations() const override { return 0; }
@@ -126,16 +131,15 @@ class RlcLosses final : public svzerod::Block {
   void assemble(svzerod::Assembler& /*a*/, double /*t*/) const override {}
   void assemble_nonlinear(svzerod::Assembler& a, double /*t*/, const Eigen::VectorXd& y,
                           const Eigen::VectorXd& /*yd*/) const override {
-    for (size_t i = 0; i < rows_.size(); ++i) {
-      const double q = y[rows_[i]], aq = std::abs(q);
-      a.c_nl(rows_[i], k_[i] * aq * q);
-      a.dy(rows_[i], rows_[i], 2.0 * k_[i] * aq);
+    for (const Lossy& l : lossy_) {
+      const double q = y[l.row];
+      a.c_nl(l.row, l.law.pressure_drop(q, l.resistance) - l.resistance * q);
+      a.dy(l.row, l.row, l.law.slope(q, l.resistance) - l.resistance);
     }
   }
 
  private:
-  std::vector<int> rows_;  // the segments' flow unknowns, which are also their rows
-  std::vector<double> k_;  // Pa·s²/m⁶
+  std::vector<Lossy> lossy_;
 };
 
 /// Unknown layout: [p (num_nodes) | Q (num_segments) | per RCR or coronary outlet its outflow and its own unknowns].
@@ -269,20 +273,17 @@ class RlcSolver final : public FlowSolver {
     boundary_ = std::make_unique<RlcBoundary>(a_, src);
     network_->place(0, static_cast<int>(n_nodes_));
     std::vector<svzerod::Block*> blocks{network_.get(), boundary_.get()};
-    std::vector<int> lossy;
-    std::vector<double> k;
+    std::vector<RlcLosses::Lossy> lossy;
     for (size_t s = 0; s < spec_.segment_laws.size(); ++s)
-      if (spec_.segment_laws[s].quadratic > 0.0) {
-        lossy.push_back(qi(s));
-        k.push_back(spec_.segment_laws[s].quadratic);
-      }
+      if (spec_.segment_laws[s].quadratic > 0.0 || spec_.segment_laws[s].dean > 0.0)
+        lossy.push_back({qi(s), spec_.segment_laws[s], resistance_[s]});
     if (!lossy.empty()) {
-      losses_ = std::make_unique<RlcLosses>(std::move(lossy), std::move(k));
+      losses_ = std::make_unique<RlcLosses>(std::move(lossy));
       blocks.push_back(losses_.get());
     }
     for (auto& b : outlets_) blocks.push_back(b.get());
     system_ = std::make_unique<svzerod::System>(blocks, static_cast<int>(n_), spec_.cycle(), "flow (rlc)");
-    // A linear system: one solve per step (tolerance 0 never skips it). With quadratic losses,
+    // A linear system: one solve per step (tolerance 0 never skips it). With nonlinear losses,
     // Newton's method within each step to svZeroDSolver's absolute tolerance (the segment rows are
     // in Pa; the node balances are linear, so Newton leaves them at round-off).
     integrator_ =
@@ -324,7 +325,7 @@ class RlcSolver final : public FlowSolver {
       if (system_->residual(st_.y, st_.yd, 1.0, prev_y_) < kLossTolerance) break;
       if (it == 50 || !st_.y.allFinite())
         throw_numerical_error(
-            fmt::format("flow (rlc): the steady state with quadratic losses did not converge in {} Newton iterations "
+            fmt::format("flow (rlc): the steady state with nonlinear losses did not converge in {} Newton iterations "
                         "(residual {:.3g})",
                         it, prev_y_.lpNorm<Eigen::Infinity>()));
       system_->factorize(0.0, 1.0);
@@ -373,7 +374,7 @@ class RlcSolver final : public FlowSolver {
   Eigen::Index n_ = 0;
   std::unique_ptr<RlcNetwork> network_;
   std::unique_ptr<RlcBoundary> boundary_;
-  std::unique_ptr<RlcLosses> losses_;  // null without quadratic losses
+  std::unique_ptr<RlcLosses> losses_;  // null without nonlinear losses
   std::unique_ptr<svzerod::System> system_;
   std::unique_ptr<svzerod::GeneralizedAlpha> integrator_;
   svzerod::State st_;

@@ -534,12 +534,13 @@ std::unique_ptr<FlowSolver> make_solver(const Network& net, FlowSpec spec) {
   std::unique_ptr<FlowSolver> s;
   if (spec.model == Model::Rlc) {
     s = detail::make_rlc_solver(net, std::move(spec));
-  } else if (spec.has_quadratic_losses()) {
+  } else if (spec.has_nonlinear_losses()) {
     // Superposition does not hold for a nonlinear network: every frame is solved by Newton.
     if (spec.solver == SolverKind::DenseInverse || spec.solver == SolverKind::Petsc)
-      throw_input_error("flow", fmt::format("quadratic segment losses (a calibration) need the superposition or "
-                                            "sparse solver (solved by Newton's method every frame), not {}",
-                                            to_string(spec.solver)));
+      throw_input_error("flow",
+                        fmt::format("nonlinear segment losses (a calibration, flow.losses) need the superposition or "
+                                    "sparse solver (solved by Newton's method every frame), not {}",
+                                    to_string(spec.solver)));
     s = detail::make_newton_solver(net, std::move(spec));
   } else {
     switch (spec.solver) {

@@ -146,8 +146,9 @@ std::string_view to_string(SolverKind s) {
   return "?";
 }
 
-bool FlowSpec::has_quadratic_losses() const {
-  return std::any_of(segment_laws.begin(), segment_laws.end(), [](const SegmentLaw& l) { return l.quadratic > 0.0; });
+bool FlowSpec::has_nonlinear_losses() const {
+  return std::any_of(segment_laws.begin(), segment_laws.end(),
+                     [](const SegmentLaw& l) { return l.quadratic > 0.0 || l.dean > 0.0; });
 }
 
 double FlowSpec::cycle() const {
@@ -480,15 +481,21 @@ void declare_scene_keys(config::Schema& s) {
         "(docs/flow-losses.md); they make the network nonlinear (solved by Newton's method)");
   s.add("flow.losses.stenosis", Type::Enum, "none", D::None,
         "young_tsai: every narrowing of a branch's radius (a local minimum) loses K_t rho/2 (A0/As - 1)^2 U0|U0| "
-        "where its jet expands (Young & Tsai 1973; U0 = Q/A0, A0 the lower shoulder's area, As the throat's) | none",
-        {"none", "young_tsai"});
+        "where its jet expands (Young & Tsai 1973, K_t = 1.52; U0 = Q/A0, A0 the lower shoulder's area, As the "
+        "throat's) | borda_carnot: the same with K_t = 1, the loss of a sudden expansion (closer to 3D laminar flow "
+        "through smooth stenoses, docs/flow-losses.md) | none",
+        {"none", "young_tsai", "borda_carnot"});
   s.add("flow.losses.stenosis_threshold", Type::Number, "0.2", D::None,
         "a radius minimum is a stenosis from this area reduction 1 - As/A0 against its lower shoulder")
       .at_least(0.0)
       .below(1.0);
-  s.add("flow.losses.expansion_coefficient", Type::Number, "1.52", D::None,
-        "Young & Tsai's K_t (1.52: their model stenoses; 1: the Borda-Carnot loss of a sudden expansion alone)")
+  s.add("flow.losses.expansion_coefficient", Type::Number, "", D::None,
+        "K_t of the stenosis loss in place of the model's own (young_tsai 1.52, borda_carnot 1)")
       .positive();
+  s.add("flow.losses.curvature", Type::Enum, "none", D::None,
+        "white: every curved segment's resistance times White's ratio phi(De) for fully developed flow in a bend "
+        "(1929; De = Re sqrt(a/R), R from the centerline's turning angles) | none",
+        {"none", "white"});
   s.add("flow.profile", Type::Enum, "laminar", D::None,
         "velocity profile across a segment: laminar (the parabola of the current flow) | womersley (periodic inlets: "
         "the first 10 harmonics of each segment's flow with their own Womersley profiles; use it from alpha ~ 3, "
@@ -724,11 +731,13 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
       x.c /= f;
     }
   }
-  if (cfg.string_or("flow.losses.stenosis", "none") == "young_tsai") {
+  if (const std::string model = cfg.string_or("flow.losses.stenosis", "none"); model != "none") {
     s.stenoses = find_stenoses(net, s.density, cfg.number_or("flow.losses.stenosis_threshold", 0.2),
-                               cfg.number_or("flow.losses.expansion_coefficient", 1.52));
+                               cfg.number_or("flow.losses.expansion_coefficient", model == "young_tsai" ? 1.52 : 1.0));
     add_stenosis_losses(net, s.stenoses, s.segment_laws);
   }
+  if (cfg.string_or("flow.losses.curvature", "none") == "white")
+    s.curved_segments = add_curvature_losses(net, s.density, s.viscosity, s.segment_laws);
   return s;
 }
 

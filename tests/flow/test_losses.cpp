@@ -23,10 +23,12 @@ using test::flow_schema;
 constexpr double kPi = std::numbers::pi;
 constexpr double r0 = 2e-3;
 
-/// A straight vessel of radius r0 along x, sampled every 0.5 mm over [0, 80] mm, with a cosine
+/// A vessel of radius r0 along x (or bent on a circle of radius bend_radius), sampled every 0.5 mm
+/// over [0, 80] mm of arc length, with a cosine
 /// stenosis of depth δ (throat radius (1 − δ) r0) and half-length 4 mm centred at each given x,
 /// a ripple of ±ripple·r0 everywhere, and (if taper) the last 6 mm narrowing to 0.6 r0.
-Network stenosed_vessel(const std::vector<std::pair<double, double>>& stenoses, double ripple, bool taper) {
+Network stenosed_vessel(const std::vector<std::pair<double, double>>& stenoses, double ripple, bool taper,
+                        double bend_radius = 0.0) {
   vessels::Centerlines c;
   vessels::Polyline p;
   p.name = "stenosed";
@@ -36,7 +38,11 @@ Network stenosed_vessel(const std::vector<std::pair<double, double>>& stenoses, 
     for (const auto& [xc, delta] : stenoses)
       if (std::abs(x - xc) <= 4e-3) r -= r0 * delta / 2.0 * (1.0 + std::cos(kPi * (x - xc) / 4e-3));
     if (taper && x > 74e-3) r *= 1.0 - 0.4 * (x - 74e-3) / 6e-3;
-    p.points.emplace_back(x, 0.0, 0.0);
+    if (bend_radius > 0.0)  // the same arc length along a circle in the xy plane
+      p.points.emplace_back(bend_radius * std::sin(x / bend_radius), bend_radius * (1.0 - std::cos(x / bend_radius)),
+                            0.0);
+    else
+      p.points.emplace_back(x, 0.0, 0.0);
     p.radii.push_back(r);
   }
   c.branches.push_back(p);
@@ -90,6 +96,13 @@ TEST(FlowLosses, AStenosedVesselsDropThroughASceneIsPoiseuillePlusYoungAndTsaisE
   const FlowSpec without = from_config(scene(""), net);
   ASSERT_EQ(with.stenoses.size(), 1u);
   EXPECT_TRUE(without.stenoses.empty());
+  // Borda–Carnot's sudden expansion is the same law with K_t = 1; a K_t given replaces the model's.
+  const FlowSpec borda = from_config(scene("  losses: {stenosis: borda_carnot}\n"), net);
+  const FlowSpec given = from_config(scene("  losses: {stenosis: young_tsai, expansion_coefficient: 0.8}\n"), net);
+  EXPECT_NEAR(borda.stenoses.at(0).coefficient, with.stenoses[0].coefficient / 1.52,
+              1e-12 * borda.stenoses[0].coefficient);
+  EXPECT_NEAR(given.stenoses.at(0).coefficient, with.stenoses[0].coefficient * 0.8 / 1.52,
+              1e-12 * given.stenoses[0].coefficient);
   const auto s_with = make_solver(net, with);
   const auto s_without = make_solver(net, without);
   EXPECT_EQ(s_with->name(), "newton");
@@ -118,10 +131,10 @@ TEST(FlowLosses, AStenosedVesselsDropThroughASceneIsPoiseuillePlusYoungAndTsaisE
 }
 
 TEST(FlowLosses, TheRlcModelCarriesTheLossesWithSecondOrderInTime) {
-  // A rigid stenosed vessel under a pulsatile pressure that reverses the flow: one flow Q(t)
-  // through every segment, L Q̇ + R Q + K|Q|Q = Δp(t), against the periodic solution of that
-  // ODE by RK4 at 10 µs (written here), the rlc model at 10 and 5 ms.
-  const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false);
+  // A rigid stenosed vessel bent on a circle under a pulsatile pressure that reverses the flow:
+  // one flow Q(t) through every segment, L Q̇ + Σ (R Q φ(De) + K|Q|Q) = Δp(t), against the periodic
+  // solution of that ODE by RK4 at 50 µs (written here), the rlc model at 10 and 5 ms.
+  const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false, 30e-3);  // bent on R = 30 mm as well
   const double period = 0.8, p1 = 300.0, p2 = -60.0;
   FlowSpec spec = default_spec(net, Waveform::sine(p1, p2, period));
   spec.model = Model::Rlc;
@@ -130,25 +143,31 @@ TEST(FlowLosses, TheRlcModelCarriesTheLossesWithSecondOrderInTime) {
   spec.stenoses = find_stenoses(net, spec.density, 0.2);
   ASSERT_EQ(spec.stenoses.size(), 1u);
   add_stenosis_losses(net, spec.stenoses, spec.segment_laws);
+  ASSERT_EQ(add_curvature_losses(net, spec.density, spec.viscosity, spec.segment_laws), net.num_segments());
   const int inlet = spec.inlets[0].node;
   ASSERT_EQ(net.degree(inlet), 1);
-  double r = 0.0, l = 0.0, k = 0.0;
+  double l = 0.0;
   for (int s = 0; s < net.num_segments(); ++s) {
     const auto& seg = net.segment(s);
-    r += segment_resistance(spec.viscosity, seg);
     l += spec.density * seg.length / (kPi * seg.radius_from * seg.radius_to);
-    k += spec.segment_laws[static_cast<size_t>(s)].quadratic;
   }
+  const auto drop = [&](double q) {  // Σ over the segments of R Q φ(De) + K|Q|Q
+    double sum = 0.0;
+    for (int s = 0; s < net.num_segments(); ++s)
+      sum += spec.segment_laws[static_cast<size_t>(s)].pressure_drop(
+          q, segment_resistance(spec.viscosity, net.segment(s)));
+    return sum;
+  };
   // Δp(t) = (p1 − p2)/2 sin(2πt/T) + (p1 + p2)/2 from the inlet to the outlet at 0 Pa.
   const auto rhs = [&](double t, double q) {
     const double dp = (p1 - p2) / 2.0 * std::sin(2.0 * kPi * t / period) + (p1 + p2) / 2.0;
-    return (dp - r * q - k * std::abs(q) * q) / l;
+    return (dp - drop(q)) / l;
   };
-  const int n_ref = 80000;  // 10 µs
+  const int n_ref = 16000;  // 50 µs
   const double h = period / n_ref;
   double q = 0.0;
   std::vector<double> ref(static_cast<size_t>(n_ref) + 1);
-  for (int cycle = 0; cycle < 30; ++cycle) {
+  for (int cycle = 0; cycle < 12; ++cycle) {
     for (int i = 0; i < n_ref; ++i) {
       const double t = i * h;
       ref[static_cast<size_t>(i)] = q;
@@ -186,12 +205,94 @@ TEST(FlowLosses, TheRlcModelCarriesTheLossesWithSecondOrderInTime) {
   EXPECT_LT(slope, 2.5);
 }
 
+TEST(FlowLosses, WhitesRatioIsContinuousAndItsSlopeAndTheCurvedLawsInverseAreExact) {
+  EXPECT_DOUBLE_EQ(dean_resistance_ratio(5.0), 1.0);
+  EXPECT_NEAR(dean_resistance_ratio(11.6 * (1.0 + 1e-9)), 1.0, 1e-12);  // continuous at the onset
+  // Rises monotonically, about √De at large De (White's data: about 1.5 at De 100).
+  double last = 1.0;
+  for (double de = 12.0; de < 3000.0; de *= 1.3) {
+    const double phi = dean_resistance_ratio(de);
+    EXPECT_GT(phi, last) << de;
+    last = phi;
+    const double h = 1e-6 * de;
+    const double fd = (dean_resistance_ratio(de + h) - dean_resistance_ratio(de - h)) / (2.0 * h);
+    EXPECT_NEAR(dean_resistance_ratio_slope(de), fd, 1e-6 * std::abs(fd) + 1e-12) << de;
+  }
+  EXPECT_GT(dean_resistance_ratio(100.0), 1.45);
+  EXPECT_LT(dean_resistance_ratio(100.0), 1.6);
+  // A curved segment's flow is the root of its law, and its conductance the inverse slope.
+  const SegmentLaw law{1.3, 2e9, 4e7};  // f, K, De per unit |Q| (De 40 at 1 mL/s)
+  const double r = 5e7;
+  for (const double dp : {-300.0, -2.0, -1e-4, 1e-4, 0.7, 25.0, 900.0}) {
+    const double q = law.flow(dp, r);
+    EXPECT_NEAR(law.pressure_drop(q, r), dp, 1e-12 * std::abs(dp)) << dp;
+    const double h = 1e-6 * std::abs(dp);
+    const double fd = (law.flow(dp + h, r) - law.flow(dp - h, r)) / (2.0 * h);
+    EXPECT_NEAR(law.conductance(dp, r), fd, 1e-6 * std::abs(fd)) << dp;
+  }
+}
+
+TEST(FlowLosses, ASampledArcsCurvatureConvergesToOneOverItsRadiusAtSecondOrder) {
+  // A circle of radius R sampled at chords h: the turning angle over h is (1/R)(1 + θ²/24 + ...).
+  const double bend = 25e-3;
+  std::vector<double> errors;
+  for (const double h : {2e-3, 1e-3, 0.5e-3}) {
+    vessels::Centerlines c;
+    vessels::Polyline p;
+    p.name = "arc";
+    const int n = static_cast<int>(std::lround(0.06 / h));
+    for (int i = 0; i <= n; ++i) {
+      const double s = i * h;
+      p.points.emplace_back(bend * std::sin(s / bend), bend * (1.0 - std::cos(s / bend)), 0.0);
+      p.radii.push_back(r0);
+    }
+    c.branches.push_back(p);
+    vessels::BuildOptions opt;
+    opt.max_segment_length = h;
+    opt.max_chord_deviation = 1e-6;
+    const Network net = Network::build(c, opt);
+    double worst = 0.0;
+    for (double k : segment_curvatures(net)) worst = std::max(worst, std::abs(k * bend - 1.0));
+    errors.push_back(worst);
+  }
+  const double slope = std::log(errors[0] / errors[2]) / std::log(4.0);
+  EXPECT_LT(errors[2], 1e-3);
+  EXPECT_GT(slope, 1.8);
+  EXPECT_LT(slope, 2.2);
+  // A straight vessel has none.
+  for (double k : segment_curvatures(stenosed_vessel({}, 0.0, false))) EXPECT_EQ(k, 0.0);
+}
+
+TEST(FlowLosses, ABentVesselsDropThroughASceneIsPoiseuilleTimesWhitesRatio) {
+  const double bend = 20e-3;
+  const Network net = stenosed_vessel({}, 0.0, false, bend);
+  const FlowSpec spec =
+      from_config(config::load_config_text("flow:\n  inlet: {node: 0, flow: 4 mL/s}\n  outlets: {pressure: 0}\n"
+                                           "  losses: {curvature: white}\n",
+                                           "bend.yaml", flow_schema()),
+                  net);
+  EXPECT_EQ(spec.curved_segments, net.num_segments());
+  const auto solver = make_solver(net, spec);
+  EXPECT_EQ(solver->name(), "newton");
+  // Re = 2ρQ/(πaμ), De = Re √(a/R): written out here.
+  const double q = 4e-6, re = 2.0 * 1060.0 * q / (kPi * r0 * 3.5e-3), de = re * std::sqrt(r0 / bend);
+  const double poiseuille = 8.0 * 3.5e-3 * 80e-3 / (kPi * std::pow(r0, 4)) * q;
+  const std::vector<int> ends = net.ends();
+  const int outlet = ends[0] == 0 ? ends[1] : ends[0];
+  const double got = solver->node_pressure(0) - solver->node_pressure(outlet);
+  // The chords are 0.5 mm: their length is the arc's to 1e-5 and their curvature 1/R to 1e-4.
+  EXPECT_NEAR(got, poiseuille * dean_resistance_ratio(de), 2e-4 * got);
+  EXPECT_GT(got, 1.5 * poiseuille);  // De 122 at 4 mL/s (Re 386)
+  EXPECT_GT(de, 120.0);
+}
+
 TEST(FlowLosses, BadLossKeysAreRefusedNamingTheKey) {
   const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false);
   for (const auto& [text, fragment] : std::vector<std::pair<std::string, std::string>>{
            {"  losses: {stenosis: yes}\n", "flow.losses.stenosis"},
            {"  losses: {stenosis: young_tsai, stenosis_threshold: 1.0}\n", "flow.losses.stenosis_threshold"},
            {"  losses: {stenosis: young_tsai, expansion_coefficient: -1}\n", "flow.losses.expansion_coefficient"},
+           {"  losses: {curvature: dean}\n", "flow.losses.curvature"},
            {"  losses: {junctions: mynard}\n", "flow.losses.junctions"}}) {
     try {
       (void)from_config(config::load_config_text("flow:\n  outlets: {pressure: 0}\n" + text, "s.yaml", flow_schema()),

@@ -9,7 +9,10 @@
 /// \f[ \Delta p_t = \frac{K_t\rho}{2}\Big(\frac{A_0}{A_s}-1\Big)^2 |U_0| U_0, \quad K_t = 1.52, \f]
 /// with U₀ = Q/A₀ the mean velocity in the unobstructed vessel, A₀ its area and A_s the throat's:
 /// a quadratic coefficient \f$ K = \frac{K_t\rho}{2A_0^2}(A_0/A_s-1)^2 \f$ (Pa·s²/m⁶), the form
-/// svZeroDSolver's `stenosis_coefficient` takes. The viscous part of their law (K_v) is not added:
+/// svZeroDSolver's `stenosis_coefficient` takes. With K_t = 1 it is the Borda–Carnot loss of a
+/// sudden expansion from A_s to A₀, ½ρ(U_s − U₀)² (`borda_carnot`), which the project's 3D
+/// Navier–Stokes on smooth stenoses follows more closely at laminar Reynolds numbers
+/// (docs/flow-losses.md). The viscous part of their law (K_v) is not added:
 /// the network's segments already carry the Poiseuille resistance of the narrowed lumen, segment
 /// by segment. Young & Tsai's inertial term (K_u) is the rlc model's own inertance of those
 /// segments.
@@ -20,6 +23,18 @@
 /// least a threshold. Its K is spread over the segments from the throat to where the lumen has
 /// widened 90% of the way to that shoulder (in the branch's own direction), in proportion to their
 /// lengths: there the jet expands.
+/// **Curvature: White's law for a bend.** In a curved vessel the centrifugal force drives a
+/// secondary (Dean) flow that steepens the axial profile against the outer wall and raises the
+/// wall shear. For fully developed laminar flow White (Proc. R. Soc. Lond. A 123:645–663, 1929)
+/// measured the resistance of coiled pipes against the straight pipe's as a function of the Dean
+/// number De = Re √(a/R) alone (Re on the diameter and the mean velocity, a the radius, R the
+/// bend's radius of curvature):
+/// \f[ \phi(De) = \Big[1 - \big(1 - (11.6/De)^{0.45}\big)^{2.2}\Big]^{-1},\quad De > 11.6, \f]
+/// 1 below; Dean's own perturbation series (1928) gives φ − 1 = O(De⁴) for small De. The network
+/// takes each segment's curvature from its centerline (the turning angle at each node of a branch
+/// over the mean length of its two segments; a segment the mean of its two nodes'), and its law
+/// becomes Δp = f R_P Q φ(De(|Q|)) + K|Q|Q. Bends in arteries are short: the secondary flow needs
+/// a length of the order of the bend's own to develop, so a short bend loses less than φ says.
 #include <vector>
 
 #include "flowire/flow/spec.hpp"
@@ -37,6 +52,14 @@ namespace flowire::flow {
 /// @p density.
 [[nodiscard]] std::vector<Stenosis> find_stenoses(const Network& net, double density, double min_area_reduction,
                                                   double expansion_coefficient = 1.52);
+
+/// @brief Each segment's curvature (1/m) from its branch's centerline (0 on a straight one).
+[[nodiscard]] std::vector<double> segment_curvatures(const Network& net);
+
+/// @brief Give every curved segment White's law (SegmentLaw::dean) for blood of @p density and
+/// @p viscosity; @p laws made one per segment if empty and a segment is curved. The number of
+/// curved segments.
+int add_curvature_losses(const Network& net, double density, double viscosity, std::vector<SegmentLaw>& laws);
 
 /// @brief Add the stenoses' coefficients to @p laws (made one per segment if empty).
 void add_stenosis_losses(const Network& net, const std::vector<Stenosis>& stenoses, std::vector<SegmentLaw>& laws);

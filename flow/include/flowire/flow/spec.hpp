@@ -136,24 +136,49 @@ struct BranchWall {
   double thickness_ratio = 0.0;  ///< h / r where thickness is 0
 };
 
+/// @brief White's ratio of a curved pipe's laminar resistance to the straight pipe's at Dean number
+/// @p de (losses.hpp): 1 up to De = 11.6, \f$ [1 - (1 - (11.6/De)^{0.45})^{2.2}]^{-1} \f$ above.
+[[nodiscard]] double dean_resistance_ratio(double de);
+/// @brief d(dean_resistance_ratio)/dDe.
+[[nodiscard]] double dean_resistance_ratio_slope(double de);
+
 /// @brief A segment's pressure–flow law where it departs from Poiseuille's (a calibration to the
-/// 3D solution, calibration.hpp): \f$ \Delta p = f R_P Q + K |Q| Q \f$ with R_P the segment's
-/// Poiseuille (frustum) resistance, f its `resistance_factor` and K its `quadratic` coefficient
-/// (Pa·s²/m⁶: the losses that grow with the square of the flow, junctions, bends and developing
-/// flow at arterial Reynolds numbers, in the form of svZeroDSolver's stenosis coefficient).
+/// 3D solution, calibration.hpp; the losses of losses.hpp):
+/// \f$ \Delta p = f R_P Q\,\phi(c|Q|) + K |Q| Q \f$ with R_P the segment's Poiseuille (frustum)
+/// resistance, f its `resistance_factor`, K its `quadratic` coefficient (Pa·s²/m⁶: the losses that
+/// grow with the square of the flow, a stenosis's expansion, a calibration's junctions and
+/// developing flow, in the form of svZeroDSolver's stenosis coefficient) and φ White's ratio for a
+/// curved segment at the Dean number De = c|Q| (`dean` = c; 0: a straight segment, φ = 1).
 struct SegmentLaw {
   double resistance_factor = 1.0;  ///< > 0
   double quadratic = 0.0;          ///< ≥ 0, Pa·s²/m⁶
-  /// @brief The flow through the segment under the pressure difference @p dp with the linear
-  /// resistance @p r (f R_P, times an occlusion's factor): the root of r Q + K|Q|Q = Δp,
-  /// \f$ Q = 2\Delta p / (r + \sqrt{r^2 + 4K|\Delta p|}) \f$ (no cancellation as K → 0).
+  double dean = 0.0;               ///< ≥ 0, s/m³: the Dean number per unit |Q|
+  /// @brief Δp at the flow @p q with the linear resistance @p r (f R_P, times an occlusion's factor).
+  [[nodiscard]] double pressure_drop(double q, double r) const {
+    const double aq = std::abs(q);
+    return r * q * (dean > 0.0 ? dean_resistance_ratio(dean * aq) : 1.0) + quadratic * aq * q;
+  }
+  /// @brief dΔp/dQ at @p q (> 0: the law is increasing).
+  [[nodiscard]] double slope(double q, double r) const {
+    const double aq = std::abs(q);
+    const double phi =
+        dean > 0.0 ? dean_resistance_ratio(dean * aq) + dean * aq * dean_resistance_ratio_slope(dean * aq) : 1.0;
+    return r * phi + 2.0 * quadratic * aq;
+  }
+  /// @brief The flow through the segment under the pressure difference @p dp: the root of
+  /// pressure_drop(Q) = Δp; straight, \f$ Q = 2\Delta p / (r + \sqrt{r^2 + 4K|\Delta p|}) \f$ (no
+  /// cancellation as K → 0); curved, Newton's method from that root (an upper bound, φ ≥ 1).
   [[nodiscard]] double flow(double dp, double r) const {
-    return 2.0 * dp / (r + std::sqrt(r * r + 4.0 * quadratic * std::abs(dp)));
+    const double q = 2.0 * dp / (r + std::sqrt(r * r + 4.0 * quadratic * std::abs(dp)));
+    return dean > 0.0 ? curved_flow(dp, r, q) : q;
   }
-  /// @brief dQ/dΔp of `flow`: \f$ 1 / \sqrt{r^2 + 4K|\Delta p|} \f$ (= 1/(r + 2K|Q|)).
+  /// @brief dQ/dΔp of `flow`: straight, \f$ 1 / \sqrt{r^2 + 4K|\Delta p|} \f$ (= 1/(r + 2K|Q|)).
   [[nodiscard]] double conductance(double dp, double r) const {
-    return 1.0 / std::sqrt(r * r + 4.0 * quadratic * std::abs(dp));
+    return dean > 0.0 ? 1.0 / slope(flow(dp, r), r) : 1.0 / std::sqrt(r * r + 4.0 * quadratic * std::abs(dp));
   }
+
+ private:
+  [[nodiscard]] double curved_flow(double dp, double r, double straight) const;
 };
 
 /// @brief One stenosis the network's radii show (`flow.losses.stenosis`, losses.hpp).
@@ -210,6 +235,8 @@ struct FlowSpec {
   std::vector<SegmentLaw> segment_laws;
   /// The stenoses whose Young–Tsai losses the segment laws hold (`flow.losses.stenosis`, losses.hpp).
   std::vector<Stenosis> stenoses;
+  /// The segments with White's law of a bend (`flow.losses.curvature`, losses.hpp).
+  int curved_segments = 0;
   /// The segment laws are a calibration in total pressure (flow/calibration.hpp): the nodes hold
   /// p + ½ρū², but for the outlets (static values), and the laws of the segments that end at an
   /// outlet carry its dynamic pressure.
@@ -235,8 +262,8 @@ struct FlowSpec {
   /// @brief The period after which every periodic inlet repeats (the least common multiple of
   /// their periods: T for inlets of T and T/2), or 0 if all are constant.
   [[nodiscard]] double cycle() const;
-  /// @brief Whether a segment law has a quadratic term.
-  [[nodiscard]] bool has_quadratic_losses() const;
+  /// @brief Whether a segment law is nonlinear (a quadratic term or a curved segment's Dean law).
+  [[nodiscard]] bool has_nonlinear_losses() const;
 };
 
 /// @brief Inlet at the widest end with `inlet_pressure`, every other end at 0 Pa.
