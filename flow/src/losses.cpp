@@ -84,34 +84,54 @@ std::vector<Stenosis> find_stenoses(const Network& net, double density, double m
   return out;
 }
 
+namespace {
+
+/// White's ratio φ and its slope dφ/dDe at @p de with two pow calls (the curved law's inner loop).
+void dean_ratio_and_slope(double de, double& phi, double& slope) {
+  if (!(de > kDeanOnset)) {
+    phi = 1.0, slope = 0.0;
+    return;
+  }
+  const double x = std::pow(kDeanOnset / de, 0.45), y = 1.0 - x;
+  const double y02 = std::pow(y, 0.2), w = y * y * y02;  // (1 − x)^2.2
+  phi = 1.0 / (1.0 - w);
+  // dw/dDe = 2.2 (1 − x)^1.2 · 0.45 x / De;  φ = 1/(1 − w):  dφ/dDe = φ² dw/dDe
+  slope = phi * phi * 2.2 * y * y02 * 0.45 * x / de;
+}
+
+}  // namespace
+
 double dean_resistance_ratio(double de) {
-  if (!(de > kDeanOnset)) return 1.0;
-  const double x = std::pow(kDeanOnset / de, 0.45);
-  return 1.0 / (1.0 - std::pow(1.0 - x, 2.2));
+  double phi = 1.0, slope = 0.0;
+  dean_ratio_and_slope(de, phi, slope);
+  return phi;
 }
 
 double dean_resistance_ratio_slope(double de) {
-  if (!(de > kDeanOnset)) return 0.0;
-  const double x = std::pow(kDeanOnset / de, 0.45);
-  const double w = std::pow(1.0 - x, 2.2);
-  // dw/dDe = 2.2 (1 − x)^1.2 · 0.45 x / De;  φ = 1/(1 − w):  dφ/dDe = φ² dw/dDe
-  const double phi = 1.0 / (1.0 - w);
-  return phi * phi * 2.2 * std::pow(1.0 - x, 1.2) * 0.45 * x / de;
+  double phi = 1.0, slope = 0.0;
+  dean_ratio_and_slope(de, phi, slope);
+  return slope;
 }
 
-double SegmentLaw::curved_flow(double dp, double r, double straight) const {
+double SegmentLaw::curved_flow(double dp, double r, double straight, double guess) const {
   // g(Q) = Δp(Q) − |Δp| on [0, |straight|] (φ ≥ 1 puts the root below the straight law's):
-  // Newton's method from the top, bisection where a step leaves the bracket.
+  // Newton's method from the guess or the top, bisection where a step leaves the bracket. Newton converges
+  // quadratically: a step below 1e-13 of the flow is the root to round-off.
   const double target = std::abs(dp);
-  double lo = 0.0, hi = std::abs(straight), q = hi;
-  for (int it = 0; it < 100; ++it) {
-    const double g = pressure_drop(q, r) - target;
-    if (std::abs(g) <= 1e-14 * target) break;
+  double lo = 0.0, hi = std::abs(straight);
+  const double start = dp < 0.0 ? -guess : guess;
+  double q = start > 0.0 && start < hi ? start : hi;
+  for (int it = 0; it < 60; ++it) {
+    double phi = 1.0, dphi = 0.0;
+    dean_ratio_and_slope(dean * q, phi, dphi);
+    const double g = r * q * phi + quadratic * q * q - target;
+    if (g == 0.0) break;
     (g > 0.0 ? hi : lo) = q;
-    double next = q - g / slope(q, r);
+    double next = q - g / (r * (phi + dean * q * dphi) + 2.0 * quadratic * q);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    if (std::abs(next - q) <= 1e-16 * hi) break;
+    const bool done = std::abs(next - q) <= 1e-13 * q;
     q = next;
+    if (done) break;
   }
   return dp < 0.0 ? -q : q;
 }

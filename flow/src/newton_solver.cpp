@@ -61,6 +61,7 @@ class NewtonSolver final : public FrameSolver {
       }
     }
     timings_.assemble = sw.seconds();
+    harmonics_occlusion_tolerance_ = 0.01;  // a period is 128 Newton solves (solver.hpp)
     // The first guess: the linear network (K = 0) at t = 0.
     Stopwatch sf;
     init_arrays();
@@ -107,7 +108,7 @@ class NewtonSolver final : public FrameSolver {
       for (int s = 0; s < net_.num_segments(); ++s) {
         const auto& seg = net_.segment(s);
         const double dp = p[seg.node_from] - p[seg.node_to];
-        q[s] = spec_.segment_laws[static_cast<size_t>(s)].flow(dp, r_eff_[static_cast<size_t>(s)]);
+        q[s] = spec_.segment_laws[static_cast<size_t>(s)].flow(dp, r_eff_[static_cast<size_t>(s)], q[s]);
         qmax = std::max(qmax, std::abs(q[s]));
       }
       f_ = -inj_;
@@ -156,7 +157,7 @@ class NewtonSolver final : public FrameSolver {
       if (stalled && !(f_.lpNorm<Eigen::Infinity>() > kFloor * scale)) break;
       const bool newton = refactor;
       if (refactor) {
-        factorize_tangent(t, p);
+        factorize_tangent(t, q);
         refactor = false;
       }
       step_ = chol_.solve(f_);
@@ -193,13 +194,12 @@ class NewtonSolver final : public FrameSolver {
   }
 
  private:
-  /// The tangent conductance matrix at the pressures @p p, refilled in place and factored.
-  void factorize_tangent(double t, const double* p) const {
-    for (int s = 0; s < net_.num_segments(); ++s) {
-      const auto& seg = net_.segment(s);
-      dq_[static_cast<size_t>(s)] = spec_.segment_laws[static_cast<size_t>(s)].conductance(
-          p[seg.node_from] - p[seg.node_to], r_eff_[static_cast<size_t>(s)]);
-    }
+  /// The tangent conductance matrix at the flows @p q the last balance found (their pressures'
+  /// roots: dQ/dΔp = 1 / (dΔp/dQ) there, no law inverted again), refilled in place and factored.
+  void factorize_tangent(double t, const double* q) const {
+    for (int s = 0; s < net_.num_segments(); ++s)
+      dq_[static_cast<size_t>(s)] =
+          1.0 / spec_.segment_laws[static_cast<size_t>(s)].slope(q[s], r_eff_[static_cast<size_t>(s)]);
     double* v = jac_.valuePtr();
     std::fill(v, v + jac_.nonZeros(), 0.0);
     for (size_t u = 0; u < diag_slot_.size(); ++u)

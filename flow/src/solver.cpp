@@ -73,7 +73,11 @@ void FlowSolver::set_occlusion(std::span<const SegmentOcclusion> occlusion) {
   if (!changed) return;
   Stopwatch sw;
   apply_occlusion();
-  if (!harmonic_.empty()) compute_harmonics();
+  if (!harmonic_.empty() && harmonics_stale()) {
+    compute_harmonics();
+    harmonics_occlusion_ = occlusion_;
+    ++timings_.harmonic_updates;
+  }
   timings_.occlusion += sw.seconds();
   ++timings_.occlusion_updates;
 }
@@ -172,6 +176,18 @@ void FlowSolver::prepare_profile() {
   const auto ne = static_cast<size_t>(net_.num_segments());
   shape_.assign(ne * kHarmonics, nullptr);
   compute_harmonics();
+}
+
+bool FlowSolver::harmonics_stale() const {
+  if (!(harmonics_occlusion_tolerance_ > 0.0) || harmonics_occlusion_.size() != occlusion_.size()) return true;
+  const double tol = harmonics_occlusion_tolerance_;
+  for (size_t s = 0; s < occlusion_.size(); ++s) {
+    const auto &now = occlusion_[s], &then = harmonics_occlusion_[s];
+    if (std::abs(now.resistance_factor / then.resistance_factor - 1.0) > tol ||
+        std::abs(now.inertance_factor / then.inertance_factor - 1.0) > tol)
+      return true;
+  }
+  return false;
 }
 
 void FlowSolver::compute_harmonics() {

@@ -71,6 +71,7 @@ struct SolverTimings {
   long frame_count = 0;
   double occlusion = 0.0;      ///< refactorizations and re-solves after set_occlusion
   long occlusion_updates = 0;  ///< set_occlusion calls that changed a resistance or inertance
+  long harmonic_updates = 0;   ///< Womersley profile: periods resampled after an occlusion changed
 };
 
 class FlowSolver {
@@ -141,6 +142,8 @@ class FlowSolver {
   /// The flow harmonics of every segment for the Womersley profile (harmonic_); the
   /// default samples segment_flow_at over one period.
   virtual void compute_harmonics();
+  /// Whether the occlusion moved past harmonics_occlusion_tolerance_ since the harmonics were sampled.
+  [[nodiscard]] bool harmonics_stale() const;
   /// Drop harmonics below 1e-9 of `scale[s]` (a harmonic the waveform does not have).
   void drop_negligible_harmonics(std::span<const double> scale);
   /// Axial velocity given the segment, squared distance ratio d²/r² and time.
@@ -165,6 +168,12 @@ class FlowSolver {
   mutable std::map<double, std::shared_ptr<const WomersleyShape>> shape_by_alpha_;  ///< shared by equal α
   std::vector<double> resistance_;                                                  // (num_segments) without occlusion
   std::vector<SegmentOcclusion> occlusion_;  // (num_segments) or empty: no occlusion set
+  /// Womersley profile: the occlusion's factors may move by this fraction of those the harmonics
+  /// were sampled with before a period is resampled (0: at every change; a nonlinear network,
+  /// whose period is 128 Newton solves, sets 1%: the profile still carries the current Q(t),
+  /// only its split among the harmonics lags)
+  double harmonics_occlusion_tolerance_ = 0.0;
+  std::vector<SegmentOcclusion> harmonics_occlusion_;  // the occlusion the harmonics were sampled with
   double time_ = 0.0;
   double omega_ = 0.0;  // angular frequency of the spec's cycle
   SolverTimings timings_;

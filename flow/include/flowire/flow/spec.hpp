@@ -167,10 +167,11 @@ struct SegmentLaw {
   }
   /// @brief The flow through the segment under the pressure difference @p dp: the root of
   /// pressure_drop(Q) = Δp; straight, \f$ Q = 2\Delta p / (r + \sqrt{r^2 + 4K|\Delta p|}) \f$ (no
-  /// cancellation as K → 0); curved, Newton's method from that root (an upper bound, φ ≥ 1).
-  [[nodiscard]] double flow(double dp, double r) const {
+  /// cancellation as K → 0); curved, Newton's method within [0, that root] (φ ≥ 1), from @p guess
+  /// where it lies there (a nearby flow: the last iterate's), else from the straight root.
+  [[nodiscard]] double flow(double dp, double r, double guess = 0.0) const {
     const double q = 2.0 * dp / (r + std::sqrt(r * r + 4.0 * quadratic * std::abs(dp)));
-    return dean > 0.0 ? curved_flow(dp, r, q) : q;
+    return dean > 0.0 ? curved_flow(dp, r, q, guess) : q;
   }
   /// @brief dQ/dΔp of `flow`: straight, \f$ 1 / \sqrt{r^2 + 4K|\Delta p|} \f$ (= 1/(r + 2K|Q|)).
   [[nodiscard]] double conductance(double dp, double r) const {
@@ -178,7 +179,7 @@ struct SegmentLaw {
   }
 
  private:
-  [[nodiscard]] double curved_flow(double dp, double r, double straight) const;
+  [[nodiscard]] double curved_flow(double dp, double r, double straight, double guess) const;
 };
 
 /// @brief One stenosis the network's radii show (`flow.losses.stenosis`, losses.hpp).
