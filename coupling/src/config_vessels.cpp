@@ -213,10 +213,11 @@ flow::FlowSpec scene_flow_conditions(const config::Config& c, const vessels::Net
 flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) {
   flow::FlowSpec spec = scene_flow_conditions(c, net);
   if (c.has("vessels.calibration")) {
-    if (c.string_or("flow.losses.stenosis", "none") != "none")
-      throw_input_error(c.where("flow.losses.stenosis"),
-                        "vessels.calibration already holds the 3D solution's losses: flow.losses would count them "
-                        "twice (give one or the other)");
+    for (const char* key : {"flow.losses.stenosis", "flow.losses.curvature"})
+      if (c.string_or(key, "none") != "none")
+        throw_input_error(c.where(key), fmt::format("vessels.calibration already holds the 3D solution's losses: {} "
+                                                    "would count them twice (give one or the other)",
+                                                    key));
     flow::Calibration cal =
         flow::read_calibration(c.resolve_path(c.string("vessels.calibration")), net, c.where("vessels.calibration"));
     spec.segment_laws = std::move(cal.laws);
