@@ -319,7 +319,7 @@ class RlcSolver final : public FlowSolver {
     system_->residual(st_.y, st_.yd, prev_y_);  // c(0)
     system_->solve(prev_y_);
     st_.y = -prev_y_;
-    // Quadratic losses: Newton's method from the linear network's state.
+    // Nonlinear losses: Newton's method from the linear network's state.
     for (int it = 0; losses_; ++it) {
       system_->update_solution(0.0, st_.y, st_.yd);
       if (system_->residual(st_.y, st_.yd, 1.0, prev_y_) < kLossTolerance) break;
