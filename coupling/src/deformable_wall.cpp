@@ -148,12 +148,15 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
   bool others = false;
   for (const auto& [who, l] : loads_) others = others || (who != body && !l->points.empty());
   if (pressed || others || based) {
+    Eigen::VectorXd other_response;  // the other bodies' loads
+    for (const auto& [who, l] : loads_)
+      if (who != body && !l->points.empty())
+        other_response = other_response.size() ? Eigen::VectorXd(other_response + l->response) : l->response;
     a.offsets = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(at.size()));
     for (size_t j = 0; j < at.size(); ++j) {
       Vec3 u = pressed ? lumen_->interpolate(at[j], pressure_field_) : Vec3::Zero();
       if (based) u += lumen_->interpolate(at[j], base_);  // the state the wall is linear about
-      for (const auto& [who, l] : loads_)                 // (their columns were solved when they were anchored)
-        if (who != body && !l->points.empty()) u += lumen_->displacement(at[j], l->points, l->forces);
+      if (other_response.size()) u += lumen_->displacement(at[j], other_response);
       a.offsets[static_cast<Eigen::Index>(j)] = normals[j].dot(u);
     }
   }
@@ -174,6 +177,7 @@ void DeformableWall::load(const void* body, std::span<const Vec3> points, std::s
     l.points.push_back(lumen_->locate_patch(points[j], j < radii.size() ? radii[j] : 0.0));
     l.total += forces[j];
   }
+  l.response = l.points.empty() ? Eigen::VectorXd() : lumen_->response(l.points, l.forces);
   load_.setZero();
   load_total_.setZero();
   for (const auto& [who, b] : loads_) {
@@ -190,13 +194,16 @@ bool DeformableWall::moved_beyond_linearization() {
   // Each loaded point's displacement now (the base state's, the pressure's, every body's
   // loads through the kept columns) against the state the wall was linearized about.
   bool beyond = false;
+  Eigen::VectorXd all_response;
+  for (const auto& [who, l] : loads_)
+    if (!l->points.empty())
+      all_response = all_response.size() ? Eigen::VectorXd(all_response + l->response) : l->response;
   for (const auto& [who, b] : loads_) {
     (void)who;
     for (const auto& at : b->points) {
       Vec3 u = lumen_->interpolate(at, base_);
       if (pressure_field_.size() > 0) u += lumen_->interpolate(at, pressure_field_);
-      for (const auto& [other, l] : loads_)
-        if (!l->points.empty()) u += lumen_->displacement(at, l->points, l->forces);
+      if (all_response.size()) u += lumen_->displacement(at, all_response);
       // (the thickness at the face's vertices, weighted by their shape functions' magnitudes: a
       // quadratic face's vertex weights are negative near its middle)
       double t = 0.0, w_sum = 0.0;
@@ -235,6 +242,8 @@ void DeformableWall::relinearize() {
   solid_->tangent_solve(x);
   base_ = base_u_ - x.col(0);
   lumen_->clear();  // the columns of the last tangent
+  for (auto& [who, l] : loads_)
+    if (!l->points.empty()) l->response = lumen_->response(l->points, l->forces);
   if (pressure_response_.size() > 0) {
     pressure_response_.resize(0, 0);
     solve_pressure_response();

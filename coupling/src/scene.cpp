@@ -97,8 +97,8 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     running["pid"] = static_cast<long>(::getpid());
     write_text_atomically(out / "summary.json", running.dump(2) + "\n");
   };
-  nlohmann::json timings = {{"setup", 0.0},    {"flow", 0.0},   {"rod", 0.0},  {"contact", 0.0},
-                            {"coupling", 0.0}, {"output", 0.0}, {"total", 0.0}};
+  nlohmann::json timings = {{"setup", 0.0},    {"flow", 0.0},   {"rod", 0.0},   {"contact", 0.0},
+                            {"coupling", 0.0}, {"output", 0.0}, {"total", 0.0}, {"stepping", 0.0}};
   auto finish = [&](const std::string& status) {
     take_folder();
     s["status"] = status;
@@ -133,13 +133,16 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     cosim.start();
     if (series || steps == 0) recorder.record(0.0);
     long done = 0;
+    double stepping = 0.0;  // the steps alone: no setup, start or output
     {
       // SIGINT/SIGTERM end the stepping after the current step: the frames so far are
       // written below and the summary says "interrupted".
       const InterruptibleSection interruptible;
       for (; done < steps && interrupt_signal() == 0; ++done) {
         const double t1 = (static_cast<double>(done) + 1.0) * dt;
+        const auto ts = Clock::now();
         cosim.step();
+        stepping += seconds_since(ts);
         recorder.after_step();
         if (series && (done + 1) % out_every == 0) recorder.record(t1);
         if (options.progress)
@@ -171,6 +174,7 @@ RunResult run_scene(const config::Config& c, const RunOptions& options) {
     timings["contact"] = split.contact;
     timings["coupling"] = split.coupling;
     timings["output"] = t_out;
+    timings["stepping"] = stepping;
   } catch (const Error& e) {
     // Whatever ended the run, the summary says so; if even that cannot be written (a full
     // disk), the "running" one stays and the first error is the one reported.

@@ -116,9 +116,42 @@ void ElasticSolid::set_laws(std::vector<NeoHookean> laws, std::vector<int> tet_l
 }
 
 struct ElasticSolid::Factor {
-  Factor() { llt.cholmod().print = 1; }  // an indefinite tangent is reported by the solid, not by CHOLMOD's print
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  /// Eigen's supernodal LLᵀ with its CHOLMOD factor in reach (for the sparse solves).
+  struct Llt : Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+    cholmod_factor* factor() const { return m_cholmodFactor; }
+  };
+  Factor() {
+    cholmod_common& c = llt.cholmod();
+    c.print = 1;  // an indefinite tangent is reported by the solid, not by CHOLMOD's print
+    // Nested dissection always (METIS): its elimination tree is shallow, its top levels the
+    // separators, so a forward solve from one node (half_solve) reaches a few per cent of the
+    // rows; CHOLMOD's default may keep AMD, whose tree along a long tube is a chain.
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_METIS;
+  }
+  ~Factor() { forget_simplicial(); }
+  Factor(const Factor&) = delete;
+  Factor& operator=(const Factor&) = delete;
+  /// Drop the simplicial copy and the sparse solve's workspace (after a new factorization).
+  void forget_simplicial() {
+    cholmod_common& c = llt.cholmod();
+    if (simplicial) cholmod_free_factor(&simplicial, &c);
+    cholmod_free_dense(&x, &c);
+    cholmod_free_dense(&y, &c);
+    cholmod_free_dense(&e, &c);
+    cholmod_free_dense(&b, &c);
+    cholmod_free_sparse(&xset, &c);
+    cholmod_free_sparse(&bset, &c);
+  }
+  Llt llt;
   bool analysed = false;
+  // For half_solve: a simplicial LLᵀ copy of the supernodal factor (the supernodal one stays for
+  // full solves, whose BLAS it uses), the inverse permutation, CHOLMOD's reusable workspace.
+  cholmod_factor* simplicial = nullptr;
+  std::vector<int> iperm;
+  std::vector<char> marked;  ///< rows of b set in this call
+  cholmod_dense *x = nullptr, *y = nullptr, *e = nullptr, *b = nullptr;
+  cholmod_sparse *xset = nullptr, *bset = nullptr;
 };
 
 ElasticSolid::ElasticSolid(mesh::TetMesh mesh, NeoHookean law)
@@ -344,6 +377,7 @@ bool ElasticSolid::factorize_tangent(const Eigen::VectorXd& u) {
     factor_->llt.analyzePattern(h);
     factor_->analysed = true;
   }
+  factor_->forget_simplicial();
   factor_->llt.factorize(h);
   return factor_->llt.info() == Eigen::Success;
 }
@@ -359,6 +393,56 @@ void ElasticSolid::tangent_solve(Eigen::MatrixXd& x) const {
   for (int i = 0; i < num_dofs(); ++i)
     if (held_[static_cast<size_t>(i)]) x.row(i).setZero();
   x = factor_->llt.solve(x).eval();
+}
+
+void ElasticSolid::half_solve(std::span<const std::pair<int, double>> b, HalfColumn& y) const {
+  if (!linearized_) throw_usage_error("wall: half_solve before linearize");
+  Factor& f = *factor_;
+  cholmod_common& c = f.llt.cholmod();
+  const int n = num_dofs();
+  if (!f.simplicial) {
+    f.simplicial = cholmod_copy_factor(f.llt.factor(), &c);
+    // Supernodal LLᵀ to simplicial LLᵀ: the same numbers, laid out column by column.
+    if (!f.simplicial || !cholmod_change_factor(CHOLMOD_REAL, 1, 0, 1, 1, f.simplicial, &c))
+      throw_numerical_error("wall: CHOLMOD could not copy the tangent's factor (out of memory?)");
+    const auto* perm = static_cast<const int*>(f.simplicial->Perm);
+    f.iperm.resize(static_cast<size_t>(n));
+    f.marked.assign(static_cast<size_t>(n), 0);
+    for (int k = 0; k < n; ++k) f.iperm[static_cast<size_t>(perm ? perm[k] : k)] = k;
+    f.b = cholmod_zeros(static_cast<size_t>(n), 1, CHOLMOD_REAL, &c);
+    f.bset = cholmod_allocate_sparse(static_cast<size_t>(n), 1, static_cast<size_t>(n), 1, 1, 0, CHOLMOD_PATTERN, &c);
+  }
+  // b and Bset in the factor's numbering (the L solve applies no permutation itself).
+  auto* bx = static_cast<double*>(f.b->x);
+  auto* bp = static_cast<int*>(f.bset->p);
+  auto* bi = static_cast<int*>(f.bset->i);
+  int count = 0;
+  for (const auto& [dof, value] : b) {
+    if (held_[static_cast<size_t>(dof)] || value == 0.0) continue;
+    const int row = f.iperm[static_cast<size_t>(dof)];
+    if (!f.marked[static_cast<size_t>(row)]) {
+      f.marked[static_cast<size_t>(row)] = 1;
+      bi[count++] = row;
+    }
+    bx[row] += value;
+  }
+  bp[0] = 0;
+  bp[1] = count;
+  y.index.clear();
+  y.value.clear();
+  if (count == 0) return;
+  const bool ok = cholmod_solve2(CHOLMOD_L, f.simplicial, f.b, f.bset, &f.x, &f.xset, &f.y, &f.e, &c);
+  for (int p = 0; p < count; ++p) {  // b back to zero for the next call
+    bx[bi[p]] = 0.0;
+    f.marked[static_cast<size_t>(bi[p])] = 0;
+  }
+  if (!ok) throw_numerical_error("wall: CHOLMOD's sparse solve failed (out of memory?)");
+  const auto* xp = static_cast<const int*>(f.xset->p);
+  const auto* xi = static_cast<const int*>(f.xset->i);
+  const auto* xx = static_cast<const double*>(f.x->x);
+  y.index.assign(xi, xi + xp[1]);
+  y.value.resize(y.index.size());
+  for (size_t k = 0; k < y.index.size(); ++k) y.value[k] = xx[y.index[k]];
 }
 
 SolveReport ElasticSolid::solve(const SolveOptions& options) {

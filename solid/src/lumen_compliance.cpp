@@ -1,9 +1,11 @@
 // The wall's compliance between lumen points: nearest faces through a uniform grid, the
-// face's P2 shape functions at the point, and columns of the tangent's inverse solved per
-// lumen node on first use and kept.
+// face's P2 shape functions at the point, and per lumen node the sparse forward solve
+// L⁻¹ P E_a of the tangent's factor, solved on first use and kept.
 #include "flowire/solid/lumen_compliance.hpp"
 
 #include <fmt/format.h>
+
+#include <Eigen/Sparse>
 
 #include <algorithm>
 #include <cmath>
@@ -68,15 +70,15 @@ LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen, double bu
   const auto& m = solid.mesh();
   if (lumen < 0 || lumen >= static_cast<int>(m.groups.size()))
     throw_usage_error(fmt::format("wall: no lumen group {}", lumen));
-  lumen_index_.assign(static_cast<size_t>(m.num_nodes()), -1);
+  std::vector<int> lumen_index(static_cast<size_t>(m.num_nodes()), -1);
   double edge = 0.0;
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (size_t f = 0; f < m.faces.size(); ++f) {
     if (m.face_group[f] != lumen) continue;
     faces_.push_back(static_cast<int>(f));
     for (int node : m.faces[f]) {
-      if (lumen_index_[static_cast<size_t>(node)] < 0) {
-        lumen_index_[static_cast<size_t>(node)] = static_cast<int>(lumen_nodes_.size());
+      if (lumen_index[static_cast<size_t>(node)] < 0) {
+        lumen_index[static_cast<size_t>(node)] = static_cast<int>(lumen_nodes_.size());
         lumen_nodes_.push_back(node);
       }
       lo = lo.cwiseMin(m.nodes[static_cast<size_t>(node)]);
@@ -86,9 +88,8 @@ LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen, double bu
   }
   if (faces_.empty())
     throw_usage_error(fmt::format("wall: the lumen group '{}' has no face", m.groups[static_cast<size_t>(lumen)].name));
-  // A column: 3 × 3 numbers for each lumen node; at least a few hundred are kept (a step's contacts).
-  max_columns_ = std::max<size_t>(
-      256, static_cast<size_t>(budget / (9.0 * sizeof(double) * static_cast<double>(lumen_nodes_.size()))));
+  budget_ = budget;
+  slot_.assign(static_cast<size_t>(solid.num_dofs()), -1);
   cell_ = 2.0 * edge / static_cast<double>(faces_.size());
   const Vec3 extent = hi - lo;
   // No more than about 2 million cells.
@@ -132,22 +133,8 @@ LumenPoint LumenCompliance::locate(const Vec3& x) const {
   auto visit = [&](int i, int j, int l) {
     for (int k : cells_[(static_cast<size_t>(l) * static_cast<size_t>(dims_[1]) + static_cast<size_t>(j)) *
                             static_cast<size_t>(dims_[0]) +
-                        static_cast<size_t>(i)]) {
-      const auto& face = m.faces[static_cast<size_t>(faces_[static_cast<size_t>(k)])];
-      const Vec3& a = m.nodes[static_cast<size_t>(face[0])];
-      const Vec3& b = m.nodes[static_cast<size_t>(face[1])];
-      const Vec3& cc = m.nodes[static_cast<size_t>(face[2])];
-      std::array<double, 3> bary{};
-      const Vec3 q = closest_on_triangle(x, a, b, cc, bary);
-      const double d2 = (q - x).squaredNorm();
-      if (d2 < best_d2) {
-        best_d2 = d2;
-        best.face = faces_[static_cast<size_t>(k)];
-        best.bary = bary;
-        best.point = q;
-        best.normal = (b - a).cross(cc - a).normalized();
-      }
-    }
+                        static_cast<size_t>(i)])
+      closer(x, k, best, best_d2);
   };
   for (int ring = 0; ring <= max_ring; ++ring) {
     // The shell of cells at Chebyshev distance `ring` from x's cell.
@@ -161,15 +148,36 @@ LumenPoint LumenCompliance::locate(const Vec3& x) const {
     // Every face not yet visited lies farther than `ring` cells from x.
     if (best.face >= 0 && std::sqrt(best_d2) <= ring * cell_) break;
   }
-  if (best.face >= 0) {
-    std::array<double, 6> w{};
-    element::tri_p2({best.bary[1], best.bary[2], 0.0}, w.data());
-    best.weights.reserve(6);
-    for (int a = 0; a < 6; ++a)
-      best.weights.emplace_back(m.faces[static_cast<size_t>(best.face)][static_cast<size_t>(a)],
-                                w[static_cast<size_t>(a)]);
-  }
+  if (best.face >= 0) shape_weights(best);
   return best;
+}
+
+void LumenCompliance::closer(const Vec3& x, int k, LumenPoint& best, double& best_d2) const {
+  const auto& m = solid_.mesh();
+  const auto& face = m.faces[static_cast<size_t>(faces_[static_cast<size_t>(k)])];
+  const Vec3& a = m.nodes[static_cast<size_t>(face[0])];
+  const Vec3& b = m.nodes[static_cast<size_t>(face[1])];
+  const Vec3& c = m.nodes[static_cast<size_t>(face[2])];
+  std::array<double, 3> bary{};
+  const Vec3 q = closest_on_triangle(x, a, b, c, bary);
+  const double d2 = (q - x).squaredNorm();
+  if (d2 < best_d2) {
+    best_d2 = d2;
+    best.face = faces_[static_cast<size_t>(k)];
+    best.bary = bary;
+    best.point = q;
+    best.normal = (b - a).cross(c - a).normalized();
+  }
+}
+
+void LumenCompliance::shape_weights(LumenPoint& p) const {
+  std::array<double, 6> w{};
+  element::tri_p2({p.bary[1], p.bary[2], 0.0}, w.data());
+  p.weights.clear();
+  p.weights.reserve(6);
+  for (int a = 0; a < 6; ++a)
+    p.weights.emplace_back(solid_.mesh().faces[static_cast<size_t>(p.face)][static_cast<size_t>(a)],
+                           w[static_cast<size_t>(a)]);
 }
 
 LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
@@ -189,9 +197,32 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
   const Vec3 n = centre.normal;
   const Vec3 e1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
   const Vec3 e2 = n.cross(e1);
+  // A sample y lies within ρ of the centre c, so its nearest lumen point q does within 2ρ of c
+  // (|q − y| ≤ |c − y| ≤ ρ): the faces whose cells meet that box are all a sample's search needs.
+  std::vector<int> near;
+  std::array<int, 3> c0{}, c1{};
+  for (int d = 0; d < 3; ++d) {
+    const auto dd = static_cast<size_t>(d);
+    c0[dd] = std::clamp(static_cast<int>((centre.point[d] - 2.0 * radius - grid_origin_[d]) / cell_), 0, dims_[dd] - 1);
+    c1[dd] = std::clamp(static_cast<int>((centre.point[d] + 2.0 * radius - grid_origin_[d]) / cell_), 0, dims_[dd] - 1);
+  }
+  for (int i = c0[0]; i <= c1[0]; ++i)
+    for (int j = c0[1]; j <= c1[1]; ++j)
+      for (int l = c0[2]; l <= c1[2]; ++l) {
+        const auto& cell = cells_[(static_cast<size_t>(l) * static_cast<size_t>(dims_[1]) + static_cast<size_t>(j)) *
+                                      static_cast<size_t>(dims_[0]) +
+                                  static_cast<size_t>(i)];
+        near.insert(near.end(), cell.begin(), cell.end());
+      }
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
   std::unordered_map<int, double> acc;
+  LumenPoint sample;
   auto add = [&](const Vec3& y, double w) {
-    for (const auto& [node, wn] : locate(y).weights) acc[node] += w * wn;
+    double best_d2 = std::numeric_limits<double>::infinity();
+    for (int k : near) closer(y, k, sample, best_d2);
+    shape_weights(sample);
+    for (const auto& [node, wn] : sample.weights) acc[node] += w * wn;
   };
   const double dr = 1.0 / rings;
   add(centre.point, dr * dr);
@@ -210,36 +241,24 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
   return centre;
 }
 
-const Eigen::MatrixXd& LumenCompliance::column(int node) const { return columns_.at(node); }
-
 void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   ++tick_;
-  std::vector<int> missing;
+  std::array<std::pair<int, double>, 1> unit{};
   for (const auto& p : points)
     for (const auto& [node, w] : p.weights) {
       last_use_[node] = tick_;
-      if (!columns_.count(node) && std::find(missing.begin(), missing.end(), node) == missing.end())
-        missing.push_back(node);
+      if (columns_.count(node)) continue;
+      NodeColumns& y = columns_[node];
+      for (int c = 0; c < 3; ++c) {
+        unit[0] = {3 * node + c, 1.0};
+        solid_.half_solve(unit, y[static_cast<size_t>(c)]);
+        kept_bytes_ += y[static_cast<size_t>(c)].size() * (sizeof(int) + sizeof(double));
+      }
+      ++solved_;
     }
-  // Many right-hand sides per back-substitution: the supernodal solve then works on blocks.
-  constexpr size_t kBatch = 64;
-  for (size_t first = 0; first < missing.size(); first += kBatch) {
-    const size_t count = std::min(kBatch, missing.size() - first);
-    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(solid_.num_dofs(), 3 * static_cast<Eigen::Index>(count));
-    for (size_t q = 0; q < count; ++q)
-      for (int c = 0; c < 3; ++c) x(3 * missing[first + q] + c, 3 * static_cast<Eigen::Index>(q) + c) = 1.0;
-    solid_.tangent_solve(x);
-    for (size_t q = 0; q < count; ++q) {
-      Eigen::MatrixXd kept(3 * static_cast<Eigen::Index>(lumen_nodes_.size()), 3);
-      for (size_t a = 0; a < lumen_nodes_.size(); ++a)
-        kept.middleRows<3>(3 * static_cast<Eigen::Index>(a)) =
-            x.block<3, 3>(3 * lumen_nodes_[a], 3 * static_cast<Eigen::Index>(q));
-      columns_.emplace(missing[first + q], std::move(kept));
-    }
-  }
-  solved_ += static_cast<int>(missing.size());
-  if (columns_.size() <= max_columns_) return;
-  // Over the budget: drop the columns asked for longest ago (never those of this call).
+  // Over the budget: drop the columns asked for longest ago (never those of this call; at least
+  // a few hundred nodes are kept, a step's contacts).
+  if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) return;
   std::vector<std::pair<std::uint64_t, int>> by_age;
   for (const auto& [node, column] : columns_) {
     (void)column;
@@ -248,7 +267,8 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   }
   std::sort(by_age.begin(), by_age.end());
   for (const auto& [used, node] : by_age) {
-    if (columns_.size() <= max_columns_) break;
+    if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) break;
+    for (const HalfColumn& y : columns_.at(node)) kept_bytes_ -= y.size() * (sizeof(int) + sizeof(double));
     columns_.erase(node);
     last_use_.erase(node);
     ++dropped_;
@@ -257,37 +277,73 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
 
 Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
   prefetch(points);
-  const auto n = static_cast<Eigen::Index>(points.size());
-  Eigen::MatrixXd c(n, n);
-  for (Eigen::Index j = 0; j < n; ++j) {
-    const auto& pj = points[static_cast<size_t>(j)];
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const auto& pi = points[static_cast<size_t>(i)];
-      const Vec3& di = directions[static_cast<size_t>(i)];
-      double sum = 0.0;
-      for (const auto& [node_b, wb] : pj.weights) {
-        const Eigen::MatrixXd& col = column(node_b);
-        const Vec3 load = wb * directions[static_cast<size_t>(j)];
-        for (const auto& [node_a, wa] : pi.weights)
-          sum += wa * di.dot(col.middleRows<3>(3 * lumen_index_[static_cast<size_t>(node_a)]) * load);
+  // C = Zᵀ Z with column i of Z the force d_i spread over point i's nodes and forward-solved:
+  // z_i = Σ_b w_b Σ_c d_ic Y_bc, i.e. Z = Y M with Y the distinct nodes' columns gathered densely
+  // on the rows they reach (a few thousand) and M (3 nodes × points) the weights times the
+  // directions. Neighbouring points share most of their nodes: each node's columns are gathered once.
+  std::vector<int> rows, nodes;
+  std::unordered_map<int, int> node_col;
+  for (const auto& p : points)
+    for (const auto& [node, w] : p.weights)
+      if (node_col.emplace(node, static_cast<int>(nodes.size())).second) {
+        nodes.push_back(node);
+        for (const HalfColumn& y : column(node))
+          for (int row : y.index)
+            if (slot_[static_cast<size_t>(row)] < 0) {
+              slot_[static_cast<size_t>(row)] = static_cast<int>(rows.size());
+              rows.push_back(row);
+            }
       }
-      c(i, j) = sum;  // (each entry from its own column: the symmetry is Maxwell–Betti's, not imposed)
+  Eigen::MatrixXd y =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), 3 * static_cast<Eigen::Index>(nodes.size()));
+  for (size_t b = 0; b < nodes.size(); ++b)
+    for (int c = 0; c < 3; ++c) {
+      const HalfColumn& yc = column(nodes[b])[static_cast<size_t>(c)];
+      double* col = y.col(3 * static_cast<Eigen::Index>(b) + c).data();
+      for (size_t k = 0; k < yc.size(); ++k) col[slot_[static_cast<size_t>(yc.index[k])]] = yc.value[k];
     }
-  }
-  return c;
+  for (int row : rows) slot_[static_cast<size_t>(row)] = -1;
+  std::vector<Eigen::Triplet<double>> entries;
+  for (size_t i = 0; i < points.size(); ++i)
+    for (const auto& [node, w] : points[i].weights)
+      for (int c = 0; c < 3; ++c)
+        entries.emplace_back(3 * node_col.at(node) + c, static_cast<int>(i), w * directions[i][c]);
+  Eigen::SparseMatrix<double> m(y.cols(), static_cast<Eigen::Index>(points.size()));
+  m.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::MatrixXd z = y * m;
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(z.cols(), z.cols());
+  c.selfadjointView<Eigen::Lower>().rankUpdate(z.transpose());
+  return c.selfadjointView<Eigen::Lower>();
 }
 
-Vec3 LumenCompliance::displacement(const LumenPoint& at, std::span<const LumenPoint> points,
-                                   std::span<const Vec3> forces) {
+Eigen::VectorXd LumenCompliance::response(std::span<const LumenPoint> points, std::span<const Vec3> forces) {
   prefetch(points);
-  Vec3 u = Vec3::Zero();
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(solid_.num_dofs());
   for (size_t j = 0; j < points.size(); ++j)
-    for (const auto& [node_b, wb] : points[j].weights) {
-      const Eigen::MatrixXd& col = column(node_b);
-      const Vec3 load = wb * forces[j];
-      for (const auto& [node_a, wa] : at.weights)
-        u += wa * (col.middleRows<3>(3 * lumen_index_[static_cast<size_t>(node_a)]) * load);
+    for (const auto& [node, w] : points[j].weights) {
+      const NodeColumns& y = column(node);
+      for (int c = 0; c < 3; ++c) {
+        const double s = w * forces[j][c];
+        if (s == 0.0) continue;
+        const HalfColumn& yc = y[static_cast<size_t>(c)];
+        for (size_t k = 0; k < yc.size(); ++k) r[yc.index[k]] += s * yc.value[k];
+      }
     }
+  return r;
+}
+
+Vec3 LumenCompliance::displacement(const LumenPoint& at, const Eigen::VectorXd& response) {
+  prefetch(std::span<const LumenPoint>(&at, 1));
+  Vec3 u = Vec3::Zero();
+  for (const auto& [node, w] : at.weights) {
+    const NodeColumns& y = column(node);
+    for (int c = 0; c < 3; ++c) {
+      const HalfColumn& yc = y[static_cast<size_t>(c)];
+      double dot = 0.0;
+      for (size_t k = 0; k < yc.size(); ++k) dot += yc.value[k] * response[yc.index[k]];
+      u[c] += w * dot;
+    }
+  }
   return u;
 }
 

@@ -236,6 +236,52 @@ TEST(ElasticSolid, TheHeldNodesReactionsBalanceTheLoads) {
   EXPECT_LT((reaction + Vec3(0.05, 0.0, 0.0)).norm(), 1e-8 * 0.05) << reaction.transpose();
 }
 
+TEST(ElasticSolid, HalfSolvesGiveTheTangentsInverseBetweenAnyTwoLoads) {
+  // bᵀ K⁻¹ c = (L⁻¹ P b)ᵀ (L⁻¹ P c): two sparse loads (one with a repeated and a held component)
+  // against a full back-substitution, about a loaded state and again after a new factorization.
+  ElasticSolid s{mesh_tube_wall({kA, kB, 4e-3, 1e-3, false}), NeoHookean::from_young_poisson(1e6, 0.45)};
+  s.hold(s.mesh().group_named("end_0"));
+  s.support(s.mesh().group_named("outer"), 1e8);
+  s.set_pressure(s.mesh().group_named("lumen"), 2e4);
+  int held = -1;
+  for (int i = 0; i < s.num_dofs() && held < 0; ++i)
+    if (s.held(i)) held = i;
+  ASSERT_GE(held, 0);
+  const int n = s.num_dofs();
+  const std::vector<std::pair<int, double>> b = {{n / 2, 1.0}, {n / 2 + 1, -0.5}, {n / 2, 0.25}, {held, 3.0}};
+  const std::vector<std::pair<int, double>> c = {{n / 3 + 2, 0.7}, {n - 1, 1.1}};
+  auto dense = [&](const std::vector<std::pair<int, double>>& v) {
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(n, 1);
+    for (const auto& [i, value] : v) x(i, 0) += value;
+    return x;
+  };
+  auto sparse_dot = [&](const HalfColumn& y, const HalfColumn& z) {
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
+    for (size_t k = 0; k < z.size(); ++k) w[z.index[k]] = z.value[k];
+    double sum = 0.0;
+    for (size_t k = 0; k < y.size(); ++k) sum += y.value[k] * w[y.index[k]];
+    return sum;
+  };
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) ASSERT_TRUE(s.solve({.keep_tangent = true}).converged);  // a new tangent
+    s.linearize();
+    HalfColumn yb, yc;
+    s.half_solve(b, yb);
+    s.half_solve(c, yc);
+    EXPECT_LT(yb.size(), static_cast<size_t>(n) / 2) << "a forward solve from two rows reaches most of L";
+    const Eigen::MatrixXd bb = dense(b), cc = dense(c);
+    Eigen::MatrixXd kc = cc;
+    s.tangent_solve(kc);
+    Eigen::MatrixXd bb_free = bb;
+    bb_free(held, 0) = 0.0;
+    const double expected = (bb_free.transpose() * kc)(0, 0);
+    EXPECT_NEAR(sparse_dot(yb, yc), expected, 1e-10 * std::abs(expected)) << "pass " << pass;
+    Eigen::MatrixXd kb = bb;
+    s.tangent_solve(kb);
+    EXPECT_NEAR(sparse_dot(yb, yb), (bb_free.transpose() * kb)(0, 0), 1e-10 * (bb_free.transpose() * kb)(0, 0));
+  }
+}
+
 TEST(ElasticSolid, RefusesBadGeometryAndLoads) {
   EXPECT_THROW((void)mesh_tube_wall({kA, kA, 1e-3, 1e-3, false}), Error);
   EXPECT_THROW((void)mesh_tube_wall({0.0, kB, 1e-3, 1e-3, false}), Error);

@@ -134,6 +134,7 @@ class DeformableWall final : public CompliantWall {
     std::vector<solid::LumenPoint> points;
     std::vector<Vec3> forces;
     Vec3 total = Vec3::Zero();
+    Eigen::VectorXd response;  ///< the forces' response (LumenCompliance::response) about the current tangent
   };
   std::vector<std::pair<const void*, std::unique_ptr<BodyLoad>>> loads_;
   Eigen::VectorXd pressure_field_;     ///< (3 a node) the lumen's displacement under the blood pressure (0 elsewhere)

@@ -19,6 +19,8 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include "flowire/mesh/tet_mesh.hpp"
@@ -42,6 +44,13 @@ struct SolveReport {
   int iterations = 0;
   double residual = 0.0;  ///< |∇Π| (N) over the free components at the end
   bool converged = false;
+};
+
+/// @brief A sparse vector in the numbering of the tangent's factor: what `half_solve` returns.
+struct HalfColumn {
+  std::vector<int> index;  ///< rows of L (unsorted)
+  std::vector<double> value;
+  [[nodiscard]] size_t size() const { return index.size(); }
 };
 
 /// @brief The wall as an elastic solid.
@@ -112,6 +121,13 @@ class ElasticSolid {
   /// @brief x ← (∇²Π)⁻¹ x, column by column, with the factorization of the last `linearize`
   /// (held components of x are zeroed first and stay zero).
   void tangent_solve(Eigen::MatrixXd& x) const;
+  /// @brief y = L⁻¹ P b for a sparse @p b (dof, value; held components dropped), where
+  /// P K Pᵀ = L Lᵀ is the Cholesky factorization of the last `linearize`: then
+  /// bᵀ K⁻¹ c = (L⁻¹ P b)ᵀ (L⁻¹ P c) for any two loads. Only the columns of L that b reaches
+  /// (the ancestors of its rows in the elimination tree) are touched, a few per cent of a full
+  /// solve for a node of the lumen (CHOLMOD's sparse solve on a simplicial copy of the factor,
+  /// made on first use after each factorization).
+  void half_solve(std::span<const std::pair<int, double>> b, HalfColumn& y) const;
   /// @brief Whether `tangent_solve` has a tangent (a `linearize`, or a `solve` that kept its own).
   [[nodiscard]] bool linearized() const { return linearized_; }
   [[nodiscard]] const Eigen::VectorXd& displacement() const { return u_; }

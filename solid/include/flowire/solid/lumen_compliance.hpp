@@ -12,13 +12,17 @@
 /// (the patch's mean). The compliance is then C_pq = Σ_a Σ_b w^q_a w^p_b m_qᵀ G_ab n_p with G_ab
 /// the 3 × 3 block of K⁻¹ between nodes a and b. At a point it grows without bound as the mesh is
 /// refined (a point load's displacement is singular in 3D); over a patch it converges to the
-/// solid's (tests/solid: the mesh study through PETSc). Columns of K⁻¹ are solved per lumen node
-/// (three right-hand sides, one back-substitution with the kept factorization) the first time a
-/// point near that node asks, and kept restricted to the lumen's nodes: a wire that slides
-/// along the wall pays only for the nodes it reaches. Each kept column is as long as the lumen
-/// (9 numbers a lumen node): beyond a memory budget the columns used longest ago are dropped (and
-/// solved again should the wire come back). By Maxwell–Betti C is symmetric, and it is positive
-/// definite where the points are distinct.
+/// solid's (tests/solid: the mesh study through PETSc).
+///
+/// K⁻¹ is never formed. With the tangent's Cholesky factorization P K Pᵀ = L Lᵀ, a block is
+/// G_ab = Y_aᵀ Y_b where Y_a = L⁻¹ P E_a (E_a: node a's three unit loads) is sparse: a forward
+/// solve from a single node fills only the rows of L on its path to the elimination tree's root
+/// (ElasticSolid::half_solve; about 3% of the rows on the Feel++ arch's wall, a twentieth of
+/// the time of a full solve). Each lumen node's Y_a is solved the first time a point near it asks
+/// and kept: a wire that slides along the wall pays only for the nodes it reaches. Beyond a memory
+/// budget the columns used longest ago are dropped (and solved again should the wire come back).
+/// The compliance is symmetric by this construction; it is positive definite where the points are
+/// distinct.
 #include <Eigen/Dense>
 
 #include <array>
@@ -61,39 +65,54 @@ class LumenCompliance {
   /// @brief C (m × m): the displacement along @p directions[i] at @p points[i] under a unit
   /// force along @p directions[j] at @p points[j] [m/N].
   Eigen::MatrixXd compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions);
-  /// @brief The displacement at @p at under forces @p forces at @p points (the kept columns;
-  /// those the points' faces still lack solved first).
-  Vec3 displacement(const LumenPoint& at, std::span<const LumenPoint> points, std::span<const Vec3> forces);
+  /// @brief The response to forces @p forces at @p points, in the factor's numbering (L⁻¹ P f,
+  /// as long as the solid's unknowns): what `displacement` reads. Sums of responses are the
+  /// responses to the summed forces.
+  Eigen::VectorXd response(std::span<const LumenPoint> points, std::span<const Vec3> forces);
+  /// @brief The displacement at @p at under the forces whose `response` is @p response.
+  Vec3 displacement(const LumenPoint& at, const Eigen::VectorXd& response);
+  /// @brief The displacement at @p at under forces @p forces at @p points.
+  Vec3 displacement(const LumenPoint& at, std::span<const LumenPoint> points, std::span<const Vec3> forces) {
+    return displacement(at, response(points, forces));
+  }
   /// @brief A nodal field (3 a node of the solid, e.g. a displacement) at a lumen point, by the
   /// face's shape functions.
   [[nodiscard]] Vec3 interpolate(const LumenPoint& at, const Eigen::VectorXd& field) const;
   /// @brief Nodal forces (3 a node of the solid) of forces @p forces at @p points.
   [[nodiscard]] Eigen::VectorXd nodal_forces(std::span<const LumenPoint> points, std::span<const Vec3> forces) const;
-  /// @brief Solve the columns the faces of @p points still lack, many at a time.
+  /// @brief Solve the columns the faces of @p points still lack.
   void prefetch(std::span<const LumenPoint> points);
-  /// @brief Columns solved so far (a lumen node's, three right-hand sides, each time it was
+  /// @brief Columns solved so far (a lumen node's, three forward solves, each time it was
   /// solved), and those dropped to keep within the budget.
   [[nodiscard]] int solved_nodes() const { return solved_; }
   [[nodiscard]] int dropped_nodes() const { return dropped_; }
+  /// @brief Bytes the kept columns take.
+  [[nodiscard]] size_t kept_bytes() const { return kept_bytes_; }
   /// @brief Forget the kept columns (after the solid was linearized again).
   void clear() {
     columns_.clear();
     last_use_.clear();
+    kept_bytes_ = 0;
   }
 
  private:
-  /// The kept column block of lumen node `node` (solved by prefetch): (3 × lumen nodes) × 3.
-  [[nodiscard]] const Eigen::MatrixXd& column(int node) const;
-
+  /// Node @p node's Y (L⁻¹ P times its three unit loads), solved by prefetch.
+  using NodeColumns = std::array<HalfColumn, 3>;
+  [[nodiscard]] const NodeColumns& column(int node) const { return columns_.at(node); }
+  /// @p best ← lumen face k (index into faces_) if its closest point to @p x is nearer than @p best_d2.
+  void closer(const Vec3& x, int k, LumenPoint& best, double& best_d2) const;
+  /// @p p's weights: its face's six shape functions at its barycentric coordinates.
+  void shape_weights(LumenPoint& p) const;
   const ElasticSolid& solid_;
   std::vector<int> faces_;        ///< the lumen's faces
-  std::vector<int> lumen_index_;  ///< (nodes) index among the lumen's nodes, −1 elsewhere
   std::vector<int> lumen_nodes_;  ///< the lumen's nodes
-  std::unordered_map<int, Eigen::MatrixXd> columns_;
+  std::unordered_map<int, NodeColumns> columns_;
   std::unordered_map<int, std::uint64_t> last_use_;  ///< per kept column, the prefetch that last asked
   std::uint64_t tick_ = 0;
-  size_t max_columns_ = 0;  ///< the budget in columns
+  double budget_ = 0.0;    ///< bytes
+  size_t kept_bytes_ = 0;  ///< bytes the kept columns take
   int solved_ = 0, dropped_ = 0;
+  std::vector<int> slot_;  ///< (unknowns) a row's place in compliance's gathered Z; −1 between uses
   // A uniform grid of the lumen faces' bounding boxes for `locate`.
   Vec3 grid_origin_ = Vec3::Zero();
   double cell_ = 1.0;
