@@ -144,7 +144,7 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
     at.push_back(lumen_->locate_patch(points[j], j < radii.size() ? radii[j] : 0.0));
   Anchored a;
   a.compliance = lumen_->compliance(at, normals);
-  const bool pressed = pressure_field_.size() > 0, based = relinearizations_ > 0;
+  const bool pressed = pressure_response_.size() > 0 && last_pressure_.size() > 0, based = relinearizations_ > 0;
   bool others = false;
   for (const auto& [who, l] : loads_) others = others || (who != body && !l->points.empty());
   if (pressed || others || based) {
@@ -154,7 +154,7 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
         other_response = other_response.size() ? Eigen::VectorXd(other_response + l->response) : l->response;
     a.offsets = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(at.size()));
     for (size_t j = 0; j < at.size(); ++j) {
-      Vec3 u = pressed ? lumen_->interpolate(at[j], pressure_field_) : Vec3::Zero();
+      Vec3 u = pressed ? pressure_displacement(at[j]) : Vec3::Zero();
       if (based) u += lumen_->interpolate(at[j], base_);  // the state the wall is linear about
       if (other_response.size()) u += lumen_->displacement(at[j], other_response);
       a.offsets[static_cast<Eigen::Index>(j)] = normals[j].dot(u);
@@ -202,7 +202,7 @@ bool DeformableWall::moved_beyond_linearization() {
     (void)who;
     for (const auto& at : b->points) {
       Vec3 u = lumen_->interpolate(at, base_);
-      if (pressure_field_.size() > 0) u += lumen_->interpolate(at, pressure_field_);
+      if (pressure_response_.size() > 0 && last_pressure_.size() > 0) u += pressure_displacement(at);
       if (all_response.size()) u += lumen_->displacement(at, all_response);
       // (the thickness at the face's vertices, weighted by their shape functions' magnitudes: a
       // quadratic face's vertex weights are negative near its middle)
@@ -296,9 +296,8 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
 void DeformableWall::solve_pressure_response() {
   if (pressure_response_.size() == 0) {
     // The lumen's response to each unit node pressure, K⁻¹B on the lumen's nodes, solved once
-    // a linearization (a back-substitution of this wall costs as much as ten of these
-    // products): the wall then follows a pulsatile pressure at a product a step, and its full
-    // field is solved only for an output frame.
+    // a linearization: the wall then follows a pulsatile pressure by a few rows of it a contact,
+    // and its full field is solved only for an output frame.
     if (lumen_nodes_.empty()) {
       for (size_t f = 0; f < solid_->mesh().faces.size(); ++f)
         if (solid_->mesh().face_group[f] == solid_->mesh().group_named("lumen"))
@@ -309,17 +308,31 @@ void DeformableWall::solve_pressure_response() {
     Eigen::MatrixXd x = Eigen::MatrixXd(pressure_basis_);
     solid_->tangent_solve(x);
     pressure_response_.resize(3 * static_cast<Eigen::Index>(lumen_nodes_.size()), x.cols());
-    for (size_t a = 0; a < lumen_nodes_.size(); ++a)
+    lumen_row_.assign(static_cast<size_t>(solid_->mesh().num_nodes()), -1);
+    for (size_t a = 0; a < lumen_nodes_.size(); ++a) {
       pressure_response_.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = x.middleRows<3>(3 * lumen_nodes_[a]);
-    pressure_field_ = Eigen::VectorXd::Zero(solid_->num_dofs());
+      lumen_row_[static_cast<size_t>(lumen_nodes_[a])] = static_cast<int>(a);
+    }
   }
+  // The lumen's displacement under the pressure is read where a contact needs it
+  // (pressure_displacement), not formed over the whole lumen each frame.
+}
+
+Vec3 DeformableWall::pressure_displacement(const solid::LumenPoint& at) const {
+  Vec3 u = Vec3::Zero();
+  for (const auto& [node, w] : at.weights) {
+    const int a = lumen_row_[static_cast<size_t>(node)];
+    if (a >= 0) u += w * (pressure_response_.middleRows<3>(3 * static_cast<Eigen::Index>(a)) * last_pressure_);
+  }
+  return u;
+}
+
+double DeformableWall::max_pressure_displacement() const {
+  if (pressure_response_.size() == 0 || last_pressure_.size() == 0) return 0.0;
   const Eigen::VectorXd lumen = pressure_response_ * last_pressure_;
-  max_pressure_displacement_ = 0.0;
-  for (size_t a = 0; a < lumen_nodes_.size(); ++a) {
-    const Vec3 ua = lumen.segment<3>(3 * static_cast<Eigen::Index>(a));
-    pressure_field_.segment<3>(3 * lumen_nodes_[a]) = ua;  // (the lumen's nodes only: what the contacts read)
-    max_pressure_displacement_ = std::max(max_pressure_displacement_, ua.norm());
-  }
+  double largest = 0.0;
+  for (Eigen::Index a = 0; a < lumen.size() / 3; ++a) largest = std::max(largest, lumen.segment<3>(3 * a).norm());
+  return largest;
 }
 
 void DeformableWall::measure_thickness() {
@@ -470,8 +483,9 @@ nlohmann::json DeformableWall::summary() const {
             {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
             {"compliance_columns", compliance_columns()},
             {"compliance_columns_dropped", lumen_->dropped_nodes()},
-            {"blood_pressure_max_lumen_displacement",
-             pressure_field_.size() > 0 ? nlohmann::json(max_pressure_displacement_) : nlohmann::json(nullptr)},
+            {"blood_pressure_max_lumen_displacement", pressure_response_.size() > 0 && last_pressure_.size() > 0
+                                                          ? nlohmann::json(max_pressure_displacement())
+                                                          : nlohmann::json(nullptr)},
             {"seconds", seconds_}});
   return j;
 }

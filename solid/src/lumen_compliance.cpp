@@ -243,17 +243,15 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
 
 void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   ++tick_;
-  std::array<std::pair<int, double>, 1> unit{};
+  std::array<std::vector<std::pair<int, double>>, 3> unit;
   for (const auto& p : points)
     for (const auto& [node, w] : p.weights) {
       last_use_[node] = tick_;
       if (columns_.count(node)) continue;
+      for (int c = 0; c < 3; ++c) unit[static_cast<size_t>(c)] = {{3 * node + c, 1.0}};
       NodeColumns& y = columns_[node];
-      for (int c = 0; c < 3; ++c) {
-        unit[0] = {3 * node + c, 1.0};
-        solid_.half_solve(unit, y[static_cast<size_t>(c)]);
-        kept_bytes_ += y[static_cast<size_t>(c)].size() * (sizeof(int) + sizeof(double));
-      }
+      solid_.half_solve(unit, y);
+      kept_bytes_ += y.size() * (sizeof(int) + 3 * sizeof(double));
       ++solved_;
     }
   // Over the budget: drop the columns asked for longest ago (never those of this call; at least
@@ -268,7 +266,7 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   std::sort(by_age.begin(), by_age.end());
   for (const auto& [used, node] : by_age) {
     if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) break;
-    for (const HalfColumn& y : columns_.at(node)) kept_bytes_ -= y.size() * (sizeof(int) + sizeof(double));
+    kept_bytes_ -= columns_.at(node).size() * (sizeof(int) + 3 * sizeof(double));
     columns_.erase(node);
     last_use_.erase(node);
     ++dropped_;
@@ -287,21 +285,21 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
     for (const auto& [node, w] : p.weights)
       if (node_col.emplace(node, static_cast<int>(nodes.size())).second) {
         nodes.push_back(node);
-        for (const HalfColumn& y : column(node))
-          for (int row : y.index)
-            if (slot_[static_cast<size_t>(row)] < 0) {
-              slot_[static_cast<size_t>(row)] = static_cast<int>(rows.size());
-              rows.push_back(row);
-            }
+        for (int row : column(node).index)
+          if (slot_[static_cast<size_t>(row)] < 0) {
+            slot_[static_cast<size_t>(row)] = static_cast<int>(rows.size());
+            rows.push_back(row);
+          }
       }
   Eigen::MatrixXd y =
       Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), 3 * static_cast<Eigen::Index>(nodes.size()));
-  for (size_t b = 0; b < nodes.size(); ++b)
-    for (int c = 0; c < 3; ++c) {
-      const HalfColumn& yc = column(nodes[b])[static_cast<size_t>(c)];
-      double* col = y.col(3 * static_cast<Eigen::Index>(b) + c).data();
-      for (size_t k = 0; k < yc.size(); ++k) col[slot_[static_cast<size_t>(yc.index[k])]] = yc.value[k];
+  for (size_t b = 0; b < nodes.size(); ++b) {
+    const NodeColumns& yb = column(nodes[b]);
+    for (size_t k = 0; k < yb.size(); ++k) {
+      const Eigen::Index r = slot_[static_cast<size_t>(yb.index[k])];
+      for (int c = 0; c < 3; ++c) y(r, 3 * static_cast<Eigen::Index>(b) + c) = yb.value[3 * k + static_cast<size_t>(c)];
     }
+  }
   for (int row : rows) slot_[static_cast<size_t>(row)] = -1;
   std::vector<Eigen::Triplet<double>> entries;
   for (size_t i = 0; i < points.size(); ++i)
@@ -322,12 +320,9 @@ Eigen::VectorXd LumenCompliance::response(std::span<const LumenPoint> points, st
   for (size_t j = 0; j < points.size(); ++j)
     for (const auto& [node, w] : points[j].weights) {
       const NodeColumns& y = column(node);
-      for (int c = 0; c < 3; ++c) {
-        const double s = w * forces[j][c];
-        if (s == 0.0) continue;
-        const HalfColumn& yc = y[static_cast<size_t>(c)];
-        for (size_t k = 0; k < yc.size(); ++k) r[yc.index[k]] += s * yc.value[k];
-      }
+      const Vec3 f = w * forces[j];
+      for (size_t k = 0; k < y.size(); ++k)
+        r[y.index[k]] += f[0] * y.value[3 * k] + f[1] * y.value[3 * k + 1] + f[2] * y.value[3 * k + 2];
     }
   return r;
 }
@@ -337,12 +332,10 @@ Vec3 LumenCompliance::displacement(const LumenPoint& at, const Eigen::VectorXd& 
   Vec3 u = Vec3::Zero();
   for (const auto& [node, w] : at.weights) {
     const NodeColumns& y = column(node);
-    for (int c = 0; c < 3; ++c) {
-      const HalfColumn& yc = y[static_cast<size_t>(c)];
-      double dot = 0.0;
-      for (size_t k = 0; k < yc.size(); ++k) dot += yc.value[k] * response[yc.index[k]];
-      u[c] += w * dot;
-    }
+    Vec3 dot = Vec3::Zero();
+    for (size_t k = 0; k < y.size(); ++k)
+      dot += response[y.index[k]] * Vec3(y.value[3 * k], y.value[3 * k + 1], y.value[3 * k + 2]);
+    u += w * dot;
   }
   return u;
 }

@@ -255,30 +255,35 @@ TEST(ElasticSolid, HalfSolvesGiveTheTangentsInverseBetweenAnyTwoLoads) {
     for (const auto& [i, value] : v) x(i, 0) += value;
     return x;
   };
-  auto sparse_dot = [&](const HalfColumn& y, const HalfColumn& z) {
+  // Column a of y against column b of z.
+  auto sparse_dot = [&](const HalfColumns& y, int a, const HalfColumns& z, int b) {
     Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
-    for (size_t k = 0; k < z.size(); ++k) w[z.index[k]] = z.value[k];
+    for (size_t k = 0; k < z.size(); ++k) w[z.index[k]] = z.value[3 * k + static_cast<size_t>(b)];
     double sum = 0.0;
-    for (size_t k = 0; k < y.size(); ++k) sum += y.value[k] * w[y.index[k]];
+    for (size_t k = 0; k < y.size(); ++k) sum += y.value[3 * k + static_cast<size_t>(a)] * w[y.index[k]];
     return sum;
   };
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) ASSERT_TRUE(s.solve({.keep_tangent = true}).converged);  // a new tangent
     s.linearize();
-    HalfColumn yb, yc;
-    s.half_solve(b, yb);
-    s.half_solve(c, yc);
-    EXPECT_LT(yb.size(), static_cast<size_t>(n) / 2) << "a forward solve from two rows reaches most of L";
+    // b and c solved together, and c alone (in the first column of its own call).
+    HalfColumns both, alone;
+    const std::vector<std::vector<std::pair<int, double>>> bc = {b, c}, conly = {c};
+    s.half_solve(bc, both);
+    s.half_solve(conly, alone);
+    EXPECT_LT(both.size(), static_cast<size_t>(n) / 2) << "a forward solve from a few rows reaches most of L";
     const Eigen::MatrixXd bb = dense(b), cc = dense(c);
     Eigen::MatrixXd kc = cc;
     s.tangent_solve(kc);
     Eigen::MatrixXd bb_free = bb;
     bb_free(held, 0) = 0.0;
     const double expected = (bb_free.transpose() * kc)(0, 0);
-    EXPECT_NEAR(sparse_dot(yb, yc), expected, 1e-10 * std::abs(expected)) << "pass " << pass;
+    EXPECT_NEAR(sparse_dot(both, 0, both, 1), expected, 1e-10 * std::abs(expected)) << "pass " << pass;
+    EXPECT_NEAR(sparse_dot(both, 0, alone, 0), expected, 1e-10 * std::abs(expected)) << "pass " << pass;
     Eigen::MatrixXd kb = bb;
     s.tangent_solve(kb);
-    EXPECT_NEAR(sparse_dot(yb, yb), (bb_free.transpose() * kb)(0, 0), 1e-10 * (bb_free.transpose() * kb)(0, 0));
+    const double bkb = (bb_free.transpose() * kb)(0, 0);
+    EXPECT_NEAR(sparse_dot(both, 0, both, 0), bkb, 1e-10 * bkb);
   }
 }
 

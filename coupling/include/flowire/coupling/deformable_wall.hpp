@@ -137,7 +137,6 @@ class DeformableWall final : public CompliantWall {
     Eigen::VectorXd response;  ///< the forces' response (LumenCompliance::response) about the current tangent
   };
   std::vector<std::pair<const void*, std::unique_ptr<BodyLoad>>> loads_;
-  Eigen::VectorXd pressure_field_;     ///< (3 a node) the lumen's displacement under the blood pressure (0 elsewhere)
   Eigen::VectorXd pressure_load_;      ///< (3 a node) the blood pressure's nodal forces
   Eigen::MatrixXd pressure_response_;  ///< (3 lumen nodes × network nodes) K⁻¹B on the lumen
   std::vector<int> lumen_nodes_;
@@ -145,7 +144,7 @@ class DeformableWall final : public CompliantWall {
   double reference_pressure_ = 0.0;
   vessels::Network net_;                        ///< for the pressure along the lumen
   Eigen::SparseMatrix<double> pressure_basis_;  ///< nodal forces per unit network-node pressure
-  double max_pressure_displacement_ = 0.0;
+  std::vector<int> lumen_row_;                  ///< (nodes) a lumen node's place in pressure_response_, −1 elsewhere
   /// Solve the displacement field of the last load if not yet done.
   void solve_field() const;
   Eigen::VectorXd load_;  ///< nodal forces of the last load
@@ -182,6 +181,10 @@ class DeformableWall final : public CompliantWall {
   bool moved_beyond_linearization();
   /// The lumen's response to the blood pressure (K_b⁻¹B on the lumen's nodes) and its field.
   void solve_pressure_response();
+  /// The lumen's displacement at @p at under the last blood pressure (pressure_response_).
+  [[nodiscard]] Vec3 pressure_displacement(const solid::LumenPoint& at) const;
+  /// The largest displacement of a lumen node under the last blood pressure [m].
+  [[nodiscard]] double max_pressure_displacement() const;
 };
 
 }  // namespace flowire::coupling

@@ -46,10 +46,11 @@ struct SolveReport {
   bool converged = false;
 };
 
-/// @brief A sparse vector in the numbering of the tangent's factor: what `half_solve` returns.
-struct HalfColumn {
-  std::vector<int> index;  ///< rows of L (unsorted)
-  std::vector<double> value;
+/// @brief Up to three sparse vectors sharing one pattern, in the numbering of the tangent's factor:
+/// what `half_solve` returns.
+struct HalfColumns {
+  std::vector<int> index;     ///< rows of L (unsorted)
+  std::vector<double> value;  ///< 3 a row: column c of row index[k] at 3k + c
   [[nodiscard]] size_t size() const { return index.size(); }
 };
 
@@ -121,13 +122,13 @@ class ElasticSolid {
   /// @brief x ← (∇²Π)⁻¹ x, column by column, with the factorization of the last `linearize`
   /// (held components of x are zeroed first and stay zero).
   void tangent_solve(Eigen::MatrixXd& x) const;
-  /// @brief y = L⁻¹ P b for a sparse @p b (dof, value; held components dropped), where
-  /// P K Pᵀ = L Lᵀ is the Cholesky factorization of the last `linearize`: then
-  /// bᵀ K⁻¹ c = (L⁻¹ P b)ᵀ (L⁻¹ P c) for any two loads. Only the columns of L that b reaches
-  /// (the ancestors of its rows in the elimination tree) are touched, a few per cent of a full
-  /// solve for a node of the lumen (CHOLMOD's sparse solve on a simplicial copy of the factor,
-  /// made on first use after each factorization).
-  void half_solve(std::span<const std::pair<int, double>> b, HalfColumn& y) const;
+  /// @brief Y = L⁻¹ P B for up to three sparse loads @p loads (the columns of B: dof, value; held
+  /// components dropped), where P K Pᵀ = L Lᵀ is the Cholesky factorization of the last
+  /// `linearize`: then bᵀ K⁻¹ c = (L⁻¹ P b)ᵀ (L⁻¹ P c) for any two loads. Only the columns of L
+  /// the loads reach (the ancestors of their rows in the elimination tree) are touched, a few per
+  /// cent of a full solve for a node of the lumen (on a simplicial copy of the factor, made on
+  /// first use after each factorization; the pattern is CHOLMOD's).
+  void half_solve(std::span<const std::vector<std::pair<int, double>>> loads, HalfColumns& y) const;
   /// @brief Whether `tangent_solve` has a tangent (a `linearize`, or a `solve` that kept its own).
   [[nodiscard]] bool linearized() const { return linearized_; }
   [[nodiscard]] const Eigen::VectorXd& displacement() const { return u_; }

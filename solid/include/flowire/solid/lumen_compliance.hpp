@@ -97,7 +97,7 @@ class LumenCompliance {
 
  private:
   /// Node @p node's Y (L⁻¹ P times its three unit loads), solved by prefetch.
-  using NodeColumns = std::array<HalfColumn, 3>;
+  using NodeColumns = HalfColumns;
   [[nodiscard]] const NodeColumns& column(int node) const { return columns_.at(node); }
   /// @p best ← lumen face k (index into faces_) if its closest point to @p x is nearer than @p best_d2.
   void closer(const Vec3& x, int k, LumenPoint& best, double& best_d2) const;
