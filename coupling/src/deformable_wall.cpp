@@ -275,7 +275,7 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
   reference_pressure_ = reference;
   if (pressure_basis_.size() == 0) {
     // The pressure at a lumen point: along the nearest segment, between its nodes' pressures,
-    // so the load is linear in them, f = B p: B once, a product and a back-substitution a change.
+    // so the load is linear in them, f = B p: B once, then K⁻¹B on the lumen once a linearization.
     pressure_basis_ = solid_->pressure_basis(solid_->mesh().group_named("lumen"), net_.num_nodes(),
                                              [this](const Vec3& x, std::vector<std::pair<int, double>>& w) {
                                                const NearestSegment near = nearest_segment(net_, x);

@@ -216,6 +216,13 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
       }
   std::sort(near.begin(), near.end());
   near.erase(std::unique(near.begin(), near.end()), near.end());
+  // Of those, the faces that do come within 2ρ of the centre.
+  std::erase_if(near, [&](int k) {
+    LumenPoint probe;
+    double d2 = 4.0 * radius * radius * (1.0 + 1e-12);
+    closer(centre.point, k, probe, d2);
+    return probe.face < 0;
+  });
   std::unordered_map<int, double> acc;
   LumenPoint sample;
   auto add = [&](const Vec3& y, double w) {

@@ -79,9 +79,9 @@ class DeformableWall final : public CompliantWall {
   /// normal displacement there of the blood pressure and of the other bodies' last loads.
   Anchored anchor(const void* body, std::span<const Vec3> points, std::span<const Vec3> normals,
                   std::span<const double> radii = {}) override;
-  /// @brief The blood pressure as a dead load on the lumen (linear about rest: its displacement
-  /// field u_p = K⁻¹ f_p, one back-substitution, redone only when the pressures change), which the
-  /// contacts meet and the outputs add.
+  /// @brief The blood pressure as a dead load on the lumen (linear about the wall's state: the
+  /// lumen's response to each unit node pressure solved once a linearization, read at the
+  /// contacts' nodes as the pressures change), which the contacts meet and the outputs add.
   void set_blood_pressure(std::span<const double> node_pressures, double reference) override;
   /// @brief The mean radial displacement of each segment's lumen vertices about its axis, by
   /// reciprocity: ū_s = w_sᵀ K⁻¹ f = (K⁻¹ w_s)ᵀ f with w_s the mean over the segment's lumen
