@@ -93,6 +93,7 @@ DeformableWall::DeformableWall(const vessels::Network& net, const WallSpec& spec
   load_ = displacement_;
   base_ = displacement_;
   base_u_ = displacement_;
+  base_load_ = displacement_;
   seconds_ += since(t0);
 }
 
@@ -223,19 +224,49 @@ void DeformableWall::relinearize() {
   const auto t0 = Clock::now();
   Eigen::VectorXd f = load_;
   if (pressure_load_.size() > 0) f += pressure_load_;
-  // From the linear estimate about the last state, Newton on the neo-Hookean solid under the
-  // loads as they stand (dead loads), then its tangent there.
+  // Newton on the neo-Hookean solid under the loads as they stand (dead loads), then its tangent
+  // there. The loads are reached from the last linearization's, f_b + t (f − f_b): in one go from
+  // the linear estimate about the last state; where that fails (an element turned inside out, a
+  // tangent that is not positive definite, no convergence: loads large for the wall, as a stiff
+  // wire's on a thin wall), in increments of t, halved until each converges from the state
+  // before it and doubled after.
   Eigen::MatrixXd x = f;
   solid_->tangent_solve(x);
-  solid_->set_displacement(base_ + x.col(0));
-  solid_->nodal_forces() = f;
-  const solid::SolveReport report = solid_->solve({.tolerance = 1e-6, .max_iterations = 30, .keep_tangent = true});
-  if (!report.converged)
-    throw_numerical_error(
-        fmt::format("wall: solving the wall under its loads to linearize it again did not converge "
-                    "({} Newton iterations, residual {:.3g} N): the wall cannot carry these loads "
-                    "(a stiffer or thicker wall, wall.support_stiffness, or less force on it)",
-                    report.iterations, report.residual));
+  const Eigen::VectorXd estimate = base_ + x.col(0);
+  Eigen::VectorXd from = base_u_;
+  double done = 0.0, step = 1.0;
+  int increments = 0;
+  std::string why;
+  while (done < 1.0) {
+    const double t = std::min(1.0, done + step);
+    solid_->set_displacement(done == 0.0 && t == 1.0 ? estimate : from);
+    solid_->nodal_forces() = base_load_ + t * (f - base_load_);
+    bool converged = false;
+    try {
+      const solid::SolveReport report = solid_->solve({.tolerance = 1e-6, .max_iterations = 30, .keep_tangent = true});
+      converged = report.converged;
+      if (!converged) why = fmt::format("{} Newton iterations, residual {:.3g} N", report.iterations, report.residual);
+    } catch (const Error& e) {
+      if (e.kind() != ErrorKind::Numerical) throw;
+      why = e.what();
+    }
+    if (converged) {
+      done = t;
+      from = solid_->displacement();
+      step *= 2.0;
+      ++increments;
+      continue;
+    }
+    step *= 0.5;
+    if (step < 1.0 / 1024.0)
+      throw_numerical_error(
+          fmt::format("wall: solving the wall under its loads to linearize it again did not converge "
+                      "beyond {:.4g} of the way from the last linearization's loads ({}): the wall cannot "
+                      "carry these loads (a stiffer or thicker wall, wall.support_stiffness, or less force on it)",
+                      done, why));
+  }
+  if (increments > 1) load_increments_ += increments;
+  base_load_ = f;
   if (!solid_->linearized()) solid_->linearize();  // (else the last iteration's tangent is kept)
   base_u_ = solid_->displacement();
   x = f;
@@ -479,6 +510,7 @@ nlohmann::json DeformableWall::summary() const {
             {"max_increment_over_thickness", max_increment_ratio_},
             {"relinearizations", relinearizations_},
             {"relinearize_seconds", relinearize_seconds_},
+            {"relinearize_load_increments", load_increments_},
             {"final_max_displacement", max_displacement_},
             {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
             {"compliance_columns", compliance_columns()},

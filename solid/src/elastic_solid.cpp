@@ -122,7 +122,7 @@ struct ElasticSolid::Factor {
   };
   Factor() {
     cholmod_common& c = llt.cholmod();
-    c.print = 1;  // an indefinite tangent is reported by the solid, not by CHOLMOD's print
+    c.print = 0;  // an indefinite tangent is reported by the solid (one error), not also by CHOLMOD
     // Nested dissection always (METIS): its elimination tree is shallow, its top levels the
     // separators, so a forward solve from one node (half_solve) reaches a few per cent of the
     // rows; CHOLMOD's default may keep AMD, whose tree along a long tube is a chain.

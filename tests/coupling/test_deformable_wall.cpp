@@ -378,6 +378,42 @@ TEST(DeformableWall, RefusesAWallThatCannotBe) {
   EXPECT_THROW(build(kThickness, 1e6, 0.45, -1.0), Error);
 }
 
+TEST(DeformableWall, LoadsTooLargeForOneLinearStepAreReachedInIncrements) {
+  // The footprint's whole load at once on a wall at rest, 0.4 N (five thicknesses), which the
+  // wall's Newton does not reach in one go from the linear estimate (42% off at half of it, the
+  // test above). The wall is linearized again under it in increments and
+  // lands where the same load reached in 20 steps (each solved from the last equilibrium) leaves
+  // it: the nonlinear solid's equilibrium under a dead load does not depend on the way there.
+  const double force = 0.4, radius = 0.445e-3, length = 16e-3;
+  const Vec3 at(0.5 * length, kR, 0.0);
+  const std::vector<Vec3> points = {at};
+  const std::vector<double> radii = {radius};
+  auto nearest_node = [&](const DeformableWall& wall) {
+    const auto& m = wall.mesh();
+    int nearest = 0;
+    for (int n = 1; n < m.num_nodes(); ++n)
+      if ((m.nodes[static_cast<size_t>(n)] - at).norm() < (m.nodes[static_cast<size_t>(nearest)] - at).norm())
+        nearest = n;
+    return nearest;
+  };
+  WallSpec spec = soft_wall(1e6);
+  spec.relinearize = 0.0;
+  DeformableWall stepped(Vec3::Zero(), Vec3(length, 0, 0), kR, spec);
+  for (int k = 1; k <= 20; ++k) {
+    stepped.load(&stepped, points, std::vector<Vec3>{Vec3(0, force * k / 20, 0)}, radii);
+    stepped.relinearize();
+  }
+  DeformableWall at_once(Vec3::Zero(), Vec3(length, 0, 0), kR, spec);
+  at_once.load(&at_once, points, std::vector<Vec3>{Vec3(0, force, 0)}, radii);
+  at_once.relinearize();
+  const int n = nearest_node(at_once);
+  const double u_stepped = stepped.displacement()[3 * n + 1], u_once = at_once.displacement()[3 * n + 1];
+  std::printf("footprint pushed out %.4g mm (%.2f thicknesses) at once in %d increments, %.4g mm in 20 steps\n",
+              u_once * 1e3, u_once / kThickness, at_once.relinearize_load_increments(), u_stepped * 1e3);
+  EXPECT_GT(at_once.relinearize_load_increments(), 1) << "the load was reached in one go: no increments tested";
+  EXPECT_GT(u_once, 2.0 * kThickness);
+  EXPECT_NEAR(u_once, u_stepped, 1e-6 * u_stepped);
+}
 }  // namespace
 }  // namespace flowire::coupling
 

@@ -117,6 +117,8 @@ class DeformableWall final : public CompliantWall {
   void relinearize();
   /// @brief How many times the wall was linearized again about a loaded state.
   [[nodiscard]] int relinearizations() const { return relinearizations_; }
+  /// @brief Load increments the linearizations that could not reach their loads in one go took.
+  [[nodiscard]] int relinearize_load_increments() const { return load_increments_; }
   /// @brief Largest displacement, ever and now (and whether it went beyond the wall's thickness,
   /// the linear wall's range: warned once), the load now, columns solved, seconds.
   [[nodiscard]] nlohmann::json summary() const override;
@@ -170,11 +172,13 @@ class DeformableWall final : public CompliantWall {
   // base_ = u_b − K_b⁻¹ f_b (0 at rest), f the loads (bodies' and pressure's nodal forces).
   Eigen::VectorXd base_;                ///< (3 a node) u_b − K_b⁻¹ f_b
   Eigen::VectorXd base_u_;              ///< (3 a node) u_b
+  Eigen::VectorXd base_load_;           ///< (3 a node) f_b
   Eigen::SparseMatrix<double> radial_;  ///< (dofs × segments) W, each segment's mean radial direction
   Eigen::VectorXd base_widening_;       ///< (segments) Wᵀ base_
   std::vector<double> node_thickness_;  ///< (nodes) the lumen's local thickness, 0 elsewhere
   double relinearize_ = 0.0;            ///< WallSpec::relinearize
   int relinearizations_ = 0;
+  int load_increments_ = 0;  ///< increments of relinearizations that took more than one
   double relinearize_seconds_ = 0.0;
   mutable double max_increment_ratio_ = 0.0;  ///< largest |u − u_b| over the local thickness
   /// Whether a loaded point moved beyond the relinearize fraction of its thickness from u_b.
