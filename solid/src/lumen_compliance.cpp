@@ -70,17 +70,12 @@ LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen, double bu
   const auto& m = solid.mesh();
   if (lumen < 0 || lumen >= static_cast<int>(m.groups.size()))
     throw_usage_error(fmt::format("wall: no lumen group {}", lumen));
-  std::vector<int> lumen_index(static_cast<size_t>(m.num_nodes()), -1);
   double edge = 0.0;
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (size_t f = 0; f < m.faces.size(); ++f) {
     if (m.face_group[f] != lumen) continue;
     faces_.push_back(static_cast<int>(f));
     for (int node : m.faces[f]) {
-      if (lumen_index[static_cast<size_t>(node)] < 0) {
-        lumen_index[static_cast<size_t>(node)] = static_cast<int>(lumen_nodes_.size());
-        lumen_nodes_.push_back(node);
-      }
       lo = lo.cwiseMin(m.nodes[static_cast<size_t>(node)]);
       hi = hi.cwiseMax(m.nodes[static_cast<size_t>(node)]);
     }
