@@ -58,6 +58,10 @@ void declare_fem_keys(config::Schema& s) {
   s.add("fem.inlet", Type::Enum, "profile", D::None,
         "navier_stokes: profile (a Poiseuille velocity profile scaled to the inlet pressure or flow) or traction",
         {"profile", "traction"});
+  s.add("fem.inlet_profile", Type::Enum, "poiseuille", D::None,
+        "navier_stokes with fem.inlet: profile: poiseuille (developed flow enters) | flat (a uniform velocity enters "
+        "and develops: the entrance of docs/flow-losses.md)",
+        {"poiseuille", "flat"});
   s.add("fem.backflow", Type::Number, "1", D::None, "navier_stokes: outlet backflow stabilization coefficient (0: off)")
       .non_negative();
   s.add("fem.time_dependent", Type::Bool, "false", D::None,
@@ -118,6 +122,7 @@ flow::fem::FemOptions fem_options(const config::Config& c) {
       c.string("fem.stabilization") == "none" ? flow::fem::Stabilization::None : flow::fem::Stabilization::Supg;
   fo.inlet =
       c.string("fem.inlet") == "traction" ? flow::fem::InletCondition::Traction : flow::fem::InletCondition::Profile;
+  fo.flat_inlet = c.string("fem.inlet_profile") == "flat";
   fo.backflow = c.number("fem.backflow");
   fo.samples_per_branch = c.integer("fem.samples_per_branch");
   fo.size_factor = c.number("fem.size_factor");

@@ -102,6 +102,10 @@ void CoSimulation::build_flow(nlohmann::json& s) {
   }
   if (scene_.string_or("flow.losses.curvature", "none") != "none")
     s["flow"]["losses"]["curvature"] = {{"model", "white"}, {"curved_segments", fsolver_->spec().curved_segments}};
+  if (scene_.string_or("flow.losses.entrance", "none") != "none")
+    s["flow"]["losses"]["entrance"] = {{"model", "shah"},
+                                       {"inlet_profile", scene_.string("flow.losses.inlet_profile")},
+                                       {"entrances", fsolver_->spec().entrances}};
 }
 
 void CoSimulation::build_wire(nlohmann::json& s) {

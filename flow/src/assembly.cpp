@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -34,6 +35,11 @@ Assembly assemble(const Network& net, const FlowSpec& spec, std::vector<double>&
       throw_usage_error(
           fmt::format("flow: segment {}: resistance factor {} must be > 0, quadratic {} and Dean coefficient {} >= 0",
                       s, law.resistance_factor, law.quadratic, law.dean));
+    auto ordered = [](const std::array<double, 2>& c) { return c[0] >= 0.0 && c[1] >= c[0] && std::isfinite(c[1]); };
+    if (!(law.entry >= 0.0) || !std::isfinite(law.entry) || !ordered(law.entry_forward) || !ordered(law.entry_backward))
+      throw_usage_error(fmt::format(
+          "flow: segment {}: entrance coefficient {} must be >= 0 and its distances [{}, {}], [{}, {}] ordered", s,
+          law.entry, law.entry_forward[0], law.entry_forward[1], law.entry_backward[0], law.entry_backward[1]));
   }
   Assembly a;
   resistance.resize(ne);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "flowire/common/error.hpp"
@@ -113,27 +114,69 @@ double dean_resistance_ratio_slope(double de) {
   return slope;
 }
 
-double SegmentLaw::curved_flow(double dp, double r, double straight, double guess) const {
-  // g(Q) = Δp(Q) − |Δp| on [0, |straight|] (φ ≥ 1 puts the root below the straight law's):
-  // Newton's method from the guess or the top, bisection where a step leaves the bracket. Newton converges
-  // quadratically: a step below 1e-13 of the flow is the root to round-off.
-  const double target = std::abs(dp);
+namespace {
+// Shah (J. Fluids Eng. 100:177–179, 1978): f_app Re = 3.44/√x⁺ + (1.25/(4x⁺) + 16 − 3.44/√x⁺)/(1 + a/x⁺²)
+// with a = 0.00021; the drop over ½ρū² is 4 f_app Re x⁺, of which 64 x⁺ is Poiseuille's. The rest,
+// K = 13.76√x⁺ − 64x⁺ + M/(1 + a/x⁺²) with M = 1.25 + 64x⁺ − 13.76√x⁺, is written
+// K = 1.25 − M a/(x⁺² + a): no cancellation of large terms far downstream.
+constexpr double kShahA = 0.00021;
+constexpr double kShahInfinity = 1.25;
+}  // namespace
+
+double shah_incremental_drop(double x) {
+  if (!(x > 0.0)) return 0.0;
+  if (std::isinf(x)) return kShahInfinity;
+  const double m = kShahInfinity + 64.0 * x - 13.76 * std::sqrt(x);
+  return kShahInfinity - m * kShahA / (x * x + kShahA);
+}
+
+double shah_incremental_drop_slope(double x) {
+  if (!(x > 0.0)) return std::numeric_limits<double>::infinity();  // K ~ 13.76 √x⁺ at the entrance
+  if (std::isinf(x)) return 0.0;
+  const double sx = std::sqrt(x), d = x * x + kShahA;
+  const double m = kShahInfinity + 64.0 * x - 13.76 * sx, dm = 64.0 - 6.88 / sx;
+  return -(dm * kShahA / d - m * kShahA * 2.0 * x / (d * d));
+}
+
+double SegmentLaw::entrance_drop(double q) const {
+  const auto& c = q > 0.0 ? entry_forward : entry_backward;
+  if (q == 0.0 || !(c[1] > 0.0)) return 0.0;
+  const double aq = std::abs(q);
+  const double dk = shah_incremental_drop(c[1] / aq) - shah_incremental_drop(c[0] / aq);
+  return (q > 0.0 ? 1.0 : -1.0) * entry * aq * aq * dk;
+}
+
+double SegmentLaw::entrance_slope(double q) const {
+  const auto& c = q > 0.0 ? entry_forward : entry_backward;
+  if (q == 0.0 || !(c[1] > 0.0)) return 0.0;
+  const double aq = std::abs(q);
+  // E = k q² [K(c₁/q) − K(c₀/q)]:  dE/dq = 2kq [K(c₁/q) − K(c₀/q)] − k [c₁ K'(c₁/q) − c₀ K'(c₀/q)]
+  // (c K'(c/q) → 0 as c → 0: the near end at the entrance itself adds nothing).
+  const double dk = shah_incremental_drop(c[1] / aq) - shah_incremental_drop(c[0] / aq);
+  const double near = c[0] > 0.0 ? c[0] * shah_incremental_drop_slope(c[0] / aq) : 0.0;
+  return entry * (2.0 * aq * dk - (c[1] * shah_incremental_drop_slope(c[1] / aq) - near));
+}
+
+double SegmentLaw::bracketed_flow(double dp, double r, double straight, double guess) const {
+  // g(Q) = Δp(Q) − |Δp| on [0, |straight|] in the direction of Δp (φ ≥ 1 and E(Q)Q ≥ 0 put the root
+  // below the straight law's): Newton's method from the guess or the top, bisection where a step
+  // leaves the bracket. Newton converges quadratically: a step below 1e-13 of the flow is the root
+  // to round-off.
+  const double target = std::abs(dp), sign = dp < 0.0 ? -1.0 : 1.0;
   double lo = 0.0, hi = std::abs(straight);
-  const double start = dp < 0.0 ? -guess : guess;
+  const double start = sign * guess;
   double q = start > 0.0 && start < hi ? start : hi;
   for (int it = 0; it < 60; ++it) {
-    double phi = 1.0, dphi = 0.0;
-    dean_ratio_and_slope(dean * q, phi, dphi);
-    const double g = r * q * phi + quadratic * q * q - target;
+    const double g = sign * pressure_drop(sign * q, r) - target;
     if (g == 0.0) break;
     (g > 0.0 ? hi : lo) = q;
-    double next = q - g / (r * (phi + dean * q * dphi) + 2.0 * quadratic * q);
+    double next = q - g / slope(sign * q, r);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     const bool done = std::abs(next - q) <= 1e-13 * q;
     q = next;
     if (done) break;
   }
-  return dp < 0.0 ? -q : q;
+  return sign * q;
 }
 
 std::vector<double> segment_curvatures(const Network& net) {
@@ -181,6 +224,37 @@ void add_stenosis_losses(const Network& net, const std::vector<Stenosis>& stenos
     for (int seg : st.segments)
       laws[static_cast<size_t>(seg)].quadratic += st.coefficient * net.segment(seg).length / length;
   }
+}
+
+int add_entrance_losses(const Network& net, double density, double viscosity, const std::vector<char>& entrance,
+                        std::vector<SegmentLaw>& laws) {
+  int entrances = 0;
+  const double per_length = viscosity * std::numbers::pi / (4.0 * density);  // c = x μπ/(4ρ): x⁺ = c/|Q|
+  std::vector<double> r, s;
+  for (int b = 0; b < net.num_branches(); ++b) {
+    const auto& br = net.branch(b);
+    const size_t m = br.segments.size();
+    const bool at_start = entrance[static_cast<size_t>(br.nodes.front())] != 0;
+    const bool at_end = entrance[static_cast<size_t>(br.nodes.back())] != 0;
+    if (!at_start && !at_end) continue;
+    if (laws.empty()) laws.assign(static_cast<size_t>(net.num_segments()), SegmentLaw{});
+    branch_profile(net, b, r, s);
+    const double length = s[m];
+    for (size_t k = 0; k < m; ++k) {
+      const auto& seg = net.segment(br.segments[k]);
+      SegmentLaw& law = laws[static_cast<size_t>(br.segments[k])];
+      const double area = std::numbers::pi * seg.radius * seg.radius;
+      law.entry = density / (2.0 * area * area);
+      // The segment runs along the branch (from node k to k + 1) or against it.
+      const bool along = seg.node_from == br.nodes[k];
+      if (at_start) (along ? law.entry_forward : law.entry_backward) = {s[k] * per_length, s[k + 1] * per_length};
+      if (at_end)
+        (along ? law.entry_backward : law.entry_forward) = {(length - s[k + 1]) * per_length,
+                                                            (length - s[k]) * per_length};
+    }
+    entrances += static_cast<int>(at_start) + static_cast<int>(at_end);
+  }
+  return entrances;
 }
 
 }  // namespace flowire::flow

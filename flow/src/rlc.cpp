@@ -275,8 +275,7 @@ class RlcSolver final : public FlowSolver {
     std::vector<svzerod::Block*> blocks{network_.get(), boundary_.get()};
     std::vector<RlcLosses::Lossy> lossy;
     for (size_t s = 0; s < spec_.segment_laws.size(); ++s)
-      if (spec_.segment_laws[s].quadratic > 0.0 || spec_.segment_laws[s].dean > 0.0)
-        lossy.push_back({qi(s), spec_.segment_laws[s], resistance_[s]});
+      if (spec_.segment_laws[s].nonlinear()) lossy.push_back({qi(s), spec_.segment_laws[s], resistance_[s]});
     if (!lossy.empty()) {
       losses_ = std::make_unique<RlcLosses>(std::move(lossy));
       blocks.push_back(losses_.get());

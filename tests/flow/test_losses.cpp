@@ -3,8 +3,10 @@
 // through a whole scene (flow.losses) against Young & Tsai's law written out here term by term.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -15,6 +17,7 @@
 #include "flowire/flow/losses.hpp"
 #include "flowire/flow/solver.hpp"
 #include "flowire/flow/spec.hpp"
+#include "flowire/vessels/generators.hpp"
 
 namespace flowire::flow {
 namespace {
@@ -329,6 +332,139 @@ TEST(FlowLosses, AWomersleyProfileResamplesANonlinearPeriodOnlyWhenTheOcclusionM
   EXPECT_EQ(lagged->timings().harmonic_updates, 2);
 }
 
+/// Shah's correlation as he printed it: the apparent Fanning friction factor times Re at x⁺.
+double shah_fapp_re(double x) {
+  return 3.44 / std::sqrt(x) + (1.25 / (4.0 * x) + 16.0 - 3.44 / std::sqrt(x)) / (1.0 + 0.00021 / (x * x));
+}
+
+TEST(FlowLosses, ShahsIncrementalDropIsHisCorrelationLessPoiseuilleAndItsSlopeIsExact) {
+  EXPECT_EQ(shah_incremental_drop(0.0), 0.0);
+  EXPECT_EQ(shah_incremental_drop(std::numeric_limits<double>::infinity()), 1.25);
+  double last = 0.0;
+  for (double x = 1e-7; x < 1e3; x *= 1.2) {
+    // The drop over ½ρū² is 4 f_app Re x⁺, Poiseuille's 64 x⁺: the code's rearranged form against
+    // the printed one (whose large terms cancel far downstream: compared where they do not).
+    const double k = shah_incremental_drop(x);
+    if (x < 10.0) {
+      EXPECT_NEAR(k, 4.0 * shah_fapp_re(x) * x - 64.0 * x, 1e-12 * (1.0 + 64.0 * x)) << x;
+    }
+    EXPECT_GT(k, last) << x;  // increasing: every segment after an entrance adds a positive drop
+    EXPECT_LT(k, 1.25) << x;
+    last = k;
+    const double h = 1e-6 * x;
+    const double fd = (shah_incremental_drop(x + h) - shah_incremental_drop(x - h)) / (2.0 * h);
+    EXPECT_NEAR(shah_incremental_drop_slope(x), fd, 1e-6 * std::abs(fd) + 1e-15 / h) << x;  // K's round-off / h
+  }
+  // Developed flow: from x⁺ = 0.1 on, the apparent friction is that of Poiseuille's profile plus
+  // K(∞) = 1.25 to 1% (the correlation's own tail, K − 1.25 ≈ −0.0134/x⁺, is within its ±2.4%).
+  for (const double x : {0.1, 0.3, 1.0, 10.0}) EXPECT_NEAR(shah_fapp_re(x) / (16.0 + 1.25 / (4.0 * x)), 1.0, 0.01) << x;
+  EXPECT_NEAR(shah_incremental_drop(100.0), 1.25, 2e-4);
+  EXPECT_LT(shah_incremental_drop(0.01), 0.95);
+}
+
+TEST(FlowLosses, ADevelopingSegmentsLawHasTheExactSlopeAndInverseInBothDirections) {
+  SegmentLaw first{1.0, 0.0, 0.0};  // from the entrance itself
+  first.entry = 1060.0 / (2.0 * std::pow(kPi * r0 * r0, 2));
+  const double per_length = 3.5e-3 * kPi / (4.0 * 1060.0);
+  first.entry_forward = {0.0, 2e-3 * per_length};
+  first.entry_backward = {30e-3 * per_length, 32e-3 * per_length};
+  SegmentLaw later{1.3, 2e9, 4e7};  // with a quadratic term and a bend
+  later.entry = first.entry;
+  later.entry_forward = {12e-3 * per_length, 14e-3 * per_length};
+  const double r = 8.0 * 3.5e-3 * 2e-3 / (kPi * std::pow(r0, 4));
+  for (const SegmentLaw& law : {first, later}) {
+    ASSERT_TRUE(law.nonlinear());
+    for (double q = -20e-6; q <= 20e-6; q += 0.37e-6) {
+      const double h = 1e-6 * std::max(std::abs(q), 1e-7);
+      const double fd = (law.pressure_drop(q + h, r) - law.pressure_drop(q - h, r)) / (2.0 * h);
+      EXPECT_NEAR(law.slope(q, r), fd, 1e-6 * std::abs(fd)) << q;
+      EXPECT_GT(law.slope(q, r), 0.0) << q;
+      const double dp = law.pressure_drop(q, r);
+      EXPECT_NEAR(law.flow(dp, r), q, 1e-12 * std::abs(q) + 1e-20) << q;
+      EXPECT_GE(law.entrance_drop(q) * q, 0.0) << q;  // never a gain
+    }
+  }
+  // The excess tends to zero with the flow (Poiseuille's law at small Re) and, for the first
+  // segment, to K(x⁺) ½ρū² at its far end.
+  const double q = 8e-6;
+  EXPECT_NEAR(first.entrance_drop(q), first.entry * q * q * shah_incremental_drop(2e-3 * per_length / q), 1e-12);
+  EXPECT_LT(std::abs(later.entrance_drop(1e-9)), 1e-6 * later.pressure_drop(1e-9, r));
+  EXPECT_EQ(later.entrance_drop(-q), 0.0);  // no entrance at its far end
+}
+
+TEST(FlowLosses, AVesselEnteredFlatLosesPoiseuillePlusShahsIncrementalDropThroughAScene) {
+  const Network net = stenosed_vessel({}, 0.0, false);  // 80 mm, r 2 mm, 160 segments
+  for (const std::string profile : {"flat", "developed"}) {
+    const FlowSpec spec =
+        from_config(config::load_config_text("flow:\n  inlet: {node: 0, flow: 4 mL/s}\n  outlets: {pressure: 0}\n"
+                                             "  losses: {entrance: shah, inlet_profile: " +
+                                                 profile + "}\n",
+                                             "tube.yaml", flow_schema()),
+                    net);
+    const auto solver = make_solver(net, spec);
+    // Written out here: U = Q/A, Re = ρUD/μ, x⁺ = L/(D Re).
+    const double q = 4e-6, u = q / (kPi * r0 * r0), re = 1060.0 * u * 2.0 * r0 / 3.5e-3;
+    const double xl = 80e-3 / (2.0 * r0 * re);
+    const double poiseuille = 8.0 * 3.5e-3 * 80e-3 / (kPi * std::pow(r0, 4)) * q;
+    const double shah = (4.0 * shah_fapp_re(xl) * xl - 64.0 * xl) * 0.5 * 1060.0 * u * u;
+    const std::vector<int> ends = net.ends();
+    const int outlet = ends[0] == 0 ? ends[1] : ends[0];
+    const double got = solver->node_pressure(0) - solver->node_pressure(outlet);
+    if (profile == "flat") {
+      EXPECT_EQ(spec.entrances, 1);
+      EXPECT_EQ(solver->name(), "newton");
+      EXPECT_NEAR(got, poiseuille + shah, 1e-9 * got);
+      EXPECT_GT(shah, 0.3 * poiseuille);  // Re 386: the entrance is a third of an 80 mm vessel's drop
+    } else {
+      EXPECT_EQ(spec.entrances, 0);  // one branch, no junction: nothing develops
+      EXPECT_NEAR(got, poiseuille, 1e-9 * got);
+    }
+  }
+}
+
+TEST(FlowLosses, EveryBranchLeavingAJunctionDevelopsAgainAndTheFlowSplitFollows) {
+  vessels::YBifurcationParams yp;
+  yp.parent_radius = 4e-3;
+  yp.asymmetry = 0.4;
+  const Network net = Network::build(vessels::y_bifurcation(yp));
+  auto solve = [&](const std::string& losses) {
+    const FlowSpec spec = from_config(config::load_config_text("flow:\n  inlet: {flow: 20 mL/s}\n  outlets: {pressure: "
+                                                               "0}\n" +
+                                                                   losses,
+                                                               "y.yaml", flow_schema()),
+                                      net);
+    return std::make_pair(spec.entrances, make_solver(net, spec));
+  };
+  const auto [none, plain] = solve("");
+  const auto [three, shah] = solve("  losses: {entrance: shah}\n");
+  EXPECT_EQ(none, 0);
+  EXPECT_EQ(three, 3);  // the junction's three branch ends (the parent's for a flow reversed into it)
+  // Every segment's flow satisfies its law.
+  for (int s = 0; s < net.num_segments(); ++s) {
+    const auto& seg = net.segment(s);
+    const double dp = shah->node_pressure(seg.node_from) - shah->node_pressure(seg.node_to);
+    EXPECT_NEAR(
+        shah->spec().segment_laws[static_cast<size_t>(s)].pressure_drop(shah->segment_flow(s), shah->resistance(s)), dp,
+        1e-8 * std::abs(dp) + 1e-12)
+        << s;
+  }
+  // The entrance's excess over Poiseuille's drop is ρQK/(16πμL) of it: larger in the daughter that
+  // carries more flow, which therefore takes less than Poiseuille's law gives it.
+  const std::vector<int> ends = net.ends();
+  std::vector<std::pair<double, double>> outlets;  // (Poiseuille, with the entrance)
+  for (int e : ends) {
+    if (e == net.widest_end()) continue;
+    const auto [b, end] = net.node_segments(e);
+    outlets.emplace_back(std::abs(plain->segment_flow(*b)), std::abs(shah->segment_flow(*b)));
+  }
+  ASSERT_EQ(outlets.size(), 2u);
+  std::sort(outlets.begin(), outlets.end());
+  EXPECT_GT(outlets[0].second, outlets[0].first);
+  EXPECT_LT(outlets[1].second, outlets[1].first);
+  EXPECT_NEAR(outlets[0].second + outlets[1].second, 20e-6, 1e-15);
+  EXPECT_GT(shah->node_pressure(net.widest_end()), 1.2 * plain->node_pressure(net.widest_end()));
+}
+
 TEST(FlowLosses, BadLossKeysAreRefusedNamingTheKey) {
   const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false);
   for (const auto& [text, fragment] : std::vector<std::pair<std::string, std::string>>{
@@ -336,7 +472,9 @@ TEST(FlowLosses, BadLossKeysAreRefusedNamingTheKey) {
            {"  losses: {stenosis: young_tsai, stenosis_threshold: 1.0}\n", "flow.losses.stenosis_threshold"},
            {"  losses: {stenosis: young_tsai, expansion_coefficient: -1}\n", "flow.losses.expansion_coefficient"},
            {"  losses: {curvature: dean}\n", "flow.losses.curvature"},
-           {"  losses: {junctions: mynard}\n", "flow.losses.junctions"}}) {
+           {"  losses: {junctions: mynard}\n", "flow.losses.junctions"},
+           {"  losses: {entrance: langhaar}\n", "flow.losses.entrance"},
+           {"  losses: {entrance: shah, inlet_profile: plug}\n", "flow.losses.inlet_profile"}}) {
     try {
       (void)from_config(config::load_config_text("flow:\n  outlets: {pressure: 0}\n" + text, "s.yaml", flow_schema()),
                         net);

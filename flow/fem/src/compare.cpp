@@ -325,6 +325,7 @@ StokesOptions comparison_stokes_options(const FemOptions& opt, const BoundaryVal
   so.velocity_pc = opt.velocity_pc;
   so.stabilization = opt.stabilization;
   so.inlet = opt.inlet;
+  so.flat_inlet = opt.flat_inlet;
   so.backflow = opt.backflow;
   return so;
 }

@@ -13,8 +13,9 @@ namespace {
 
 /// The prescribed inlet velocity shape of group g (zero elsewhere and on the wall):
 /// `user(x)` when given, else the Poiseuille profile −n (1 − r²/R²) of the end disk
-/// (centre, outward normal and radius from the faces; peak 1 m/s into the domain).
-std::vector<Vec3> inlet_shape(const TetMesh& mesh, int g, const std::function<Vec3(const Vec3&)>& user) {
+/// (centre, outward normal and radius from the faces; peak 1 m/s into the domain), or with
+/// @p flat the uniform −n (1 m/s).
+std::vector<Vec3> inlet_shape(const TetMesh& mesh, int g, const std::function<Vec3(const Vec3&)>& user, bool flat) {
   std::vector<Vec3> shape(mesh.nodes.size(), Vec3::Zero());
   std::vector<char> wall(mesh.nodes.size(), 0), inlet(mesh.nodes.size(), 0);
   Vec3 centre = Vec3::Zero(), normal = Vec3::Zero();
@@ -50,6 +51,8 @@ std::vector<Vec3> inlet_shape(const TetMesh& mesh, int g, const std::function<Ve
     const Vec3& x = mesh.nodes[n];
     if (user) {
       shape[n] = user(x);
+    } else if (flat) {
+      shape[n] = -normal;
     } else {
       const Vec3 d = x - centre;
       const double rho2 = (d - d.dot(normal) * normal).squaredNorm();
@@ -225,7 +228,7 @@ StokesSolution solve_navier_stokes(const TetMesh& mesh, std::span<const GroupCon
     if (g != bs.fixed) bs.unknown.push_back(g);
   std::vector<Vec3> shape;
   if (bs.fixed >= 0) {
-    shape = inlet_shape(mesh, bs.fixed, opt.inlet_velocity);
+    shape = inlet_shape(mesh, bs.fixed, opt.inlet_velocity, opt.flat_inlet);
     known[static_cast<size_t>(bs.fixed)] = 0.0;
   }
   System sys(mesh, opt, true, bs.fixed);

@@ -10,6 +10,7 @@
 /// 47, 131–141). An RCR outlet has state, so it is only dynamic
 /// in `Model::Rlc`; the quasi-steady Poiseuille model replaces it by its total
 /// resistance Rp + Rd to Pd and reports that with a warning.
+#include <array>
 #include <cmath>
 #include <complex>
 #include <nlohmann/json_fwd.hpp>
@@ -142,44 +143,70 @@ struct BranchWall {
 /// @brief d(dean_resistance_ratio)/dDe.
 [[nodiscard]] double dean_resistance_ratio_slope(double de);
 
+/// @brief Shah's incremental pressure drop number K(x⁺) of laminar flow developing from a uniform
+/// profile in a circular tube (losses.hpp): the drop from the entrance to x beyond Poiseuille's,
+/// over ½ρū², at x⁺ = x/(D Re); 0 at the entrance, 1.25 far downstream.
+[[nodiscard]] double shah_incremental_drop(double x_plus);
+/// @brief dK/dx⁺ of shah_incremental_drop.
+[[nodiscard]] double shah_incremental_drop_slope(double x_plus);
+
 /// @brief A segment's pressure–flow law where it departs from Poiseuille's (a calibration to the
 /// 3D solution, calibration.hpp; the losses of losses.hpp):
-/// \f$ \Delta p = f R_P Q\,\phi(c|Q|) + K |Q| Q \f$ with R_P the segment's Poiseuille (frustum)
+/// \f$ \Delta p = f R_P Q\,\phi(c|Q|) + K |Q| Q + E(Q) \f$ with R_P the segment's Poiseuille (frustum)
 /// resistance, f its `resistance_factor`, K its `quadratic` coefficient (Pa·s²/m⁶: the losses that
 /// grow with the square of the flow, a stenosis's expansion, a calibration's junctions and
-/// developing flow, in the form of svZeroDSolver's stenosis coefficient) and φ White's ratio for a
-/// curved segment at the Dean number De = c|Q| (`dean` = c; 0: a straight segment, φ = 1).
+/// developing flow, in the form of svZeroDSolver's stenosis coefficient), φ White's ratio for a
+/// curved segment at the Dean number De = c|Q| (`dean` = c; 0: a straight segment, φ = 1) and E
+/// the excess drop of flow still developing after an entrance (Shah's correlation):
+/// \f$ E(Q) = \mathrm{sign}(Q)\, k Q^2 [K(c_{far}/|Q|) - K(c_{near}/|Q|)] \f$, k = `entry` = ρ/(2A²)
+/// and c = x μπ/(4ρ) at the segment's two ends, x their distances from the entrance (so that
+/// c/|Q| = x/(D Re) whatever the radius), taken from `entry_forward` for Q > 0 and from
+/// `entry_backward` for Q < 0 (far = 0: no entrance that way).
 struct SegmentLaw {
-  double resistance_factor = 1.0;  ///< > 0
-  double quadratic = 0.0;          ///< ≥ 0, Pa·s²/m⁶
-  double dean = 0.0;               ///< ≥ 0, s/m³: the Dean number per unit |Q|
+  double resistance_factor = 1.0;          ///< > 0
+  double quadratic = 0.0;                  ///< ≥ 0, Pa·s²/m⁶
+  double dean = 0.0;                       ///< ≥ 0, s/m³: the Dean number per unit |Q|
+  double entry = 0.0;                      ///< ≥ 0, Pa·s²/m⁶: ρ/(2A²) where flow develops after an entrance
+  std::array<double, 2> entry_forward{};   ///< m³/s: c at the near and far end for Q > 0
+  std::array<double, 2> entry_backward{};  ///< m³/s: the same for Q < 0
+  /// @brief Anything beyond the linear law f R_P Q.
+  [[nodiscard]] bool nonlinear() const { return quadratic > 0.0 || dean > 0.0 || developing(); }
+  /// @brief Flow develops in this segment in some direction.
+  [[nodiscard]] bool developing() const { return entry > 0.0 && (entry_forward[1] > 0.0 || entry_backward[1] > 0.0); }
   /// @brief Δp at the flow @p q with the linear resistance @p r (f R_P, times an occlusion's factor).
   [[nodiscard]] double pressure_drop(double q, double r) const {
     const double aq = std::abs(q);
-    return r * q * (dean > 0.0 ? dean_resistance_ratio(dean * aq) : 1.0) + quadratic * aq * q;
+    return r * q * (dean > 0.0 ? dean_resistance_ratio(dean * aq) : 1.0) + quadratic * aq * q +
+           (developing() ? entrance_drop(q) : 0.0);
   }
   /// @brief dΔp/dQ at @p q (> 0: the law is increasing).
   [[nodiscard]] double slope(double q, double r) const {
     const double aq = std::abs(q);
     const double phi =
         dean > 0.0 ? dean_resistance_ratio(dean * aq) + dean * aq * dean_resistance_ratio_slope(dean * aq) : 1.0;
-    return r * phi + 2.0 * quadratic * aq;
+    return r * phi + 2.0 * quadratic * aq + (developing() ? entrance_slope(q) : 0.0);
   }
   /// @brief The flow through the segment under the pressure difference @p dp: the root of
   /// pressure_drop(Q) = Δp; straight, \f$ Q = 2\Delta p / (r + \sqrt{r^2 + 4K|\Delta p|}) \f$ (no
-  /// cancellation as K → 0); curved, Newton's method within [0, that root] (φ ≥ 1), from @p guess
-  /// where it lies there (a nearby flow: the last iterate's), else from the straight root.
+  /// cancellation as K → 0); curved or developing, Newton's method within [0, that root] (φ ≥ 1,
+  /// E(Q) Q ≥ 0), from @p guess where it lies there (a nearby flow: the last iterate's), else from
+  /// the straight root.
   [[nodiscard]] double flow(double dp, double r, double guess = 0.0) const {
     const double q = 2.0 * dp / (r + std::sqrt(r * r + 4.0 * quadratic * std::abs(dp)));
-    return dean > 0.0 ? curved_flow(dp, r, q, guess) : q;
+    return dean > 0.0 || developing() ? bracketed_flow(dp, r, q, guess) : q;
   }
   /// @brief dQ/dΔp of `flow`: straight, \f$ 1 / \sqrt{r^2 + 4K|\Delta p|} \f$ (= 1/(r + 2K|Q|)).
   [[nodiscard]] double conductance(double dp, double r) const {
-    return dean > 0.0 ? 1.0 / slope(flow(dp, r), r) : 1.0 / std::sqrt(r * r + 4.0 * quadratic * std::abs(dp));
+    return dean > 0.0 || developing() ? 1.0 / slope(flow(dp, r), r)
+                                      : 1.0 / std::sqrt(r * r + 4.0 * quadratic * std::abs(dp));
   }
+  /// @brief E(Q), the developing flow's excess drop.
+  [[nodiscard]] double entrance_drop(double q) const;
+  /// @brief dE/dQ.
+  [[nodiscard]] double entrance_slope(double q) const;
 
  private:
-  [[nodiscard]] double curved_flow(double dp, double r, double straight, double guess) const;
+  [[nodiscard]] double bracketed_flow(double dp, double r, double straight, double guess) const;
 };
 
 /// @brief One stenosis the network's radii show (`flow.losses.stenosis`, losses.hpp).
@@ -238,6 +265,8 @@ struct FlowSpec {
   std::vector<Stenosis> stenoses;
   /// The segments with White's law of a bend (`flow.losses.curvature`, losses.hpp).
   int curved_segments = 0;
+  /// The branch ends where flow develops again (`flow.losses.entrance`, losses.hpp).
+  int entrances = 0;
   /// The segment laws are a calibration in total pressure (flow/calibration.hpp): the nodes hold
   /// p + ½ρū², but for the outlets (static values), and the laws of the segments that end at an
   /// outlet carry its dynamic pressure.

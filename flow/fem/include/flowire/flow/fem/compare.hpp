@@ -42,6 +42,7 @@ struct FemOptions {
   std::string velocity_pc = "gamg";
   Stabilization stabilization = Stabilization::Supg;  ///< Navier–Stokes
   InletCondition inlet = InletCondition::Profile;     ///< Navier–Stokes
+  bool flat_inlet = false;                            ///< Navier–Stokes profile inlet: uniform, not Poiseuille's
   double backflow = 1.0;                              ///< Navier–Stokes: outlet backflow β
   int samples_per_branch = 10;
   /// A lumen surface file (lumen.hpp): the FEM domain is this real lumen, tagged by the

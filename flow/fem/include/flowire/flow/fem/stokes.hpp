@@ -87,6 +87,9 @@ struct StokesOptions {
   /// Shape of the inlet velocity profile (Navier–Stokes, `Profile`); empty: Poiseuille,
   /// −n(1 − r²/R²) over the inlet disk.
   std::function<Vec3(const Vec3&)> inlet_velocity;
+  /// Without `inlet_velocity`: a uniform profile −n over the inlet (zero on its wall nodes: a plug
+  /// entering a tube, where a developing boundary layer starts) instead of Poiseuille's.
+  bool flat_inlet = false;
   LinearSolver solver = LinearSolver::Mumps;
   std::string velocity_pc = "gamg";  ///< fieldsplit: "gamg" or "hypre" on the velocity block
   double rtol = 1e-10;               ///< fieldsplit: relative residual tolerance
