@@ -138,23 +138,32 @@ double shah_incremental_drop_slope(double x) {
   return -(dm * kShahA / d - m * kShahA * 2.0 * x / (d * d));
 }
 
+namespace {
+/// E(Q) and dE/dQ of an entrance law (SegmentLaw) at q > 0 for the distances c, with ρ/(2A²) = k:
+/// E = k q² [K(c₁/q) − K(c₀/q)],  dE/dq = 2kq [K(c₁/q) − K(c₀/q)] − k [c₁ K'(c₁/q) − c₀ K'(c₀/q)]
+/// (c K'(c/q) → 0 as c → 0: the near end at the entrance itself adds nothing).
+void entrance_terms(double k, const std::array<double, 2>& c, double q, double& e, double& de) {
+  const double dk = shah_incremental_drop(c[1] / q) - shah_incremental_drop(c[0] / q);
+  const double near = c[0] > 0.0 ? c[0] * shah_incremental_drop_slope(c[0] / q) : 0.0;
+  e = k * q * q * dk;
+  de = k * (2.0 * q * dk - (c[1] * shah_incremental_drop_slope(c[1] / q) - near));
+}
+}  // namespace
+
 double SegmentLaw::entrance_drop(double q) const {
   const auto& c = q > 0.0 ? entry_forward : entry_backward;
   if (q == 0.0 || !(c[1] > 0.0)) return 0.0;
-  const double aq = std::abs(q);
-  const double dk = shah_incremental_drop(c[1] / aq) - shah_incremental_drop(c[0] / aq);
-  return (q > 0.0 ? 1.0 : -1.0) * entry * aq * aq * dk;
+  double e = 0.0, de = 0.0;
+  entrance_terms(entry, c, std::abs(q), e, de);
+  return q > 0.0 ? e : -e;
 }
 
 double SegmentLaw::entrance_slope(double q) const {
   const auto& c = q > 0.0 ? entry_forward : entry_backward;
   if (q == 0.0 || !(c[1] > 0.0)) return 0.0;
-  const double aq = std::abs(q);
-  // E = k q² [K(c₁/q) − K(c₀/q)]:  dE/dq = 2kq [K(c₁/q) − K(c₀/q)] − k [c₁ K'(c₁/q) − c₀ K'(c₀/q)]
-  // (c K'(c/q) → 0 as c → 0: the near end at the entrance itself adds nothing).
-  const double dk = shah_incremental_drop(c[1] / aq) - shah_incremental_drop(c[0] / aq);
-  const double near = c[0] > 0.0 ? c[0] * shah_incremental_drop_slope(c[0] / aq) : 0.0;
-  return entry * (2.0 * aq * dk - (c[1] * shah_incremental_drop_slope(c[1] / aq) - near));
+  double e = 0.0, de = 0.0;
+  entrance_terms(entry, c, std::abs(q), e, de);
+  return de;
 }
 
 double SegmentLaw::bracketed_flow(double dp, double r, double straight, double guess) const {
@@ -166,11 +175,18 @@ double SegmentLaw::bracketed_flow(double dp, double r, double straight, double g
   double lo = 0.0, hi = std::abs(straight);
   const double start = sign * guess;
   double q = start > 0.0 && start < hi ? start : hi;
+  const auto& c = sign > 0.0 ? entry_forward : entry_backward;
+  const bool developing_here = developing() && c[1] > 0.0;
   for (int it = 0; it < 60; ++it) {
-    const double g = sign * pressure_drop(sign * q, r) - target;
+    // The drop along the flow and its slope together: one evaluation of White's ratio (two pow
+    // calls) and of Shah's K at each end an iteration.
+    double phi = 1.0, dphi = 0.0, e = 0.0, de = 0.0;
+    if (dean > 0.0) dean_ratio_and_slope(dean * q, phi, dphi);
+    if (developing_here && q > 0.0) entrance_terms(entry, c, q, e, de);
+    const double g = r * q * phi + quadratic * q * q + e - target;
     if (g == 0.0) break;
     (g > 0.0 ? hi : lo) = q;
-    double next = q - g / slope(sign * q, r);
+    double next = q - g / (r * (phi + dean * q * dphi) + 2.0 * quadratic * q + de);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     const bool done = std::abs(next - q) <= 1e-13 * q;
     q = next;
