@@ -117,7 +117,6 @@ LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen, double bu
 }
 
 LumenPoint LumenCompliance::locate(const Vec3& x) const {
-  const auto& m = solid_.mesh();
   LumenPoint best;
   double best_d2 = std::numeric_limits<double>::infinity();
   std::array<int, 3> c{};
