@@ -256,15 +256,17 @@ TEST(ElasticSolid, HalfSolvesGiveTheTangentsInverseBetweenAnyTwoLoads) {
     return x;
   };
   // Column a of y against column b of z.
-  auto sparse_dot = [&](const HalfColumns& y, int a, const HalfColumns& z, int b) {
+  auto sparse_dot = [&](const HalfColumns& y, int ya, const HalfColumns& z, int zb) {
     Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
-    for (size_t k = 0; k < z.size(); ++k) w[z.index[k]] = z.value[3 * k + static_cast<size_t>(b)];
+    for (size_t k = 0; k < z.size(); ++k) w[z.index[k]] = z.value[3 * k + static_cast<size_t>(zb)];
     double sum = 0.0;
-    for (size_t k = 0; k < y.size(); ++k) sum += y.value[3 * k + static_cast<size_t>(a)] * w[y.index[k]];
+    for (size_t k = 0; k < y.size(); ++k) sum += y.value[3 * k + static_cast<size_t>(ya)] * w[y.index[k]];
     return sum;
   };
   for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1) ASSERT_TRUE(s.solve({.keep_tangent = true}).converged);  // a new tangent
+    if (pass == 1) {
+      ASSERT_TRUE(s.solve({.keep_tangent = true}).converged);  // a new tangent
+    }
     s.linearize();
     // b and c solved together, and c alone (in the first column of its own call).
     HalfColumns both, alone;
