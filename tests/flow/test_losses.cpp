@@ -465,6 +465,31 @@ TEST(FlowLosses, EveryBranchLeavingAJunctionDevelopsAgainAndTheFlowSplitFollows)
   EXPECT_GT(shah->node_pressure(net.widest_end()), 1.2 * plain->node_pressure(net.widest_end()));
 }
 
+TEST(FlowLosses, TheRlcModelsSteadyStateWithTheEntranceIsTheQuasiSteadyNetworks) {
+  // The rlc model carries the entrance law in its nonlinear block: under a constant inlet flow its
+  // state settles on the quasi-steady network's solution (Newton on the node balances).
+  vessels::YBifurcationParams yp;
+  yp.parent_radius = 4e-3;
+  yp.asymmetry = 0.4;
+  const Network net = Network::build(vessels::y_bifurcation(yp));
+  auto solver_for = [&](const std::string& model) {
+    const FlowSpec spec =
+        from_config(config::load_config_text("flow:\n  model: " + model +
+                                                 "\n  inlet: {flow: 20 mL/s}\n  outlets: {pressure: 0}\n"
+                                                 "  losses: {entrance: shah}\n",
+                                             "y.yaml", flow_schema()),
+                    net);
+    return make_solver(net, spec);
+  };
+  const auto quasi = solver_for("poiseuille");
+  const auto rlc = solver_for("rlc");
+  rlc->advance(2.0);
+  const int inlet = net.widest_end();
+  EXPECT_NEAR(rlc->node_pressure(inlet), quasi->node_pressure(inlet), 1e-6 * quasi->node_pressure(inlet));
+  for (int s = 0; s < net.num_segments(); ++s)
+    EXPECT_NEAR(rlc->segment_flow(s), quasi->segment_flow(s), 1e-6 * 20e-6) << s;
+}
+
 TEST(FlowLosses, BadLossKeysAreRefusedNamingTheKey) {
   const Network net = stenosed_vessel({{30e-3, 0.5}}, 0.0, false);
   for (const auto& [text, fragment] : std::vector<std::pair<std::string, std::string>>{
