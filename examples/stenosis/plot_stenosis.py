@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""The pressure along the stenosed vessel: the 3D solution's section-mean pressure (fem_compare.csv
-of a `flowire run examples/stenosis/scene.yaml`) against the network's of each run given, each
-labelled by its flow.losses (summary.json), with the lumen's radius below.
+"""The pressure along a single vessel: the 3D solution's section-mean pressure (fem_compare.csv
+of a `flowire run examples/stenosis/scene.yaml`, or of examples/bend, examples/entrance) against the
+network's of each run given, each labelled by its flow.losses (summary.json), with the lumen's
+radius below.
 Usage: plot_stenosis.py OUT_PNG RUN_DIR [RUN_DIR ...]   (the 3D curve from the first run)."""
 import csv
 import json
@@ -18,9 +19,9 @@ def read(run):
     rows = list(csv.DictReader(open(os.path.join(run, "fem_compare.csv"))))
     col = {k: [float(r[k]) for r in rows] for k in ("s", "pressure_network", "pressure_fem", "radius_network")}
     flow = json.load(open(os.path.join(run, "summary.json"))).get("flow", {})
-    stenosis = flow.get("losses", {}).get("stenosis", {}).get("model", "none")
-    curvature = flow.get("losses", {}).get("curvature", {}).get("model", "none")
-    label = "network, Poiseuille" if stenosis == "none" and curvature == "none" else f"network, {stenosis}"
+    losses = flow.get("losses", {})
+    models = [losses[k]["model"] for k in ("stenosis", "curvature", "entrance") if k in losses]
+    label = "network, " + (" + ".join(models) if models else "Poiseuille")
     return col, label
 
 
