@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -422,18 +423,25 @@ TEST(FlowLosses, AVesselEnteredFlatLosesPoiseuillePlusShahsIncrementalDropThroug
   }
 }
 
-TEST(FlowLosses, EveryBranchLeavingAJunctionDevelopsAgainAndTheFlowSplitFollows) {
+/// An asymmetric Y of straight branches, parent radius 4 mm (Re about 1000 at 20 mL/s).
+Network wide_y() {
   vessels::YBifurcationParams yp;
   yp.parent_radius = 4e-3;
   yp.asymmetry = 0.4;
-  const Network net = Network::build(vessels::y_bifurcation(yp));
+  return Network::build(vessels::y_bifurcation(yp));
+}
+
+/// A solver for @p net with the scene's `flow:` section @p flow (its body, indented).
+std::unique_ptr<FlowSolver> solver_from(const Network& net, const std::string& flow) {
+  return make_solver(net, from_config(config::load_config_text("flow:\n" + flow, "y.yaml", flow_schema()), net));
+}
+
+TEST(FlowLosses, EveryBranchLeavingAJunctionDevelopsAgainAndTheFlowSplitFollows) {
+  const Network net = wide_y();
   auto solve = [&](const std::string& losses) {
-    const FlowSpec spec = from_config(config::load_config_text("flow:\n  inlet: {flow: 20 mL/s}\n  outlets: {pressure: "
-                                                               "0}\n" +
-                                                                   losses,
-                                                               "y.yaml", flow_schema()),
-                                      net);
-    return std::make_pair(spec.entrances, make_solver(net, spec));
+    const std::string flow = "  inlet: {flow: 20 mL/s}\n  outlets: {pressure: 0}\n" + losses;
+    const FlowSpec spec = from_config(config::load_config_text("flow:\n" + flow, "y.yaml", flow_schema()), net);
+    return std::make_pair(spec.entrances, solver_from(net, flow));
   };
   const auto [none, plain] = solve("");
   const auto [three, shah] = solve("  losses: {entrance: shah}\n");
@@ -468,18 +476,10 @@ TEST(FlowLosses, EveryBranchLeavingAJunctionDevelopsAgainAndTheFlowSplitFollows)
 TEST(FlowLosses, TheRlcModelsSteadyStateWithTheEntranceIsTheQuasiSteadyNetworks) {
   // The rlc model carries the entrance law in its nonlinear block: under a constant inlet flow its
   // state settles on the quasi-steady network's solution (Newton on the node balances).
-  vessels::YBifurcationParams yp;
-  yp.parent_radius = 4e-3;
-  yp.asymmetry = 0.4;
-  const Network net = Network::build(vessels::y_bifurcation(yp));
+  const Network net = wide_y();
   auto solver_for = [&](const std::string& model) {
-    const FlowSpec spec =
-        from_config(config::load_config_text("flow:\n  model: " + model +
-                                                 "\n  inlet: {flow: 20 mL/s}\n  outlets: {pressure: 0}\n"
-                                                 "  losses: {entrance: shah}\n",
-                                             "y.yaml", flow_schema()),
-                    net);
-    return make_solver(net, spec);
+    return solver_from(net, "  model: " + model +
+                                "\n  inlet: {flow: 20 mL/s}\n  outlets: {pressure: 0}\n  losses: {entrance: shah}\n");
   };
   const auto quasi = solver_for("poiseuille");
   const auto rlc = solver_for("rlc");
