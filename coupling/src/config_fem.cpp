@@ -319,7 +319,7 @@ nlohmann::json calibrate_scene(const config::Config& c, const CalibrateOptions& 
   flow::FlowSpec spec = scene_flow(c, net);
   if (!spec.segment_laws.empty()) {
     warn(fmt::format("calibrate: the scene's {} set aside; the fit starts from Poiseuille segments",
-                     spec.stenoses.empty() ? "vessels.calibration is" : "flow.losses are"));
+                     c.has("vessels.calibration") ? "vessels.calibration is" : "flow.losses are"));
     spec.segment_laws.clear();
     spec.stenoses.clear();
     spec.total_pressure = false;
