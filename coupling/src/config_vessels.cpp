@@ -112,7 +112,9 @@ SceneNetwork build_scene_network_and_radii(const config::Config& c) {
                 {"measured", r.measured},
                 {"filled", r.filled},
                 {"branches_unmeasured", r.branches_unmeasured},
-                {"median_ratio", r.median_ratio}};
+                {"median_ratio", r.median_ratio},
+                {"median_shape", r.median_shape},
+                {"max_shape", r.max_shape}};
   if (r.measured == 0)
     throw_input_error(c.where("vessels.surface"),
                       fmt::format("{}: no cross-section of the surface encloses the centerline ({} points cut): is it "

@@ -57,6 +57,11 @@ TEST(FrustumResistance, EqualsTheQuadratureOfTheLinearTaper) {
     EXPECT_NEAR(frustum_resistance(eta, l, r2, r1) / exact, 1.0, 1e-14);
   }
   EXPECT_NEAR(frustum_resistance(eta, l, 2e-3, 2e-3) / poiseuille_resistance(eta, l, 2e-3), 1.0, 1e-15);
+  // A segment's resistance is its frustum's times its sections' shape factor.
+  vessels::Segment seg{0, 1, 1.5e-3, l, 0, 2e-3, 1e-3};
+  EXPECT_DOUBLE_EQ(segment_resistance(eta, seg), frustum_resistance(eta, l, 2e-3, 1e-3));
+  seg.shape = 1.0833;
+  EXPECT_NEAR(segment_resistance(eta, seg) / frustum_resistance(eta, l, 2e-3, 1e-3), 1.0833, 1e-14);
   EXPECT_GT(frustum_resistance(eta, l, 2e-3, 1e-3) / poiseuille_resistance(eta, l, 1.5e-3), 1.1);
   // Inertance ∫ρ/(π r²) and compliance ∫ 3π r² /(2 E h/r) over the same taper.
   const double rho = 1060.0, e = 4e5, h = 0.1, r1 = 3e-3, r2 = 1.2e-3;

@@ -110,6 +110,34 @@ TEST(Sections, AnEllipticTubesNetworkTakesTheCircleOfTheSameArea) {
     EXPECT_EQ(g.node_from, net.segment(i).node_from);
   }
   EXPECT_EQ(r.network.branch(0).name, "tube");
+  // Each segment's shape factor is the ellipse's, (a² + b²)/(2ab), so that its resistance is
+  // Boussinesq's exact one for the elliptic pipe, 4μL(a² + b²)/(πa³b³) (written out here).
+  const double shape = (a * a + b * b) / (2.0 * a * b);
+  EXPECT_NEAR(r.median_shape, shape, 1e-4);
+  EXPECT_NEAR(r.max_shape, shape, 1e-4);
+  const double mu = 3.5e-3;
+  double resistance = 0.0;
+  for (int i = 0; i < m; ++i) {  // the circle of the same area times the segment's shape factor
+    const Segment& g = r.network.segment(i);
+    resistance += g.shape * 8.0 * mu * g.length / (kPi * std::pow(g.radius, 4));
+  }
+  EXPECT_NEAR(resistance / (4.0 * mu * length * (a * a + b * b) / (kPi * std::pow(a * b, 3))), 1.0, 5e-4);
+}
+
+TEST(Sections, ACircularSectionHasNoShapeFactorAndAnEllipseItsOwnAtAnyOrientation) {
+  const LumenSurface circle = elliptic_prism(2e-3, 2e-3, 128, 0.02, 11);
+  const auto c = cut_section(circle, Vec3(0.01, 0.0, 0.0), Vec3(1.0, 0.0, 0.0), 8e-3);
+  ASSERT_TRUE(c);
+  EXPECT_NEAR(c->shape_factor, 1.0, 1e-12);
+  for (const double ratio : {1.2, 1.5, 2.0}) {
+    const LumenSurface e = elliptic_prism(2e-3 * ratio, 2e-3, 256, 0.02, 11);
+    // The normal section, and one off the centre (the moments are taken about the contour's centroid).
+    for (const Vec3& at : {Vec3(0.01, 0.0, 0.0), Vec3(0.01, 0.5e-3, -0.3e-3)}) {
+      const auto sec = cut_section(e, at, Vec3(1.0, 0.0, 0.0), 8e-3);
+      ASSERT_TRUE(sec);
+      EXPECT_NEAR(sec->shape_factor, 0.5 * (ratio + 1.0 / ratio), 1e-4) << ratio;
+    }
+  }
 }
 
 TEST(Sections, ABranchBeyondTheSurfaceKeepsTheRatioOfItsNearestSection) {

@@ -98,11 +98,18 @@ std::optional<Section> cut_section(const LumenSurface& surface, const Vec3& p, c
     // perimeter and the distances from p.
     Section sec;
     double twice_area = 0.0, winding = 0.0;
+    double mx = 0.0, my = 0.0, mxx = 0.0, myy = 0.0, mxy = 0.0;  // first and second moments (signed)
     sec.min_distance = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < loop.size(); ++i) {
       const Vec3 a = loop[i] - p, b = loop[(i + 1) % loop.size()] - p;
       const double ax = a.dot(e1), ay = a.dot(e2), bx = b.dot(e1), by = b.dot(e2);
-      twice_area += ax * by - ay * bx;
+      const double cross = ax * by - ay * bx;
+      twice_area += cross;
+      mx += (ax + bx) * cross;
+      my += (ay + by) * cross;
+      mxx += (ax * ax + ax * bx + bx * bx) * cross;
+      myy += (ay * ay + ay * by + by * by) * cross;
+      mxy += (ax * by + 2.0 * ax * ay + 2.0 * bx * by + bx * ay) * cross;
       winding += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
       sec.perimeter += (loop[(i + 1) % loop.size()] - loop[i]).norm();
       sec.max_distance = std::max(sec.max_distance, std::hypot(ax, ay));
@@ -113,6 +120,20 @@ std::optional<Section> cut_section(const LumenSurface& surface, const Vec3& p, c
     }
     if (std::abs(winding) < std::numbers::pi) continue;  // p is not inside this contour
     sec.area = 0.5 * std::abs(twice_area);
+    {
+      // The polygon's moments (Green's theorem over its edges), central, and the principal ones.
+      const double sign = twice_area < 0.0 ? -1.0 : 1.0;  // the sums carry the contour's orientation
+      const double area = 0.5 * std::abs(twice_area);
+      const double cx = mx / (3.0 * twice_area), cy = my / (3.0 * twice_area);
+      const double ixx = sign * mxx / 12.0 - area * cx * cx, iyy = sign * myy / 12.0 - area * cy * cy;
+      const double ixy = sign * mxy / 24.0 - area * cx * cy;
+      const double mean = 0.5 * (ixx + iyy), dev = std::hypot(0.5 * (ixx - iyy), ixy);
+      const double i1 = mean + dev, i2 = mean - dev;
+      if (i2 > 0.0) {
+        const double k = std::sqrt(i1 / i2);  // a/b of the equivalent ellipse
+        sec.shape_factor = 0.5 * (k + 1.0 / k);
+      }
+    }
     if (!best || sec.area < best->area) best = sec;
   }
   if (best) best->contours = contours;
@@ -128,13 +149,13 @@ SectionRadii section_radii(const Network& net, const LumenSurface& surface, cons
     const double r = from ? g.radius_from : g.radius_to;
     return r > 0.0 ? r : g.radius;
   };
-  std::vector<double> ratios;
+  std::vector<double> ratios, shapes;
   for (int b = 0; b < net.num_branches(); ++b) {
     const Branch& br = net.branch(b);
     const auto nk = br.nodes.size();
     if (nk < 2) continue;
     // The inscribed radius at each node of the branch (the segment ends there), arc length.
-    std::vector<double> r_in(nk), arc(nk, 0.0), ratio(nk, -1.0);
+    std::vector<double> r_in(nk), arc(nk, 0.0), ratio(nk, -1.0), shape(nk, 1.0);
     for (size_t k = 0; k < nk; ++k) {
       const Segment& g = net.segment(br.segments[std::min(k, nk - 2)]);
       const bool from = g.node_from == br.nodes[k];
@@ -150,7 +171,9 @@ SectionRadii section_radii(const Network& net, const LumenSurface& surface, cons
       const double r = sec->equivalent_radius();
       if (r > options.max_ratio * r_in[k] || sec->max_distance > options.max_extent * r_in[k]) continue;
       ratio[k] = r / r_in[k];
+      shape[k] = sec->shape_factor;
       ratios.push_back(ratio[k]);
+      shapes.push_back(shape[k]);
       ++out.measured;
     }
     // Unmeasured nodes take the ratio of the nearest measured node of the branch.
@@ -160,10 +183,12 @@ SectionRadii section_radii(const Network& net, const LumenSurface& surface, cons
     for (size_t k = 0; k < nk; ++k) {
       if (ratio[k] > 0.0) continue;
       ++out.filled;
-      double best = std::numeric_limits<double>::infinity(), q = 1.0;
+      double best = std::numeric_limits<double>::infinity(), q = 1.0, f = 1.0;
       for (size_t m = 0; m < nk; ++m)
-        if (ratio[m] > 0.0 && std::abs(arc[m] - arc[k]) < best) best = std::abs(arc[m] - arc[k]), q = ratio[m];
+        if (ratio[m] > 0.0 && std::abs(arc[m] - arc[k]) < best)
+          best = std::abs(arc[m] - arc[k]), q = ratio[m], f = shape[m];
       ratio[k] = -q;  // negative: filled (kept apart from the measured ones for the loop above)
+      shape[k] = f;
     }
     for (size_t k = 0; k + 1 < nk; ++k) {
       Segment& g = segments[static_cast<size_t>(br.segments[k])];
@@ -173,11 +198,15 @@ SectionRadii section_radii(const Network& net, const LumenSurface& surface, cons
       (forward ? g.radius_from : g.radius_to) = s0 * r0;
       (forward ? g.radius_to : g.radius_from) = s1 * r1;
       g.radius = 0.5 * (g.radius_from + g.radius_to);
+      g.shape = 0.5 * (shape[k] + shape[k + 1]);
     }
   }
   if (!ratios.empty()) {
     std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
     out.median_ratio = ratios[ratios.size() / 2];
+    out.max_shape = *std::max_element(shapes.begin(), shapes.end());
+    std::nth_element(shapes.begin(), shapes.begin() + static_cast<std::ptrdiff_t>(shapes.size() / 2), shapes.end());
+    out.median_shape = shapes[shapes.size() / 2];
   }
   std::vector<Vec3> nodes;
   nodes.reserve(static_cast<size_t>(net.num_nodes()));

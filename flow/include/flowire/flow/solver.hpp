@@ -207,9 +207,10 @@ void finalize_petsc();
   return 8.0 * viscosity * length * (r1 * r1 + r1 * r2 + r2 * r2) / (3.0 * pi * r1 * r1 * r1 * r2 * r2 * r2);
 }
 
-/// @brief The resistance of a network segment: the frustum between its end radii.
+/// @brief The resistance of a network segment: the frustum between its end radii, times its
+/// sections' shape factor (Segment::shape: 1 for circles).
 [[nodiscard]] inline double segment_resistance(double viscosity, const vessels::Segment& seg) {
-  return frustum_resistance(viscosity, seg.length, seg.radius_from, seg.radius_to);
+  return seg.shape * frustum_resistance(viscosity, seg.length, seg.radius_from, seg.radius_to);
 }
 
 /// @brief Wall-clock helper for timings.

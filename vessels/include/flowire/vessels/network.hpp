@@ -65,6 +65,9 @@ struct Segment {
   int branch = -1;
   double radius_from = 0.0;  ///< m, at node_from; <= 0 on input: `radius` (a cylinder)
   double radius_to = 0.0;    ///< m, at node_to; <= 0 on input: `radius`
+  /// Its sections' Poiseuille resistance over that of the circles of the same area (1: circular;
+  /// (a² + b²)/(2ab) for an ellipse of half-axes a, b; from a lumen surface, sections.hpp).
+  double shape = 1.0;
   /// @brief The radius at one of its two nodes.
   [[nodiscard]] double radius_at(int node) const { return node == node_from ? radius_from : radius_to; }
 };

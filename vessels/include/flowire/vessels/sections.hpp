@@ -8,9 +8,9 @@
 /// Poiseuille resistance 8ηL/(πr⁴) of a section of area A is closest to that of the circle of the
 /// same area, r = √(A/π) (exact for a circle; for an ellipse of axes a ≥ b the exact resistance
 /// is 8ηL (a² + b²)/(2πa³b³) against 8ηL/(π a² b²) from √(ab): the two differ by
-/// (a² + b²)/(2ab) − 1, 1.25% at a/b = 1.17), while the inscribed radius b overestimates it by
-/// (a/b)² (37% at 1.17). On the real lumens the network's pressure drop stood 20–30% above the
-/// 3D solution by that mismatch (docs/fem-real-lumens.md).
+/// (a² + b²)/(2ab) − 1, 1.25% at a/b = 1.17, which each segment carries as its shape factor,
+/// Segment::shape), while the inscribed radius b overestimates it by (a/b)² (37% at 1.17). On the real lumens the
+/// network's pressure drop stood 20–30% above the 3D solution by that mismatch (docs/fem-real-lumens.md).
 #include <optional>
 #include <string>
 
@@ -26,6 +26,11 @@ struct Section {
   double min_distance = 0.0;  ///< the contour's nearest point from the centerline point [m]
   double max_distance = 0.0;  ///< its farthest [m]
   int contours = 0;           ///< closed contours the plane cut within reach
+  /// (a² + b²)/(2ab) of the ellipse with the contour's area and the ratio of its principal second
+  /// moments of area (a/b = √(I₁/I₂)): Poiseuille's resistance of that ellipse over the circle's of
+  /// the same area (Boussinesq's exact solution for elliptic pipes). 1 for a circle; for a
+  /// non-elliptic contour an estimate by its equivalent ellipse.
+  double shape_factor = 1.0;
   /// @brief √(A/π).
   [[nodiscard]] double equivalent_radius() const;
 };
@@ -53,6 +58,8 @@ struct SectionRadii {
   int filled = 0;               ///< the rest: the ratio of the nearest measured point of the branch
   int branches_unmeasured = 0;  ///< branches with no section taken (their inscribed radii kept)
   double median_ratio = 1.0;    ///< median over the measured points of √(A/π) / inscribed radius
+  double median_shape = 1.0;    ///< median over the measured points of Section::shape_factor
+  double max_shape = 1.0;       ///< the largest of them
 };
 
 /// @brief Each branch's radius at each of its nodes from the section there (normal to the branch:
