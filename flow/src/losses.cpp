@@ -148,21 +148,27 @@ void entrance_terms(double k, const std::array<double, 2>& c, double q, double& 
   e = k * q * q * dk;
   de = k * (2.0 * q * dk - (c[1] * shah_incremental_drop_slope(c[1] / q) - near));
 }
+
+/// The entrance law's E(Q) and dE/dQ for the direction of @p q (0 where none develops that way).
+void signed_entrance_terms(const SegmentLaw& law, double q, double& e, double& de) {
+  e = de = 0.0;
+  const auto& c = q > 0.0 ? law.entry_forward : law.entry_backward;
+  if (q == 0.0 || !(c[1] > 0.0)) return;
+  entrance_terms(law.entry, c, std::abs(q), e, de);
+  if (q < 0.0) e = -e;  // E is odd in Q, its slope even
+}
+
 }  // namespace
 
 double SegmentLaw::entrance_drop(double q) const {
-  const auto& c = q > 0.0 ? entry_forward : entry_backward;
-  if (q == 0.0 || !(c[1] > 0.0)) return 0.0;
   double e = 0.0, de = 0.0;
-  entrance_terms(entry, c, std::abs(q), e, de);
-  return q > 0.0 ? e : -e;
+  signed_entrance_terms(*this, q, e, de);
+  return e;
 }
 
 double SegmentLaw::entrance_slope(double q) const {
-  const auto& c = q > 0.0 ? entry_forward : entry_backward;
-  if (q == 0.0 || !(c[1] > 0.0)) return 0.0;
   double e = 0.0, de = 0.0;
-  entrance_terms(entry, c, std::abs(q), e, de);
+  signed_entrance_terms(*this, q, e, de);
   return de;
 }
 

@@ -749,10 +749,7 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
   if (cfg.string_or("flow.losses.entrance", "none") == "shah") {
     // Flow leaves every junction (three segments or more meet) with a new boundary layer.
     std::vector<char> entrance(static_cast<size_t>(net.num_nodes()), 0);
-    for (int n = 0; n < net.num_nodes(); ++n) {
-      const auto [b, e] = net.node_segments(n);
-      entrance[static_cast<size_t>(n)] = e - b >= 3 ? 1 : 0;
-    }
+    for (int n = 0; n < net.num_nodes(); ++n) entrance[static_cast<size_t>(n)] = net.degree(n) >= 3 ? 1 : 0;
     if (cfg.string_or("flow.losses.inlet_profile", "developed") == "flat")
       for (const auto& in : s.inlets) entrance[static_cast<size_t>(in.node)] = 1;
     s.entrances = add_entrance_losses(net, s.density, s.viscosity, entrance, s.segment_laws);

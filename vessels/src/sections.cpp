@@ -202,11 +202,13 @@ SectionRadii section_radii(const Network& net, const LumenSurface& surface, cons
     }
   }
   if (!ratios.empty()) {
-    std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
-    out.median_ratio = ratios[ratios.size() / 2];
+    auto median = [](std::vector<double>& v) {
+      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+      return v[v.size() / 2];
+    };
+    out.median_ratio = median(ratios);
     out.max_shape = *std::max_element(shapes.begin(), shapes.end());
-    std::nth_element(shapes.begin(), shapes.begin() + static_cast<std::ptrdiff_t>(shapes.size() / 2), shapes.end());
-    out.median_shape = shapes[shapes.size() / 2];
+    out.median_shape = median(shapes);
   }
   std::vector<Vec3> nodes;
   nodes.reserve(static_cast<size_t>(net.num_nodes()));
