@@ -213,11 +213,14 @@ BENCHMARK(BM_ArchExample78cm_1mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->
 /// turned at π rad/s, with `inserted` metres in the arch at `segment` metres a vertex
 /// (about inserted/segment vertices in contact), everything on (friction, cylinder drag,
 /// pulsatile flow, 5 mm network). Counters: Newton iterations and unconverged steps.
+/// `slide`: Newton starts from the slide while the wire is fed (rod::SolverSettings::slide_guess);
+/// without it, from the inertial guess (the baseline of BM_ArchPushedInertialGuess).
 enum class Drive { Held, Pushed, Pulled, Turned };
-void run_driven(benchmark::State& state, Drive drive) {
+void run_driven(benchmark::State& state, Drive drive, bool slide = true) {
   const double inserted = 1e-3 * static_cast<double>(state.range(0));
   const double segment = 1e-6 * static_cast<double>(state.range(1));
   ArchExample s(5e-3, inserted, false, segment);
+  s.rod->settings().slide_guess = slide;
   if (drive == Drive::Pushed || drive == Drive::Turned) s.rod->set_insertion_speed(0.02);
   if (drive == Drive::Pulled) s.rod->set_insertion_speed(-0.02);
   if (drive == Drive::Turned) s.rod->set_rotation_speed(std::numbers::pi);
@@ -235,6 +238,7 @@ void BM_ArchHeld(benchmark::State& st) { run_driven(st, Drive::Held); }
 void BM_ArchPushed(benchmark::State& st) { run_driven(st, Drive::Pushed); }
 void BM_ArchPulled(benchmark::State& st) { run_driven(st, Drive::Pulled); }
 void BM_ArchTurned(benchmark::State& st) { run_driven(st, Drive::Turned); }
+void BM_ArchPushedInertialGuess(benchmark::State& st) { run_driven(st, Drive::Pushed, false); }
 #define FLOWIRE_DRIVEN_ARGS               \
   ArgNames({"inserted_mm", "segment_um"}) \
       ->Args({200, 1000})                 \
@@ -246,6 +250,7 @@ BENCHMARK(BM_ArchHeld)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchPushed)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchPulled)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchTurned)->FLOWIRE_DRIVEN_ARGS;
+BENCHMARK(BM_ArchPushedInertialGuess)->FLOWIRE_DRIVEN_ARGS;
 
 // Scaling of each phase: against the inserted length (args: cm inserted, network 5 mm) and
 // against the network's sampling (args: 78 cm, network in tenths of a mm).

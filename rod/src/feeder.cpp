@@ -247,12 +247,50 @@ void Feeder::clamp_tip(const Vec3& tip, const Vec3& next) {
   tip_clamp_theta_ = body_.state.theta[0];
 }
 
+Vec3 Feeder::path_point(const WirePath& path, double sigma) const {
+  const Vec3& pb = body_.model.base_position;
+  const Vec3& db = body_.model.base_direction;
+  if (sigma <= 0.0) return pb + db * sigma;  // the insertion line, behind the entry
+  const auto& x = path.x;
+  const auto& u = path.u;
+  const int n = static_cast<int>(x.size());
+  const double m = path.inserted - sigma;  // the material coordinate that lay there
+  if (m >= u[n - 1]) return pb + db * sigma;
+  // Vertex tangents: inside, the mean of the unit edges on either side; at an end, the edge
+  // reflected about the next vertex's tangent. Both exact on a circular arc sampled evenly,
+  // O(ℓ²) off elsewhere, so that the cubic is O(ℓ³) from the curve.
+  auto edge = [&](int j) { return Vec3((x[j + 1] - x[j]).normalized()); };
+  auto inner = [&](int k) { return Vec3((edge(k - 1) + edge(k)).normalized()); };
+  auto tangent = [&](int k) {
+    if (n < 3) return edge(0);
+    if (k == 0) return Vec3(2.0 * edge(0).dot(inner(1)) * edge(0) - inner(1));
+    if (k == n - 1) return Vec3(2.0 * edge(n - 2).dot(inner(n - 2)) * edge(n - 2) - inner(n - 2));
+    return inner(k);
+  };
+  const int j = std::clamp(static_cast<int>(std::upper_bound(u.begin(), u.end(), m) - u.begin()) - 1, 0, n - 2);
+  const double chord = (x[j + 1] - x[j]).norm();
+  const Vec3 t0 = tangent(j), t1 = tangent(j + 1);
+  auto cubic = [&](double a) {
+    const double a2 = a * a, a3 = a2 * a;
+    return Vec3((2.0 * a3 - 3.0 * a2 + 1.0) * x[j] + (a3 - 2.0 * a2 + a) * chord * t0 +
+                (3.0 * a2 - 2.0 * a3) * x[j + 1] + (a3 - a2) * chord * t1);
+  };
+  const double a = (m - u[j]) / (u[j + 1] - u[j]);
+  if (a >= -1.0) return cubic(a);  // (past the tip: the first edge's cubic, up to one edge on)
+  // Farther past the tip: straight on from there.
+  const Vec3 end_tangent = 12.0 * (x[j] - x[j + 1]) + chord * (8.0 * t0 + 5.0 * t1);  // the cubic's slope at a = −1
+  return cubic(-1.0) + (a + 1.0) * end_tangent;
+}
+
 void Feeder::predict_feed(double fed, double h, std::span<const Vec3> x0, std::span<const Vec3> v0) {
   // Initial Newton guess while feeding: each free vertex follows the wire — it moves to
   // where material u_k − fed lay at the step start (on the old polyline, on the insertion
   // line behind the entry, or past the tip along the tip edge) — plus its velocity across
-  // the wire. The plain inertial guess x + h v can fold the wire at the entry when the
-  // feed per step exceeds a segment.
+  // the wire. The plain inertial guess x + h v can fold the wire at the entry when the feed
+  // per step exceeds a segment. (On the polyline, not on predict_slide's cubic: at the start
+  // of a feed a pre-shaped tip's hook, bent by half a radian a segment, would carry the
+  // cubic's overshoot past its end; the first step of the J-tipped push of
+  // CoSim.AnAdaptiveJTipWirePushedThroughTheArchStaysInside then fails at dt/8.)
   if (fed == 0.0) return;
   RodState& s = body_.state;
   const Vec3& pb = body_.model.base_position;
@@ -261,9 +299,6 @@ void Feeder::predict_feed(double fed, double h, std::span<const Vec3> x0, std::s
   const double L_old = s.inserted_length;
   const std::vector<double>& uk = s.u;
   int i = 0;  // old edge holding material u (u increases with k: a forward walk)
-  // (Measured: in vessels, where walls make the wire slide along its own path, this guess
-  // takes half the Newton work of the second-order inertial one, which it replaces while
-  // feeding; a pre-shaped tip in free space would rather keep the latter.)
   for (int k = 0; k < first_clamped_; ++k) {
     const double u = uk[k] - fed;
     Vec3 p;
@@ -279,6 +314,26 @@ void Feeder::predict_feed(double fed, double h, std::span<const Vec3> x0, std::s
     const Vec3 t = k + 1 < nv ? Vec3((x0[k + 1] - x0[k]).normalized()) : db;
     const Vec3 v = v0[k];
     s.x[k] = p + h * (v - t * t.dot(v));
+  }
+}
+
+void Feeder::predict_slide(double inserted, const WirePath& now, const WirePath& before) {
+  RodState& s = body_.state;
+  const Discretization& d = body_.disc;
+  // The tip: up to the last free vertex with a rest curvature (a pre-shaped tip), else the
+  // tip vertex itself.
+  double u_tip = s.u[0];
+  for (int k = 1; k < first_clamped_; ++k)
+    if (d.rest_kappa1[k] != 0.0 || d.rest_kappa2[k] != 0.0) u_tip = s.u[k];
+  for (int k = 0; k < first_clamped_; ++k) {
+    // C² smoothstep from the tip's own guess to the slide: a kink in the blend would bend or
+    // stretch the stiff wire (a jump of 6 µm along one 1 mm edge is 50 N of stretching).
+    const double t = std::clamp((s.u[k] - u_tip) / kSlideBlend, 0.0, 1.0);
+    const double w = t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
+    if (w == 0.0) continue;
+    const double sigma = inserted - s.u[k];
+    const Vec3 slid = 2.0 * path_point(now, sigma) - path_point(before, sigma);
+    s.x[k] = w * slid + (1.0 - w) * s.x[k];
   }
 }
 

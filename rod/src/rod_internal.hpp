@@ -76,18 +76,24 @@ struct TimeStepper::Work {
   int max_dof = 0;
 
   // Step start (stepper.cpp): for velocities, the inertial target and rollback.
-  std::vector<Vec3> x0, v0;                    ///< (nv)
-  std::vector<double> theta0, omega0, twist0;  ///< (ne)
-  std::vector<EdgeFrame> frame0;               ///< (ne)
-  Eigen::VectorXd q0;                          ///< (nd) unknowns at the step start
-  Eigen::VectorXd qhat;                        ///< (nd) inertial target q₀ + h q̇₀
-  std::vector<Vec3> x_end;                     ///< (nv) where the last implicit Euler step ended …
-  double h_end = 0.0;                          ///< … and its step, for the next step's predictor
-  double feed_end = 0.0;                       ///< … and its feed speed [m/s]
-  std::vector<Vec3> v_guess;                   ///< (nv) velocity of Newton's initial guess
-  std::vector<double> omega_guess;             ///< (ne)
-  std::vector<Vec3> x_mid;                     ///< (nv) implicit midpoint: positions at the midpoint
-  struct Saved {                               ///< a step start kept for a retry in substeps
+  std::vector<Vec3> x0, v0;                       ///< (nv)
+  std::vector<double> theta0, omega0, twist0;     ///< (ne)
+  std::vector<EdgeFrame> frame0;                  ///< (ne)
+  Eigen::VectorXd q0;                             ///< (nd) unknowns at the step start
+  Eigen::VectorXd qhat;                           ///< (nd) inertial target q₀ + h q̇₀
+  std::vector<Vec3> x_end;                        ///< (nv) where the last implicit Euler step ended …
+  double h_end = 0.0;                             ///< … and its step, for the next step's predictor
+  double feed_end = 0.0;                          ///< … and its feed speed [m/s]
+  std::vector<Vec3> path_x;                       ///< (nv) the path the last implicit Euler step started from …
+  std::vector<double> path_u;                     ///< … its vertices' material coordinates …
+  double path_inserted = 0.0;                     ///< … and its inserted length [m]
+  double inserted0 = 0.0;                         ///< the inserted length at this step's start [m]
+  std::vector<Vec3> guess_slide, guess_inertial;  ///< (free vertices) this step's two guesses (none: no slide) …
+  double slide_miss = -1.0, inertial_miss = -1.0;  ///< … the last step's largest squared miss of each [m²] (< 0: none)
+  std::vector<Vec3> v_guess;                       ///< (nv) velocity of Newton's initial guess
+  std::vector<double> omega_guess;                 ///< (ne)
+  std::vector<Vec3> x_mid;                         ///< (nv) implicit midpoint: positions at the midpoint
+  struct Saved {                                   ///< a step start kept for a retry in substeps
     RodState state;
     double target_angle = 0.0, insertion_speed = 0.0;
     int first_clamped = 0;
@@ -99,9 +105,9 @@ struct TimeStepper::Work {
   /// guess is made from.
   struct Checkpoint {
     Saved at;
-    std::vector<Vec3> x_end, v0;
-    std::vector<double> omega0;
-    double h_end = 0.0, feed_end = 0.0;
+    std::vector<Vec3> x_end, v0, path_x;
+    std::vector<double> omega0, path_u;
+    double h_end = 0.0, feed_end = 0.0, path_inserted = 0.0, slide_miss = -1.0, inertial_miss = -1.0;
     bool valid = false;
   } checkpoint;
   std::vector<Vec3> guess_x;        ///< a caller's initial guess for the next stage (restore_checkpoint) …

@@ -33,10 +33,13 @@ TimeStepper::Work::Work(int nvmax, int max_subdivisions) : max_dof(4 * nvmax - 1
   ext_edge_k.reserve(nvmax);
   edges.reserve(nvmax);
   acc.reserve(nvmax);
-  for (auto* v : {&vel, &x0, &v0, &x_accepted, &x_mid, &tangent, &x_end, &v_guess}) v->reserve(nvmax);
+  for (auto* v :
+       {&vel, &x0, &v0, &x_accepted, &x_mid, &tangent, &x_end, &v_guess, &path_x, &guess_slide, &guess_inertial})
+    v->reserve(nvmax);
   spin.reserve(nvmax);
   ext_spin_k.reserve(nvmax);
-  for (auto* v : {&theta0, &omega0, &twist0, &theta_accepted, &twist_accepted, &omega_guess}) v->reserve(nvmax);
+  for (auto* v : {&theta0, &omega0, &twist0, &theta_accepted, &twist_accepted, &omega_guess, &path_u})
+    v->reserve(nvmax);
   saved.resize(static_cast<size_t>(std::max(max_subdivisions, 0)) + 4);
   for (auto& v : saved) v.state.reserve(nvmax);
   frame0.reserve(nvmax);
@@ -259,17 +262,7 @@ StepReport TimeStepper::step_euler(double dt) {
   RodState& s = body_.state;
   const double L_new = feeder_.feed_vertex_set(dt);
   const double angle_new = feeder_.drive().angle_after(dt);
-
-  // Initial guess: inertial prediction; prescribed unknowns at their end-of-step values.
-  // While the wire is fed at the speed of the last step, the second-order inertial guess
-  // already carries the feed (every free vertex moved with it then): it is O(h³) from the
-  // solution, where the feed predictor (the wire slid along its own polyline) is O(h²) off
-  // in every bend and far off at a pre-shaped tip. The feed predictor starts a feed, or a
-  // change of its speed, where the inertial guess has nothing to go on.
-  const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feeder_.feed_speed() == w.feed_end;
-  begin_step(dt, settings_.second_order_guess);
-  w.h_newton = dt;
-  start_stage(L_new, angle_new, steady_feed ? 0.0 : L_new - s.inserted_length, dt);
+  begin_euler_step(dt, L_new, angle_new, /*may_slide=*/true);
 
   StepReport rep = newton(Mode::Dynamic, dt, 1.0);
   if (rep.status == SolveStatus::NonFinite || rep.status == SolveStatus::SingularMatrix) {
@@ -279,11 +272,48 @@ StepReport TimeStepper::step_euler(double dt) {
     feeder_.set_prescribed(L_new, angle_new, s.x, s.theta);
     detail::transport_frames_to(s.x, w.frame0, w.twist0, s.frame, s.ref_twist);
   }
-  end_euler_step(dt, angle_new);
+  end_euler_step(dt, angle_new, rep.converged());
   return rep;
 }
 
-void TimeStepper::end_euler_step(double dt, double angle_new) {
+void TimeStepper::begin_euler_step(double dt, double L_new, double angle_new, bool may_slide) {
+  Work& w = *work_;
+  RodState& s = body_.state;
+  // Newton's start; prescribed unknowns at their end-of-step values.
+  // - The inertial prediction, second-order where the last step of the same length left the
+  //   vertex (begin_step); with the feed predictor (the wire slid along its own path) where a
+  //   feed starts or changes speed and the inertial guess has nothing to go on.
+  // - While the wire is fed, or was fed the step before, and the last step was as long and left
+  //   the wire where it is, also the slide (Feeder::predict_slide): its path extrapolated in
+  //   time at each place along it. Where the feed jerks (vertices riding over the walls'
+  //   creases, the clamp's boundary moving by an edge), the inertial guess carries the jerk on
+  //   into the next steps; the slide follows the path the walls hold. Where the motion is
+  //   smooth the inertial guess is the closer. Newton starts from whichever of the two came
+  //   closer to the last step's solution.
+  const double L_start = s.inserted_length;
+  bool untouched = may_slide && settings_.slide_guess && dt == w.h_end && !w.path_x.empty();
+  for (int k = 0; untouched && k < std::min(feeder_.first_clamped(), static_cast<int>(w.x_end.size())); ++k)
+    untouched = s.x[k] == w.x_end[k];
+  bool slide = untouched && (L_new != L_start || L_start != w.path_inserted);
+  const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feeder_.feed_speed() == w.feed_end;
+  begin_step(dt, settings_.second_order_guess);
+  const auto free = static_cast<size_t>(feeder_.first_clamped());
+  w.guess_slide.clear();
+  if (slide) {
+    w.guess_inertial.assign(s.x.begin(), s.x.begin() + free);
+    feeder_.predict_slide(L_new, {w.x0, s.u, L_start}, {w.path_x, w.path_u, w.path_inserted});
+    w.guess_slide.assign(s.x.begin(), s.x.begin() + free);
+    if (w.inertial_miss >= 0.0 && w.inertial_miss < w.slide_miss) {
+      std::copy(w.guess_inertial.begin(), w.guess_inertial.end(), s.x.begin());
+      slide = false;
+    }
+  }
+  w.h_newton = dt;
+  w.inserted0 = L_start;
+  start_stage(L_new, angle_new, slide || steady_feed ? 0.0 : L_new - L_start, dt);
+}
+
+void TimeStepper::end_euler_step(double dt, double angle_new, bool converged) {
   Work& w = *work_;
   RodState& s = body_.state;
   const int nv = s.vertex_count();
@@ -293,10 +323,22 @@ void TimeStepper::end_euler_step(double dt, double angle_new) {
   }
   feeder_.drive().set_base_angle(angle_new);
   s.base_angle = angle_new;
-  // Where this step left the vertices, for the next step's predictor.
+  // How far each guess was from where the step converged, for the next step's choice.
+  w.slide_miss = w.inertial_miss = -1.0;
+  if (converged && !w.guess_slide.empty()) {
+    w.slide_miss = w.inertial_miss = 0.0;
+    for (size_t k = 0; k < w.guess_slide.size(); ++k) {
+      w.slide_miss = std::max(w.slide_miss, (w.guess_slide[k] - s.x[k]).squaredNorm());
+      w.inertial_miss = std::max(w.inertial_miss, (w.guess_inertial[k] - s.x[k]).squaredNorm());
+    }
+  }
+  // Where this step left the vertices and the path it started from, for the next step's predictor.
   w.x_end = s.x;
   w.h_end = dt;
   w.feed_end = feeder_.feed_speed();
+  w.path_x = w.x0;
+  w.path_u = s.u;
+  w.path_inserted = w.inserted0;
   compute_base_reaction();
 }
 
@@ -377,6 +419,8 @@ void TimeStepper::save_checkpoint() {
   c.at.trace_size = trace_.size();
   c.x_end = w.x_end, c.v0 = w.v0, c.omega0 = w.omega0;
   c.h_end = w.h_end, c.feed_end = w.feed_end;
+  c.path_x = w.path_x, c.path_u = w.path_u, c.path_inserted = w.path_inserted;
+  c.slide_miss = w.slide_miss, c.inertial_miss = w.inertial_miss;
   c.valid = true;
   for (auto& e : externals_) e->save_checkpoint();
 }
@@ -396,6 +440,8 @@ void TimeStepper::restore_checkpoint(bool guess_from_current) {
   trace_.resize(c.at.trace_size);
   w.x_end = c.x_end, w.v0 = c.v0, w.omega0 = c.omega0;
   w.h_end = c.h_end, w.feed_end = c.feed_end;
+  w.path_x = c.path_x, w.path_u = c.path_u, w.path_inserted = c.path_inserted;
+  w.slide_miss = c.slide_miss, w.inertial_miss = c.inertial_miss;
   for (auto& e : externals_) e->restore_checkpoint();
   body_.rediscretize();
   feeder_.refresh_arc_lengths();

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <vector>
 
 #include "rod_test_util.hpp"
 
@@ -88,10 +90,68 @@ TEST(RodFeeder, PredictsAStraightWireSlidingAlongItself) {
   RodState& s = rig.body.state;
   const std::vector<Eigen::Vector3d> x0 = s.x;
   const std::vector<Eigen::Vector3d> v0(x0.size(), Eigen::Vector3d::Zero());
-  const double fed = 0.037;
-  rig.feeder.predict_feed(fed, 1e-3, x0, v0);
-  for (int k = 0; k < rig.feeder.first_clamped(); ++k)
-    EXPECT_LT((s.x[k] - rig.on_line(s.u[k], 0.32 + fed)).norm(), 1e-14) << k;
+  for (const double fed : {0.037, 0.12}) {  // within one segment, and past the tip by more than one
+    rig.feeder.predict_feed(fed, 1e-3, x0, v0);
+    for (int k = 0; k < rig.feeder.first_clamped(); ++k)
+      EXPECT_LT((s.x[k] - rig.on_line(s.u[k], 0.32 + fed)).norm(), 1e-14) << k << ", fed " << fed;
+  }
+}
+
+// A path that moves at a steady rate: a helix (radius 0.3 m, pitch 0.2 m per turn) leaving the
+// entry along the insertion line, shifted by t·b at arc length σ > 0 from the entry (the
+// insertion line behind it). A wire is inextensible, so σ stays its arc length at every t; of
+// such paths, the shifted ones are those linear in t. Written from the helix's formula, not
+// from the feeder's.
+Eigen::Vector3d moving_path(double sigma, double t, const Eigen::Vector3d& pb, const Eigen::Vector3d& db) {
+  if (sigma <= 0.0) return pb + db * sigma;
+  const double r = 0.3, c = 0.2 / (2.0 * M_PI), rate = std::sqrt(r * r + c * c);
+  const double th = sigma / rate;
+  const Eigen::Vector3d p(r * std::cos(th) - r, r * std::sin(th), c * th);  // starts at 0 along (0, r, c)
+  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d(0.0, r, c).normalized(), db);
+  return pb + q * p + t * Eigen::Vector3d(0.0, 0.01, -0.02);
+}
+
+// The slide's largest miss over the free vertices at least 0.1 m inside (the path's curvature
+// and the shift jump at the entry, which only the segments next to it see) and behind the tip's
+// blend (where the state's own guess is kept), for a wire of @p segments on a path sampled at
+// t = −1 and 0 and fed @p fed a step; @p first_order: the path held still.
+double slide_miss(int segments, double fed, bool first_order) {
+  RodBody body{RodModel::from_spec(unit_rod_spec(segments)), {}, {}};
+  body.state.reserve(body.max_vertices());
+  Feeder feeder(body);
+  const double L = 0.6;
+  feeder.build(L);
+  const Eigen::Vector3d pb = body.model.base_position, db = body.model.base_direction;
+  const RodState& s = body.state;
+  std::vector<Eigen::Vector3d> now(s.x.size()), before(s.x.size());
+  for (size_t k = 0; k < now.size(); ++k) {
+    now[k] = moving_path(L - s.u[k], 0.0, pb, db);
+    before[k] = moving_path(L - fed - s.u[k], first_order ? 0.0 : -1.0, pb, db);
+  }
+  feeder.predict_slide(L + fed, {now, s.u, L}, {before, s.u, L - fed});
+  double miss = 0.0;
+  for (int k = 0; k < feeder.first_clamped(); ++k) {
+    const double sigma = L + fed - s.u[k];
+    if (sigma >= 0.1 && s.u[k] >= Feeder::kSlideBlend)
+      miss = std::max(miss, (s.x[k] - moving_path(sigma, 1.0, pb, db)).norm());
+  }
+  return miss;
+}
+
+TEST(RodFeeder, TheSlideLandsOnAPathThatMovesSteadilyToTheCubicsOrder) {
+  // 2·now(σ) − before(σ) is exact for a path moving linearly in time; what is left is the
+  // cubic Hermite's between the vertices, whose tangents (the neighbouring chords) are O(h²)
+  // off on a helix: O(h³).
+  std::vector<double> h, miss;
+  for (int n : {40, 80, 160, 320}) {
+    h.push_back(1.0 / n);
+    miss.push_back(slide_miss(n, 0.37 / n, false));  // the feed a fraction of a segment
+  }
+  const double slope = loglog_slope(h, miss);
+  EXPECT_GT(slope, 2.7) << "misses " << miss[0] << " … " << miss.back();
+  EXPECT_LT(miss.back(), 1e-6);
+  // Held still in time (the first-order slide), the path's own motion is missed whatever h.
+  EXPECT_GT(slide_miss(320, 0.37 / 320, true), 1e3 * miss.back());
 }
 
 TEST(RodFeeder, ATipClampHoldsTheDistalEdge) {

@@ -8,7 +8,8 @@
 /// entry along the wire: grid points that pass it are released, new ones are appended behind
 /// it, and points pulled back behind it are laid onto the insertion line and held, their twist
 /// kept continuous. `set_prescribed` puts the held unknowns where the clamp (and an optional tip
-/// clamp) holds them; `predict_feed` gives Newton a start in which the wire slid along itself.
+/// clamp) holds them; `predict_feed` gives Newton a start in which the wire slid along itself,
+/// `predict_slide` one in which the wire's path also changes as it did over the last step.
 ///
 /// **Adaptivity** (`WireSpec::adapt`): `adapt_for` splits free edges where the wire is bent
 /// and merges them where it is straight, on a dyadic hierarchy in the material coordinate,
@@ -28,6 +29,15 @@
 #include "flowire/rod/drive.hpp"
 
 namespace flowire::rod {
+
+/// @brief The curve the wire lay on at one instant: its vertices, their material coordinates
+/// (increasing from the tip) and the inserted length, which places each vertex at arc length
+/// σ = inserted − u from the entry (the insertion line behind it).
+struct WirePath {
+  std::span<const Eigen::Vector3d> x;
+  std::span<const double> u;
+  double inserted = 0.0;
+};
 
 class Feeder {
  public:
@@ -66,6 +76,21 @@ class Feeder {
   /// vertex where material u − fed lay at the stage's start (@p x0, @p v0), plus its velocity
   /// across the wire. No-op for fed = 0.
   void predict_feed(double fed, double h, std::span<const Eigen::Vector3d> x0, std::span<const Eigen::Vector3d> v0);
+  /// @brief Newton's start for a step of the same length as the last one, ending at inserted
+  /// length @p inserted, from the wire's path at this step's start (@p now) and at the last
+  /// step's (@p before): each free vertex at 2·now(σ) − before(σ), σ its arc length from the
+  /// entry at the step's end (the path extrapolated in time at a fixed place along it: exact for
+  /// a wire sliding along a path that is fixed in space or changes at a steady rate). The tip
+  /// goes where the path has not been, and a pre-shaped one carries its shape with the
+  /// material: there (the tip vertex, or the pre-shaped length) the state's own guess is kept,
+  /// blended into the slide over `kSlideBlend` behind it.
+  void predict_slide(double inserted, const WirePath& now, const WirePath& before);
+  /// @brief The point of @p path at arc length @p sigma from the entry: on the cubic Hermite
+  /// curve through the vertices (tangents from the neighbouring edges), on the insertion line
+  /// behind the entry; past the tip on the first edge's cubic for one edge, then straight on.
+  [[nodiscard]] Eigen::Vector3d path_point(const WirePath& path, double sigma) const;
+  /// The length over which predict_slide passes from the tip's own guess to the slide [m].
+  static constexpr double kSlideBlend = 0.01;
 
   /// @brief Index of the first clamped vertex (the one at or just behind the entry).
   [[nodiscard]] int first_clamped() const { return first_clamped_; }

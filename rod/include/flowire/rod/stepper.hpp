@@ -86,6 +86,11 @@ struct SolverSettings {
   /// Implicit Euler's Newton starts from q + h q̇ + h (q̇ − q̇_prev) (the last step's
   /// acceleration held) where the vertex has not moved since that step; else q + h q̇.
   bool second_order_guess = true;
+  /// While the wire is fed (or was the step before), implicit Euler's Newton may also start
+  /// from the wire's path extrapolated in time at each place along it (Feeder::predict_slide):
+  /// where the last step was as long and left the wire where it is, from whichever of that and
+  /// the guesses above came closer to the last step's solution.
+  bool slide_guess = true;
 };
 
 /// @brief The external forces on a rod, shared by the simulator and its stepper.
@@ -164,10 +169,14 @@ class TimeStepper {
   /// base angle @p angle, @p fed fed since the step start: the feed predictor, the
   /// prescribed unknowns, the frames carried from the step start, time and arc lengths.
   void start_stage(double L, double angle, double fed, double h);
+  /// Newton's start for an implicit Euler step of @p dt to inserted length @p L_new and base
+  /// angle @p angle_new (the vertex set already fed): begin_step, the slide (if @p may_slide) or
+  /// feed predictor, start_stage.
+  void begin_euler_step(double dt, double L_new, double angle_new, bool may_slide);
   StepReport step_euler(double dt);
-  /// The end of an implicit Euler step of @p dt: velocities, the base angle, the predictor's
-  /// record, the clamp's reaction.
-  void end_euler_step(double dt, double angle_new);
+  /// The end of an implicit Euler step of @p dt: velocities, the base angle, the predictors'
+  /// record (how far each guess was, if the step @p converged), the clamp's reaction.
+  void end_euler_step(double dt, double angle_new, bool converged);
   StepReport step_midpoint(double dt);
   StepReport solve_static_once();
   /// Pseudo-transient continuation to the static equilibrium at @p load_scale from the
