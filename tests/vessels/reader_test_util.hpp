@@ -213,7 +213,13 @@ inline Network sample_network() {
       {"right \"iliac\"\n\\2", {Vec3(0.001, 0, -0.06), Vec3(0.0234567891234, 1e-7, -0.0912)}, {0.0051, 0.0037}});
   BuildOptions b;
   b.max_segment_length = 7e-3;
-  return Network::build(c, b);
+  const Network built = Network::build(c, b);
+  // Non-circular sections (Segment::shape), as a lumen surface gives them: the writers must keep them.
+  std::vector<Vec3> nodes(built.nodes().begin(), built.nodes().end());
+  std::vector<Segment> segments(built.segments().begin(), built.segments().end());
+  for (size_t s = 0; s < segments.size(); ++s) segments[s].shape = 1.0 + 0.01 * static_cast<double>(s);
+  std::vector<Branch> branches(built.branches().begin(), built.branches().end());
+  return Network::from_graph(std::move(nodes), std::move(segments), std::move(branches), built.source());
 }
 
 inline void expect_identical(const Network& a, const Network& b) {
@@ -228,6 +234,7 @@ inline void expect_identical(const Network& a, const Network& b) {
     EXPECT_EQ(a.segment(s).radius_from, b.segment(s).radius_from) << "segment " << s;  // the taper
     EXPECT_EQ(a.segment(s).radius_to, b.segment(s).radius_to) << "segment " << s;
     EXPECT_EQ(a.segment(s).length, b.segment(s).length);
+    EXPECT_EQ(a.segment(s).shape, b.segment(s).shape) << "segment " << s;
     EXPECT_EQ(a.segment(s).branch, b.segment(s).branch);
   }
   for (int k = 0; k < a.num_branches(); ++k) {

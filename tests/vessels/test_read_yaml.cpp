@@ -100,6 +100,8 @@ TEST(ReadBadInput, YamlErrorsNameFileLineAndPoint) {
        "2 disconnected pieces"},
       {"segloop.yaml", "nodes: [[0, 0, 0], [1, 0, 0]]\nsegments: [[0, 0, 1, 1, 0]]\n",
        "segloop.yaml:2: segment 0 joins node 0 to itself (self-loop)"},
+      {"shape.yaml", "nodes: [[0, 0, 0], [1, 0, 0]]\nsegments:\n  - [0, 1, 1, 1, 0, 1, 1, 0.5]\n",
+       "shape.yaml:3: segment 0: shape 0.5 is not finite and at least 1"},
   };
   ReadOptions opt;
   opt.build.max_segment_length = 0.0;

@@ -96,7 +96,8 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
   const auto ns = static_cast<size_t>(net.num_segments());
   const auto nb = static_cast<size_t>(net.num_branches());
   check_arrays(point_data, nn, "point", {"radius"});
-  check_arrays(cell_data, ns, "cell", {"radius", "radius_from", "radius_to", "length", "branch_id", "segment_id"});
+  check_arrays(cell_data, ns, "cell",
+               {"radius", "radius_from", "radius_to", "length", "shape", "branch_id", "segment_id"});
 
   Appended data;
   std::vector<ArrayXml> field, point, cell;
@@ -135,7 +136,7 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
   add(point, "radius", node_r);
   for (const auto& a : point_data) add(point, a.name, a.values, a.components);
 
-  std::vector<double> radius(ns), radius_from(ns), radius_to(ns), length(ns);
+  std::vector<double> radius(ns), radius_from(ns), radius_to(ns), length(ns), shape(ns);
   std::vector<int32_t> branch(ns), segment_id(ns);
   std::vector<int64_t> conn(2 * ns), offsets(ns);
   for (size_t s = 0; s < ns; ++s) {
@@ -144,6 +145,7 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
     radius_from[s] = seg.radius_from;
     radius_to[s] = seg.radius_to;
     length[s] = seg.length;
+    shape[s] = seg.shape;
     branch[s] = seg.branch;
     segment_id[s] = static_cast<int32_t>(s);
     conn[2 * s] = seg.node_from;
@@ -154,6 +156,7 @@ void write_network_vtp(const Network& net, const std::string& path, const std::v
   add(cell, "radius_from", radius_from);
   add(cell, "radius_to", radius_to);
   add(cell, "length", length);
+  add(cell, "shape", shape);
   add(cell, "branch_id", branch);
   add(cell, "segment_id", segment_id);
   for (const auto& a : cell_data) add(cell, a.name, a.values, a.components);
@@ -207,7 +210,8 @@ void write_network_yaml(const Network& net, const std::string& path) {
   std::string y;
   y += "# flowire vessel network. Positions and radii in metres. 'branches' gives each branch's points\n";
   y += "# [x, y, z, r] (r: the branch's radius at the point); 'nodes' and 'segments'\n";
-  y += "# ([from, to, radius, length, branch, radius_from, radius_to]) give the exact network.\n";
+  y += "# ([from, to, radius, length, branch, radius_from, radius_to, shape]) give the exact network\n";
+  y += "# (shape: the sections' Poiseuille resistance over that of circles of the same area).\n";
   y += "format: flowire-network\nversion: 1\nlength_unit: m\nbranches:\n";
   auto list = [](const std::vector<int>& v) {
     std::string s = "[";
@@ -255,8 +259,8 @@ void write_network_yaml(const Network& net, const std::string& path) {
   for (const auto& p : net.nodes()) y += fmt::format("  - [{}, {}, {}]\n", p.x(), p.y(), p.z());
   y += "segments:\n";
   for (const auto& s : net.segments())
-    y += fmt::format("  - [{}, {}, {}, {}, {}, {}, {}]\n", s.node_from, s.node_to, s.radius, s.length, s.branch,
-                     s.radius_from, s.radius_to);
+    y += fmt::format("  - [{}, {}, {}, {}, {}, {}, {}, {}]\n", s.node_from, s.node_to, s.radius, s.length, s.branch,
+                     s.radius_from, s.radius_to, s.shape);
   write_text_atomically(path, y);
 }
 

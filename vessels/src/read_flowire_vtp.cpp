@@ -1,8 +1,9 @@
 // flowire's own .vtp, as write_network_vtp writes it (field array flowire_network = 1): the
 // exact network back, in metres. Points are the nodes; each line cell is one segment of exactly
 // two points, with the cell arrays radius, branch_id and optionally length, radius_from and
-// radius_to (absent in files written before tapered segments: cylinders); the field arrays
-// branch_segment_offsets / branch_segments and branch_node_offsets / branch_nodes list each
+// radius_to (absent in files written before tapered segments: cylinders) and shape (absent
+// before the sections' shape factors: circles); the field arrays branch_segment_offsets /
+// branch_segments and branch_node_offsets / branch_nodes list each
 // branch's segments and nodes, and the string array branch_names names them. Read as
 // centerlines, each branch gives its nodes with the radius the branch has at each.
 #include <fmt/format.h>
@@ -33,6 +34,8 @@ std::optional<Network> polydata_to_network(const PolyData& pd) {
   const auto* radius_to = find_array(pd.cell_data, "radius_to");
   if (radius_from) require_tuples(pd, *radius_from, ns, "cell");
   if (radius_to) require_tuples(pd, *radius_to, ns, "cell");
+  const auto* shape = find_array(pd.cell_data, "shape");  // absent before shape factors: circles
+  if (shape) require_tuples(pd, *shape, ns, "cell");
   const auto* branch = find_array(pd.cell_data, "branch_id");
   if (!radius) throw_input_error(src, "flowire network file without the cell array 'radius'");
   if (!branch) throw_input_error(src, "flowire network file without the cell array 'branch_id'");
@@ -59,6 +62,12 @@ std::optional<Network> polydata_to_network(const PolyData& pd) {
       *out = arr->values[s * static_cast<size_t>(arr->components)];
       if (!(*out > 0.0 && std::isfinite(*out)))
         throw_input_error(src, fmt::format("line cell {}: {} {} is not positive and finite", s, arr->name, *out));
+    }
+    if (shape) {
+      segs[s].shape = shape->values[s * static_cast<size_t>(shape->components)];
+      if (!(segs[s].shape >= 1.0 && std::isfinite(segs[s].shape)))
+        throw_input_error(
+            src, fmt::format("line cell {}: shape {} is not finite and at least 1 (a circle's)", s, segs[s].shape));
     }
     segs[s].length = length ? length->values[s * static_cast<size_t>(length->components)] : 0.0;
     if (length && !(segs[s].length > 0.0 && std::isfinite(segs[s].length)))

@@ -5,8 +5,9 @@
 //     - name: trunk                      # optional
 //       points: [[x, y, z, r], ...]      # at least 2, radius r > 0, no repeated point
 //   nodes: [[x, y, z], ...]              # optional, with segments: the exact network
-//   segments: [[from, to, radius, length, branch(, radius_from, radius_to)], ...]
-// (with nodes/segments, each branch lists its `nodes` and `segments` by index). Coordinates,
+//   segments: [[from, to, radius, length, branch(, radius_from, radius_to(, shape))], ...]
+// (with nodes/segments, each branch lists its `nodes` and `segments` by index; shape, ≥ 1, the
+// sections' resistance over the circles' of the same area, Segment::shape). Coordinates,
 // radii and lengths are in length_unit (else the caller's unit, else metres). Every error names
 // the file, its line and the branch, point, node or segment at fault.
 #include <fmt/format.h>
@@ -155,9 +156,10 @@ std::optional<Network> yaml_network(const std::string& path, const YamlFile& f, 
   for (size_t s = 0; s < segs_n.size(); ++s) {
     const auto n = segs_n[s];
     const auto what = fmt::format("segment {}", s);
-    if (!n.IsSequence() || (n.size() != 5 && n.size() != 7))
-      throw_input_error(at(path, n),
-                        what + ": expected [node_from, node_to, radius, length, branch(, radius_from, radius_to)]");
+    if (!n.IsSequence() || (n.size() != 5 && n.size() != 7 && n.size() != 8))
+      throw_input_error(
+          at(path, n),
+          what + ": expected [node_from, node_to, radius, length, branch(, radius_from, radius_to(, shape))]");
     Segment seg;
     const long long a = integer(path, n[0], what), b = integer(path, n[1], what);
     if (a < 0 || a >= nn || b < 0 || b >= nn)
@@ -169,7 +171,13 @@ std::optional<Network> yaml_network(const std::string& path, const YamlFile& f, 
     seg.length = number(path, n[3], what) * factor;
     if (!(seg.radius > 0.0) || !std::isfinite(seg.radius))
       throw_input_error(at(path, n), fmt::format("{}: radius is not positive and finite", what));
-    if (n.size() == 7) {
+    if (n.size() == 8) {
+      seg.shape = number(path, n[7], what);
+      if (!(seg.shape >= 1.0) || !std::isfinite(seg.shape))
+        throw_input_error(at(path, n[7]),
+                          fmt::format("{}: shape {} is not finite and at least 1 (a circle's)", what, seg.shape));
+    }
+    if (n.size() >= 7) {
       seg.radius_from = number(path, n[5], what) * factor;
       seg.radius_to = number(path, n[6], what) * factor;
       if (!(seg.radius_from > 0.0 && seg.radius_to > 0.0) || !std::isfinite(seg.radius_from) ||
