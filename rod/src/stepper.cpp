@@ -292,7 +292,7 @@ void TimeStepper::begin_euler_step(double dt, double L_new, double angle_new, bo
   //   closer to the last step's solution. Not while the base turns (the wire's shape turns with
   //   it, off its path), nor where a step feeds half a segment or more (the clamp's boundary
   //   moves every step or two, the feed is steady, and the slide cost Newton iterations: the
-  //   arch at 0.25 mm segments pushed at 2 cm/s, 5.2 → 6.1 a step; turned, 8.3 against 7.3).
+  //   arch at 0.25 mm segments pushed at 2 cm/s, 5.2 → 6.1 a step; turned, 8.3 against 7.9).
   const double L_start = s.inserted_length;
   bool untouched = may_slide && settings_.slide_guess && dt == w.h_end && !w.path_x.empty() &&
                    feeder_.drive().rotation_speed() == 0.0 && std::abs(L_new - L_start) < 0.5 * body_.model.h;
