@@ -41,5 +41,21 @@ TEST_F(ReadersWithVtk, VtpRoundTripIsExact) {
   EXPECT_TRUE(w.contains("declares length_unit m"));
 }
 
+TEST_F(ReadersWithVtk, AVtpSegmentShapeBelowACirclesIsRefusedNamingTheCell) {
+  // A shape factor is at least 1 (a circle's, the least resistance for an area): a file that
+  // says less is damaged, and is refused naming the cell rather than read as a lower resistance.
+  const auto net = sample_network();
+  std::vector<Vec3> nodes(net.nodes().begin(), net.nodes().end());
+  std::vector<Segment> segments(net.segments().begin(), net.segments().end());
+  segments[2].shape = 0.5;
+  std::vector<Branch> branches(net.branches().begin(), net.branches().end());
+  const auto bad = Network::from_graph(std::move(nodes), std::move(segments), std::move(branches), "bad");
+  const auto file = (scratch_dir("io_vtp_bad_shape") / "net.vtp").string();
+  write_network_vtp(bad, file);
+  const auto msg = error_of([&] { (void)read_network(file); });
+  EXPECT_CONTAINS(msg, file);
+  EXPECT_CONTAINS(msg, "line cell 2: shape 0.5 is not finite and at least 1");
+}
+
 }  // namespace
 }  // namespace flowire::vessels
