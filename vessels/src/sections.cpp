@@ -123,10 +123,9 @@ std::optional<Section> cut_section(const LumenSurface& surface, const Vec3& p, c
     {
       // The polygon's moments (Green's theorem over its edges), central, and the principal ones.
       const double sign = twice_area < 0.0 ? -1.0 : 1.0;  // the sums carry the contour's orientation
-      const double area = 0.5 * std::abs(twice_area);
       const double cx = mx / (3.0 * twice_area), cy = my / (3.0 * twice_area);
-      const double ixx = sign * mxx / 12.0 - area * cx * cx, iyy = sign * myy / 12.0 - area * cy * cy;
-      const double ixy = sign * mxy / 24.0 - area * cx * cy;
+      const double ixx = sign * mxx / 12.0 - sec.area * cx * cx, iyy = sign * myy / 12.0 - sec.area * cy * cy;
+      const double ixy = sign * mxy / 24.0 - sec.area * cx * cy;
       const double mean = 0.5 * (ixx + iyy), dev = std::hypot(0.5 * (ixx - iyy), ixy);
       const double i1 = mean + dev, i2 = mean - dev;
       if (i2 > 0.0) {
