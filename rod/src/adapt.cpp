@@ -19,104 +19,96 @@ bool aligned(double u, double len) {
 }
 }  // namespace
 
-bool Feeder::adapt_for(double pull_back, const std::function<void(const std::vector<int>&)>& on_resample) {
+bool Feeder::adapt(const std::function<void(const std::vector<int>&)>& on_resample) {
   const RodModel& model = body_.model;
   const Discretization& disc = body_.disc;
   if (!model.adapt.enabled) return false;
   const AdaptSpec& a = model.adapt;
-  const double h = model.h;
-  const double tol = 1e-9 * h;
-  bool any = false;
-  // Round 0 applies the curvature criteria and the grid near the entry; later rounds only
-  // finish restoring the grid near the entry (after a pull-back over a refined part).
-  for (int round = 0; round < 8; ++round) {
-    RodState& s = body_.state;
-    Scratch& w = *scratch_;
-    const int nv = s.vertex_count();
-    const int fc = first_clamped_;
-    // Vertices at or behind `zone` (the entry after the next step's pull-back) must be
-    // feeding-grid points h apart.
-    const double zone = s.inserted_length - pull_back;
-    const int lowest = tip_clamped_ ? 3 : 0;  // a tip clamp holds vertices 0..2 as they are
-    auto len = [&](int j) { return s.u[j + 1] - s.u[j]; };
-    w.turn_angle.assign(nv, 0.0);
-    for (int k = 1; k < nv - 1; ++k) {
-      const Vec3 te = (s.x[k] - s.x[k - 1]).normalized();
-      const Vec3 tf = (s.x[k + 1] - s.x[k]).normalized();
-      const double phi = std::atan2(te.cross(tf).norm(), te.dot(tf));
-      const double rest = 2.0 * std::atan(0.5 * std::hypot(disc.rest_kappa1[k], disc.rest_kappa2[k]));
-      w.turn_angle[k] = std::max(phi, rest);
-    }
-    w.split_edge.assign(nv - 1, 0);
-    w.remove_vertex.assign(nv, 0);
-    auto sibling_pair = [&](int k) {  // vertex k is the midpoint of an aligned parent edge
-      const double l = len(k - 1);
-      return std::abs(len(k) - l) <= 1e-9 * l && aligned(s.u[k - 1], 2.0 * l);
-    };
-    // At and behind the entry (after the step's pull-back): grid points only (coarse edges
-    // reaching there split, refined vertices there removed).
-    for (int j = lowest; j < nv - 1; ++j)
-      if (s.u[j + 1] > zone + tol && len(j) > h + tol) w.split_edge[j] = 1;
-    for (int k = std::max(lowest, 1); k < nv - 1; ++k)
-      if (s.u[k] > zone - tol && !aligned(s.u[k], h) && sibling_pair(k) && !w.split_edge[k - 1] && !w.split_edge[k])
-        w.remove_vertex[k] = 1;
-    if (round == 0) {
-      auto splittable = [&](int j) {  // the new vertex stays free over the next step
-        return j >= lowest && j < fc && 0.5 * (s.u[j] + s.u[j + 1]) < zone - tol &&
-               len(j) >= 2.0 * a.min_segment_length - tol;
-      };
-      for (int j = lowest; j < fc; ++j)
-        if (splittable(j) && std::max(w.turn_angle[j], w.turn_angle[j + 1]) > a.split_angle) w.split_edge[j] = 1;
-      // 2:1 balance: neighbouring rest lengths differ by at most a factor 2.
-      auto final_len = [&](int j) { return w.split_edge[j] ? 0.5 * len(j) : len(j); };
-      for (bool again = true; again;) {
-        again = false;
-        for (int j = 0; j < nv - 1; ++j)
-          for (int i : {j - 1, j + 1})
-            if (i >= 0 && i < nv - 1 && !w.split_edge[i] && final_len(i) > 2.0 * final_len(j) + tol && splittable(i)) {
-              w.split_edge[i] = 1;
-              again = true;
-            }
-      }
-      for (int k = std::max(lowest, 1); k < fc; ++k) {
-        if (w.remove_vertex[k] || !sibling_pair(k)) continue;
-        const double l = len(k - 1);
-        if (2.0 * l > h + tol && s.u[k + 1] > zone + tol) continue;
-        if (2.0 * l > a.max_segment_length + tol || w.split_edge[k - 1] || w.split_edge[k]) continue;
-        if (std::max({w.turn_angle[k - 1], w.turn_angle[k], w.turn_angle[k + 1]}) >= a.merge_angle) continue;
-        if (k >= 2 && final_len(k - 2) < l - tol) continue;
-        if (final_len(k + 1) < l - tol) continue;
-        // Lumping the vertex's mass onto its neighbours raises the kinetic energy by
-        // (m_k/8)|v_{k−1} − v_{k+1}|² (exact for a linear velocity field): merge only where
-        // that is negligible, so a rod swinging through straight is not coarsened.
-        const double dke = 0.125 * disc.mass[k] * (s.v[k - 1] - s.v[k + 1]).squaredNorm();
-        const double ke = 0.5 * (disc.mass[k - 1] * s.v[k - 1].squaredNorm() + disc.mass[k] * s.v[k].squaredNorm() +
-                                 disc.mass[k + 1] * s.v[k + 1].squaredNorm());
-        if (dke > 1e-4 * ke) continue;
-        w.remove_vertex[k] = 1;
-      }
-    }
-    w.new_u.clear();
-    int splits = 0, merges = 0;
-    for (int k = 0; k < nv; ++k) {
-      if (w.remove_vertex[k]) {
-        ++merges;
-      } else {
-        w.new_u.push_back(s.u[k]);
-      }
-      if (k < nv - 1 && w.split_edge[k]) {
-        w.new_u.push_back(0.5 * (s.u[k] + s.u[k + 1]));
-        ++splits;
-      }
-    }
-    if (splits == 0 && merges == 0) break;
-    resample(w.new_u);
-    on_resample(w.new_source);
-    adapt_splits_ += splits;
-    adapt_merges_ += merges;
-    any = true;
+  const double tol = 1e-9 * model.h;
+  RodState& s = body_.state;
+  Scratch& w = *scratch_;
+  const int nv = s.vertex_count();
+  const int fc = first_clamped_;
+  // The boundary edge (fc − 1, from the last free vertex to the entry) has no level of its own:
+  // its rest length follows the feed within [ℓ/2, 3ℓ/2) of its neighbour's ℓ (update_vertex_set).
+  // It is refined or coarsened with that neighbour: the criteria of edge fc − 2 see the turning
+  // at the entry too, and after the free part is resampled the boundary edge is cut again at
+  // the neighbour's new level (boundary_vertices). The clamp's edge behind the entry is never touched.
+  const int lowest = tip_clamped_ ? 3 : 0;  // a tip clamp holds vertices 0..2 as they are
+  auto len = [&](int j) { return s.u[j + 1] - s.u[j]; };
+  w.turn_angle.assign(nv, 0.0);
+  for (int k = 1; k < nv - 1; ++k) {
+    const Vec3 te = (s.x[k] - s.x[k - 1]).normalized();
+    const Vec3 tf = (s.x[k + 1] - s.x[k]).normalized();
+    const double phi = std::atan2(te.cross(tf).norm(), te.dot(tf));
+    const double rest = 2.0 * std::atan(0.5 * std::hypot(disc.rest_kappa1[k], disc.rest_kappa2[k]));
+    w.turn_angle[k] = std::max(phi, rest);
   }
-  return any;
+  // Turning seen by edge j's criteria (the last regular edge also sees the boundary's).
+  auto turning = [&](int j) {
+    const double t = std::max(w.turn_angle[j], w.turn_angle[j + 1]);
+    return j == fc - 2 ? std::max(t, w.turn_angle[fc]) : t;
+  };
+  w.split_edge.assign(nv - 1, 0);
+  w.remove_vertex.assign(nv, 0);
+  auto sibling_pair = [&](int k) {  // vertex k is the midpoint of an aligned parent edge
+    const double l = len(k - 1);
+    return std::abs(len(k) - l) <= 1e-9 * l && aligned(s.u[k - 1], 2.0 * l);
+  };
+  auto splittable = [&](int j) { return j >= lowest && j < fc - 1 && len(j) >= 2.0 * a.min_segment_length - tol; };
+  for (int j = lowest; j < fc - 1; ++j)
+    if (splittable(j) && turning(j) > a.split_angle) w.split_edge[j] = 1;
+  // 2:1 balance: neighbouring rest lengths of the regular free edges differ by at most a factor 2.
+  auto final_len = [&](int j) { return w.split_edge[j] ? 0.5 * len(j) : len(j); };
+  for (bool again = true; again;) {
+    again = false;
+    for (int j = 0; j < fc - 1; ++j)
+      for (int i : {j - 1, j + 1})
+        if (i >= 0 && i < fc - 1 && !w.split_edge[i] && final_len(i) > 2.0 * final_len(j) + tol && splittable(i)) {
+          w.split_edge[i] = 1;
+          again = true;
+        }
+  }
+  for (int k = std::max(lowest, 1); k < fc - 1; ++k) {
+    if (!sibling_pair(k)) continue;
+    const double l = len(k - 1);
+    if (2.0 * l > a.max_segment_length + tol || w.split_edge[k - 1] || w.split_edge[k]) continue;
+    if (std::max(turning(k - 1), turning(k)) >= a.merge_angle) continue;
+    if (k >= 2 && final_len(k - 2) < l - tol) continue;
+    if (k + 1 < fc - 1 && final_len(k + 1) < l - tol) continue;
+    // Lumping the vertex's mass onto its neighbours raises the kinetic energy by
+    // (m_k/8)|v_{k−1} − v_{k+1}|² (exact for a linear velocity field): merge only where
+    // that is negligible, so a rod swinging through straight is not coarsened.
+    const double dke = 0.125 * disc.mass[k] * (s.v[k - 1] - s.v[k + 1]).squaredNorm();
+    const double ke = 0.5 * (disc.mass[k - 1] * s.v[k - 1].squaredNorm() + disc.mass[k] * s.v[k].squaredNorm() +
+                             disc.mass[k + 1] * s.v[k + 1].squaredNorm());
+    if (dke > 1e-4 * ke) continue;
+    w.remove_vertex[k] = 1;
+  }
+  w.new_u.clear();
+  int splits = 0, merges = 0;
+  for (int k = 0; k < fc; ++k) {
+    if (w.remove_vertex[k]) {
+      ++merges;
+    } else {
+      w.new_u.push_back(s.u[k]);
+    }
+    if (k < fc - 1 && w.split_edge[k]) {
+      w.new_u.push_back(0.5 * (s.u[k] + s.u[k + 1]));
+      ++splits;
+    }
+  }
+  if (splits == 0 && merges == 0) return false;
+  const int free_before = static_cast<int>(w.new_u.size());
+  boundary_vertices(s.inserted_length, w.new_u);
+  const int free_after = static_cast<int>(w.new_u.size());
+  w.new_u.push_back(s.u[fc]);
+  w.new_u.push_back(s.u[fc + 1]);
+  resample(w.new_u);
+  on_resample(w.new_source);
+  adapt_splits_ += splits + std::max(free_after - free_before, 0);
+  adapt_merges_ += merges + std::max(free_before - free_after, 0);
+  return true;
 }
 
 void Feeder::resample(const std::vector<double>& u_new) {

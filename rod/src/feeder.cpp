@@ -18,8 +18,8 @@ namespace flowire::rod {
 // -----------------------------------------------------------------------------------------
 
 Feeder::Scratch::Scratch(int nvmax) {
-  for (auto* v : {&feed_twist, &turn_angle, &new_u, &new_twist_density, &old_u, &old_twist_density, &old_cell,
-                  &old_theta, &old_omega, &old_ref_twist})
+  for (auto* v : {&turn_angle, &new_u, &new_twist_density, &old_u, &old_twist_density, &old_cell, &old_theta,
+                  &old_omega, &old_ref_twist})
     v->reserve(static_cast<size_t>(nvmax));
   for (auto* v : {&old_x, &old_v, &old_tangent}) v->reserve(static_cast<size_t>(nvmax));
   old_frame.reserve(static_cast<size_t>(nvmax));
@@ -40,8 +40,10 @@ Feeder::~Feeder() = default;
 void Feeder::build(double inserted) {
   const RodModel& model = body_.model;
   const double h = model.h;
-  const int kc = static_cast<int>(std::ceil(inserted / h - 1e-9));
-  const int nv = kc + 2;
+  // Free grid points 0 … m, the last within [h/2, 3h/2) of the entry; then the boundary vertex
+  // at the entry (u = inserted) and one more, a segment behind it.
+  const int m = std::max(1, static_cast<int>(std::floor((inserted - 0.5 * h) / h + 1e-9)));
+  const int nv = m + 3;
   RodState& s = body_.state;
   s.x.assign(nv, Vec3::Zero());
   s.v.assign(nv, Vec3::Zero());
@@ -50,12 +52,14 @@ void Feeder::build(double inserted) {
   s.frame.assign(nv - 1, EdgeFrame{});
   s.ref_twist.assign(nv, 0.0);
   s.u.resize(nv);
-  for (int k = 0; k < nv; ++k) s.u[k] = model.u(k);
+  for (int k = 0; k <= m; ++k) s.u[k] = model.u(k);
+  s.u[m + 1] = inserted;
+  s.u[m + 2] = inserted + h;
   body_.rediscretize();
   s.inserted_length = inserted;
   s.base_angle = 0.0;
   s.time = 0.0;
-  first_clamped_ = kc;
+  first_clamped_ = m + 1;
   drive_.set_base_angle(0.0);
   layout_rest_shape();
 }
@@ -147,79 +151,110 @@ void Feeder::refresh_arc_lengths() {
   for (size_t k = 0; k < s.x.size(); ++k) arc_length_[k] = s.inserted_length - s.u[k];
 }
 
+int Feeder::boundary_change(double inserted, double u_prev, double u_last, bool removable) const {
+  const double l = u_last - u_prev, b = inserted - u_last, tol = 1e-9 * body_.model.h;
+  if (b >= 1.5 * l - tol) return 1;
+  if (b < 0.5 * l - tol && removable) return -1;
+  return 0;
+}
+
+double Feeder::next_boundary_point(double u_prev, double u_last) const {
+  const double h = body_.model.h, l = u_last - u_prev;
+  if (std::abs(l - h) <= 1e-9 * h) return body_.model.u(static_cast<int>(std::lround(u_last / h)) + 1);
+  return u_last + l;
+}
+
+void Feeder::boundary_vertices(double inserted, std::vector<double>& u) const {
+  for (int guard = 0; guard < 64; ++guard) {
+    const size_t n = u.size();
+    const int change = boundary_change(inserted, u[n - 2], u[n - 1], n > 2);
+    if (change > 0) {
+      u.push_back(next_boundary_point(u[n - 2], u[n - 1]));
+    } else if (change < 0) {
+      u.pop_back();
+    } else {
+      return;
+    }
+  }
+}
+
 void Feeder::update_vertex_set(double new_inserted) {
+  // The clamp's boundary stays at the entry: vertex first_clamped_ is the material point at the
+  // entry (u = inserted), the next one a segment behind it, both held on the insertion line. The
+  // last free edge (the boundary edge) has no rest length of its own: it stays within [ℓ/2, 3ℓ/2)
+  // of the edge before it (ℓ: a segment unless adaptivity refined or coarsened it). When it would
+  // pass 3ℓ/2 the next point of that edge's level is inserted on it (where that material lay at
+  // the step's start), when it would fall below ℓ/2 its last free vertex is removed (the two
+  // edges merged, their twist kept). The support of the free wire is then continuous in the
+  // inserted length (a grid clamp vertex would jump back by a segment each time one is freed).
   const RodModel& model = body_.model;
-  // The clamp vertex is the first feeding-grid point at or behind the entry, followed by
-  // one more grid point. Near the entry every edge is a grid edge (adapt() keeps it so),
-  // so feeding only appends or drops grid points at the proximal end.
   RodState& s = body_.state;
   const double h = model.h;
-  const int kc = static_cast<int>(std::ceil(new_inserted / h - 1e-9));
-  const int k_last = std::min(kc + 1, model.grid_vertices - 1);
-  const int k_old_last = static_cast<int>(std::lround(s.u.back() / h));
-  const int nv_old = s.vertex_count();
+  const double L = s.inserted_length;
   const Vec3& pb = model.base_position;
   const Vec3& db = model.base_direction;
-  const double L = s.inserted_length;
-  const double angle = s.base_angle;
-  if (k_last > k_old_last) {
-    for (int k = k_old_last + 1; k <= k_last; ++k) {
-      s.u.push_back(model.u(k));
-      s.x.push_back(pb - db * (model.u(k) - L));
-      s.v.push_back(db * feed_speed_);
-      s.theta.push_back(-angle);
-      s.omega.push_back(-drive_.rotation_speed());
-      s.frame.push_back(EdgeFrame{base_d1_, base_d2_});
-      s.ref_twist.push_back(0.0);
+  const Vec3 v_entry = db * feed_speed_;  // the material's velocity at the entry
+  const int nv_old = s.vertex_count();
+  int kc = first_clamped_;
+  auto at = [](auto& vec, int i) { return vec.begin() + i; };
+  for (int guard = 0; guard < 1 << 20; ++guard) {
+    const int change = boundary_change(new_inserted, s.u[kc - 2], s.u[kc - 1], kc >= 3);
+    if (change < 0) {
+      // Pulled back: the last free vertex leaves; the edge before it reaches the entry, keeping
+      // its frame and angle; the boundary's reference twist keeps the sum of the two, so the
+      // material twist is continuous.
+      const int j = kc - 1;  // the vertex leaving, and the edge from it to the boundary
+      s.ref_twist[kc] += s.ref_twist[j];
+      s.u.erase(at(s.u, j));
+      s.x.erase(at(s.x, j));
+      s.v.erase(at(s.v, j));
+      s.ref_twist.erase(at(s.ref_twist, j));
+      s.theta.erase(at(s.theta, j));
+      s.omega.erase(at(s.omega, j));
+      s.frame.erase(at(s.frame, j));
+      --kc;
+    } else if (change > 0 && kc + 2 < model.grid_vertices) {
+      // Fed: the new vertex on the wire's path at the step's start. Inside the entry it splits
+      // the boundary edge (both halves keep its frame, angle and spin; velocity interpolated
+      // between its neighbours' material velocities); behind it, the new edge to the boundary is
+      // material the clamp held (its frame, angle and spin; the twist that was at the boundary
+      // moves to the new vertex).
+      const double u_last = s.u[kc - 1];
+      const double u_new = next_boundary_point(s.u[kc - 2], u_last);
+      const bool inside = u_new < L && L - u_last > 0.0;
+      const int source = inside ? kc - 1 : kc;  // the edge the new edge copies
+      Vec3 x_new = pb - db * (u_new - L), v_new = v_entry;
+      if (inside) {
+        const double a = (u_new - u_last) / (L - u_last);
+        x_new = (1.0 - a) * s.x[kc - 1] + a * pb;
+        v_new = (1.0 - a) * s.v[kc - 1] + a * v_entry;
+      }
+      const double theta = s.theta[source], omega = s.omega[source];
+      const EdgeFrame frame = s.frame[source];
+      const double twist = inside ? 0.0 : s.ref_twist[kc];
+      if (!inside) s.ref_twist[kc] = 0.0;
+      s.u.insert(at(s.u, kc), u_new);
+      s.x.insert(at(s.x, kc), x_new);
+      s.v.insert(at(s.v, kc), v_new);
+      s.ref_twist.insert(at(s.ref_twist, kc), twist);
+      s.theta.insert(at(s.theta, kc), theta);
+      s.omega.insert(at(s.omega, kc), omega);
+      s.frame.insert(at(s.frame, kc), frame);
+      ++kc;
+    } else {
+      break;
     }
-  } else if (k_last < k_old_last) {
-    const int nv_new = nv_old - (k_old_last - k_last);
-    s.u.resize(nv_new);
-    s.x.resize(nv_new);
-    s.v.resize(nv_new);
-    s.theta.resize(nv_new - 1);
-    s.omega.resize(nv_new - 1);
-    s.frame.resize(nv_new - 1);
-    s.ref_twist.resize(nv_new);
-    s.ref_twist.back() = 0.0;
   }
-  const int nv = s.vertex_count();
-  if (nv != nv_old) body_.rediscretize();
-  const int fc = nv - 2;
-  if (fc < first_clamped_) {
-    // Pulled back: vertices fc … first_clamped_−1 enter the clamp. Keep the material twist
-    // continuous at the vertices whose edges are reset.
-    const int k_lo = std::max(fc, 1);
-    for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k)
-      scratch_->feed_twist.push_back(s.theta[k] - s.theta[k - 1] + s.ref_twist[k]);  // total twist
-    for (int k = fc; k < std::min(first_clamped_, nv); ++k) {
-      s.x[k] = pb - db * (s.u[k] - L);
-      s.v[k] = db * feed_speed_;
-    }
-    for (int j = fc; j < nv - 1; ++j) {
-      s.frame[j] = EdgeFrame{base_d1_, base_d2_};
-      s.theta[j] = -angle;
-      s.omega[j] = -drive_.rotation_speed();
-    }
-    // Re-transport the free edge that touches the clamp, then rebuild reference twists.
-    if (fc >= 1) {
-      const int j = fc - 1;
-      const Vec3 t0 = s.frame[j].d1.cross(s.frame[j].d2);
-      const Vec3 t1 = (s.x[j + 1] - s.x[j]).normalized();
-      s.frame[j].d1 = parallel_transport(s.frame[j].d1, t0, t1);
-      s.frame[j].d1 = (s.frame[j].d1 - t1 * t1.dot(s.frame[j].d1)).normalized();
-      s.frame[j].d2 = t1.cross(s.frame[j].d1);
-    }
-    int idx = 0;
-    for (int k = k_lo; k < std::min(first_clamped_ + 1, nv - 1); ++k, ++idx) {
-      const double m_old = scratch_->feed_twist[idx];
-      const double previous = m_old - (s.theta[k] - s.theta[k - 1]);
-      s.ref_twist[k] = reference_twist(s.frame[k - 1].d1, (s.x[k] - s.x[k - 1]).normalized(), s.frame[k].d1,
-                                       (s.x[k + 1] - s.x[k]).normalized(), previous);
-    }
-    scratch_->feed_twist.clear();
+  // The boundary and the vertex behind it: the material at the new entry, where it lay at the
+  // step's start (set_prescribed moves them to the step's end).
+  s.u[kc] = new_inserted;
+  s.u[kc + 1] = new_inserted + h;
+  for (int k = kc; k < kc + 2; ++k) {
+    s.x[k] = pb - db * (s.u[k] - L);
+    s.v[k] = v_entry;
   }
-  first_clamped_ = fc;
+  first_clamped_ = kc;
+  if (s.vertex_count() != nv_old || new_inserted != L) body_.rediscretize();
 }
 
 void Feeder::set_prescribed(double inserted, double angle, std::vector<Vec3>& x, std::vector<double>& theta) const {

@@ -149,7 +149,6 @@ struct TimeStepper::Work {
 /// and the old state while resampling.
 struct Feeder::Scratch {
   explicit Scratch(int nvmax);
-  std::vector<double> feed_twist;         ///< (nv) each vertex's total twist, kept across a re-layout
   std::vector<double> turn_angle;         ///< (nv) turning angle, or the rest shape's if larger
   std::vector<char> split_edge;           ///< (ne) edges to halve
   std::vector<char> remove_vertex;        ///< (nv) vertices to merge away

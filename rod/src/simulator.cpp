@@ -50,7 +50,7 @@ double RodSimulator::static_imbalance() { return stepper_.static_imbalance(); }
 double RodSimulator::step_imbalance() { return stepper_.step_imbalance(); }
 void RodSimulator::save_checkpoint() { stepper_.save_checkpoint(); }
 void RodSimulator::restore_checkpoint(bool guess_from_current) { stepper_.restore_checkpoint(guess_from_current); }
-bool RodSimulator::adapt() { return stepper_.adapt_for(0.0); }
+bool RodSimulator::adapt() { return stepper_.adapt(); }
 int RodSimulator::static_hessian_negative_eigenvalues() { return stepper_.static_hessian_negative_eigenvalues(); }
 
 int RodSimulator::add_point_force(double s, const Vec3& f) {

@@ -58,8 +58,8 @@ TimeStepper::TimeStepper(RodBody& body, Feeder& feeder, const Loads& loads, cons
 
 TimeStepper::~TimeStepper() = default;
 
-bool TimeStepper::adapt_for(double pull_back) {
-  return feeder_.adapt_for(pull_back, [this](const std::vector<int>& new_source) {
+bool TimeStepper::adapt() {
+  return feeder_.adapt([this](const std::vector<int>& new_source) {
     if (externals_.empty()) return;
     const RodView view = current_view(0.0);
     for (const auto& e : externals_) e->remap(view, new_source);
@@ -296,8 +296,11 @@ void TimeStepper::begin_euler_step(double dt, double L_new, double angle_new, bo
   const double L_start = s.inserted_length;
   bool untouched = may_slide && settings_.slide_guess && dt == w.h_end && !w.path_x.empty() &&
                    feeder_.drive().rotation_speed() == 0.0 && std::abs(L_new - L_start) < 0.5 * body_.model.h;
-  for (int k = 0; untouched && k < std::min(feeder_.first_clamped(), static_cast<int>(w.x_end.size())); ++k)
-    untouched = s.x[k] == w.x_end[k];
+  // (A grid point the feed has just inserted at the entry is new: the vertices before it must
+  // be where the last step left them.)
+  const int last_old =
+      std::min({feeder_.first_clamped(), static_cast<int>(w.x_end.size()), static_cast<int>(w.path_u.size())});
+  for (int k = 0; untouched && k < last_old && s.u[k] == w.path_u[k]; ++k) untouched = s.x[k] == w.x_end[k];
   bool slide = untouched && (L_new != L_start || L_start != w.path_inserted);
   const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feeder_.feed_speed() == w.feed_end;
   begin_step(dt, settings_.second_order_guess);
@@ -397,7 +400,7 @@ StepReport TimeStepper::step_midpoint(double dt) {
 StepReport TimeStepper::solve_static() {
   StepReport r = solve_static_once();
   // Adaptive: resample at the equilibrium and solve again until the vertex set settles.
-  for (int round = 0; round < 12 && r.converged() && adapt_for(0.0); ++round) {
+  for (int round = 0; round < 12 && r.converged() && adapt(); ++round) {
     trace_.pop_back();
     r.then(solve_static_once());
   }
@@ -558,7 +561,7 @@ int TimeStepper::static_hessian_negative_eigenvalues() {
 
 StepReport TimeStepper::step_at_feed(double dt, double speed) {
   feeder_.set_feed_speed(speed);
-  adapt_for(std::max(0.0, -feeder_.feed_speed() * dt));
+  adapt();
   return settings_.integrator == Integrator::ImplicitMidpoint ? step_midpoint(dt) : step_euler(dt);
 }
 

@@ -18,7 +18,7 @@ void TimeStepper::coupled_begin(double dt) {
   Work& w = *work_;
   // step_once and step_at_feed: the feed speed, held at the force limit.
   feeder_.set_feed_speed(feeder_.drive().kinematic_speed(base_force_.dot(body_.model.base_direction)));
-  adapt_for(std::max(0.0, -feeder_.feed_speed() * dt));
+  adapt();
   // step_euler up to its Newton solve.
   const double L_new = feeder_.feed_vertex_set(dt);
   coupled_angle_ = feeder_.drive().angle_after(dt);
@@ -100,8 +100,13 @@ double TimeStepper::coupled_max_step(const Eigen::Ref<const Eigen::VectorXd>& dq
   // wire free between walls), is only cut back by the line search after costly trials.
   const int nv = body_.state.vertex_count();
   const int first_fixed = 4 * feeder_.first_clamped(), first_free = feeder_.tip_clamped() ? 7 : 0;
+  // (The boundary edge at the entry, whose rest length follows the feed down to half its
+  // neighbour's, counts as its neighbour: a step that turns it twice as far as the others is
+  // still in the trust region, and a step throttled by it would throttle the whole wire.)
+  const int boundary = feeder_.first_clamped() - 1;
   double lmin = body_.model.h;
-  for (int j = 0; j < nv - 1; ++j) lmin = std::min(lmin, body_.disc.rest_length[j]);
+  for (int j = 0; j < nv - 1; ++j)
+    if (j != boundary) lmin = std::min(lmin, body_.disc.rest_length[j]);
   double sx = 0.0, st = 0.0;
   for (int k = first_free / 4; 4 * k < first_fixed; ++k) {
     sx = std::max(sx, dq.segment<3>(4 * k).norm());

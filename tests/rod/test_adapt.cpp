@@ -192,11 +192,16 @@ TEST(RodAdapt, FeedingInAndOutKeepsTheGridAtTheClampAndTheLength) {
     }
     max_diff = std::max(max_diff, (plain.tip_position() - refined.tip_position()).norm());
     max_drift = std::max(max_drift, refined.length_drift());
-    // The clamp vertex and the one behind it are feeding-grid points.
+    // The boundary vertex is the material at the entry, the one behind it a segment further;
+    // the boundary edge is within [ℓ/2, 3ℓ/2) of the edge before it, ℓ a dyadic level.
     const auto u = refined.material_coordinates();
     const int fc = refined.first_clamped_vertex();
-    EXPECT_NEAR(u[fc] / 1e-3, std::round(u[fc] / 1e-3), 1e-7);
+    EXPECT_NEAR(u[fc], refined.inserted_length(), 1e-15);
     EXPECT_NEAR(u[fc + 1] - u[fc], 1e-3, 1e-12);
+    const double l = u[fc - 1] - u[fc - 2], b = u[fc] - u[fc - 1];
+    EXPECT_NEAR(std::log2(1e-3 / l), std::round(std::log2(1e-3 / l)), 1e-9) << i;
+    EXPECT_GE(b, 0.5 * l - 1e-12) << i;
+    EXPECT_LT(b, 1.5 * l + 1e-12) << i;
   }
   std::printf("feeding: max tip difference %.3e m, max length drift %.2e, splits %ld merges %ld\n", max_diff, max_drift,
               refined.adapt_splits(), refined.adapt_merges());

@@ -28,47 +28,77 @@ struct FeederRig {
   Feeder feeder;
 };
 
-TEST(RodFeeder, BuildsTheGridUpToTwoPointsBehindTheEntry) {
-  FeederRig rig(0.32);  // 6.4 segments inserted: the clamp vertex is grid point 7
+TEST(RodFeeder, BuildsTheFreeGridAndTheClampsBoundaryAtTheEntry) {
+  FeederRig rig(0.32);  // 6.4 segments inserted: free grid points 0 … 5 (7 cm from the entry)
   const RodState& s = rig.body.state;
-  ASSERT_EQ(s.vertex_count(), 9);
-  EXPECT_EQ(rig.feeder.first_clamped(), 7);
+  ASSERT_EQ(s.vertex_count(), 8);
+  EXPECT_EQ(rig.feeder.first_clamped(), 6);
+  const std::vector<double> u = {0.0, 0.05, 0.10, 0.15, 0.20, 0.25, 0.32, 0.37};
   for (int k = 0; k < s.vertex_count(); ++k) {
-    EXPECT_NEAR(s.u[k], 0.05 * k, 1e-15);
-    EXPECT_NEAR(rig.feeder.arc_lengths()[k], 0.32 - 0.05 * k, 1e-15);
+    EXPECT_NEAR(s.u[k], u[k], 1e-15);
+    EXPECT_NEAR(rig.feeder.arc_lengths()[k], 0.32 - u[k], 1e-15);
     EXPECT_LT((s.x[k] - rig.on_line(s.u[k], 0.32)).norm(), 1e-14) << "straight rod at rest on the line, vertex " << k;
   }
-  EXPECT_EQ(rig.feeder.first_fixed_dof(), 28);
+  EXPECT_LT((s.x[6] - rig.body.model.base_position).norm(), 1e-15) << "the boundary vertex is the entry";
+  EXPECT_NEAR(rig.body.disc.rest_length[5], 0.07, 1e-15);
+  EXPECT_EQ(rig.feeder.first_fixed_dof(), 24);
   EXPECT_EQ(rig.feeder.first_free_dof(), 0);
-  EXPECT_TRUE(rig.feeder.free_vertex(6));
-  EXPECT_FALSE(rig.feeder.free_vertex(7));
+  EXPECT_TRUE(rig.feeder.free_vertex(5));
+  EXPECT_FALSE(rig.feeder.free_vertex(6));
 }
 
-TEST(RodFeeder, FeedingAppendsGridPointsAndPullingBackHoldsThemOnTheLine) {
+/// The wire's total twist from edge @p j0 to the clamp's edge: Σ (θ_k − θ_{k−1} + m_k) over the
+/// vertices between them.
+double twist_to_clamp(const RodState& s, int j0, int clamp_edge) {
+  double t = 0.0;
+  for (int k = j0 + 1; k <= clamp_edge; ++k) t += s.theta[k] - s.theta[k - 1] + s.ref_twist[k];
+  return t;
+}
+
+TEST(RodFeeder, FeedingInsertsGridPointsOnTheBoundaryEdgeAndPullingBackRemovesThem) {
   FeederRig rig(0.32);
   RodState& s = rig.body.state;
-  // Push 12 cm in (0.32 → 0.44 m): grid points 7 and 8 pass the entry, 9 becomes the clamp vertex.
+  const Eigen::Vector3d& pb = rig.body.model.base_position;
+  // Bend the free part and give every edge an angle and every vertex a reference twist.
+  for (int k = 0; k < 6; ++k) s.x[k].y() += 1e-3 * (6 - k) * (6 - k);
+  for (size_t j = 0; j < s.theta.size(); ++j) s.theta[j] = 0.1 * std::sin(1.0 + static_cast<double>(j));
+  for (size_t k = 1; k + 1 < s.ref_twist.size(); ++k) s.ref_twist[k] = 0.05 * std::cos(static_cast<double>(k));
+  const double twist_before = twist_to_clamp(s, 3, 6);
+  const std::vector<Eigen::Vector3d> x_bent(s.x.begin(), s.x.begin() + 6);
+  // Push 12 cm in (0.32 → 0.44 m): the boundary edge would reach 19 cm, so grid points 6, 7, 8
+  // (0.30, 0.35, 0.40) are inserted, leaving it 4 cm; the boundary vertex is material 0.44.
   rig.feeder.set_feed_speed(0.12);
   const double L = rig.feeder.feed_vertex_set(1.0);
   EXPECT_NEAR(L, 0.44, 1e-15);
   ASSERT_EQ(s.vertex_count(), 11);
-  EXPECT_EQ(rig.feeder.first_clamped(), 9);  // ceil(0.44 / 0.05) = 9
-  for (int k = 9; k < 11; ++k) EXPECT_NEAR(s.u[k], 0.05 * k, 1e-15);
+  ASSERT_EQ(rig.feeder.first_clamped(), 9);
+  const std::vector<double> u = {0.30, 0.35, 0.40, 0.44, 0.49};
+  for (int k = 6; k < 11; ++k) EXPECT_NEAR(s.u[k], u[k - 6], 1e-15) << k;
+  for (int k = 0; k < 6; ++k) EXPECT_EQ(s.x[k], x_bent[k]) << "free vertex " << k << " untouched";
+  // Each new vertex where its material lay at 0.32 m inserted: 0.30 on the straight edge from
+  // material 0.25 to the entry, the others and the clamp's vertices on the insertion line.
+  EXPECT_LT((s.x[6] - (x_bent[5] + (5.0 / 7.0) * (pb - x_bent[5]))).norm(), 1e-15);
+  for (int k = 7; k < 11; ++k) EXPECT_LT((s.x[k] - rig.on_line(s.u[k], 0.32)).norm(), 1e-14) << k;
+  EXPECT_NEAR(twist_to_clamp(s, 3, 9), twist_before, 1e-15) << "the twist is carried, not made";
   s.inserted_length = L;
   rig.feeder.set_prescribed(L, 0.0, s.x, s.theta);
-  for (int k = 9; k < 11; ++k) EXPECT_LT((s.x[k] - rig.on_line(s.u[k], L)).norm(), 1e-14);
+  EXPECT_LT((s.x[9] - pb).norm(), 1e-15) << "the boundary at the entry at the step's end";
+  EXPECT_LT((s.x[10] - rig.on_line(0.49, L)).norm(), 1e-14);
 
-  // Bend the free part, then pull back 20 cm (0.44 → 0.24 m): vertices 5..8 enter the clamp, the
-  // set shrinks to the new clamp vertex 5 and one more, both laid on the line of the step's start
-  // (the wire behind the entry is straight).
-  for (int k = 0; k < 9; ++k) s.x[k].y() += 1e-3 * k * k;
+  // Pull back 20 cm (0.44 → 0.24 m): grid points 8 … 5 leave (the boundary edge would be
+  // shorter than half a segment), 4 (0.20) stays the last free one; the twist is kept.
+  const double twist_in = twist_to_clamp(s, 3, 9);
   rig.feeder.set_feed_speed(-0.20);
   const double L2 = rig.feeder.feed_vertex_set(1.0);
   EXPECT_NEAR(L2, 0.24, 1e-15);
   ASSERT_EQ(s.vertex_count(), 7);
-  EXPECT_EQ(rig.feeder.first_clamped(), 5);
+  ASSERT_EQ(rig.feeder.first_clamped(), 5);
+  EXPECT_NEAR(s.u[5], 0.24, 1e-15);
+  EXPECT_NEAR(s.u[6], 0.29, 1e-15);
+  EXPECT_NEAR(rig.body.disc.rest_length[4], 0.04, 1e-15);
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(s.x[k], x_bent[k]) << "free vertex " << k << " untouched";
   for (int k = 5; k < 7; ++k) EXPECT_LT((s.x[k] - rig.on_line(s.u[k], 0.44)).norm(), 1e-14) << k;
-  for (int k = 0; k < 5; ++k) EXPECT_NEAR(s.x[k].y(), 1e-3 * k * k, 1e-15) << "free vertex " << k << " untouched";
+  EXPECT_NEAR(twist_to_clamp(s, 3, 5), twist_in, 1e-15);
 }
 
 TEST(RodFeeder, HoldsTheInsertedLengthAtTheWiresEnd) {
@@ -171,7 +201,7 @@ TEST(RodFeeder, ATipClampHoldsTheDistalEdge) {
   rig.feeder.vertex_params(1, p);
   EXPECT_NEAR(p.voronoi_length, 0.5 * rig.body.disc.cell_length[1], 1e-15);
   rig.feeder.vertex_params(rig.feeder.first_clamped(), p);
-  EXPECT_NEAR(p.voronoi_length, 0.5 * 0.05, 1e-15);
+  EXPECT_NEAR(p.voronoi_length, 0.5 * 0.07, 1e-15) << "half the boundary edge (7 cm)";
   rig.feeder.release_tip();
   EXPECT_EQ(rig.feeder.first_free_dof(), 0);
 }

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "flowire/rod/simulator.hpp"
@@ -162,10 +163,12 @@ PushRun push_through_bend(bool slide, double speed) {
   return r;
 }
 
-TEST(RodNewtonStart, TheSlideLandsWhereTheInertialGuessDoesAndNeverCostsMore) {
-  // Each time the feed frees a vertex at the clamp the wire jerks; the inertial guess carries
-  // the jerk on for steps, the slide (its path extrapolated in place) does not, and the one
-  // that came closer last step is taken. Same steps, same tolerance: the same path.
+TEST(RodNewtonStart, TheSlideLandsWhereTheInertialGuessDoesAtAboutItsCost) {
+  // Where the wire's motion is smooth (a smooth bend, the clamp's support at the entry) the
+  // inertial guess is the closer one and the step starts from it whenever it came closer last
+  // step; the slide pays off where walls jerk the wire (the arch's capsule creases:
+  // BM_ArchPushed against BM_ArchPushedInertialGuess). Same steps, same tolerance: the same path,
+  // and on the smooth bend the choice costs at most a few per cent.
   for (const double speed : {0.02, 0.04}) {
     const PushRun inertial = push_through_bend(false, speed);
     const PushRun slide = push_through_bend(true, speed);
@@ -174,12 +177,43 @@ TEST(RodNewtonStart, TheSlideLandsWhereTheInertialGuessDoesAndNeverCostsMore) {
     for (size_t i = 0; i < slide.tip.size(); ++i) diff = std::max(diff, (slide.tip[i] - inertial.tip[i]).norm());
     EXPECT_LT(diff, 1e-7) << speed;
     EXPECT_GT(slide.tip.back().y(), 0.01) << "the wire must have followed the bend";
-    // Measured: 559 → 553 iterations at 2 cm/s, 401 → 336 at 4 cm/s (a jerk every 2.5 steps).
-    EXPECT_LE(static_cast<double>(slide.newton), 1.02 * static_cast<double>(inertial.newton)) << speed;
-    if (speed == 0.04) {
-      EXPECT_LT(static_cast<double>(slide.newton), 0.85 * static_cast<double>(inertial.newton));
+    // Measured: 480 → 493 iterations at 2 cm/s, 278 → 292 at 4 cm/s.
+    EXPECT_LE(static_cast<double>(slide.newton), 1.08 * static_cast<double>(inertial.newton)) << speed;
+  }
+}
+
+TEST(RodNewtonStart, APushedWiresClampForceAndTipMoveSmoothly) {
+  // The clamp's support stays at the entry while the feed inserts vertices on the boundary edge:
+  // pushed round the smooth bend at 2 cm/s (a vertex inserted every fifth step), the clamp's
+  // force and the tip's advance change smoothly from step to step. A support that jumped back by
+  // a segment each time a vertex was freed made both a sawtooth of one segment's period (the
+  // force 5%, the tip's advance from 0.16 to 0.38 mm a step, measured). Second differences over
+  // the last 50 steps, against the first differences.
+  WireSpec spec = jwire();
+  spec.tip.shape = TipShape::Straight;
+  spec.tip.length = 0.0;
+  spec.inserted_length = 8e-3;
+  spec.segment_length = 1e-3;
+  RodSimulator sim(spec);
+  sim.add_external(bent_tube(0.03, 1.5e-3, spec.radius, 3e4));
+  sim.set_insertion_speed(0.02);
+  std::vector<Eigen::Vector3d> force, tip;
+  for (int n = 0; n < 150; ++n) {
+    ASSERT_TRUE(sim.step(1e-2).converged()) << n;
+    if (n >= 100) force.push_back(sim.base_force()), tip.push_back(sim.tip_position());
+  }
+  double df = 0.0, d2f = 0.0, dt = 0.0, d2t = 0.0;
+  for (size_t i = 1; i < force.size(); ++i) {
+    df = std::max(df, (force[i] - force[i - 1]).norm());
+    dt = std::max(dt, (tip[i] - tip[i - 1]).norm());
+    if (i >= 2) {
+      d2f = std::max(d2f, (force[i] - 2.0 * force[i - 1] + force[i - 2]).norm());
+      d2t = std::max(d2t, (tip[i] - 2.0 * tip[i - 1] + tip[i - 2]).norm());
     }
   }
+  std::printf("clamp force: steps %.2e N, second differences %.2e N; tip: %.2e m, %.2e m\n", df, d2f, dt, d2t);
+  EXPECT_LT(d2f, 0.1 * df);
+  EXPECT_LT(d2t, 0.1 * dt);
 }
 
 TEST(RodNewtonStart, AHalvedStepCountsTheAttemptThatFailed) {

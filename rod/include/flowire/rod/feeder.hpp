@@ -2,20 +2,25 @@
 /// @file feeder.hpp
 /// @brief Which part of the wire is simulated, and where its held unknowns are.
 ///
-/// **Feeding.** The wire lies on a fixed grid in the material coordinate (model.hpp). The
-/// simulated vertices are the grid points from the tip to two points behind the entry: the
-/// clamp vertex (the first grid point at or behind the entry) and one more. Feeding moves the
-/// entry along the wire: grid points that pass it are released, new ones are appended behind
-/// it, and points pulled back behind it are laid onto the insertion line and held, their twist
-/// kept continuous. `set_prescribed` puts the held unknowns where the clamp (and an optional tip
-/// clamp) holds them; `predict_feed` gives Newton a start in which the wire slid along itself,
-/// `predict_slide` one in which the wire's path also changes as it did over the last step.
+/// **Feeding.** The free wire lies on a fixed grid in the material coordinate (model.hpp), from
+/// the tip to the last grid point within [h/2, 3h/2) of the entry. Then come the clamp's two
+/// held vertices: the boundary vertex, the material point at the entry itself (u = inserted
+/// length), and one a segment behind it on the insertion line. The last free edge (the boundary
+/// edge) thus has a rest length that follows the feed: the next grid point is inserted on it when
+/// it would pass 3h/2 and its last free vertex removed when it would fall below h/2 (their twist
+/// kept continuous). The clamp's support stays at the entry, so the free wire and the clamp's
+/// force change continuously with the inserted length (a grid vertex as the clamp's support would
+/// jump back by a segment each time the feed frees one). `set_prescribed` puts the held unknowns
+/// where the clamp (and an optional tip clamp) holds them; `predict_feed` gives Newton a start in
+/// which the wire slid along itself, `predict_slide` one in which the wire's path also changes as
+/// it did over the last step.
 ///
-/// **Adaptivity** (`WireSpec::adapt`): `adapt_for` splits free edges where the wire is bent
-/// and merges them where it is straight, on a dyadic hierarchy in the material coordinate,
-/// and carries the state over (resample: positions on the Hermite curve through the old
-/// vertices and tangents, velocities interpolated, frames transported, twist density kept).
-/// Vertices at or behind the entry stay feeding-grid points.
+/// **Adaptivity** (`WireSpec::adapt`): `adapt` splits free edges where the wire is bent and
+/// merges them where it is straight, on a dyadic hierarchy in the material coordinate, and
+/// carries the state over (resample: positions on the Hermite curve through the old vertices and
+/// tangents, velocities interpolated, frames transported, twist density kept). The boundary
+/// edge follows the level of the edge before it (ℓ instead of h above): refining that edge
+/// refines the boundary, and the feed then inserts points of that level.
 ///
 /// The feeder moves vertices of the body's state and changes its vertex set; it solves
 /// nothing (the TimeStepper, stepper.hpp, does).
@@ -67,7 +72,8 @@ class Feeder {
   /// two segments and the wire's length, with a warning and the feed stopped), with the vertex
   /// set updated to it; the state's base angle set to the drive's.
   double feed_vertex_set(double dt);
-  /// @brief The vertex set for inserted length @p inserted (grid points appended or held).
+  /// @brief The vertex set for inserted length @p inserted (free points inserted at or removed
+  /// from the boundary edge; the held ones placed where that material lay at the current one).
   void update_vertex_set(double inserted);
   /// @brief The held unknowns of @p x, @p theta where the clamp at inserted length @p inserted
   /// and base angle @p angle (and a tip clamp) put them.
@@ -92,7 +98,7 @@ class Feeder {
   /// The length over which predict_slide passes from the tip's own guess to the slide [m].
   static constexpr double kSlideBlend = 0.01;
 
-  /// @brief Index of the first clamped vertex (the one at or just behind the entry).
+  /// @brief Index of the first clamped vertex (the boundary vertex, at the entry).
   [[nodiscard]] int first_clamped() const { return first_clamped_; }
   /// @brief For a step taken again from a kept start (the vertex set of that start).
   void set_first_clamped(int k) { first_clamped_ = k; }
@@ -115,16 +121,25 @@ class Feeder {
   void release_tip() { tip_clamped_ = false; }
   [[nodiscard]] bool tip_clamped() const { return tip_clamped_; }
 
-  /// @brief Resample the free part (a no-op unless adaptivity is on), keeping the grid over the
-  /// length a pull-back of @p pull_back moves into the clamp; @p on_resample is told, after each
-  /// resampling, the old vertex each new one copies (−1: a new vertex). True if the set changed.
-  bool adapt_for(double pull_back, const std::function<void(const std::vector<int>&)>& on_resample);
+  /// @brief Resample the free part (a no-op unless adaptivity is on); @p on_resample is told,
+  /// after a resampling, the old vertex each new one copies (−1: a new vertex). True if the set
+  /// changed.
+  bool adapt(const std::function<void(const std::vector<int>&)>& on_resample);
   /// @brief Vertices added and removed by adaptivity so far.
   [[nodiscard]] long adapt_splits() const { return adapt_splits_; }
   [[nodiscard]] long adapt_merges() const { return adapt_merges_; }
 
  private:
   struct Scratch;
+  /// Whether the boundary edge from a last free vertex at @p u_last (the one before it at
+  /// @p u_prev) to the entry at @p inserted needs a vertex inserted (+1), its last free vertex
+  /// removed (−1, if @p removable) or neither (0): it stays within [ℓ/2, 3ℓ/2), ℓ = u_last − u_prev.
+  [[nodiscard]] int boundary_change(double inserted, double u_prev, double u_last, bool removable) const;
+  /// The material coordinate of the vertex inserted after @p u_last (the next one of its level).
+  [[nodiscard]] double next_boundary_point(double u_prev, double u_last) const;
+  /// Free material coordinates @p u (from the tip) completed or cut so that the boundary edge
+  /// to the entry at @p inserted is within [ℓ/2, 3ℓ/2) of the edge before it.
+  void boundary_vertices(double inserted, std::vector<double>& u) const;
   /// Replace the vertex set by the one at material coordinates @p u_new (a dyadic refinement
   /// or coarsening of the current one), carrying the state over.
   void resample(const std::vector<double>& u_new);

@@ -7,9 +7,10 @@
 /// tip along the wire (u = 0 at the tip, u = length at the proximal end). The rod is
 /// discretized on a fixed grid u_k = k·h anchored at the tip, so a vertex keeps its
 /// material (stiffness, mass, rest curvature) for its whole life while the wire is fed in
-/// and pulled back; the simulated vertices are the grid points from the tip up to two
-/// points behind the entry (the clamp stub). Beyond the proximal end the shaft material
-/// is continued (the holder is virtual).
+/// and pulled back; the simulated vertices are the grid points from the tip to within a
+/// segment and a half of the entry, then the material point at the entry and one a segment
+/// behind it (the clamp stub, feeder.hpp). Beyond the proximal end the shaft material is
+/// continued (the holder is virtual).
 ///
 /// **Inextensibility.** Stretching uses the wire's physical axial stiffness EA as a stiff
 /// penalty (no constraint): the strain is N/(EA) for an axial force N. For the stiffest

@@ -10,8 +10,9 @@
 ///
 /// **Unknowns.** Vertex positions and one twist angle per edge, interleaved
 /// (x_0, θ_0, x_1, θ_1, …, x_n): 4n+3 unknowns, Hessian banded with half-width 10.
-/// Vertex 0 is the distal tip; the last two vertices are behind the entry point and held
-/// by the clamp (their positions and the angle of the edge between them are prescribed).
+/// Vertex 0 is the distal tip; the last two vertices are held by the clamp: the boundary vertex
+/// at the entry point and one a segment behind it (their positions and the angle of the edge
+/// between them are prescribed).
 ///
 /// Each solve is Newton's method (newton.hpp, `NewtonSolver`; the rod's problem is
 /// src/stepper_stage.cpp) with a backtracking line search on the incremental
@@ -31,20 +32,21 @@
 /// **Clamps.** The base clamp holds the last two vertices on the insertion line and the
 /// angle of the edge between them; the clamp vertex owns only the half cell in front of
 /// it, which puts the clamp exactly at that vertex and keeps the scheme second order.
-/// The clamp vertex is the first grid point at or behind the entry, so while feeding the
-/// effective clamp sits up to one segment behind the entry point.
+/// The clamp vertex is the material point at the entry whatever the inserted length (its
+/// edge's rest length follows the feed, feeder.hpp), so the free wire is exactly as long as
+/// the inserted length and the clamp's force changes continuously while feeding.
 /// `clamp_tip` optionally holds the distal edge too (rods clamped at both ends).
 ///
-/// **Feeding.** `set_insertion_speed` moves the entry point along the wire: grid points
-/// that pass the entry are released, new grid points are appended behind it, and points
-/// pulled back behind the entry are snapped onto the insertion line and clamped. Only the
-/// inserted part plus one clamped edge is simulated.
+/// **Feeding.** `set_insertion_speed` moves the entry point along the wire: the last free
+/// edge (from the last free grid point to the entry) grows and shrinks with the feed, a grid
+/// point is inserted on it when it would pass one and a half segments and removed when it
+/// would fall below half of one. Only the inserted part plus one clamped edge is simulated.
 ///
 /// **Adaptivity.** With `WireSpec::adapt` enabled, each step (and each round of a static
 /// solve) starts with `adapt()`: free edges are split where the wire is bent and merged
 /// where it is straight, on a dyadic hierarchy in the material coordinate (model.hpp).
-/// Vertices at or behind the entry (after the step's pull-back) stay feeding-grid points,
-/// so feeding is unaffected. The state is carried over consistently: a new vertex lies on the cubic
+/// The boundary edge follows the level of the edge before it, so feeding inserts points of
+/// the level the wire has there. The state is carried over consistently: a new vertex lies on the cubic
 /// Hermite curve through its edge's end points and vertex tangents (on a circular arc this
 /// keeps the bending energy to second order; the edge strain changes by O(φ²/32) at turning
 /// φ), velocities are interpolated linearly, each new edge's reference frame is the old
@@ -191,7 +193,7 @@ class RodSimulator {
   [[nodiscard]] std::span<const Eigen::Vector3d> velocities() const { return body_.state.v; }
   /// @brief (n_vertices) arc length from the entry point [m]: > 0 inserted, ≤ 0 clamped.
   [[nodiscard]] std::span<const double> arc_lengths() const { return feeder_.arc_lengths(); }
-  /// @brief Index of the first clamped vertex (the one at or just behind the entry).
+  /// @brief Index of the first clamped vertex (the boundary vertex, at the entry).
   [[nodiscard]] int first_clamped_vertex() const { return feeder_.first_clamped(); }
   [[nodiscard]] const Eigen::Vector3d& tip_position() const { return body_.state.x.front(); }
   [[nodiscard]] double inserted_length() const { return body_.state.inserted_length; }

@@ -115,8 +115,8 @@ class TimeStepper {
   [[nodiscard]] double step_imbalance();
   void save_checkpoint();
   void restore_checkpoint(bool guess_from_current);
-  /// @brief The feeder's adapt_for, the external forces told of the new vertices.
-  bool adapt_for(double pull_back);
+  /// @brief The feeder's adapt, the external forces told of the new vertices.
+  bool adapt();
   /// @brief Negative eigenvalues of the static Hessian on the free unknowns.
   [[nodiscard]] int static_hessian_negative_eigenvalues();
   /// @brief What the external forces see of the current state (dt = 0: between steps).
