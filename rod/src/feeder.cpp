@@ -225,8 +225,18 @@ void Feeder::update_vertex_set(double new_inserted) {
       const int source = inside ? kc - 1 : kc;  // the edge the new edge copies
       Vec3 x_new = pb - db * (u_new - L), v_new = v_entry;
       if (inside) {
+        // On the cubic Hermite curve from the last free vertex (its tangent the mean of its
+        // edges') to the entry (the clamp's direction): a chord would put the vertex off the
+        // bent wire by the edge's sagitta, and the step after would give that offset to its
+        // velocity (a kick the next steps' guesses carry on).
         const double a = (u_new - u_last) / (L - u_last);
-        x_new = (1.0 - a) * s.x[kc - 1] + a * pb;
+        const Vec3& x0 = s.x[kc - 1];
+        const double chord = (pb - x0).norm();
+        const Vec3 t0 = ((x0 - s.x[kc - 2]).normalized() + (pb - x0).normalized()).normalized();
+        const Vec3 t1 = -db;
+        const double a2 = a * a, a3 = a2 * a;
+        x_new = (2.0 * a3 - 3.0 * a2 + 1.0) * x0 + (a3 - 2.0 * a2 + a) * chord * t0 + (3.0 * a2 - 2.0 * a3) * pb +
+                (a3 - a2) * chord * t1;
         v_new = (1.0 - a) * s.v[kc - 1] + a * v_entry;
       }
       const double theta = s.theta[source], omega = s.omega[source];
