@@ -292,7 +292,8 @@ void TimeStepper::begin_euler_step(double dt, double L_new, double angle_new, bo
   //   closer to the last step's solution. Not while the base turns (the wire's shape turns with
   //   it, off its path), nor where a step feeds half a segment or more (the clamp's boundary
   //   moves every step or two, the feed is steady, and the slide cost Newton iterations: the
-  //   arch at 0.25 mm segments pushed at 2 cm/s, 5.2 → 6.1 a step; turned, 8.3 against 7.9).
+  //   arch at 0.25 mm segments pushed at 2 cm/s, 5.2 → 6.1 a step; turned, 8.3 against 7.9; with
+  //   the clamp's support at the entry, 5.2 → 5.6 pushed, 5.8 → 5.5 pulled).
   const double L_start = s.inserted_length;
   bool untouched = may_slide && settings_.slide_guess && dt == w.h_end && !w.path_x.empty() &&
                    feeder_.drive().rotation_speed() == 0.0 && std::abs(L_new - L_start) < 0.5 * body_.model.h;
@@ -302,7 +303,9 @@ void TimeStepper::begin_euler_step(double dt, double L_new, double angle_new, bo
       std::min({feeder_.first_clamped(), static_cast<int>(w.x_end.size()), static_cast<int>(w.path_u.size())});
   for (int k = 0; untouched && k < last_old && s.u[k] == w.path_u[k]; ++k) untouched = s.x[k] == w.x_end[k];
   bool slide = untouched && (L_new != L_start || L_start != w.path_inserted);
-  const bool steady_feed = settings_.second_order_guess && dt == w.h_end && feeder_.feed_speed() == w.feed_end;
+  // (A step after a subdivided one is as steady: its inertial guess, first-order there, holds
+  // a J tip's hook where the feed predictor would slide it along its own path.)
+  const bool steady_feed = settings_.second_order_guess && w.h_end > 0.0 && feeder_.feed_speed() == w.feed_end;
   begin_step(dt, settings_.second_order_guess);
   const auto free = static_cast<size_t>(feeder_.first_clamped());
   w.guess_slide.clear();
