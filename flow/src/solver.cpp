@@ -216,7 +216,7 @@ void FlowSolver::drop_negligible_harmonics(std::span<const double> scale) {
   // A harmonic the waveform does not have (a sine has one) is left to the parabola.
   for (size_t s = 0; s < scale.size(); ++s)
     for (int n = 0; n < kHarmonics; ++n)
-      if (std::abs(harmonic_[s * kHarmonics + static_cast<size_t>(n)]) <= 1e-9 * scale[s])
+      if (std::norm(harmonic_[s * kHarmonics + static_cast<size_t>(n)]) <= 1e-18 * scale[s] * scale[s])
         harmonic_[s * kHarmonics + static_cast<size_t>(n)] = 0.0;
 }
 
@@ -285,6 +285,10 @@ void ResponseSolver::compute_harmonics() {
         }
       }
     }
+    source_harmonic_size_.assign(kk, 0.0);
+    for (size_t k = 1; k < kk; ++k)
+      for (int n = 0; n < kHarmonics; ++n)
+        source_harmonic_size_[k] += std::abs(source_harmonic_[k * kHarmonics + static_cast<size_t>(n)]);
   }
   const auto ne = static_cast<size_t>(net_.num_segments());
   harmonic_.assign(ne * kHarmonics, 0.0);
@@ -297,11 +301,10 @@ void ResponseSolver::compute_harmonics() {
     magnitude[s] = std::abs(g * (a[0] - b[0]));
     for (size_t k = 1; k < kk; ++k) {
       const double dq = g * (a[k] - b[k]);
-      for (int n = 0; n < kHarmonics; ++n) {
-        const auto h = source_harmonic_[k * kHarmonics + static_cast<size_t>(n)] * dq;
-        harmonic_[s * kHarmonics + static_cast<size_t>(n)] += h;
-        magnitude[s] += std::abs(h);
-      }
+      for (int n = 0; n < kHarmonics; ++n)
+        harmonic_[s * kHarmonics + static_cast<size_t>(n)] +=
+            source_harmonic_[k * kHarmonics + static_cast<size_t>(n)] * dq;
+      magnitude[s] += std::abs(dq) * source_harmonic_size_[k];  // Σ_n |f̂_{k,n} dq|, without a modulus each
     }
   }
   drop_negligible_harmonics(magnitude);

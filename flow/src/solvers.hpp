@@ -38,6 +38,7 @@ class ResponseSolver : public FlowSolver {
   std::vector<double> p_;                              // (num_nodes x k) node pressure response to each source
   std::vector<double> coef_;                           // (k) f_k(time)
   std::vector<std::complex<double>> source_harmonic_;  // (k x kHarmonics) of each waveform, once
+  std::vector<double> source_harmonic_size_;           // (k) Σ_n |f̂_{k,n}|, once
 };
 
 /// Base of the solvers that compute full arrays every frame.
