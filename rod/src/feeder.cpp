@@ -21,7 +21,7 @@ Feeder::Scratch::Scratch(int nvmax) {
   for (auto* v : {&turn_angle, &new_u, &new_twist_density, &old_u, &old_twist_density, &old_cell, &old_theta,
                   &old_omega, &old_ref_twist})
     v->reserve(static_cast<size_t>(nvmax));
-  for (auto* v : {&old_x, &old_v, &old_tangent}) v->reserve(static_cast<size_t>(nvmax));
+  for (auto* v : {&old_x, &old_v, &old_tangent, &tangent_now, &tangent_before}) v->reserve(static_cast<size_t>(nvmax));
   old_frame.reserve(static_cast<size_t>(nvmax));
   new_source.reserve(static_cast<size_t>(nvmax));
   split_edge.reserve(static_cast<size_t>(nvmax));
@@ -292,6 +292,21 @@ void Feeder::clamp_tip(const Vec3& tip, const Vec3& next) {
   tip_clamp_theta_ = body_.state.theta[0];
 }
 
+namespace {
+/// Vertex @p k's tangent of the path through @p x: inside, the mean of the unit edges on either
+/// side; at an end, the edge reflected about the next vertex's tangent. Both exact on a circular
+/// arc sampled evenly, O(ℓ²) off elsewhere, so that the cubic through them is O(ℓ³) from the curve.
+Vec3 path_tangent(std::span<const Vec3> x, int k) {
+  const int n = static_cast<int>(x.size());
+  auto edge = [&](int j) { return Vec3((x[j + 1] - x[j]).normalized()); };
+  auto inner = [&](int i) { return Vec3((edge(i - 1) + edge(i)).normalized()); };
+  if (n < 3) return edge(0);
+  if (k == 0) return Vec3(2.0 * edge(0).dot(inner(1)) * edge(0) - inner(1));
+  if (k == n - 1) return Vec3(2.0 * edge(n - 2).dot(inner(n - 2)) * edge(n - 2) - inner(n - 2));
+  return inner(k);
+}
+}  // namespace
+
 Vec3 Feeder::path_point(const WirePath& path, double sigma) const {
   const Vec3& pb = body_.model.base_position;
   const Vec3& db = body_.model.base_direction;
@@ -301,16 +316,8 @@ Vec3 Feeder::path_point(const WirePath& path, double sigma) const {
   const int n = static_cast<int>(x.size());
   const double m = path.inserted - sigma;  // the material coordinate that lay there
   if (m >= u[n - 1]) return pb + db * sigma;
-  // Vertex tangents: inside, the mean of the unit edges on either side; at an end, the edge
-  // reflected about the next vertex's tangent. Both exact on a circular arc sampled evenly,
-  // O(ℓ²) off elsewhere, so that the cubic is O(ℓ³) from the curve.
-  auto edge = [&](int j) { return Vec3((x[j + 1] - x[j]).normalized()); };
-  auto inner = [&](int k) { return Vec3((edge(k - 1) + edge(k)).normalized()); };
   auto tangent = [&](int k) {
-    if (n < 3) return edge(0);
-    if (k == 0) return Vec3(2.0 * edge(0).dot(inner(1)) * edge(0) - inner(1));
-    if (k == n - 1) return Vec3(2.0 * edge(n - 2).dot(inner(n - 2)) * edge(n - 2) - inner(n - 2));
-    return inner(k);
+    return path.tangent.empty() ? path_tangent(x, k) : path.tangent[static_cast<size_t>(k)];
   };
   const int j = std::clamp(static_cast<int>(std::upper_bound(u.begin(), u.end(), m) - u.begin()) - 1, 0, n - 2);
   const double chord = (x[j + 1] - x[j]).norm();
@@ -370,6 +377,15 @@ void Feeder::predict_slide(double inserted, const WirePath& now, const WirePath&
   double u_tip = s.u[0];
   for (int k = 1; k < first_clamped_; ++k)
     if (d.rest_kappa1[k] != 0.0 || d.rest_kappa2[k] != 0.0) u_tip = s.u[k];
+  // Both paths' vertex tangents once, not two for each point asked for.
+  Scratch& sc = *scratch_;
+  WirePath paths[2] = {now, before};
+  std::vector<Vec3>* tangents[2] = {&sc.tangent_now, &sc.tangent_before};
+  for (int p = 0; p < 2; ++p) {
+    tangents[p]->resize(paths[p].x.size());
+    for (size_t k = 0; k < paths[p].x.size(); ++k) (*tangents[p])[k] = path_tangent(paths[p].x, static_cast<int>(k));
+    paths[p].tangent = *tangents[p];
+  }
   for (int k = 0; k < first_clamped_; ++k) {
     // C² smoothstep from the tip's own guess to the slide: a kink in the blend would bend or
     // stretch the stiff wire (a jump of 6 µm along one 1 mm edge is 50 N of stretching).
@@ -377,7 +393,7 @@ void Feeder::predict_slide(double inserted, const WirePath& now, const WirePath&
     const double w = t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
     if (w == 0.0) continue;
     const double sigma = inserted - s.u[k];
-    const Vec3 slid = 2.0 * path_point(now, sigma) - path_point(before, sigma);
+    const Vec3 slid = 2.0 * path_point(paths[0], sigma) - path_point(paths[1], sigma);
     s.x[k] = w * slid + (1.0 - w) * s.x[k];
   }
 }

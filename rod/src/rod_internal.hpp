@@ -157,6 +157,7 @@ struct Feeder::Scratch {
   std::vector<double> new_twist_density;  ///< (new nv)
   std::vector<double> old_u, old_cell, old_theta, old_omega, old_ref_twist, old_twist_density;
   std::vector<Vec3> old_x, old_v, old_tangent;
+  std::vector<Vec3> tangent_now, tangent_before;  ///< (path vertices) predict_slide's paths' tangents
   std::vector<EdgeFrame> old_frame;
 };
 

@@ -42,6 +42,8 @@ struct WirePath {
   std::span<const Eigen::Vector3d> x;
   std::span<const double> u;
   double inserted = 0.0;
+  /// The vertices' tangents if already known (as Feeder::path_point defines them); empty: computed.
+  std::span<const Eigen::Vector3d> tangent = {};
 };
 
 class Feeder {
