@@ -16,7 +16,8 @@ std::complex<double> bessel_series(int n, std::complex<double> z) {
   for (int m = 1; m < 400; ++m) {
     term *= h2 / (static_cast<double>(m) * static_cast<double>(m + n));
     sum += term;
-    if (std::abs(term) <= 1e-17 * std::abs(sum) && m > std::abs(z)) break;
+    // (|term| ≤ 10⁻¹⁷ |sum| and m > |z|, in squared moduli: no square root a term)
+    if (std::norm(term) <= 1e-34 * std::norm(sum) && static_cast<double>(m) * m > std::norm(z)) break;
   }
   return sum;
 }
