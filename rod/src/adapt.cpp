@@ -161,9 +161,7 @@ void Feeder::resample(const std::vector<double>& u_new) {
     }
     const double t = (u - w.old_u[i]) / (w.old_u[i + 1] - w.old_u[i]);
     const double chord = (w.old_x[i + 1] - w.old_x[i]).norm();
-    const double t2 = t * t, t3 = t2 * t;
-    s.x[m] = (2 * t3 - 3 * t2 + 1) * w.old_x[i] + (t3 - 2 * t2 + t) * chord * w.old_tangent[i] +
-             (-2 * t3 + 3 * t2) * w.old_x[i + 1] + (t3 - t2) * chord * w.old_tangent[i + 1];
+    s.x[m] = detail::hermite(w.old_x[i], w.old_tangent[i], w.old_x[i + 1], w.old_tangent[i + 1], chord, t);
     s.v[m] = (1.0 - t) * w.old_v[i] + t * w.old_v[i + 1];
     w.new_twist_density[m] = (1.0 - t) * w.old_twist_density[i] + t * w.old_twist_density[i + 1];
   }

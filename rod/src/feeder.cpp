@@ -151,6 +151,21 @@ void Feeder::refresh_arc_lengths() {
   for (size_t k = 0; k < s.x.size(); ++k) arc_length_[k] = s.inserted_length - s.u[k];
 }
 
+namespace {
+/// Vertex @p k's tangent of the path through @p x: inside, the mean of the unit edges on either
+/// side; at an end, the edge reflected about the next vertex's tangent. Both exact on a circular
+/// arc sampled evenly, O(ℓ²) off elsewhere, so that the cubic through them is O(ℓ³) from the curve.
+Vec3 path_tangent(std::span<const Vec3> x, int k) {
+  const int n = static_cast<int>(x.size());
+  auto edge = [&](int j) { return Vec3((x[j + 1] - x[j]).normalized()); };
+  auto inner = [&](int i) { return Vec3((edge(i - 1) + edge(i)).normalized()); };
+  if (n < 3) return edge(0);
+  if (k == 0) return Vec3(2.0 * edge(0).dot(inner(1)) * edge(0) - inner(1));
+  if (k == n - 1) return Vec3(2.0 * edge(n - 2).dot(inner(n - 2)) * edge(n - 2) - inner(n - 2));
+  return inner(k);
+}
+}  // namespace
+
 int Feeder::boundary_change(double inserted, double u_prev, double u_last, bool removable) const {
   const double l = u_last - u_prev, b = inserted - u_last, tol = 1e-9 * body_.model.h;
   if (b >= 1.5 * l - tol) return 1;
@@ -229,14 +244,11 @@ void Feeder::update_vertex_set(double new_inserted) {
         // edges') to the entry (the clamp's direction): a chord would put the vertex off the
         // bent wire by the edge's sagitta, and the step after would give that offset to its
         // velocity (a kick the next steps' guesses carry on).
+        // (The boundary vertex is still at the entry here: the last free vertex's tangent is
+        // the path's.)
         const double a = (u_new - u_last) / (L - u_last);
         const Vec3& x0 = s.x[kc - 1];
-        const double chord = (pb - x0).norm();
-        const Vec3 t0 = ((x0 - s.x[kc - 2]).normalized() + (pb - x0).normalized()).normalized();
-        const Vec3 t1 = -db;
-        const double a2 = a * a, a3 = a2 * a;
-        x_new = (2.0 * a3 - 3.0 * a2 + 1.0) * x0 + (a3 - 2.0 * a2 + a) * chord * t0 + (3.0 * a2 - 2.0 * a3) * pb +
-                (a3 - a2) * chord * t1;
+        x_new = detail::hermite(x0, path_tangent(s.x, kc - 1), pb, -db, (pb - x0).norm(), a);
         v_new = (1.0 - a) * s.v[kc - 1] + a * v_entry;
       }
       const double theta = s.theta[source], omega = s.omega[source];
@@ -292,21 +304,6 @@ void Feeder::clamp_tip(const Vec3& tip, const Vec3& next) {
   tip_clamp_theta_ = body_.state.theta[0];
 }
 
-namespace {
-/// Vertex @p k's tangent of the path through @p x: inside, the mean of the unit edges on either
-/// side; at an end, the edge reflected about the next vertex's tangent. Both exact on a circular
-/// arc sampled evenly, O(ℓ²) off elsewhere, so that the cubic through them is O(ℓ³) from the curve.
-Vec3 path_tangent(std::span<const Vec3> x, int k) {
-  const int n = static_cast<int>(x.size());
-  auto edge = [&](int j) { return Vec3((x[j + 1] - x[j]).normalized()); };
-  auto inner = [&](int i) { return Vec3((edge(i - 1) + edge(i)).normalized()); };
-  if (n < 3) return edge(0);
-  if (k == 0) return Vec3(2.0 * edge(0).dot(inner(1)) * edge(0) - inner(1));
-  if (k == n - 1) return Vec3(2.0 * edge(n - 2).dot(inner(n - 2)) * edge(n - 2) - inner(n - 2));
-  return inner(k);
-}
-}  // namespace
-
 Vec3 Feeder::path_point(const WirePath& path, double sigma) const {
   const Vec3& pb = body_.model.base_position;
   const Vec3& db = body_.model.base_direction;
@@ -322,11 +319,7 @@ Vec3 Feeder::path_point(const WirePath& path, double sigma) const {
   const int j = std::clamp(static_cast<int>(std::upper_bound(u.begin(), u.end(), m) - u.begin()) - 1, 0, n - 2);
   const double chord = (x[j + 1] - x[j]).norm();
   const Vec3 t0 = tangent(j), t1 = tangent(j + 1);
-  auto cubic = [&](double a) {
-    const double a2 = a * a, a3 = a2 * a;
-    return Vec3((2.0 * a3 - 3.0 * a2 + 1.0) * x[j] + (a3 - 2.0 * a2 + a) * chord * t0 +
-                (3.0 * a2 - 2.0 * a3) * x[j + 1] + (a3 - a2) * chord * t1);
-  };
+  auto cubic = [&](double a) { return detail::hermite(x[j], t0, x[j + 1], t1, chord, a); };
   const double a = (m - u[j]) / (u[j + 1] - u[j]);
   if (a >= -1.0) return cubic(a);  // (past the tip: the first edge's cubic, up to one edge on)
   // Farther past the tip: straight on from there.

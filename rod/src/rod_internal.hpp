@@ -42,6 +42,14 @@ inline Eigen::Matrix<double, 6, 6> positive_part6(const Eigen::Matrix<double, 6,
 }
 
 /// The inserted length held between two segments and the wire's length.
+/// The cubic Hermite curve from @p x0 to @p x1 with unit tangents @p t0, @p t1 scaled by the
+/// @p chord, at parameter @p a (0 at x0, 1 at x1).
+inline Vec3 hermite(const Vec3& x0, const Vec3& t0, const Vec3& x1, const Vec3& t1, double chord, double a) {
+  const double a2 = a * a, a3 = a2 * a;
+  return (2.0 * a3 - 3.0 * a2 + 1.0) * x0 + (a3 - 2.0 * a2 + a) * chord * t0 + (3.0 * a2 - 2.0 * a3) * x1 +
+         (a3 - a2) * chord * t1;
+}
+
 inline double clamp_inserted(double L, const RodModel& m, bool& clamped) {
   const double lo = 2.0 * m.h, hi = m.length;
   clamped = L < lo || L > hi;

@@ -224,18 +224,13 @@ TEST(RodNewtonStart, AStepAfterASubdividedOneStartsFromTheInertialGuess) {
   // start is the inertial guess, which moves the hook with the wire, even though the last step
   // was shorter. (The feed predictor, which slides each vertex along the wire's own path, bends
   // the hook straight: each of those steps was subdivided again, about 240 iterations a step.)
-  WireSpec spec;
+  WireSpec spec = jwire();  // its 3 cm J tip (3 mm bend), damping
   spec.length = 0.16;
   spec.inserted_length = 0.1;
   spec.segment_length = 1e-3;
   spec.radius = 4.45e-4;
   spec.youngs_modulus = 200e9;
-  spec.density = 6450.0;
-  spec.tip.length = 0.03;
   spec.tip.youngs_modulus = 40e9;
-  spec.tip.shape = TipShape::J;
-  spec.tip.bend_radius = 0.003;
-  spec.damping = 1e-3;
   RodSimulator sim(spec);
   const double dt = 1.0 / 30.0;
   int worst_after = 0, reversal = 0;
