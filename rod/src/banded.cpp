@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "flowire/common/error.hpp"
-#include "kernel_clones.hpp"
+#include "flowire/common/kernel_clones.hpp"
 
 namespace flowire::rod {
 
@@ -195,7 +195,7 @@ __attribute__((always_inline)) inline void solve_band(const double* __restrict L
 
 }  // namespace
 
-FLOWIRE_ROD_KERNEL_CLONES
+FLOWIRE_KERNEL_CLONES
 bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
   const int n = a.size();
   const int b = a.bandwidth();
@@ -214,7 +214,7 @@ bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
   return factorize_band<0>(L, n, b, tiny, min_pivot, w, negative_, modified_, min_pivot_);
 }
 
-FLOWIRE_ROD_KERNEL_CLONES
+FLOWIRE_KERNEL_CLONES
 void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const {
   const int n = l_.size();
   const int b = l_.bandwidth();

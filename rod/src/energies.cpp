@@ -1,6 +1,6 @@
 #include "flowire/rod/energies.hpp"
 
-#include "kernel_clones.hpp"
+#include "flowire/common/kernel_clones.hpp"
 
 #include <cassert>
 #include <cmath>
@@ -304,7 +304,7 @@ struct S3 {
 ///   only 3×3 term, [r]× + δ I in (te,tf), is projected in closed form);
 /// - the (x0,x0) and (x2,x2) blocks are built as symmetric 3×3 matrices, and the 11×11
 ///   result is written once, both triangles, from the three position blocks Ee, Ef, Ff.
-FLOWIRE_ROD_KERNEL_CLONES
+FLOWIRE_KERNEL_CLONES
 double bend_twist_kernel(const Vec3& te_, const Vec3& tf_, double le, double lf, const Vec3& m1e_, const Vec3& m2e_,
                          const Vec3& m1f_, const Vec3& m2f_, double theta_e, double theta_f, double ref_twist,
                          const VertexParams& p, Vec11* gradient, Mat11* hessian, bool gauss_newton) {

@@ -7,7 +7,7 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
-#include "kernel_clones.hpp"
+#include "flowire/common/kernel_clones.hpp"
 #include "rod_internal.hpp"
 
 namespace flowire::rod {
@@ -123,7 +123,7 @@ void Feeder::lay_along(const std::function<Vec3(double)>& along) {
 }
 
 // The stepper's frame transport (rod_internal.hpp), beside the feeder's own transports of frames.
-FLOWIRE_ROD_KERNEL_CLONES
+FLOWIRE_KERNEL_CLONES
 void detail::transport_frames_to(const std::vector<Vec3>& x_new, const std::vector<EdgeFrame>& frame_from,
                                  const std::vector<double>& twist_from, std::vector<EdgeFrame>& frame_to,
                                  std::vector<double>& twist_to) {

@@ -7,7 +7,7 @@
 
 #include "flowire/common/diagnostics.hpp"
 #include "flowire/common/error.hpp"
-#include "kernel_clones.hpp"
+#include "flowire/common/kernel_clones.hpp"
 #include "rod_internal.hpp"
 
 namespace flowire::rod {

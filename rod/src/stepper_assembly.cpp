@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "flowire/common/error.hpp"
-#include "kernel_clones.hpp"
+#include "flowire/common/kernel_clones.hpp"
 #include "rod_internal.hpp"
 
 namespace flowire::rod {

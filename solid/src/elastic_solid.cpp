@@ -7,10 +7,13 @@
 
 #include <Eigen/CholmodSupport>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 #include "flowire/common/element.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/kernel_clones.hpp"
 
 namespace flowire::solid {
 namespace {
@@ -18,6 +21,49 @@ namespace {
 constexpr int kQuad = 4;   // quadrature points a tetrahedron
 constexpr int kGeom = 31;  // ∇N (10 × 3) and weight·det J per point
 using Grad = Eigen::Matrix<double, 10, 3>;
+
+// The forward solve on one supernode's tail: its columns off .. nscol − 1 (values column-major,
+// leading dimension nsrow, the diagonal block first) against @p nrhs right-hand sides gathered on
+// its rows off .. nsrow − 1, each contiguous (right-hand side r at x + r·m). Columns are taken
+// kBlock at a time: the block's triangle first, then the rows below updated by all its columns
+// at once, so that each right-hand side is swept once a block instead of once a column (the
+// block's columns stay in cache for the next right-hand side).
+FLOWIRE_KERNEL_CLONES
+void supernode_forward(const double* lx, int nsrow, int off, int nscol, int nrhs, double* x) {
+  constexpr int kBlock = 8;
+  const int m = nsrow - off, ncol = nscol - off;
+  const auto ld = static_cast<size_t>(nsrow);
+  const double* base = lx + static_cast<size_t>(off) * ld + off;  // row i, column j of the tail: base[j·ld + i]
+  for (int j0 = 0; j0 < ncol; j0 += kBlock) {
+    const int jb = std::min(kBlock, ncol - j0);
+    const double* __restrict c0 = base + static_cast<size_t>(j0) * ld;
+    for (int r = 0; r < nrhs; ++r) {
+      double* __restrict xr = x + static_cast<size_t>(r) * static_cast<size_t>(m);
+      for (int j = j0; j < j0 + jb; ++j) {  // the block's triangle
+        const double* col = base + static_cast<size_t>(j) * ld;
+        const double a = (xr[j] /= col[j]);
+        for (int i = j + 1; i < j0 + jb; ++i) xr[i] -= col[i] * a;
+      }
+      double a[kBlock] = {};
+      bool any = false;
+      for (int jj = 0; jj < jb; ++jj) any = ((a[jj] = xr[j0 + jj]) != 0.0) || any;
+      if (!any) continue;  // a load whose reach these columns are not on
+      if (jb == kBlock) {
+        for (int i = j0 + kBlock; i < m; ++i) {
+          double sum = 0.0;
+          for (int jj = 0; jj < kBlock; ++jj) sum += c0[static_cast<size_t>(jj) * ld + i] * a[jj];
+          xr[i] -= sum;
+        }
+      } else {  // the supernode's last, narrower block
+        for (int i = j0 + jb; i < m; ++i) {
+          double sum = 0.0;
+          for (int jj = 0; jj < jb; ++jj) sum += c0[static_cast<size_t>(jj) * ld + i] * a[jj];
+          xr[i] -= sum;
+        }
+      }
+    }
+  }
+}
 
 Mat3 displacement_gradient(const double* g, const std::array<int, 10>& tet, const Eigen::VectorXd& u) {
   Mat3 e = Mat3::Zero();
@@ -129,26 +175,19 @@ struct ElasticSolid::Factor {
     c.nmethods = 1;
     c.method[0].ordering = CHOLMOD_METIS;
   }
-  ~Factor() { forget_simplicial(); }
   Factor(const Factor&) = delete;
   Factor& operator=(const Factor&) = delete;
-  /// Drop the simplicial copy and the sparse solve's workspace (after a new factorization).
-  void forget_simplicial() {
-    cholmod_common& c = llt.cholmod();
-    if (simplicial) cholmod_free_factor(&simplicial, &c);
-    cholmod_free_sparse(&xset, &c);
-    cholmod_free_sparse(&bset, &c);
-  }
+  /// Drop the sparse solve's maps (after a new factorization).
+  void forget_maps() { col_super.clear(); }
   Llt llt;
   bool analysed = false;
-  // For half_solve: a simplicial LLᵀ copy of the supernodal factor (the supernodal one stays for
-  // full solves, whose BLAS it uses), the inverse permutation, the right-hand sides (3 a row,
-  // zero between calls), the patterns of the loads and of the solution.
-  cholmod_factor* simplicial = nullptr;
-  std::vector<int> iperm;
-  std::vector<char> marked;  ///< rows of the loads set in this call
-  std::vector<double> x;
-  cholmod_sparse *xset = nullptr, *bset = nullptr;
+  // For half_solve, made on first use after each factorization: the inverse permutation, each
+  // column's supernode, each supernode's parent in the supernodal elimination tree, the first
+  // column of each supernode a solve reaches (INT_MAX: none), the right-hand sides (3 ×
+  // kHalfSolveBatch a row, zero between calls) and one supernode's rows gathered (one contiguous
+  // run a right-hand side).
+  std::vector<int> iperm, col_super, parent, entry, touched, starts;
+  std::vector<double> x, gathered;
 };
 
 ElasticSolid::ElasticSolid(mesh::TetMesh mesh, NeoHookean law)
@@ -374,7 +413,7 @@ bool ElasticSolid::factorize_tangent(const Eigen::VectorXd& u) {
     factor_->llt.analyzePattern(h);
     factor_->analysed = true;
   }
-  factor_->forget_simplicial();
+  factor_->forget_maps();
   factor_->llt.factorize(h);
   return factor_->llt.info() == Eigen::Success;
 }
@@ -393,81 +432,109 @@ void ElasticSolid::tangent_solve(Eigen::MatrixXd& x) const {
 }
 
 void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>>> loads, HalfColumns& y) const {
-  if (!linearized_) throw_usage_error("wall: half_solve before linearize");
   if (loads.size() > 3) throw_usage_error("wall: half_solve takes at most three loads");
+  std::array<std::vector<std::pair<int, double>>, 3> three;
+  std::copy(loads.begin(), loads.end(), three.begin());
+  half_solve(three, std::span<HalfColumns>(&y, 1));
+}
+
+void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>>> loads,
+                              std::span<HalfColumns> y) const {
+  if (!linearized_) throw_usage_error("wall: half_solve before linearize");
+  if (y.size() > kHalfSolveBatch || loads.size() != 3 * y.size())
+    throw_usage_error(fmt::format("wall: half_solve takes three loads for each of at most {} results ({} for {})",
+                                  kHalfSolveBatch, loads.size(), y.size()));
   Factor& f = *factor_;
-  cholmod_common& c = f.llt.cholmod();
+  const cholmod_factor& l = *f.llt.factor();
+  if (!l.is_super || !l.is_ll) throw_numerical_error("wall: the tangent's factor is not a supernodal LLᵀ");
   const int n = num_dofs();
-  if (!f.simplicial) {
-    f.simplicial = cholmod_copy_factor(f.llt.factor(), &c);
-    // Supernodal LLᵀ to simplicial LLᵀ: the same numbers, laid out column by column (each
-    // column's diagonal first), as the loop below reads them.
-    if (!f.simplicial || !cholmod_change_factor(CHOLMOD_REAL, 1, 0, 1, 1, f.simplicial, &c) || !f.simplicial->is_ll ||
-        f.simplicial->is_super)
-      throw_numerical_error("wall: CHOLMOD could not copy the tangent's factor (out of memory?)");
-    const auto* perm = static_cast<const int*>(f.simplicial->Perm);
+  const auto nrhs = static_cast<int>(loads.size());
+  const auto stride = static_cast<size_t>(nrhs);         // x: the right-hand sides row by row
+  const auto* super = static_cast<const int*>(l.super);  // supernode s: columns super[s] .. super[s+1) − 1
+  const auto* pi = static_cast<const int*>(l.pi);        // its rows: ls[pi[s] .. pi[s+1]), the columns' first
+  const auto* px = static_cast<const int*>(l.px);        // its values: column-major from lx[px[s]]
+  const auto* ls = static_cast<const int*>(l.s);
+  const auto* lx = static_cast<const double*>(l.x);
+  const auto nsuper = static_cast<int>(l.nsuper);
+  if (f.col_super.empty()) {
+    const auto* perm = static_cast<const int*>(l.Perm);
     f.iperm.resize(static_cast<size_t>(n));
     for (int k = 0; k < n; ++k) f.iperm[static_cast<size_t>(perm ? perm[k] : k)] = k;
-    f.marked.assign(static_cast<size_t>(n), 0);
-    f.x.assign(3 * static_cast<size_t>(n), 0.0);
-    f.bset = cholmod_allocate_sparse(static_cast<size_t>(n), 1, static_cast<size_t>(n), 0, 1, 0, CHOLMOD_PATTERN, &c);
-    f.xset = cholmod_allocate_sparse(static_cast<size_t>(n), 1, static_cast<size_t>(n), 0, 1, 0, CHOLMOD_PATTERN, &c);
+    f.col_super.resize(static_cast<size_t>(n));
+    f.parent.resize(static_cast<size_t>(nsuper));
+    for (int s = 0; s < nsuper; ++s)
+      for (int k = super[s]; k < super[s + 1]; ++k) f.col_super[static_cast<size_t>(k)] = s;
+    // A supernode's parent holds its first row below the diagonal block.
+    for (int s = 0; s < nsuper; ++s) {
+      const int nscol = super[s + 1] - super[s];
+      f.parent[static_cast<size_t>(s)] =
+          pi[s + 1] - pi[s] > nscol ? f.col_super[static_cast<size_t>(ls[pi[s] + nscol])] : -1;
+    }
+    f.entry.assign(static_cast<size_t>(nsuper), std::numeric_limits<int>::max());
+    f.x.assign(3 * kHalfSolveBatch * static_cast<size_t>(n), 0.0);
   }
-  // The loads in the factor's numbering (x holds the three right-hand sides row by row), the
-  // rows they start from as a pattern.
-  auto* bp = static_cast<int*>(f.bset->p);
-  auto* bi = static_cast<int*>(f.bset->i);
-  int count = 0;
+  // The loads in the factor's numbering (x holds the right-hand sides row by row).
+  f.starts.clear();
   for (size_t col = 0; col < loads.size(); ++col)
     for (const auto& [dof, value] : loads[col]) {
       if (held_[static_cast<size_t>(dof)] || value == 0.0) continue;
       const int row = f.iperm[static_cast<size_t>(dof)];
-      if (!f.marked[static_cast<size_t>(row)]) {
-        f.marked[static_cast<size_t>(row)] = 1;
-        bi[count++] = row;
-      }
-      f.x[3 * static_cast<size_t>(row) + col] += value;
+      f.starts.push_back(row);
+      f.x[stride * static_cast<size_t>(row) + col] += value;
     }
-  bp[0] = 0;
-  bp[1] = count;
-  for (int p = 0; p < count; ++p) f.marked[static_cast<size_t>(bi[p])] = 0;
-  y.index.clear();
-  y.value.clear();
-  if (count == 0) return;
-  // The rows of L⁻¹b (the loads' rows and their ancestors in the elimination tree), in an order
-  // the forward solve can take them: CHOLMOD's. CHOLMOD's own sparse solve (cholmod_solve2 with
-  // Bset) takes one right-hand side a call; the three of a lumen node share their rows, so they
-  // are solved together here, column by column of the simplicial factor (2.4 times faster).
-  if (!cholmod_lsolve_pattern(f.bset, f.simplicial, f.xset, &c))
-    throw_numerical_error("wall: CHOLMOD could not find the pattern of a sparse solve (out of memory?)");
-  const auto* lp = static_cast<const int*>(f.simplicial->p);
-  const auto* li = static_cast<const int*>(f.simplicial->i);
-  const auto* lnz = static_cast<const int*>(f.simplicial->nz);
-  const auto* lx = static_cast<const double*>(f.simplicial->x);
-  const auto* xi = static_cast<const int*>(f.xset->i);
-  const int reach = static_cast<const int*>(f.xset->p)[1];
-  double* x = f.x.data();
-  for (int q = 0; q < reach; ++q) {
-    const int j = xi[q];
-    const int p0 = lp[j];
-    double* xj = x + 3 * static_cast<size_t>(j);
-    const double d = lx[p0];
-    const double a0 = xj[0] /= d, a1 = xj[1] /= d, a2 = xj[2] /= d;
-    for (int p = p0 + 1; p < p0 + lnz[j]; ++p) {
-      double* xr = x + 3 * static_cast<size_t>(li[p]);
-      const double l = lx[p];
-      xr[0] -= l * a0;
-      xr[1] -= l * a1;
-      xr[2] -= l * a2;
+  for (auto& yk : y) {
+    yk.index.clear();
+    yk.value.clear();
+  }
+  // The rows of L⁻¹b are the loads' rows and their ancestors in the elimination tree; in a
+  // supernode, column k's parent is k + 1, so a solve reaches the tail of each supernode on the
+  // paths from the loads' supernodes to the root, from the first column it enters by.
+  f.touched.clear();
+  for (int row : f.starts) {
+    int s = f.col_super[static_cast<size_t>(row)], col = row;
+    while (s >= 0) {
+      int& entry = f.entry[static_cast<size_t>(s)];
+      const bool seen = entry != std::numeric_limits<int>::max();
+      if (!seen) f.touched.push_back(s);
+      entry = std::min(entry, col);
+      if (seen) break;  // its ancestors are already on the list
+      const int nscol = super[s + 1] - super[s];
+      if (pi[s + 1] - pi[s] == nscol) break;
+      col = ls[pi[s] + nscol];
+      s = f.parent[static_cast<size_t>(s)];
     }
   }
-  y.index.assign(xi, xi + reach);
-  y.value.resize(3 * static_cast<size_t>(reach));
-  for (int q = 0; q < reach; ++q) {
-    double* xj = x + 3 * static_cast<size_t>(xi[q]);
-    for (int col = 0; col < 3; ++col) {
-      y.value[3 * static_cast<size_t>(q) + col] = xj[col];
-      xj[col] = 0.0;  // x back to zero for the next call
+  // Descendants before ancestors: supernodes are numbered in a postorder.
+  std::sort(f.touched.begin(), f.touched.end());
+  double* x = f.x.data();
+  for (int s : f.touched) {
+    const int k0 = super[s], nscol = super[s + 1] - k0, nsrow = pi[s + 1] - pi[s];
+    const int off = f.entry[static_cast<size_t>(s)] - k0;
+    f.entry[static_cast<size_t>(s)] = std::numeric_limits<int>::max();
+    const auto m = static_cast<size_t>(nsrow - off);
+    const int* rows = ls + pi[s] + off;
+    f.gathered.resize(static_cast<size_t>(nrhs) * m);
+    double* g = f.gathered.data();
+    for (size_t i = 0; i < m; ++i)
+      for (size_t r = 0; r < static_cast<size_t>(nrhs); ++r)
+        g[r * m + i] = x[stride * static_cast<size_t>(rows[i]) + r];
+    supernode_forward(lx + px[s], nsrow, off, nscol, nrhs, g);
+    // The tail's rows are final (returned, and x back to zero there); the rows below belong to
+    // ancestors, which take the updates.
+    const auto tail = static_cast<size_t>(nscol - off);
+    for (size_t i = 0; i < m; ++i) {
+      double* xr = x + stride * static_cast<size_t>(rows[i]);
+      if (i >= tail) {
+        for (size_t r = 0; r < static_cast<size_t>(nrhs); ++r) xr[r] = g[r * m + i];
+        continue;
+      }
+      for (size_t k = 0; k < y.size(); ++k) {
+        const double v0 = g[3 * k * m + i], v1 = g[(3 * k + 1) * m + i], v2 = g[(3 * k + 2) * m + i];
+        xr[3 * k] = xr[3 * k + 1] = xr[3 * k + 2] = 0.0;
+        if (v0 == 0.0 && v1 == 0.0 && v2 == 0.0) continue;  // not reached from these loads
+        y[k].index.push_back(rows[i]);
+        y[k].value.insert(y[k].value.end(), {v0, v1, v2});
+      }
     }
   }
 }

@@ -16,6 +16,11 @@
 #include "flowire/common/element.hpp"
 #include "flowire/common/error.hpp"
 
+// BLAS's symmetric rank-k update, C ← α Aᵀ A + β C on the lower triangle (Fortran interface).
+extern "C" void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
+                       const double* a, const int* lda, const double* beta, double* c, const int* ldc, size_t uplo_len,
+                       size_t trans_len);
+
 namespace flowire::solid {
 namespace {
 
@@ -244,17 +249,31 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
 
 void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   ++tick_;
-  std::array<std::vector<std::pair<int, double>>, 3> unit;
+  std::vector<int> fresh;
   for (const auto& p : points)
     for (const auto& [node, w] : p.weights) {
       last_use_[node] = tick_;
-      if (columns_.count(node)) continue;
-      for (int c = 0; c < 3; ++c) unit[static_cast<size_t>(c)] = {{3 * node + c, 1.0}};
-      NodeColumns& y = columns_[node];
-      solid_.half_solve(unit, y);
+      if (!columns_.count(node) && std::find(fresh.begin(), fresh.end(), node) == fresh.end()) fresh.push_back(node);
+    }
+  // The new nodes solved together, a batch at a time: their reaches end in the same top
+  // separators, read once a batch.
+  constexpr size_t batch = ElasticSolid::kHalfSolveBatch;
+  std::vector<std::vector<std::pair<int, double>>> unit;
+  std::vector<HalfColumns> solved;
+  for (size_t first = 0; first < fresh.size(); first += batch) {
+    const size_t count = std::min(batch, fresh.size() - first);
+    unit.assign(3 * count, {});
+    for (size_t k = 0; k < count; ++k)
+      for (int c = 0; c < 3; ++c) unit[3 * k + static_cast<size_t>(c)] = {{3 * fresh[first + k] + c, 1.0}};
+    solved.resize(count);
+    solid_.half_solve(unit, solved);
+    for (size_t k = 0; k < count; ++k) {
+      NodeColumns& y = columns_[fresh[first + k]];
+      y = std::move(solved[k]);
       kept_bytes_ += y.size() * (sizeof(int) + 3 * sizeof(double));
       ++solved_;
     }
+  }
   // Over the budget: drop the columns asked for longest ago (never those of this call; at least
   // a few hundred nodes are kept, a step's contacts).
   if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) return;
@@ -277,41 +296,47 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
 Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
   prefetch(points);
   // C = Zᵀ Z with column i of Z the force d_i spread over point i's nodes and forward-solved:
-  // z_i = Σ_b w_b Σ_c d_ic Y_bc, i.e. Z = Y M with Y the distinct nodes' columns gathered densely
-  // on the rows they reach (a few thousand) and M (3 nodes × points) the weights times the
-  // directions. Neighbouring points share most of their nodes: each node's columns are gathered once.
+  // z_i = Σ_b w_b Σ_c d_ic Y_bc, summed from each distinct node's columns (neighbouring points
+  // share most of their nodes) onto the rows they reach (a few thousand), then C by a symmetric
+  // rank update (BLAS).
   std::vector<int> rows, nodes;
-  std::unordered_map<int, int> node_col;
-  for (const auto& p : points)
-    for (const auto& [node, w] : p.weights)
-      if (node_col.emplace(node, static_cast<int>(nodes.size())).second) {
+  std::vector<std::vector<std::pair<Eigen::Index, Vec3>>> uses;  // by node: (point, w d)
+  std::unordered_map<int, size_t> node_at;
+  for (size_t i = 0; i < points.size(); ++i)
+    for (const auto& [node, w] : points[i].weights) {
+      const auto [it, fresh] = node_at.emplace(node, nodes.size());
+      if (fresh) {
         nodes.push_back(node);
+        uses.emplace_back();
         for (int row : column(node).index)
           if (slot_[static_cast<size_t>(row)] < 0) {
             slot_[static_cast<size_t>(row)] = static_cast<int>(rows.size());
             rows.push_back(row);
           }
       }
-  Eigen::MatrixXd y =
-      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), 3 * static_cast<Eigen::Index>(nodes.size()));
+      uses[it->second].emplace_back(static_cast<Eigen::Index>(i), w * directions[i]);
+    }
+  const auto nr = static_cast<Eigen::Index>(rows.size());
+  const auto np = static_cast<Eigen::Index>(points.size());
+  Eigen::MatrixXd z = Eigen::MatrixXd::Zero(nr, np);
+  std::vector<int> at;
   for (size_t b = 0; b < nodes.size(); ++b) {
     const NodeColumns& yb = column(nodes[b]);
-    for (size_t k = 0; k < yb.size(); ++k) {
-      const Eigen::Index r = slot_[static_cast<size_t>(yb.index[k])];
-      for (int c = 0; c < 3; ++c) y(r, 3 * static_cast<Eigen::Index>(b) + c) = yb.value[3 * k + static_cast<size_t>(c)];
+    at.resize(yb.size());
+    for (size_t k = 0; k < yb.size(); ++k) at[k] = slot_[static_cast<size_t>(yb.index[k])];
+    for (const auto& [i, u] : uses[b]) {
+      double* zi = z.col(i).data();
+      const double* v = yb.value.data();
+      for (size_t k = 0; k < yb.size(); ++k) zi[at[k]] += u[0] * v[3 * k] + u[1] * v[3 * k + 1] + u[2] * v[3 * k + 2];
     }
   }
   for (int row : rows) slot_[static_cast<size_t>(row)] = -1;
-  std::vector<Eigen::Triplet<double>> entries;
-  for (size_t i = 0; i < points.size(); ++i)
-    for (const auto& [node, w] : points[i].weights)
-      for (int c = 0; c < 3; ++c)
-        entries.emplace_back(3 * node_col.at(node) + c, static_cast<int>(i), w * directions[i][c]);
-  Eigen::SparseMatrix<double> m(y.cols(), static_cast<Eigen::Index>(points.size()));
-  m.setFromTriplets(entries.begin(), entries.end());
-  const Eigen::MatrixXd z = y * m;
-  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(z.cols(), z.cols());
-  c.selfadjointView<Eigen::Lower>().rankUpdate(z.transpose());
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(np, np);
+  if (np > 0 && nr > 0) {
+    const int n = static_cast<int>(np), k = static_cast<int>(nr);
+    const double one = 1.0, zero = 0.0;
+    dsyrk_("L", "T", &n, &k, &one, z.data(), &k, &zero, c.data(), &n, 1, 1);
+  }
   return c.selfadjointView<Eigen::Lower>();
 }
 

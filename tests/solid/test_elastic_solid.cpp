@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -287,6 +289,68 @@ TEST(ElasticSolid, HalfSolvesGiveTheTangentsInverseBetweenAnyTwoLoads) {
     const double bkb = (bb_free.transpose() * kb)(0, 0);
     EXPECT_NEAR(sparse_dot(both, 0, both, 0), bkb, 1e-10 * bkb);
   }
+}
+
+TEST(ElasticSolid, NodesSolvedTogetherGetTheColumnsEachGetsAlone) {
+  // A batch of nodes' unit loads (their reaches share the top separators) against each node
+  // solved alone: the same rows and values, and through them the same bᵀ K⁻¹ c against a full
+  // back-substitution; nodes spread over the tube and one of them held.
+  ElasticSolid s{mesh_tube_wall({kA, kB, 4e-3, 1e-3, false}), NeoHookean::from_young_poisson(1e6, 0.45)};
+  s.hold(s.mesh().group_named("end_0"));
+  s.support(s.mesh().group_named("outer"), 1e8);
+  s.linearize();
+  const int nodes = s.mesh().num_nodes();
+  std::vector<int> picked;
+  for (int k = 0; k < static_cast<int>(ElasticSolid::kHalfSolveBatch); ++k) picked.push_back((k * 7919 + 13) % nodes);
+  int held = -1;
+  for (int i = 0; i < s.num_dofs() && held < 0; ++i)
+    if (s.held(i)) held = i / 3;
+  ASSERT_GE(held, 0);
+  picked.back() = held;
+  std::vector<std::vector<std::pair<int, double>>> loads;
+  for (int node : picked)
+    for (int c = 0; c < 3; ++c) loads.push_back({{3 * node + c, 1.0}});
+  std::vector<HalfColumns> together(picked.size());
+  s.half_solve(loads, together);
+  auto as_map = [](const HalfColumns& y) {
+    std::map<int, std::array<double, 3>> m;
+    for (size_t k = 0; k < y.size(); ++k) m[y.index[k]] = {y.value[3 * k], y.value[3 * k + 1], y.value[3 * k + 2]};
+    return m;
+  };
+  for (size_t k = 0; k < picked.size(); ++k) {
+    HalfColumns alone;
+    const std::vector<std::vector<std::pair<int, double>>> three(loads.begin() + static_cast<long>(3 * k),
+                                                                 loads.begin() + static_cast<long>(3 * k + 3));
+    s.half_solve(three, alone);
+    const auto a = as_map(alone), t = as_map(together[k]);
+    ASSERT_EQ(a.size(), t.size()) << "node " << picked[k];
+    if (static_cast<int>(k) + 1 == static_cast<int>(picked.size())) {
+      EXPECT_EQ(t.size(), 0u) << "a held node has no column";
+      continue;
+    }
+    EXPECT_GT(t.size(), 0u);
+    for (const auto& [row, v] : a)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(t.at(row)[static_cast<size_t>(c)], v[static_cast<size_t>(c)],
+                    1e-12 * std::abs(v[static_cast<size_t>(c)]) + 1e-300);
+  }
+  // Between the first two nodes, against a full solve: (L⁻¹ P b)ᵀ (L⁻¹ P c) = bᵀ K⁻¹ c.
+  const auto y0 = as_map(together[0]), y1 = as_map(together[1]);
+  double dot = 0.0;
+  for (const auto& [row, v] : y0)
+    if (auto it = y1.find(row); it != y1.end()) dot += v[0] * it->second[2];
+  Eigen::MatrixXd kc = Eigen::MatrixXd::Zero(s.num_dofs(), 1);
+  kc(3 * picked[1] + 2, 0) = 1.0;
+  s.tangent_solve(kc);
+  const double expected = kc(3 * picked[0], 0);
+  EXPECT_NEAR(dot, expected, 1e-10 * std::abs(expected));
+  EXPECT_NE(expected, 0.0);
+  // More than a batch, or loads not three a result: refused.
+  std::vector<HalfColumns> too_many(ElasticSolid::kHalfSolveBatch + 1);
+  std::vector<std::vector<std::pair<int, double>>> many(3 * too_many.size());
+  EXPECT_THROW(s.half_solve(many, too_many), Error);
+  std::vector<HalfColumns> two(2);
+  EXPECT_THROW(s.half_solve(std::span(loads).first(5), two), Error);
 }
 
 TEST(ElasticSolid, RefusesBadGeometryAndLoads) {

@@ -126,9 +126,15 @@ class ElasticSolid {
   /// components dropped), where P K Pᵀ = L Lᵀ is the Cholesky factorization of the last
   /// `linearize`: then bᵀ K⁻¹ c = (L⁻¹ P b)ᵀ (L⁻¹ P c) for any two loads. Only the columns of L
   /// the loads reach (the ancestors of their rows in the elimination tree) are touched, a few per
-  /// cent of a full solve for a node of the lumen (on a simplicial copy of the factor, made on
-  /// first use after each factorization; the pattern is CHOLMOD's).
+  /// cent of a full solve for a node of the lumen, on CHOLMOD's supernodal factor (the tail of
+  /// each supernode on the loads' paths to the root, dense).
   void half_solve(std::span<const std::vector<std::pair<int, double>>> loads, HalfColumns& y) const;
+  /// @brief The same for up to kHalfSolveBatch results at once, three loads each (loads 3k, 3k + 1,
+  /// 3k + 2 give y[k]): the columns of L their reaches share are read once for all (the top
+  /// separators, which every lumen node's reach ends in). Each y[k] holds the rows its own loads
+  /// reach.
+  void half_solve(std::span<const std::vector<std::pair<int, double>>> loads, std::span<HalfColumns> y) const;
+  static constexpr size_t kHalfSolveBatch = 8;
   /// @brief Whether `tangent_solve` has a tangent (a `linearize`, or a `solve` that kept its own).
   [[nodiscard]] bool linearized() const { return linearized_; }
   [[nodiscard]] const Eigen::VectorXd& displacement() const { return u_; }
