@@ -298,7 +298,7 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
   // C = Zᵀ Z with column i of Z the force d_i spread over point i's nodes and forward-solved:
   // z_i = Σ_b w_b Σ_c d_ic Y_bc, summed from each distinct node's columns (neighbouring points
   // share most of their nodes) onto the rows they reach (a few thousand), then C by a symmetric
-  // rank update (BLAS).
+  // rank-k update (BLAS).
   std::vector<int> rows, nodes;
   std::vector<std::vector<std::pair<Eigen::Index, Vec3>>> uses;  // by node: (point, w d)
   std::unordered_map<int, size_t> node_at;
@@ -318,16 +318,26 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
     }
   const auto nr = static_cast<Eigen::Index>(rows.size());
   const auto np = static_cast<Eigen::Index>(points.size());
-  Eigen::MatrixXd z = Eigen::MatrixXd::Zero(nr, np);
-  std::vector<int> at;
+  // Zᵀ (points × rows, column-major: a row's points together), each node's columns read once
+  // for all the points that use the node.
+  Eigen::MatrixXd zt = Eigen::MatrixXd::Zero(np, nr);
+  std::vector<Eigen::Index> use_point;
+  std::vector<double> use_u;
   for (size_t b = 0; b < nodes.size(); ++b) {
     const NodeColumns& yb = column(nodes[b]);
-    at.resize(yb.size());
-    for (size_t k = 0; k < yb.size(); ++k) at[k] = slot_[static_cast<size_t>(yb.index[k])];
-    for (const auto& [i, u] : uses[b]) {
-      double* zi = z.col(i).data();
-      const double* v = yb.value.data();
-      for (size_t k = 0; k < yb.size(); ++k) zi[at[k]] += u[0] * v[3 * k] + u[1] * v[3 * k + 1] + u[2] * v[3 * k + 2];
+    const size_t nu = uses[b].size();
+    use_point.resize(nu);
+    use_u.resize(3 * nu);
+    for (size_t q = 0; q < nu; ++q) {
+      use_point[q] = uses[b][q].first;
+      for (int c = 0; c < 3; ++c) use_u[3 * q + static_cast<size_t>(c)] = uses[b][q].second[c];
+    }
+    const double* v = yb.value.data();
+    for (size_t k = 0; k < yb.size(); ++k) {
+      double* zr = zt.col(slot_[static_cast<size_t>(yb.index[k])]).data();
+      const double v0 = v[3 * k], v1 = v[3 * k + 1], v2 = v[3 * k + 2];
+      for (size_t q = 0; q < nu; ++q)
+        zr[use_point[q]] += use_u[3 * q] * v0 + use_u[3 * q + 1] * v1 + use_u[3 * q + 2] * v2;
     }
   }
   for (int row : rows) slot_[static_cast<size_t>(row)] = -1;
@@ -335,7 +345,7 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
   if (np > 0 && nr > 0) {
     const int n = static_cast<int>(np), k = static_cast<int>(nr);
     const double one = 1.0, zero = 0.0;
-    dsyrk_("L", "T", &n, &k, &one, z.data(), &k, &zero, c.data(), &n, 1, 1);
+    dsyrk_("L", "N", &n, &k, &one, zt.data(), &n, &zero, c.data(), &n, 1, 1);
   }
   return c.selfadjointView<Eigen::Lower>();
 }

@@ -17,8 +17,8 @@
 /// K⁻¹ is never formed. With the tangent's Cholesky factorization P K Pᵀ = L Lᵀ, a block is
 /// G_ab = Y_aᵀ Y_b where Y_a = L⁻¹ P E_a (E_a: node a's three unit loads) is sparse: a forward
 /// solve from a single node fills only the rows of L on its path to the elimination tree's root
-/// (ElasticSolid::half_solve; on the Feel++ arch's wall about 3% of the rows, a node's three in
-/// 0.86 ms against 39 ms for a full solve of three). Each lumen node's Y_a is solved the first time a point near it
+/// (ElasticSolid::half_solve; on the Feel++ arch's wall about 3% of the rows, against 39 ms for a full solve of
+/// three right-hand sides). Each lumen node's Y_a is solved the first time a point near it
 /// asks and kept: a wire that slides along the wall pays only for the nodes it reaches. Beyond a memory budget the
 /// columns used longest ago are dropped (and solved again should the wire come back). The compliance is symmetric by
 /// this construction; it is positive definite where the points are distinct.
