@@ -31,10 +31,16 @@ void WallContact::evaluate(const rod::RodView& rod, int free, Wall& wall, rod::F
   ensure_size(rod.vertex_count());
   wall.ensure_size(rod.vertex_count());
   energy_ = 0.0;
+  // Anchoring measures every free vertex's wall (Hessian included): this evaluation reads the
+  // candidates' from it, and the others are out of the contact's reach.
+  bool anchored_now = false;
   if (deformable_) {
-    if (anchors_stale_ || static_cast<int>(candidate_of_.size()) != rod.vertex_count())
+    if (anchors_stale_ || static_cast<int>(candidate_of_.size()) != rod.vertex_count()) {
       anchor_candidates(rod, free, wall);
-    for (auto& c : candidates_) c.penetration = -1.0;
+      anchored_now = true;
+    } else {
+      for (auto& c : candidates_) c.penetration = -1.0;
+    }
   }
   for (int i = 0; i < free; ++i) {
     const auto k = static_cast<size_t>(i);
@@ -64,6 +70,7 @@ void WallContact::evaluate(const rod::RodView& rod, int free, Wall& wall, rod::F
       }
     }
     ++stats.wall_queries;
+    if (anchored_now) continue;
     double d = 0.0;
     Vec3 n_wall;
     Mat3 H_wall;  // exact, blends included: Newton stays quadratic near junctions and bends
@@ -108,9 +115,10 @@ void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wal
     const double a = rod.vertex_radius(i, wire_radius_);
     double d = 0.0;
     Vec3 n;
-    if (!wall.at(i, rod.position(i), a, reach, &d, &n, nullptr) || d + a < -reach) continue;
+    Mat3 h;
+    if (!wall.at(i, rod.position(i), a, reach, &d, &n, &h) || d + a < -reach) continue;
     candidate_of_[static_cast<size_t>(i)] = static_cast<int>(candidates_.size());
-    candidates_.push_back({i});
+    candidates_.push_back({i, d + a, n, h, params_.stiffness * rod.cell_weight(i)});
     points.push_back(rod.position(i) - d * n);  // the rest wall's closest point
     normals.push_back(n);
     radii.push_back(a);  // the wire presses on the wall over its own width

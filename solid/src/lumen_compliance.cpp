@@ -15,6 +15,7 @@
 
 #include "flowire/common/element.hpp"
 #include "flowire/common/error.hpp"
+#include "flowire/common/kernel_clones.hpp"
 
 // BLAS's symmetric rank-k update, C ← α Aᵀ A + β C on the lower triangle (Fortran interface).
 extern "C" void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
@@ -23,6 +24,22 @@ extern "C" void dsyrk_(const char* uplo, const char* trans, const int* n, const 
 
 namespace flowire::solid {
 namespace {
+
+// Zᵀ(lo + q, slot_k) += u_q · v_k for a node's entries k (rows slot_k of Zᵀ's np-long columns, values
+// v_k, three a row) and the weights u_q (u0, u1, u2: three contiguous runs of @p width) of the
+// points lo .. lo + width − 1: the inner loop over the points is contiguous, in vector registers.
+FLOWIRE_KERNEL_CLONES
+void add_node_columns(const double* v, const int* slot, size_t count, const double* u, size_t width, double* zt,
+                      Eigen::Index np) {
+  const double* __restrict u0 = u;
+  const double* __restrict u1 = u + width;
+  const double* __restrict u2 = u + 2 * width;
+  for (size_t k = 0; k < count; ++k) {
+    double* __restrict z = zt + static_cast<size_t>(slot[k]) * static_cast<size_t>(np);
+    const double v0 = v[3 * k], v1 = v[3 * k + 1], v2 = v[3 * k + 2];
+    for (size_t q = 0; q < width; ++q) z[q] += u0[q] * v0 + u1[q] * v1 + u2[q] * v2;
+  }
+}
 
 /// Closest point of triangle (a, b, c) to p, with its barycentric coordinates (Ericson,
 /// Real-Time Collision Detection, §5.1.5).
@@ -144,8 +161,15 @@ LumenPoint LumenCompliance::locate(const Vec3& x) const {
           if (i < 0 || j < 0 || l < 0 || i >= dims_[0] || j >= dims_[1] || l >= dims_[2]) continue;
           visit(i, j, l);
         }
-    // Every face not yet visited lies farther than `ring` cells from x.
-    if (best.face >= 0 && std::sqrt(best_d2) <= ring * cell_) break;
+    // Every face not yet visited lies outside the block of cells visited (its bounding box meets
+    // none of them): farther from x than `ring` cells, and than x is from the block's sides.
+    if (best.face < 0) continue;
+    double inside = std::numeric_limits<double>::infinity();
+    for (int d = 0; d < 3; ++d) {
+      const double lo = grid_origin_[d] + (c[static_cast<size_t>(d)] - ring) * cell_;
+      inside = std::min({inside, x[d] - lo, lo + (2 * ring + 1) * cell_ - x[d]});
+    }
+    if (std::sqrt(best_d2) <= std::max(ring * cell_, inside)) break;
   }
   if (best.face >= 0) shape_weights(best);
   return best;
@@ -222,11 +246,31 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
     closer(centre.point, k, probe, d2);
     return probe.face < 0;
   });
+  // Each face's bounding sphere (centroid, farthest corner): a face whose sphere lies farther from
+  // a sample than the best face so far cannot be nearer, and is not projected on.
+  std::vector<std::pair<Vec3, double>> sphere;
+  sphere.reserve(near.size());
+  for (int k : near) {
+    const auto& fk = m.faces[static_cast<size_t>(faces_[static_cast<size_t>(k)])];
+    const Vec3& a = m.nodes[static_cast<size_t>(fk[0])];
+    const Vec3& b = m.nodes[static_cast<size_t>(fk[1])];
+    const Vec3& c = m.nodes[static_cast<size_t>(fk[2])];
+    const Vec3 g = (a + b + c) / 3.0;
+    sphere.emplace_back(g, std::sqrt(std::max({(a - g).squaredNorm(), (b - g).squaredNorm(), (c - g).squaredNorm()})));
+  }
   std::unordered_map<int, double> acc;
   LumenPoint sample;
+  size_t last = 0;  // the face nearest to the last sample: tried first
   auto add = [&](const Vec3& y, double w) {
     double best_d2 = std::numeric_limits<double>::infinity();
-    for (int k : near) closer(y, k, sample, best_d2);
+    if (!near.empty()) closer(y, near[last], sample, best_d2);
+    for (size_t q = 0; q < near.size(); ++q) {
+      const double reach = std::sqrt(best_d2) + sphere[q].second;
+      if (q == last || (sphere[q].first - y).squaredNorm() > reach * reach * (1.0 + 1e-12)) continue;
+      const int before = sample.face;
+      closer(y, near[q], sample, best_d2);
+      if (sample.face != before) last = q;
+    }
     shape_weights(sample);
     for (const auto& [node, wn] : sample.weights) acc[node] += w * wn;
   };
@@ -318,27 +362,23 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
     }
   const auto nr = static_cast<Eigen::Index>(rows.size());
   const auto np = static_cast<Eigen::Index>(points.size());
-  // Zᵀ (points × rows, column-major: a row's points together), each node's columns read once
-  // for all the points that use the node.
+  // Zᵀ (points × rows, column-major: a row's points together), each node's columns read once for
+  // the points that use it: neighbours along the wire, so a node's points are taken as the range
+  // between the first and the last of them (zero weights for those between that do not).
   Eigen::MatrixXd zt = Eigen::MatrixXd::Zero(np, nr);
-  std::vector<Eigen::Index> use_point;
-  std::vector<double> use_u;
+  std::vector<int> at;
+  std::vector<double> u;
   for (size_t b = 0; b < nodes.size(); ++b) {
     const NodeColumns& yb = column(nodes[b]);
-    const size_t nu = uses[b].size();
-    use_point.resize(nu);
-    use_u.resize(3 * nu);
-    for (size_t q = 0; q < nu; ++q) {
-      use_point[q] = uses[b][q].first;
-      for (int c = 0; c < 3; ++c) use_u[3 * q + static_cast<size_t>(c)] = uses[b][q].second[c];
-    }
-    const double* v = yb.value.data();
-    for (size_t k = 0; k < yb.size(); ++k) {
-      double* zr = zt.col(slot_[static_cast<size_t>(yb.index[k])]).data();
-      const double v0 = v[3 * k], v1 = v[3 * k + 1], v2 = v[3 * k + 2];
-      for (size_t q = 0; q < nu; ++q)
-        zr[use_point[q]] += use_u[3 * q] * v0 + use_u[3 * q + 1] * v1 + use_u[3 * q + 2] * v2;
-    }
+    Eigen::Index lo = np, hi = -1;
+    for (const auto& [i, w] : uses[b]) lo = std::min(lo, i), hi = std::max(hi, i);
+    const auto width = static_cast<size_t>(hi - lo + 1);
+    u.assign(3 * width, 0.0);
+    for (const auto& [i, w] : uses[b])
+      for (size_t c = 0; c < 3; ++c) u[c * width + static_cast<size_t>(i - lo)] += w[static_cast<Eigen::Index>(c)];
+    at.resize(yb.size());
+    for (size_t k = 0; k < yb.size(); ++k) at[k] = slot_[static_cast<size_t>(yb.index[k])];
+    add_node_columns(yb.value.data(), at.data(), yb.size(), u.data(), width, zt.data() + lo, np);
   }
   for (int row : rows) slot_[static_cast<size_t>(row)] = -1;
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(np, np);

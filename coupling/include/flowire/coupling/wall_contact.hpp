@@ -79,7 +79,8 @@ class WallContact {
  private:
   void ensure_size(int n);
   /// The step's candidate contacts with a deformable wall: free vertices within reach of the
-  /// rest wall at the step's first evaluation, anchored at their closest wall points.
+  /// rest wall at the step's first evaluation, anchored at their closest wall points, with the
+  /// wall measured there (distance, normal, Hessian) for that evaluation.
   void anchor_candidates(const rod::RodView& rod, int free, Wall& wall);
   /// The candidates' normal forces λ = k·max(0, δ − C λ) (active set), applied with their
   /// energy ½ λᵀ(K⁻¹ + C)λ, the band's part of their stiffness and the coupled rest.
