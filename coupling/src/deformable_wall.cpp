@@ -181,10 +181,16 @@ void DeformableWall::load(const void* body, std::span<const Vec3> points, std::s
   l.response = l.points.empty() ? Eigen::VectorXd() : lumen_->response(l.points, l.forces);
   load_.setZero();
   load_total_.setZero();
+  load_dofs_.clear();
   for (const auto& [who, b] : loads_) {
     if (!b->points.empty()) load_ += lumen_->nodal_forces(b->points, b->forces);
     load_total_ += b->total;
+    for (const auto& at : b->points)
+      for (const auto& [node, w] : at.weights)
+        for (int c = 0; c < 3; ++c) load_dofs_.push_back(3 * node + c);
   }
+  std::sort(load_dofs_.begin(), load_dofs_.end());
+  load_dofs_.erase(std::unique(load_dofs_.begin(), load_dofs_.end()), load_dofs_.end());
   field_current_ = false;
   seconds_ += since(t0);
   if (relinearize_ > 0.0 && moved_beyond_linearization()) relinearize();
@@ -195,10 +201,17 @@ bool DeformableWall::moved_beyond_linearization() {
   // Each loaded point's displacement now (the base state's, the pressure's, every body's
   // loads through the kept columns) against the state the wall was linearized about.
   bool beyond = false;
-  Eigen::VectorXd all_response;
+  Eigen::VectorXd summed;  // the bodies' responses summed where there are several
+  const Eigen::VectorXd* only = nullptr;
+  int loaded = 0;
   for (const auto& [who, l] : loads_)
-    if (!l->points.empty())
-      all_response = all_response.size() ? Eigen::VectorXd(all_response + l->response) : l->response;
+    if (!l->points.empty()) {
+      if (++loaded == 1)
+        only = &l->response;
+      else
+        summed = (loaded == 2 ? *only : summed) + l->response;
+    }
+  const Eigen::VectorXd& all_response = loaded > 1 ? summed : only ? *only : summed;
   for (const auto& [who, b] : loads_) {
     (void)who;
     for (const auto& at : b->points) {
@@ -223,7 +236,7 @@ bool DeformableWall::moved_beyond_linearization() {
 void DeformableWall::relinearize() {
   const auto t0 = Clock::now();
   Eigen::VectorXd f = load_;
-  if (pressure_load_.size() > 0) f += pressure_load_;
+  if (last_pressure_.size() > 0) f += pressure_basis_ * last_pressure_;
   // Newton on the neo-Hookean solid under the loads as they stand (dead loads), then its tangent
   // there. The loads are reached from the last linearization's, f_b + t (f − f_b): in one go from
   // the linear estimate about the last state; where that fails (an element turned inside out, a
@@ -317,8 +330,7 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
   }
   Eigen::VectorXd p(net_.num_nodes());
   for (int k = 0; k < net_.num_nodes(); ++k) p[k] = node_pressures_[static_cast<size_t>(k)] - reference;
-  last_pressure_ = p;
-  pressure_load_ = pressure_basis_ * p;
+  last_pressure_ = p;  // its nodal forces B p formed only where the whole field is solved
   solve_pressure_response();
   field_current_ = false;
   seconds_ += since(t0);
@@ -424,7 +436,7 @@ std::vector<double> DeformableWall::segment_widening() {
   if (widening_pressure_.size() == 0 && pressure_basis_.size() > 0)  // (the pressure may come later)
     widening_pressure_ = widening_.transpose() * pressure_basis_;
   Eigen::VectorXd u = base_widening_;
-  for (Eigen::Index i = 0; i < load_.size(); ++i)  // the bodies' forces: a few nonzero entries
+  for (int i : load_dofs_)  // the bodies' forces: a few nonzero entries
     if (load_[i] != 0.0) u += load_[i] * widening_.row(i).transpose();
   if (last_pressure_.size() > 0) u += widening_pressure_ * last_pressure_;
   // Segments without vertices of their own: their neighbours' mean (a few passes).
@@ -455,7 +467,7 @@ void DeformableWall::solve_field() const {
   if (field_current_) return;
   const auto t0 = Clock::now();
   Eigen::MatrixXd u = load_;
-  if (pressure_load_.size() > 0) u.col(0) += pressure_load_;
+  if (last_pressure_.size() > 0) u.col(0) += pressure_basis_ * last_pressure_;
   solid_->tangent_solve(u);
   displacement_ = base_ + u.col(0);
   max_displacement_ = 0.0;

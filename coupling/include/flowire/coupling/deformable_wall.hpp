@@ -139,7 +139,6 @@ class DeformableWall final : public CompliantWall {
     Eigen::VectorXd response;  ///< the forces' response (LumenCompliance::response) about the current tangent
   };
   std::vector<std::pair<const void*, std::unique_ptr<BodyLoad>>> loads_;
-  Eigen::VectorXd pressure_load_;      ///< (3 a node) the blood pressure's nodal forces
   Eigen::MatrixXd pressure_response_;  ///< (3 lumen nodes × network nodes) K⁻¹B on the lumen
   std::vector<int> lumen_nodes_;
   std::vector<double> node_pressures_;  ///< the last pressures set (to skip unchanged ones)
@@ -149,7 +148,8 @@ class DeformableWall final : public CompliantWall {
   std::vector<int> lumen_row_;                  ///< (nodes) a lumen node's place in pressure_response_, −1 elsewhere
   /// Solve the displacement field of the last load if not yet done.
   void solve_field() const;
-  Eigen::VectorXd load_;  ///< nodal forces of the last load
+  Eigen::VectorXd load_;        ///< nodal forces of the last load
+  std::vector<int> load_dofs_;  ///< the components load_ may be nonzero at (the loaded points' nodes)
   mutable Eigen::VectorXd displacement_;
   mutable bool field_current_ = true;
   Vec3 load_total_ = Vec3::Zero();
