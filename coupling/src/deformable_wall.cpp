@@ -290,6 +290,7 @@ void DeformableWall::relinearize() {
     if (!l->points.empty()) l->response = lumen_->response(l->points, l->forces);
   if (pressure_response_.size() > 0) {
     pressure_response_.resize(0, 0);
+    ++pressure_generation_;
     solve_pressure_response();
   }
   widening_.resize(0, 0);
@@ -331,6 +332,7 @@ void DeformableWall::set_blood_pressure(std::span<const double> node_pressures, 
   Eigen::VectorXd p(net_.num_nodes());
   for (int k = 0; k < net_.num_nodes(); ++k) p[k] = node_pressures_[static_cast<size_t>(k)] - reference;
   last_pressure_ = p;  // its nodal forces B p formed only where the whole field is solved
+  ++pressure_generation_;
   solve_pressure_response();
   field_current_ = false;
   seconds_ += since(t0);
@@ -365,7 +367,18 @@ Vec3 DeformableWall::pressure_displacement(const solid::LumenPoint& at) const {
   Vec3 u = Vec3::Zero();
   for (const auto& [node, w] : at.weights) {
     const int a = lumen_row_[static_cast<size_t>(node)];
-    if (a >= 0) u += w * (pressure_response_.middleRows<3>(3 * static_cast<Eigen::Index>(a)) * last_pressure_);
+    if (a < 0) continue;
+    // Each node's displacement computed once a pressure (points share their nodes).
+    if (pressure_node_u_.size() != lumen_nodes_.size()) {
+      pressure_node_u_.assign(lumen_nodes_.size(), Vec3::Zero());
+      pressure_node_stamp_.assign(lumen_nodes_.size(), 0);
+    }
+    const auto k = static_cast<size_t>(a);
+    if (pressure_node_stamp_[k] != pressure_generation_) {
+      pressure_node_u_[k] = pressure_response_.middleRows<3>(3 * static_cast<Eigen::Index>(a)) * last_pressure_;
+      pressure_node_stamp_[k] = pressure_generation_;
+    }
+    u += w * pressure_node_u_[k];
   }
   return u;
 }

@@ -18,6 +18,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <utility>
@@ -168,6 +169,11 @@ class DeformableWall final : public CompliantWall {
   Eigen::MatrixXd widening_pressure_;  ///< (segments × network nodes) (K⁻¹W)ᵀB
   std::vector<char> segment_has_nodes_;
   Eigen::VectorXd last_pressure_;  ///< the network-node pressures less the reference of the last set
+  /// (lumen nodes) each node's displacement under the last pressure, valid where its stamp is
+  /// the generation (counted up at each new pressure and each new response)
+  mutable std::vector<Vec3> pressure_node_u_;
+  mutable std::vector<std::uint64_t> pressure_node_stamp_;
+  std::uint64_t pressure_generation_ = 1;
   // The state the wall is linear about (rest until relinearize): u = base_ + K_b⁻¹ f with
   // base_ = u_b − K_b⁻¹ f_b (0 at rest), f the loads (bodies' and pressure's nodal forces).
   Eigen::VectorXd base_;                ///< (3 a node) u_b − K_b⁻¹ f_b
