@@ -307,8 +307,20 @@ class Loader {
   }
 
   void map(const YAML::Node& node, const std::string& decl, const std::string& concrete) {
-    if (!node.IsMap())
-      throw_input_error(where(node), fmt::format("'{}' must be a map of keys", concrete.empty() ? "scene" : concrete));
+    if (!node.IsMap()) {
+      const std::string at = overridden_.count(concrete) ? std::string("--set") : where(node);
+      if (decl.size() > 2 && decl.ends_with(".*")) {
+        // A section that takes named entries (a branch's own values): a misspelt key lands here.
+        const std::string parent = decl.substr(0, decl.size() - 2);
+        std::string allowed;
+        for (const auto* k : schema_.children(parent))
+          if (!k->path.ends_with(".*")) allowed += (allowed.empty() ? "" : ", ") + std::string(leaf_of(k->path));
+        throw_input_error(at, fmt::format("'{}' is not a key of {} (allowed: {}), and as a named entry it must be a "
+                                          "map of keys",
+                                          concrete, parent, allowed));
+      }
+      throw_input_error(at, fmt::format("'{}' must be a map of keys", concrete.empty() ? "scene" : concrete));
+    }
     for (const auto& kv : node) {
       if (!kv.first.IsScalar())  // "? [a, b]: 1": YAML allows lists and maps as keys; a scene does not
         throw_input_error(where(kv.first), "a key must be a name, not a list or a map");

@@ -112,6 +112,36 @@ TEST(Config, SetOverridesAndRejectsUnknownKeys) {
   EXPECT_NE(error_of("flow: {}\n", {"novalue"}).find("KEY=VALUE"), std::string::npos);
 }
 
+TEST(Config, AMisspeltKeyOfASectionWithNamedEntriesSaysSoAndWhere) {
+  // wall.<branch> takes a branch's own values as a map: a scalar under an unknown name is a
+  // misspelt key of wall (named as such, with the keys allowed) at its line, or at --set.
+  Schema s;
+  s.add({"wall", Type::Section, "", Dimension::None, "", {}, {}});
+  s.add({"wall.thickness", Type::Number, "", Dimension::Length, "", {}, {}});
+  s.add({"wall.youngs_modulus", Type::Number, "1 MPa", Dimension::Pressure, "", {}, {}});
+  s.add({"wall.*", Type::Section, "", Dimension::None, "", {}, {}});
+  s.add({"wall.*.youngs_modulus", Type::Number, "", Dimension::Pressure, "", {}, {}});
+  auto error = [&](const std::string& text, const std::vector<std::string>& sets) {
+    try {
+      load_config_text(text, "scene.yaml", s, sets);
+    } catch (const flowire::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string in_file = error("wall:\n  thicknes: 1 mm\n", {});
+  EXPECT_NE(in_file.find("scene.yaml:2"), std::string::npos) << in_file;
+  EXPECT_NE(in_file.find("'wall.thicknes' is not a key of wall (allowed: thickness, youngs_modulus)"),
+            std::string::npos)
+      << in_file;
+  const std::string set = error("wall: {}\n", {"wall.bogus=1"});
+  EXPECT_EQ(set.rfind("--set:", 0), 0u) << set;
+  EXPECT_NE(set.find("'wall.bogus' is not a key of wall"), std::string::npos) << set;
+  // A named entry given as a map is a branch's values.
+  const auto c = load_config_text("wall:\n  iliac:\n    youngs_modulus: 2 MPa\n", "scene.yaml", s, {});
+  EXPECT_DOUBLE_EQ(c.number("wall.iliac.youngs_modulus"), 2e6);
+}
+
 TEST(Config, SchemaMarkdownListsEveryKey) {
   const auto md = test_schema().markdown();
   EXPECT_NE(md.find("`flow.solver`"), std::string::npos);
