@@ -183,9 +183,9 @@ struct ElasticSolid::Factor {
   bool analysed = false;
   // For half_solve, made on first use after each factorization: the inverse permutation, each
   // column's supernode, each supernode's parent in the supernodal elimination tree, the first
-  // column of each supernode a solve reaches (INT_MAX: none), the right-hand sides (3 ×
-  // kHalfSolveBatch a row, zero between calls) and one supernode's rows gathered (one contiguous
-  // run a right-hand side).
+  // column of each supernode a solve reaches (INT_MAX: none), the right-hand sides (row by row, room
+  // for 3 × kHalfSolveBatch a row, zero between calls) and one supernode's rows gathered (one
+  // contiguous run a right-hand side).
   std::vector<int> iperm, col_super, parent, entry, touched, starts;
   std::vector<double> x, gathered;
 };

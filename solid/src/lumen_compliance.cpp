@@ -17,7 +17,8 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/kernel_clones.hpp"
 
-// BLAS's symmetric rank-k update, C ← α Aᵀ A + β C on the lower triangle (Fortran interface).
+// BLAS's symmetric rank-k update on the lower triangle of C: C ← α A Aᵀ + β C (trans "N", A n × k)
+// or α Aᵀ A + β C ("T", A k × n); the Fortran interface.
 extern "C" void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
                        const double* a, const int* lda, const double* beta, double* c, const int* ldc, size_t uplo_len,
                        size_t trans_len);
@@ -246,31 +247,11 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
     closer(centre.point, k, probe, d2);
     return probe.face < 0;
   });
-  // Each face's bounding sphere (centroid, farthest corner): a face whose sphere lies farther from
-  // a sample than the best face so far cannot be nearer, and is not projected on.
-  std::vector<std::pair<Vec3, double>> sphere;
-  sphere.reserve(near.size());
-  for (int k : near) {
-    const auto& fk = m.faces[static_cast<size_t>(faces_[static_cast<size_t>(k)])];
-    const Vec3& a = m.nodes[static_cast<size_t>(fk[0])];
-    const Vec3& b = m.nodes[static_cast<size_t>(fk[1])];
-    const Vec3& c = m.nodes[static_cast<size_t>(fk[2])];
-    const Vec3 g = (a + b + c) / 3.0;
-    sphere.emplace_back(g, std::sqrt(std::max({(a - g).squaredNorm(), (b - g).squaredNorm(), (c - g).squaredNorm()})));
-  }
   std::unordered_map<int, double> acc;
   LumenPoint sample;
-  size_t last = 0;  // the face nearest to the last sample: tried first
   auto add = [&](const Vec3& y, double w) {
     double best_d2 = std::numeric_limits<double>::infinity();
-    if (!near.empty()) closer(y, near[last], sample, best_d2);
-    for (size_t q = 0; q < near.size(); ++q) {
-      const double reach = std::sqrt(best_d2) + sphere[q].second;
-      if (q == last || (sphere[q].first - y).squaredNorm() > reach * reach * (1.0 + 1e-12)) continue;
-      const int before = sample.face;
-      closer(y, near[q], sample, best_d2);
-      if (sample.face != before) last = q;
-    }
+    for (int k : near) closer(y, k, sample, best_d2);
     shape_weights(sample);
     for (const auto& [node, wn] : sample.weights) acc[node] += w * wn;
   };
