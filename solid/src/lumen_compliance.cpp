@@ -325,48 +325,53 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
   // share most of their nodes) onto the rows they reach (a few thousand), then C by a symmetric
   // rank-k update (BLAS).
   std::vector<int> rows, nodes;
-  std::vector<std::vector<std::pair<Eigen::Index, Vec3>>> uses;  // by node: (point, w d)
-  std::unordered_map<int, size_t> node_at;
+  if (node_slot_.empty()) node_slot_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), -1);
+  uses_.clear();
   for (size_t i = 0; i < points.size(); ++i)
     for (const auto& [node, w] : points[i].weights) {
-      const auto [it, fresh] = node_at.emplace(node, nodes.size());
-      if (fresh) {
+      int& at = node_slot_[static_cast<size_t>(node)];
+      if (at < 0) {
+        at = static_cast<int>(nodes.size());
         nodes.push_back(node);
-        uses.emplace_back();
         for (int row : column(node).index)
           if (slot_[static_cast<size_t>(row)] < 0) {
             slot_[static_cast<size_t>(row)] = static_cast<int>(rows.size());
             rows.push_back(row);
           }
       }
-      uses[it->second].emplace_back(static_cast<Eigen::Index>(i), w * directions[i]);
+      uses_.push_back({at, static_cast<Eigen::Index>(i), w * directions[i]});
     }
+  for (int node : nodes) node_slot_[static_cast<size_t>(node)] = -1;
+  std::stable_sort(uses_.begin(), uses_.end(), [](const Use& x, const Use& y) { return x.node < y.node; });
   const auto nr = static_cast<Eigen::Index>(rows.size());
   const auto np = static_cast<Eigen::Index>(points.size());
   // Zᵀ (points × rows, column-major: a row's points together), each node's columns read once for
   // the points that use it: neighbours along the wire, so a node's points are taken as the range
   // between the first and the last of them (zero weights for those between that do not).
-  Eigen::MatrixXd zt = Eigen::MatrixXd::Zero(np, nr);
-  std::vector<int> at;
-  std::vector<double> u;
-  for (size_t b = 0; b < nodes.size(); ++b) {
-    const NodeColumns& yb = column(nodes[b]);
+  zt_.assign(static_cast<size_t>(np * nr), 0.0);
+  for (size_t first = 0; first < uses_.size();) {
+    size_t last = first;
+    while (last < uses_.size() && uses_[last].node == uses_[first].node) ++last;
+    const NodeColumns& yb = column(nodes[static_cast<size_t>(uses_[first].node)]);
     Eigen::Index lo = np, hi = -1;
-    for (const auto& [i, w] : uses[b]) lo = std::min(lo, i), hi = std::max(hi, i);
+    for (size_t q = first; q < last; ++q) lo = std::min(lo, uses_[q].point), hi = std::max(hi, uses_[q].point);
     const auto width = static_cast<size_t>(hi - lo + 1);
-    u.assign(3 * width, 0.0);
-    for (const auto& [i, w] : uses[b])
-      for (size_t c = 0; c < 3; ++c) u[c * width + static_cast<size_t>(i - lo)] += w[static_cast<Eigen::Index>(c)];
-    at.resize(yb.size());
-    for (size_t k = 0; k < yb.size(); ++k) at[k] = slot_[static_cast<size_t>(yb.index[k])];
-    add_node_columns(yb.value.data(), at.data(), yb.size(), u.data(), width, zt.data() + lo, np);
+    node_weights_.assign(3 * width, 0.0);
+    for (size_t q = first; q < last; ++q)
+      for (size_t c = 0; c < 3; ++c)
+        node_weights_[c * width + static_cast<size_t>(uses_[q].point - lo)] +=
+            uses_[q].weight[static_cast<Eigen::Index>(c)];
+    node_rows_.resize(yb.size());
+    for (size_t k = 0; k < yb.size(); ++k) node_rows_[k] = slot_[static_cast<size_t>(yb.index[k])];
+    add_node_columns(yb.value.data(), node_rows_.data(), yb.size(), node_weights_.data(), width, zt_.data() + lo, np);
+    first = last;
   }
   for (int row : rows) slot_[static_cast<size_t>(row)] = -1;
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(np, np);
   if (np > 0 && nr > 0) {
     const int n = static_cast<int>(np), k = static_cast<int>(nr);
     const double one = 1.0, zero = 0.0;
-    dsyrk_("L", "N", &n, &k, &one, zt.data(), &n, &zero, c.data(), &n, 1, 1);
+    dsyrk_("L", "N", &n, &k, &one, zt_.data(), &n, &zero, c.data(), &n, 1, 1);
   }
   return c.selfadjointView<Eigen::Lower>();
 }

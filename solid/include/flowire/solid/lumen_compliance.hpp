@@ -111,6 +111,18 @@ class LumenCompliance {
   size_t kept_bytes_ = 0;  ///< bytes the kept columns take
   int solved_ = 0, dropped_ = 0;
   std::vector<int> slot_;  ///< (unknowns) a row's place in compliance's gathered Z; −1 between uses
+  /// compliance's workspace, kept across calls (a step's Zᵀ is about a megabyte): each mesh node's
+  /// place among the call's distinct nodes (−1 between uses), the (point, w d) uses grouped by node,
+  /// Zᵀ and the rows' slots and weights of one node.
+  struct Use {
+    int node;  ///< place among the call's distinct nodes
+    Eigen::Index point;
+    Vec3 weight;  ///< w d
+  };
+  std::vector<int> node_slot_;
+  std::vector<Use> uses_;
+  std::vector<double> zt_, node_weights_;
+  std::vector<int> node_rows_;
   // A uniform grid of the lumen faces' bounding boxes for `locate`.
   Vec3 grid_origin_ = Vec3::Zero();
   double cell_ = 1.0;
