@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <unordered_map>
@@ -17,29 +18,56 @@
 #include "flowire/common/error.hpp"
 #include "flowire/common/kernel_clones.hpp"
 
-// BLAS's symmetric rank-k update on the lower triangle of C: C ← α A Aᵀ + β C (trans "N", A n × k)
-// or α Aᵀ A + β C ("T", A k × n); the Fortran interface.
-extern "C" void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
-                       const double* a, const int* lda, const double* beta, double* c, const int* ldc, size_t uplo_len,
-                       size_t trans_len);
-
 namespace flowire::solid {
 namespace {
 
-// Zᵀ(lo + q, slot_k) += u_q · v_k for a node's entries k (rows slot_k of Zᵀ's np-long columns, values
-// v_k, three a row) and the weights u_q (u0, u1, u2: three contiguous runs of @p width) of the
-// points lo .. lo + width − 1: the inner loop over the points is contiguous, in vector registers.
+// G += Σ_k a_k b_kᵀ over @p count rows, a_k and b_k the three values of row k of two nodes' columns
+// (three a row, contiguous; G column-major 3 × 3). Row k's b is loaded four wide (its three and the
+// next row's first, whose products are dropped): three multiply-adds of four a row instead of nine,
+// two rows at a time for independent sums.
 FLOWIRE_KERNEL_CLONES
-void add_node_columns(const double* v, const int* slot, size_t count, const double* u, size_t width, double* zt,
-                      Eigen::Index np) {
-  const double* __restrict u0 = u;
-  const double* __restrict u1 = u + width;
-  const double* __restrict u2 = u + 2 * width;
-  for (size_t k = 0; k < count; ++k) {
-    double* __restrict z = zt + static_cast<size_t>(slot[k]) * static_cast<size_t>(np);
-    const double v0 = v[3 * k], v1 = v[3 * k + 1], v2 = v[3 * k + 2];
-    for (size_t q = 0; q < width; ++q) z[q] += u0[q] * v0 + u1[q] * v1 + u2[q] * v2;
+void add_row_products(const double* __restrict a, const double* __restrict b, size_t count, double* __restrict g) {
+  using V4 = double __attribute__((vector_size(32)));
+  V4 s0{}, s1{}, s2{}, t0{}, t1{}, t2{};
+  size_t k = 0;
+  for (; k + 2 < count; k += 2) {  // row k + 1's four-wide load reads row k + 2's first value
+    V4 b0, b1;
+    std::memcpy(&b0, b + 3 * k, sizeof b0);
+    std::memcpy(&b1, b + 3 * k + 3, sizeof b1);
+    s0 += a[3 * k] * b0, s1 += a[3 * k + 1] * b0, s2 += a[3 * k + 2] * b0;
+    t0 += a[3 * k + 3] * b1, t1 += a[3 * k + 4] * b1, t2 += a[3 * k + 5] * b1;
   }
+  s0 += t0, s1 += t1, s2 += t2;
+  for (int c = 0; c < 3; ++c) g[3 * c] += s0[c], g[3 * c + 1] += s1[c], g[3 * c + 2] += s2[c];
+  for (; k < count; ++k)
+    for (size_t r = 0; r < 3; ++r)
+      for (size_t c = 0; c < 3; ++c) g[3 * c + r] += a[3 * k + r] * b[3 * k + c];
+}
+
+// G_ab = Y_aᵀ Y_b over the rows both columns hold: both are ascending, and two lumen nodes' reaches
+// share the path from where they meet in the elimination tree to its root, so after the jumps past
+// each one's own rows the shared rows come in long equal runs, each a dense product.
+Mat3 column_block(const HalfColumns& a, const HalfColumns& b) {
+  Mat3 g = Mat3::Zero();
+  const int* ia = a.index.data();
+  const int* ib = b.index.data();
+  const int* const ea = ia + a.size();
+  const int* const eb = ib + b.size();
+  while (ia < ea && ib < eb) {
+    if (*ia < *ib) {
+      ia = std::lower_bound(ia, ea, *ib);
+    } else if (*ib < *ia) {
+      ib = std::lower_bound(ib, eb, *ia);
+    } else {
+      const auto run = std::mismatch(ia, ea, ib, eb);
+      const auto count = static_cast<size_t>(run.first - ia);
+      add_row_products(a.value.data() + 3 * (ia - a.index.data()), b.value.data() + 3 * (ib - b.index.data()), count,
+                       g.data());
+      ia = run.first;
+      ib = run.second;
+    }
+  }
+  return g;
 }
 
 /// Closest point of triangle (a, b, c) to p, with its barycentric coordinates (Ericson,
@@ -107,7 +135,6 @@ LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen, double bu
   if (faces_.empty())
     throw_usage_error(fmt::format("wall: the lumen group '{}' has no face", m.groups[static_cast<size_t>(lumen)].name));
   budget_ = budget;
-  slot_.assign(static_cast<size_t>(solid.num_dofs()), -1);
   cell_ = 2.0 * edge / static_cast<double>(faces_.size());
   const Vec3 extent = hi - lo;
   // No more than about 2 million cells.
@@ -320,60 +347,68 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
 
 Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
   prefetch(points);
-  // C = Zᵀ Z with column i of Z the force d_i spread over point i's nodes and forward-solved:
-  // z_i = Σ_b w_b Σ_c d_ic Y_bc, summed from each distinct node's columns (neighbouring points
-  // share most of their nodes) onto the rows they reach (a few thousand), then C by a symmetric
-  // rank-k update (BLAS).
-  std::vector<int> rows, nodes;
+  // C_ij = Σ_a Σ_b w_ia w_jb d_iᵀ G_ab d_j over the points' distinct nodes, G_ab = Y_aᵀ Y_b: the blocks
+  // among the last call's nodes are kept, so a wire that slides on pays for the pairs of the few
+  // nodes it reaches anew (neighbouring points share most of their nodes).
   if (node_slot_.empty()) node_slot_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), -1);
-  uses_.clear();
-  for (size_t i = 0; i < points.size(); ++i)
-    for (const auto& [node, w] : points[i].weights) {
+  if (block_slot_.empty()) block_slot_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), -1);
+  std::vector<int> nodes;
+  for (const auto& p : points)
+    for (const auto& [node, w] : p.weights) {
+      (void)w;
       int& at = node_slot_[static_cast<size_t>(node)];
       if (at < 0) {
         at = static_cast<int>(nodes.size());
         nodes.push_back(node);
-        for (int row : column(node).index)
-          if (slot_[static_cast<size_t>(row)] < 0) {
-            slot_[static_cast<size_t>(row)] = static_cast<int>(rows.size());
-            rows.push_back(row);
-          }
       }
-      uses_.push_back({at, static_cast<Eigen::Index>(i), w * directions[i]});
     }
-  for (int node : nodes) node_slot_[static_cast<size_t>(node)] = -1;
-  std::stable_sort(uses_.begin(), uses_.end(), [](const Use& x, const Use& y) { return x.node < y.node; });
-  const auto nr = static_cast<Eigen::Index>(rows.size());
+  const auto nn = static_cast<Eigen::Index>(nodes.size());
+  Eigen::MatrixXd g(3 * nn, 3 * nn);
+  std::vector<Eigen::Index> fresh;  // the nodes whose blocks were not kept
+  for (Eigen::Index q = 0; q < nn; ++q) {
+    const int bq = block_slot_[static_cast<size_t>(nodes[static_cast<size_t>(q)])];
+    if (bq < 0) {
+      fresh.push_back(q);
+      continue;
+    }
+    for (Eigen::Index p = 0; p <= q; ++p) {
+      const int bp = block_slot_[static_cast<size_t>(nodes[static_cast<size_t>(p)])];
+      if (bp < 0) continue;
+      g.block<3, 3>(3 * p, 3 * q) = blocks_.block<3, 3>(3 * bp, 3 * bq);
+      g.block<3, 3>(3 * q, 3 * p) = blocks_.block<3, 3>(3 * bq, 3 * bp);
+    }
+  }
+  // The new blocks, each node's column read once against the few fresh nodes' (which stay in cache).
+  for (Eigen::Index q = 0; q < nn; ++q) {
+    const bool q_fresh = block_slot_[static_cast<size_t>(nodes[static_cast<size_t>(q)])] < 0;
+    const NodeColumns& yq = column(nodes[static_cast<size_t>(q)]);
+    for (Eigen::Index p : fresh) {
+      if (q_fresh && p > q) break;  // (a pair of fresh nodes once)
+      const Mat3 gpq = column_block(column(nodes[static_cast<size_t>(p)]), yq);
+      ++block_products_;
+      g.block<3, 3>(3 * p, 3 * q) = gpq;
+      g.block<3, 3>(3 * q, 3 * p) = gpq.transpose();
+    }
+  }
+  for (int node : block_nodes_) block_slot_[static_cast<size_t>(node)] = -1;
+  block_nodes_ = nodes;
+  for (size_t k = 0; k < nodes.size(); ++k) block_slot_[static_cast<size_t>(nodes[k])] = static_cast<int>(k);
+  blocks_ = std::move(g);
+  // H = G W (column j: Σ_b w_jb G_·b d_j), then C = Wᵀ H.
   const auto np = static_cast<Eigen::Index>(points.size());
-  // Zᵀ (points × rows, column-major: a row's points together), each node's columns read once for
-  // the points that use it: neighbours along the wire, so a node's points are taken as the range
-  // between the first and the last of them (zero weights for those between that do not).
-  zt_.assign(static_cast<size_t>(np * nr), 0.0);
-  for (size_t first = 0; first < uses_.size();) {
-    size_t last = first;
-    while (last < uses_.size() && uses_[last].node == uses_[first].node) ++last;
-    const NodeColumns& yb = column(nodes[static_cast<size_t>(uses_[first].node)]);
-    Eigen::Index lo = np, hi = -1;
-    for (size_t q = first; q < last; ++q) lo = std::min(lo, uses_[q].point), hi = std::max(hi, uses_[q].point);
-    const auto width = static_cast<size_t>(hi - lo + 1);
-    node_weights_.assign(3 * width, 0.0);
-    for (size_t q = first; q < last; ++q)
-      for (size_t c = 0; c < 3; ++c)
-        node_weights_[c * width + static_cast<size_t>(uses_[q].point - lo)] +=
-            uses_[q].weight[static_cast<Eigen::Index>(c)];
-    node_rows_.resize(yb.size());
-    for (size_t k = 0; k < yb.size(); ++k) node_rows_[k] = slot_[static_cast<size_t>(yb.index[k])];
-    add_node_columns(yb.value.data(), node_rows_.data(), yb.size(), node_weights_.data(), width, zt_.data() + lo, np);
-    first = last;
-  }
-  for (int row : rows) slot_[static_cast<size_t>(row)] = -1;
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(3 * nn, np);
+  for (Eigen::Index j = 0; j < np; ++j)
+    for (const auto& [node, w] : points[static_cast<size_t>(j)].weights)
+      h.col(j).noalias() +=
+          blocks_.middleCols<3>(3 * node_slot_[static_cast<size_t>(node)]) * (w * directions[static_cast<size_t>(j)]);
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(np, np);
-  if (np > 0 && nr > 0) {
-    const int n = static_cast<int>(np), k = static_cast<int>(nr);
-    const double one = 1.0, zero = 0.0;
-    dsyrk_("L", "N", &n, &k, &one, zt_.data(), &n, &zero, c.data(), &n, 1, 1);
-  }
-  return c.selfadjointView<Eigen::Lower>();
+  for (Eigen::Index i = 0; i < np; ++i)
+    for (const auto& [node, w] : points[static_cast<size_t>(i)].weights)
+      c.row(i).noalias() += (w * directions[static_cast<size_t>(i)]).transpose() *
+                            h.middleRows<3>(3 * node_slot_[static_cast<size_t>(node)]);
+  for (int node : nodes) node_slot_[static_cast<size_t>(node)] = -1;
+  // (symmetric to round-off: made exactly so)
+  return 0.5 * (c + c.transpose());
 }
 
 Eigen::VectorXd LumenCompliance::response(std::span<const LumenPoint> points, std::span<const Vec3> forces) {

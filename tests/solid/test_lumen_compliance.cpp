@@ -179,5 +179,51 @@ TEST(LumenCompliance, ColumnsDroppedForTheBudgetAreSolvedAgainAndGiveTheSameComp
   EXPECT_EQ(kept.dropped_nodes(), 0);
 }
 
+TEST(LumenCompliance, BlocksKeptFromTheLastCallGiveTheComplianceAFreshObjectGives) {
+  // A wire sliding along the wall: each call's footprints a step further on. The node blocks kept
+  // from the call before give the compliance that an object asked for the first time gives, and
+  // only the blocks of nodes new to the call are formed; after a clear (a new tangent) all are.
+  ElasticSolid s = supported_tube();
+  s.linearize();
+  LumenCompliance sliding(s, s.mesh().group_named("lumen"));
+  auto footprints = [&](LumenCompliance& c, double z0) {
+    std::vector<LumenPoint> p;
+    for (int k = 0; k < 8; ++k) {
+      const double phi = 0.3 + 0.05 * k, z = z0 + 0.25e-3 * k;
+      p.push_back(c.locate_patch(Vec3((kA - 0.05e-3) * std::cos(phi), (kA - 0.05e-3) * std::sin(phi), z), 0.445e-3));
+    }
+    return p;
+  };
+  auto directions = [](const std::vector<LumenPoint>& p) {
+    std::vector<Vec3> d;
+    for (const auto& q : p) d.push_back(-q.normal);
+    return d;
+  };
+  std::uint64_t fresh_products = 0, kept_products = 0;
+  for (int step = 0; step < 6; ++step) {
+    const double z0 = 3e-3 + 0.4e-3 * step;
+    const auto p = footprints(sliding, z0);
+    const std::uint64_t before = sliding.block_products();
+    const Eigen::MatrixXd kept = sliding.compliance(p, directions(p));
+    LumenCompliance fresh(s, s.mesh().group_named("lumen"));
+    const auto q = footprints(fresh, z0);
+    const Eigen::MatrixXd first = fresh.compliance(q, directions(q));
+    EXPECT_LT((kept - first).cwiseAbs().maxCoeff(), 1e-12 * first.cwiseAbs().maxCoeff()) << "step " << step;
+    EXPECT_LT((kept - kept.transpose()).cwiseAbs().maxCoeff(), 1e-15 * first.cwiseAbs().maxCoeff());
+    if (step > 0) kept_products += sliding.block_products() - before, fresh_products += fresh.block_products();
+  }
+  EXPECT_LT(kept_products, fresh_products / 2) << "the blocks of the nodes the footprints kept were formed again";
+  // The same footprints after a new tangent: every block formed again, none from before.
+  const auto p = footprints(sliding, 3e-3);
+  (void)sliding.compliance(p, directions(p));
+  const std::uint64_t before = sliding.block_products();
+  sliding.clear();
+  (void)sliding.compliance(p, directions(p));
+  LumenCompliance fresh(s, s.mesh().group_named("lumen"));
+  const auto q = footprints(fresh, 3e-3);
+  (void)fresh.compliance(q, directions(q));
+  EXPECT_EQ(sliding.block_products() - before, fresh.block_products());
+}
+
 }  // namespace
 }  // namespace flowire::solid

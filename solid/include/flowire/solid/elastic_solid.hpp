@@ -49,7 +49,7 @@ struct SolveReport {
 /// @brief Up to three sparse vectors sharing one pattern, in the numbering of the tangent's factor:
 /// what `half_solve` returns.
 struct HalfColumns {
-  std::vector<int> index;     ///< rows of L (unsorted)
+  std::vector<int> index;     ///< rows of L, ascending
   std::vector<double> value;  ///< 3 a row: column c of row index[k] at 3k + c
   [[nodiscard]] size_t size() const { return index.size(); }
 };

@@ -21,7 +21,9 @@
 /// three right-hand sides). Each lumen node's Y_a is solved the first time a point near it
 /// asks and kept: a wire that slides along the wall pays only for the nodes it reaches. Beyond a memory budget the
 /// columns used longest ago are dropped (and solved again should the wire come back). The compliance is symmetric by
-/// this construction; it is positive definite where the points are distinct.
+/// this construction; it is positive definite where the points are distinct. The blocks G_ab among
+/// one call's nodes are kept for the next call: a wire that slides along the wall reaches a few new
+/// nodes a step, and only their blocks are formed.
 #include <Eigen/Dense>
 
 #include <array>
@@ -92,7 +94,12 @@ class LumenCompliance {
     columns_.clear();
     last_use_.clear();
     kept_bytes_ = 0;
+    for (int node : block_nodes_) block_slot_[static_cast<size_t>(node)] = -1;
+    block_nodes_.clear();
+    blocks_.resize(0, 0);
   }
+  /// @brief The 3 × 3 blocks G_ab = Y_aᵀ Y_b that `compliance` formed (not kept from its last call).
+  [[nodiscard]] std::uint64_t block_products() const { return block_products_; }
 
  private:
   /// Node @p node's Y (L⁻¹ P times its three unit loads), solved by prefetch.
@@ -110,19 +117,11 @@ class LumenCompliance {
   double budget_ = 0.0;    ///< bytes
   size_t kept_bytes_ = 0;  ///< bytes the kept columns take
   int solved_ = 0, dropped_ = 0;
-  std::vector<int> slot_;  ///< (unknowns) a row's place in compliance's gathered Z; −1 between uses
-  /// compliance's workspace, kept across calls (a step's Zᵀ is about a megabyte): each mesh node's
-  /// place among the call's distinct nodes (−1 between uses), the (point, w d) uses grouped by node,
-  /// Zᵀ and the rows' slots and weights of one node.
-  struct Use {
-    int node;  ///< place among the call's distinct nodes
-    Eigen::Index point;
-    Vec3 weight;  ///< w d
-  };
-  std::vector<int> node_slot_;
-  std::vector<Use> uses_;
-  std::vector<double> zt_, node_weights_;
-  std::vector<int> node_rows_;
+  /// compliance's blocks G_ab = Y_aᵀ Y_b among the nodes of its last call (in their order), kept
+  /// for the next; each mesh node's place among them (−1: none) and, during a call, among its own.
+  std::vector<int> block_nodes_, block_slot_, node_slot_;
+  Eigen::MatrixXd blocks_;
+  std::uint64_t block_products_ = 0;
   // A uniform grid of the lumen faces' bounding boxes for `locate`.
   Vec3 grid_origin_ = Vec3::Zero();
   double cell_ = 1.0;
