@@ -152,7 +152,7 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
     Eigen::VectorXd other_response;  // the other bodies' loads
     for (const auto& [who, l] : loads_)
       if (who != body && !l->points.empty())
-        other_response = other_response.size() ? Eigen::VectorXd(other_response + l->response) : l->response;
+        other_response = other_response.size() ? Eigen::VectorXd(other_response + response(*l)) : response(*l);
     a.offsets = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(at.size()));
     for (size_t j = 0; j < at.size(); ++j) {
       Vec3 u = pressed ? pressure_displacement(at[j]) : Vec3::Zero();
@@ -178,7 +178,7 @@ void DeformableWall::load(const void* body, std::span<const Vec3> points, std::s
     l.points.push_back(lumen_->locate_patch(points[j], j < radii.size() ? radii[j] : 0.0));
     l.total += forces[j];
   }
-  l.response = l.points.empty() ? Eigen::VectorXd() : lumen_->response(l.points, l.forces);
+  l.response.resize(0);  // formed when another body's anchoring asks for it
   load_.setZero();
   load_total_.setZero();
   load_dofs_.clear();
@@ -196,38 +196,36 @@ void DeformableWall::load(const void* body, std::span<const Vec3> points, std::s
   if (relinearize_ > 0.0 && moved_beyond_linearization()) relinearize();
 }
 
+const Eigen::VectorXd& DeformableWall::response(BodyLoad& l) {
+  if (l.response.size() == 0 && !l.points.empty()) l.response = lumen_->response(l.points, l.forces);
+  return l.response;
+}
+
 bool DeformableWall::moved_beyond_linearization() {
   const auto t0 = Clock::now();
   // Each loaded point's displacement now (the base state's, the pressure's, every body's
-  // loads through the kept columns) against the state the wall was linearized about.
-  bool beyond = false;
-  Eigen::VectorXd summed;  // the bodies' responses summed where there are several
-  const Eigen::VectorXd* only = nullptr;
-  int loaded = 0;
-  for (const auto& [who, l] : loads_)
-    if (!l->points.empty()) {
-      if (++loaded == 1)
-        only = &l->response;
-      else
-        summed = (loaded == 2 ? *only : summed) + l->response;
-    }
-  const Eigen::VectorXd& all_response = loaded > 1 ? summed : only ? *only : summed;
-  for (const auto& [who, b] : loads_) {
+  // loads through the kept node blocks) against the state the wall was linearized about.
+  std::vector<solid::LumenPoint> points;
+  std::vector<Vec3> forces;
+  for (const auto& [who, l] : loads_) {
     (void)who;
-    for (const auto& at : b->points) {
-      Vec3 u = lumen_->interpolate(at, base_);
-      if (pressure_response_.size() > 0 && last_pressure_.size() > 0) u += pressure_displacement(at);
-      if (all_response.size()) u += lumen_->displacement(at, all_response);
-      // (the thickness at the face's vertices, weighted by their shape functions' magnitudes: a
-      // quadratic face's vertex weights are negative near its middle)
-      double t = 0.0, w_sum = 0.0;
-      for (const auto& [node, w] : at.weights)
-        if (node_thickness_[static_cast<size_t>(node)] > 0.0)
-          t += std::abs(w) * node_thickness_[static_cast<size_t>(node)], w_sum += std::abs(w);
-      if (!(w_sum > 0.0)) continue;
-      if ((u - lumen_->interpolate(at, base_u_)).norm() > relinearize_ * t / w_sum) beyond = true;
-    }
-    if (beyond) break;
+    points.insert(points.end(), l->points.begin(), l->points.end());
+    forces.insert(forces.end(), l->forces.begin(), l->forces.end());
+  }
+  const std::vector<Vec3> moved = lumen_->displacements(points, forces);
+  bool beyond = false;
+  for (size_t j = 0; j < points.size() && !beyond; ++j) {
+    const solid::LumenPoint& at = points[j];
+    Vec3 u = lumen_->interpolate(at, base_) + moved[j];
+    if (pressure_response_.size() > 0 && last_pressure_.size() > 0) u += pressure_displacement(at);
+    // (the thickness at the face's vertices, weighted by their shape functions' magnitudes: a
+    // quadratic face's vertex weights are negative near its middle)
+    double t = 0.0, w_sum = 0.0;
+    for (const auto& [node, w] : at.weights)
+      if (node_thickness_[static_cast<size_t>(node)] > 0.0)
+        t += std::abs(w) * node_thickness_[static_cast<size_t>(node)], w_sum += std::abs(w);
+    if (!(w_sum > 0.0)) continue;
+    if ((u - lumen_->interpolate(at, base_u_)).norm() > relinearize_ * t / w_sum) beyond = true;
   }
   seconds_ += since(t0);
   return beyond;
@@ -285,9 +283,8 @@ void DeformableWall::relinearize() {
   x = f;
   solid_->tangent_solve(x);
   base_ = base_u_ - x.col(0);
-  lumen_->clear();  // the columns of the last tangent
-  for (auto& [who, l] : loads_)
-    if (!l->points.empty()) l->response = lumen_->response(l->points, l->forces);
+  lumen_->clear();                                      // the columns of the last tangent
+  for (auto& [who, l] : loads_) l->response.resize(0);  // (about the new tangent when asked)
   if (pressure_response_.size() > 0) {
     pressure_response_.resize(0, 0);
     ++pressure_generation_;
@@ -443,8 +440,9 @@ std::vector<double> DeformableWall::segment_widening() {
     base_widening_ = radial_.transpose() * base_;
   }
   if (widening_.size() == 0) {  // K⁻¹W, again after each linearization
-    widening_ = Eigen::MatrixXd(radial_);
-    solid_->tangent_solve(widening_);
+    Eigen::MatrixXd x = Eigen::MatrixXd(radial_);
+    solid_->tangent_solve(x);
+    widening_ = x;
   }
   if (widening_pressure_.size() == 0 && pressure_basis_.size() > 0)  // (the pressure may come later)
     widening_pressure_ = widening_.transpose() * pressure_basis_;

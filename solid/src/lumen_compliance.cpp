@@ -345,23 +345,22 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   }
 }
 
-Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
+void LumenCompliance::form_blocks(std::span<const LumenPoint> points) {
   prefetch(points);
-  // C_ij = Σ_a Σ_b w_ia w_jb d_iᵀ G_ab d_j over the points' distinct nodes, G_ab = Y_aᵀ Y_b: the blocks
-  // among the last call's nodes are kept, so a wire that slides on pays for the pairs of the few
-  // nodes it reaches anew (neighbouring points share most of their nodes).
-  if (node_slot_.empty()) node_slot_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), -1);
   if (block_slot_.empty()) block_slot_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), -1);
+  if (mark_.empty()) mark_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), 0);
+  // The nodes kept from now on: this call's, then the last call's others (the contacts' anchoring
+  // and their loads alternate, at nearly the same nodes).
   std::vector<int> nodes;
   for (const auto& p : points)
     for (const auto& [node, w] : p.weights) {
       (void)w;
-      int& at = node_slot_[static_cast<size_t>(node)];
-      if (at < 0) {
-        at = static_cast<int>(nodes.size());
-        nodes.push_back(node);
-      }
+      if (!mark_[static_cast<size_t>(node)]) mark_[static_cast<size_t>(node)] = 1, nodes.push_back(node);
     }
+  std::vector<int> call = nodes;
+  for (int node : last_call_)
+    if (!mark_[static_cast<size_t>(node)]) mark_[static_cast<size_t>(node)] = 1, nodes.push_back(node);
+  for (int node : nodes) mark_[static_cast<size_t>(node)] = 0;
   const auto nn = static_cast<Eigen::Index>(nodes.size());
   Eigen::MatrixXd g(3 * nn, 3 * nn);
   std::vector<Eigen::Index> fresh;  // the nodes whose blocks were not kept
@@ -391,24 +390,45 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
     }
   }
   for (int node : block_nodes_) block_slot_[static_cast<size_t>(node)] = -1;
-  block_nodes_ = nodes;
-  for (size_t k = 0; k < nodes.size(); ++k) block_slot_[static_cast<size_t>(nodes[k])] = static_cast<int>(k);
+  block_nodes_ = std::move(nodes);
+  for (size_t k = 0; k < block_nodes_.size(); ++k)
+    block_slot_[static_cast<size_t>(block_nodes_[k])] = static_cast<int>(k);
   blocks_ = std::move(g);
-  // H = G W (column j: Σ_b w_jb G_·b d_j), then C = Wᵀ H.
+  last_call_ = std::move(call);
+}
+
+Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
+  // C_ij = Σ_a Σ_b w_ia w_jb d_iᵀ G_ab d_j over the points' nodes: H = G W (column j: Σ_b w_jb G_·b d_j),
+  // then C = Wᵀ H.
+  form_blocks(points);
   const auto np = static_cast<Eigen::Index>(points.size());
-  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(3 * nn, np);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(blocks_.rows(), np);
   for (Eigen::Index j = 0; j < np; ++j)
     for (const auto& [node, w] : points[static_cast<size_t>(j)].weights)
       h.col(j).noalias() +=
-          blocks_.middleCols<3>(3 * node_slot_[static_cast<size_t>(node)]) * (w * directions[static_cast<size_t>(j)]);
+          blocks_.middleCols<3>(3 * block_slot_[static_cast<size_t>(node)]) * (w * directions[static_cast<size_t>(j)]);
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(np, np);
   for (Eigen::Index i = 0; i < np; ++i)
     for (const auto& [node, w] : points[static_cast<size_t>(i)].weights)
       c.row(i).noalias() += (w * directions[static_cast<size_t>(i)]).transpose() *
-                            h.middleRows<3>(3 * node_slot_[static_cast<size_t>(node)]);
-  for (int node : nodes) node_slot_[static_cast<size_t>(node)] = -1;
+                            h.middleRows<3>(3 * block_slot_[static_cast<size_t>(node)]);
   // (symmetric to round-off: made exactly so)
   return 0.5 * (c + c.transpose());
+}
+
+std::vector<Vec3> LumenCompliance::displacements(std::span<const LumenPoint> points, std::span<const Vec3> forces) {
+  // The forces gathered on the nodes (F_b = Σ_j w_jb f_j), moved by G, read with each point's weights.
+  form_blocks(points);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(blocks_.rows());
+  for (size_t j = 0; j < points.size(); ++j)
+    for (const auto& [node, w] : points[j].weights)
+      f.segment<3>(3 * block_slot_[static_cast<size_t>(node)]) += w * forces[j];
+  const Eigen::VectorXd u = blocks_ * f;
+  std::vector<Vec3> out(points.size(), Vec3::Zero());
+  for (size_t i = 0; i < points.size(); ++i)
+    for (const auto& [node, w] : points[i].weights)
+      out[i] += w * u.segment<3>(3 * block_slot_[static_cast<size_t>(node)]);
+  return out;
 }
 
 Eigen::VectorXd LumenCompliance::response(std::span<const LumenPoint> points, std::span<const Vec3> forces) {

@@ -137,8 +137,11 @@ class DeformableWall final : public CompliantWall {
     std::vector<solid::LumenPoint> points;
     std::vector<Vec3> forces;
     Vec3 total = Vec3::Zero();
-    Eigen::VectorXd response;  ///< the forces' response (LumenCompliance::response) about the current tangent
+    Eigen::VectorXd
+        response;  ///< the forces' response (LumenCompliance::response) about the current tangent; empty until asked
   };
+  /// @p l's response, formed on first use (another body's anchoring reads it).
+  const Eigen::VectorXd& response(BodyLoad& l);
   std::vector<std::pair<const void*, std::unique_ptr<BodyLoad>>> loads_;
   Eigen::MatrixXd pressure_response_;  ///< (3 lumen nodes × network nodes) K⁻¹B on the lumen
   std::vector<int> lumen_nodes_;
@@ -164,8 +167,9 @@ class DeformableWall final : public CompliantWall {
   double thinnest_ = 0.0;              ///< the wall's least thickness [m]
   mutable bool warned_range_ = false;  ///< a run beyond the linear range said so once
   double mesh_seconds_ = 0.0;
-  nlohmann::json lumen_facts_;         ///< what the wall was grown around (summary)
-  Eigen::MatrixXd widening_;           ///< (dofs × segments) K⁻¹W, empty until first asked
+  nlohmann::json lumen_facts_;  ///< what the wall was grown around (summary)
+  /// (dofs × segments) K⁻¹W, empty until first asked; by rows (a load's dof reads its row)
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> widening_;
   Eigen::MatrixXd widening_pressure_;  ///< (segments × network nodes) (K⁻¹W)ᵀB
   std::vector<char> segment_has_nodes_;
   Eigen::VectorXd last_pressure_;  ///< the network-node pressures less the reference of the last set
