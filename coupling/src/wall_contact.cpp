@@ -124,6 +124,7 @@ void WallContact::anchor_candidates(const rod::RodView& rod, int free, Wall& wal
     radii.push_back(a);  // the wire presses on the wall over its own width
   }
   anchored_ = deformable_->anchor(this, points, normals, radii);
+  active_.clear();
   lambda_.setZero(static_cast<Eigen::Index>(candidates_.size()));
   wall_shift_.setZero(static_cast<Eigen::Index>(candidates_.size()));
 }
@@ -140,11 +141,15 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
   auto gap = [&](Eigen::Index j) {
     return candidates_[static_cast<size_t>(j)].penetration - (o.size() == m ? o[j] : 0.0);
   };
-  // λ = k·max(0, δ − o − C λ): an LCP with the P-matrix K⁻¹ + C; active sets from those pressed
-  // into the (pressed-out) rest wall, dropping negative forces and adding the contacts the
-  // wall's motion still leaves penetrated, until none changes.
-  std::vector<char> active(static_cast<size_t>(m));
-  for (Eigen::Index j = 0; j < m; ++j) active[static_cast<size_t>(j)] = gap(j) > 0.0;
+  // λ = k·max(0, δ − o − C λ): an LCP with the P-matrix K⁻¹ + C, whose solution is unique; active
+  // sets from the last evaluation's contacts (at an anchoring, those pressed into the pressed-out
+  // rest wall), dropping negative forces and adding the contacts the wall's motion still leaves
+  // penetrated, until none changes.
+  std::vector<char>& active = active_;
+  if (static_cast<Eigen::Index>(active.size()) != m) {
+    active.assign(static_cast<size_t>(m), 0);
+    for (Eigen::Index j = 0; j < m; ++j) active[static_cast<size_t>(j)] = gap(j) > 0.0;
+  }
   std::vector<Eigen::Index> idx;
   Eigen::MatrixXd a;
   Eigen::LLT<Eigen::MatrixXd> llt;
@@ -178,6 +183,7 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
     if (!changed) break;
   }
   lambda_ = lambda_.cwiseMax(0.0);
+  for (Eigen::Index j = 0; j < m; ++j) active[static_cast<size_t>(j)] = lambda_[j] > 0.0;
   wall_shift_ = c * lambda_;
   if (o.size() == m) wall_shift_ += o;  // the wall's whole normal displacement there
   idx.clear();

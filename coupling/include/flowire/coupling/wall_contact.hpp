@@ -99,6 +99,7 @@ class WallContact {
   std::vector<int> candidate_of_;  ///< (vertices) index into candidates_, −1 if none
   std::vector<Candidate> candidates_;
   Eigen::VectorXd lambda_;      ///< (candidates) normal forces at the last evaluation [N]
+  std::vector<char> active_;    ///< (candidates) in contact at the last evaluation; empty after an anchoring
   Eigen::VectorXd wall_shift_;  ///< (candidates) the wall's normal displacement there, C λ [m]
   double max_shift_ = 0.0;      ///< the largest such displacement at an accepted state [m]
   ContactParams params_;
