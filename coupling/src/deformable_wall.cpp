@@ -144,7 +144,11 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
   for (size_t j = 0; j < points.size(); ++j)
     at.push_back(lumen_->locate_patch(points[j], j < radii.size() ? radii[j] : 0.0));
   Anchored a;
-  a.compliance = lumen_->compliance(at, normals);
+  // Each body its own kept blocks (cache 0 is the loads' check): its anchorings follow each other
+  // at nearly the same nodes, another body's lie elsewhere.
+  auto cache = std::find(cache_bodies_.begin(), cache_bodies_.end(), body);
+  if (cache == cache_bodies_.end()) cache = cache_bodies_.insert(cache_bodies_.end(), body);
+  a.compliance = lumen_->compliance(at, normals, 1 + static_cast<int>(cache - cache_bodies_.begin()));
   const bool pressed = pressure_response_.size() > 0 && last_pressure_.size() > 0, based = relinearizations_ > 0;
   bool others = false;
   for (const auto& [who, l] : loads_) others = others || (who != body && !l->points.empty());

@@ -345,12 +345,16 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   }
 }
 
-void LumenCompliance::form_blocks(std::span<const LumenPoint> points) {
+LumenCompliance::Blocks& LumenCompliance::form_blocks(std::span<const LumenPoint> points, int cache) {
   prefetch(points);
-  if (block_slot_.empty()) block_slot_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), -1);
-  if (mark_.empty()) mark_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), 0);
-  // The nodes kept from now on: this call's, then the last call's others (the contacts' anchoring
-  // and their loads alternate, at nearly the same nodes).
+  if (cache < 0) throw_usage_error(fmt::format("wall: no compliance cache {}", cache));
+  if (static_cast<int>(blocks_.size()) <= cache) blocks_.resize(static_cast<size_t>(cache) + 1);
+  Blocks& kept = blocks_[static_cast<size_t>(cache)];
+  const auto num_nodes = static_cast<size_t>(solid_.mesh().num_nodes());
+  if (kept.slot.empty()) kept.slot.assign(num_nodes, -1);
+  if (mark_.empty()) mark_.assign(num_nodes, 0);
+  // The nodes kept from now on: this call's, then the last call's others (a body's contacts'
+  // anchoring and their loads, or its anchorings a step apart, are at nearly the same nodes).
   std::vector<int> nodes;
   for (const auto& p : points)
     for (const auto& [node, w] : p.weights) {
@@ -358,28 +362,28 @@ void LumenCompliance::form_blocks(std::span<const LumenPoint> points) {
       if (!mark_[static_cast<size_t>(node)]) mark_[static_cast<size_t>(node)] = 1, nodes.push_back(node);
     }
   std::vector<int> call = nodes;
-  for (int node : last_call_)
+  for (int node : kept.last_call)
     if (!mark_[static_cast<size_t>(node)]) mark_[static_cast<size_t>(node)] = 1, nodes.push_back(node);
   for (int node : nodes) mark_[static_cast<size_t>(node)] = 0;
   const auto nn = static_cast<Eigen::Index>(nodes.size());
   Eigen::MatrixXd g(3 * nn, 3 * nn);
   std::vector<Eigen::Index> fresh;  // the nodes whose blocks were not kept
   for (Eigen::Index q = 0; q < nn; ++q) {
-    const int bq = block_slot_[static_cast<size_t>(nodes[static_cast<size_t>(q)])];
+    const int bq = kept.slot[static_cast<size_t>(nodes[static_cast<size_t>(q)])];
     if (bq < 0) {
       fresh.push_back(q);
       continue;
     }
     for (Eigen::Index p = 0; p <= q; ++p) {
-      const int bp = block_slot_[static_cast<size_t>(nodes[static_cast<size_t>(p)])];
+      const int bp = kept.slot[static_cast<size_t>(nodes[static_cast<size_t>(p)])];
       if (bp < 0) continue;
-      g.block<3, 3>(3 * p, 3 * q) = blocks_.block<3, 3>(3 * bp, 3 * bq);
-      g.block<3, 3>(3 * q, 3 * p) = blocks_.block<3, 3>(3 * bq, 3 * bp);
+      g.block<3, 3>(3 * p, 3 * q) = kept.g.block<3, 3>(3 * bp, 3 * bq);
+      g.block<3, 3>(3 * q, 3 * p) = kept.g.block<3, 3>(3 * bq, 3 * bp);
     }
   }
   // The new blocks, each node's column read once against the few fresh nodes' (which stay in cache).
   for (Eigen::Index q = 0; q < nn; ++q) {
-    const bool q_fresh = block_slot_[static_cast<size_t>(nodes[static_cast<size_t>(q)])] < 0;
+    const bool q_fresh = kept.slot[static_cast<size_t>(nodes[static_cast<size_t>(q)])] < 0;
     const NodeColumns& yq = column(nodes[static_cast<size_t>(q)]);
     for (Eigen::Index p : fresh) {
       if (q_fresh && p > q) break;  // (a pair of fresh nodes once)
@@ -389,45 +393,46 @@ void LumenCompliance::form_blocks(std::span<const LumenPoint> points) {
       g.block<3, 3>(3 * q, 3 * p) = gpq.transpose();
     }
   }
-  for (int node : block_nodes_) block_slot_[static_cast<size_t>(node)] = -1;
-  block_nodes_ = std::move(nodes);
-  for (size_t k = 0; k < block_nodes_.size(); ++k)
-    block_slot_[static_cast<size_t>(block_nodes_[k])] = static_cast<int>(k);
-  blocks_ = std::move(g);
-  last_call_ = std::move(call);
+  for (int node : kept.nodes) kept.slot[static_cast<size_t>(node)] = -1;
+  kept.nodes = std::move(nodes);
+  for (size_t k = 0; k < kept.nodes.size(); ++k) kept.slot[static_cast<size_t>(kept.nodes[k])] = static_cast<int>(k);
+  kept.g = std::move(g);
+  kept.last_call = std::move(call);
+  return kept;
 }
 
-Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions) {
+Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions,
+                                            int cache) {
   // C_ij = Σ_a Σ_b w_ia w_jb d_iᵀ G_ab d_j over the points' nodes: H = G W (column j: Σ_b w_jb G_·b d_j),
   // then C = Wᵀ H.
-  form_blocks(points);
+  const Blocks& b = form_blocks(points, cache);
   const auto np = static_cast<Eigen::Index>(points.size());
-  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(blocks_.rows(), np);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(b.g.rows(), np);
   for (Eigen::Index j = 0; j < np; ++j)
     for (const auto& [node, w] : points[static_cast<size_t>(j)].weights)
       h.col(j).noalias() +=
-          blocks_.middleCols<3>(3 * block_slot_[static_cast<size_t>(node)]) * (w * directions[static_cast<size_t>(j)]);
+          b.g.middleCols<3>(3 * b.slot[static_cast<size_t>(node)]) * (w * directions[static_cast<size_t>(j)]);
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(np, np);
   for (Eigen::Index i = 0; i < np; ++i)
     for (const auto& [node, w] : points[static_cast<size_t>(i)].weights)
-      c.row(i).noalias() += (w * directions[static_cast<size_t>(i)]).transpose() *
-                            h.middleRows<3>(3 * block_slot_[static_cast<size_t>(node)]);
+      c.row(i).noalias() +=
+          (w * directions[static_cast<size_t>(i)]).transpose() * h.middleRows<3>(3 * b.slot[static_cast<size_t>(node)]);
   // (symmetric to round-off: made exactly so)
   return 0.5 * (c + c.transpose());
 }
 
-std::vector<Vec3> LumenCompliance::displacements(std::span<const LumenPoint> points, std::span<const Vec3> forces) {
+std::vector<Vec3> LumenCompliance::displacements(std::span<const LumenPoint> points, std::span<const Vec3> forces,
+                                                 int cache) {
   // The forces gathered on the nodes (F_b = Σ_j w_jb f_j), moved by G, read with each point's weights.
-  form_blocks(points);
-  Eigen::VectorXd f = Eigen::VectorXd::Zero(blocks_.rows());
+  const Blocks& b = form_blocks(points, cache);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(b.g.rows());
   for (size_t j = 0; j < points.size(); ++j)
     for (const auto& [node, w] : points[j].weights)
-      f.segment<3>(3 * block_slot_[static_cast<size_t>(node)]) += w * forces[j];
-  const Eigen::VectorXd u = blocks_ * f;
+      f.segment<3>(3 * b.slot[static_cast<size_t>(node)]) += w * forces[j];
+  const Eigen::VectorXd u = b.g * f;
   std::vector<Vec3> out(points.size(), Vec3::Zero());
   for (size_t i = 0; i < points.size(); ++i)
-    for (const auto& [node, w] : points[i].weights)
-      out[i] += w * u.segment<3>(3 * block_slot_[static_cast<size_t>(node)]);
+    for (const auto& [node, w] : points[i].weights) out[i] += w * u.segment<3>(3 * b.slot[static_cast<size_t>(node)]);
   return out;
 }
 

@@ -143,7 +143,8 @@ class DeformableWall final : public CompliantWall {
   /// @p l's response, formed on first use (another body's anchoring reads it).
   const Eigen::VectorXd& response(BodyLoad& l);
   std::vector<std::pair<const void*, std::unique_ptr<BodyLoad>>> loads_;
-  Eigen::MatrixXd pressure_response_;  ///< (3 lumen nodes × network nodes) K⁻¹B on the lumen
+  std::vector<const void*> cache_bodies_;  ///< body k's anchorings keep their blocks in cache k + 1
+  Eigen::MatrixXd pressure_response_;      ///< (3 lumen nodes × network nodes) K⁻¹B on the lumen
   std::vector<int> lumen_nodes_;
   std::vector<double> node_pressures_;  ///< the last pressures set (to skip unchanged ones)
   double reference_pressure_ = 0.0;

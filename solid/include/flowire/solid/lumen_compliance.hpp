@@ -22,8 +22,8 @@
 /// asks and kept: a wire that slides along the wall pays only for the nodes it reaches. Beyond a memory budget the
 /// columns used longest ago are dropped (and solved again should the wire come back). The compliance is symmetric by
 /// this construction; it is positive definite where the points are distinct. The blocks G_ab among
-/// the nodes of the last two calls are kept: a wire that slides along the wall reaches a few new
-/// nodes a step, and only their blocks are formed.
+/// the nodes of a cache's last two calls are kept: a wire that slides along the wall reaches a few
+/// new nodes a step, and only their blocks are formed.
 #include <Eigen/Dense>
 
 #include <array>
@@ -65,10 +65,12 @@ class LumenCompliance {
   [[nodiscard]] LumenPoint locate_patch(const Vec3& x, double radius) const;
   /// @brief C (m × m): the displacement along @p directions[i] at @p points[i] under a unit
   /// force along @p directions[j] at @p points[j] [m/N].
-  Eigen::MatrixXd compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions);
+  /// The blocks of K⁻¹ between the points' nodes are kept in cache @p cache (one a body whose
+  /// anchorings follow each other: its next call forms only the blocks of nodes new to it).
+  Eigen::MatrixXd compliance(std::span<const LumenPoint> points, std::span<const Vec3> directions, int cache = 0);
   /// @brief The displacement at each of @p points under forces @p forces at all of them [m]: what
   /// `displacement` gives, from the kept node blocks instead of a response as long as the solid.
-  std::vector<Vec3> displacements(std::span<const LumenPoint> points, std::span<const Vec3> forces);
+  std::vector<Vec3> displacements(std::span<const LumenPoint> points, std::span<const Vec3> forces, int cache = 0);
   /// @brief The response to forces @p forces at @p points, in the factor's numbering (L⁻¹ P f,
   /// as long as the solid's unknowns): what `displacement` reads. Sums of responses are the
   /// responses to the summed forces.
@@ -97,10 +99,7 @@ class LumenCompliance {
     columns_.clear();
     last_use_.clear();
     kept_bytes_ = 0;
-    for (int node : block_nodes_) block_slot_[static_cast<size_t>(node)] = -1;
-    block_nodes_.clear();
-    last_call_.clear();
-    blocks_.resize(0, 0);
+    blocks_.clear();
   }
   /// @brief The 3 × 3 blocks G_ab = Y_aᵀ Y_b that `compliance` formed (not kept from its last call).
   [[nodiscard]] std::uint64_t block_products() const { return block_products_; }
@@ -121,14 +120,16 @@ class LumenCompliance {
   double budget_ = 0.0;    ///< bytes
   size_t kept_bytes_ = 0;  ///< bytes the kept columns take
   int solved_ = 0, dropped_ = 0;
-  /// The blocks G_ab = Y_aᵀ Y_b among @p points' nodes and the last call's, formed where not kept:
-  /// blocks_ and block_slot_ then hold them.
-  void form_blocks(std::span<const LumenPoint> points);
-  /// The kept blocks' nodes (in blocks_'s order), each mesh node's place among them (−1: none), the
-  /// nodes of the last call, and a mark per mesh node (0 between calls).
-  std::vector<int> block_nodes_, block_slot_, last_call_;
-  std::vector<char> mark_;
-  Eigen::MatrixXd blocks_;
+  /// Blocks G_ab = Y_aᵀ Y_b kept among the nodes of a cache's last two calls: their nodes (in g's
+  /// order), each mesh node's place among them (−1: none), the nodes of the last call.
+  struct Blocks {
+    std::vector<int> nodes, slot, last_call;
+    Eigen::MatrixXd g;
+  };
+  /// Cache @p cache's blocks among @p points' nodes and its last call's, formed where not kept.
+  Blocks& form_blocks(std::span<const LumenPoint> points, int cache);
+  std::vector<Blocks> blocks_;  ///< by cache
+  std::vector<char> mark_;      ///< per mesh node (0 between calls)
   std::uint64_t block_products_ = 0;
   // A uniform grid of the lumen faces' bounding boxes for `locate`.
   Vec3 grid_origin_ = Vec3::Zero();
