@@ -139,6 +139,13 @@ TEST(LumenCompliance, IsReciprocalAndIsTheFullSolvesResponse) {
   full.nodal_forces() = c.nodal_forces(points, forces);
   ASSERT_TRUE(full.solve().converged);
   const Eigen::VectorXd predicted = compliance * lambda;
+  // The displacements at the loaded points from the node blocks equal those read through a
+  // response as long as the solid.
+  const std::vector<Vec3> at_points = c.displacements(points, forces);
+  for (int i = 0; i < 5; ++i) {
+    const Vec3 through_response = c.displacement(points[static_cast<size_t>(i)], points, forces);
+    EXPECT_LT((at_points[static_cast<size_t>(i)] - through_response).norm(), 1e-12 * through_response.norm()) << i;
+  }
   for (int i = 0; i < 5; ++i) {
     const Vec3 u = interpolate(full, points[static_cast<size_t>(i)], full.displacement());
     EXPECT_NEAR(u.dot(directions[static_cast<size_t>(i)]), predicted[i], 1e-3 * predicted.cwiseAbs().maxCoeff()) << i;
@@ -213,6 +220,30 @@ TEST(LumenCompliance, BlocksKeptFromTheLastCallGiveTheComplianceAFreshObjectGive
     if (step > 0) kept_products += sliding.block_products() - before, fresh_products += fresh.block_products();
   }
   EXPECT_LT(kept_products, fresh_products / 2) << "the blocks of the nodes the footprints kept were formed again";
+  // Another body's contacts on the other side of the tube keep their blocks in their own cache:
+  // the first body's next call at its last footprints forms none, and both agree with a fresh
+  // object's.
+  auto opposite = [&](LumenCompliance& c) {
+    std::vector<LumenPoint> p;
+    for (int k = 0; k < 8; ++k) {
+      const double phi = 3.4 + 0.05 * k, z = 5e-3 + 0.25e-3 * k;
+      p.push_back(c.locate_patch(Vec3((kA - 0.05e-3) * std::cos(phi), (kA - 0.05e-3) * std::sin(phi), z), 0.445e-3));
+    }
+    return p;
+  };
+  {
+    const auto mine = footprints(sliding, 3e-3 + 0.4e-3 * 5), theirs = opposite(sliding);
+    const Eigen::MatrixXd c_theirs = sliding.compliance(theirs, directions(theirs), 1);
+    const std::uint64_t before = sliding.block_products();
+    const Eigen::MatrixXd c_mine = sliding.compliance(mine, directions(mine), 0);
+    EXPECT_EQ(sliding.block_products(), before) << "the other body's call displaced this body's blocks";
+    LumenCompliance fresh(s, s.mesh().group_named("lumen"));
+    const auto q_mine = footprints(fresh, 3e-3 + 0.4e-3 * 5), q_theirs = opposite(fresh);
+    EXPECT_LT((c_mine - fresh.compliance(q_mine, directions(q_mine))).cwiseAbs().maxCoeff(),
+              1e-12 * c_mine.cwiseAbs().maxCoeff());
+    EXPECT_LT((c_theirs - fresh.compliance(q_theirs, directions(q_theirs))).cwiseAbs().maxCoeff(),
+              1e-12 * c_theirs.cwiseAbs().maxCoeff());
+  }
   // The same footprints after a new tangent: every block formed again, none from before.
   const auto p = footprints(sliding, 3e-3);
   (void)sliding.compliance(p, directions(p));
