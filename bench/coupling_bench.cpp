@@ -215,7 +215,8 @@ BENCHMARK(BM_ArchExample78cm_1mmNetwork_TwoWay)->Unit(benchmark::kMillisecond)->
 /// pulsatile flow, 5 mm network). Counters: Newton iterations and unconverged steps.
 /// `slide`: Newton starts from the slide while the wire is fed (rod::SolverSettings::slide_guess);
 /// without it, from the inertial guess (the baseline of BM_ArchPushedInertialGuess).
-enum class Drive { Held, Pushed, Pulled, Turned };
+/// `Forced`: pushed by a constant force at the base (insertion.force) instead of a speed.
+enum class Drive { Held, Pushed, Pulled, Turned, Forced };
 void run_driven(benchmark::State& state, Drive drive, bool slide = true) {
   const double inserted = 1e-3 * static_cast<double>(state.range(0));
   const double segment = 1e-6 * static_cast<double>(state.range(1));
@@ -224,8 +225,10 @@ void run_driven(benchmark::State& state, Drive drive, bool slide = true) {
   if (drive == Drive::Pushed || drive == Drive::Turned) s.rod->set_insertion_speed(0.02);
   if (drive == Drive::Pulled) s.rod->set_insertion_speed(-0.02);
   if (drive == Drive::Turned) s.rod->set_rotation_speed(std::numbers::pi);
+  if (drive == Drive::Forced) s.rod->set_push_force(0.1);
   for (int i = 0; i < 5; ++i) s.step(0.01);  // past the start of the feed
   const auto before = s.rod->solver_totals();
+  const double fed_before = s.rod->inserted_length();
   for (auto _ : state) s.step(0.01);
   const auto& after = s.rod->solver_totals();
   const double n = static_cast<double>(state.iterations());
@@ -233,12 +236,14 @@ void run_driven(benchmark::State& state, Drive drive, bool slide = true) {
   state.counters["newton_per_step"] = static_cast<double>(after.newton_iterations - before.newton_iterations) / n;
   state.counters["factorizations_per_step"] = static_cast<double>(after.factorizations - before.factorizations) / n;
   state.counters["unconverged"] = static_cast<double>(after.unconverged_steps - before.unconverged_steps);
+  state.counters["fed_mm_per_step"] = 1e3 * (s.rod->inserted_length() - fed_before) / n;
 }
 void BM_ArchHeld(benchmark::State& st) { run_driven(st, Drive::Held); }
 void BM_ArchPushed(benchmark::State& st) { run_driven(st, Drive::Pushed); }
 void BM_ArchPulled(benchmark::State& st) { run_driven(st, Drive::Pulled); }
 void BM_ArchTurned(benchmark::State& st) { run_driven(st, Drive::Turned); }
 void BM_ArchPushedInertialGuess(benchmark::State& st) { run_driven(st, Drive::Pushed, false); }
+void BM_ArchForced(benchmark::State& st) { run_driven(st, Drive::Forced); }
 #define FLOWIRE_DRIVEN_ARGS               \
   ArgNames({"inserted_mm", "segment_um"}) \
       ->Args({200, 1000})                 \
@@ -251,6 +256,7 @@ BENCHMARK(BM_ArchPushed)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchPulled)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchTurned)->FLOWIRE_DRIVEN_ARGS;
 BENCHMARK(BM_ArchPushedInertialGuess)->FLOWIRE_DRIVEN_ARGS;
+BENCHMARK(BM_ArchForced)->FLOWIRE_DRIVEN_ARGS;
 
 // Scaling of each phase: against the inserted length (args: cm inserted, network 5 mm) and
 // against the network's sampling (args: 78 cm, network in tenths of a mm).
@@ -390,6 +396,23 @@ BENCHMARK(BM_RealArchDriven)
     ->Arg(static_cast<int>(Drive::Turned))
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
+
+/// The wire inside a catheter (examples/catheter_arch/scene.yaml: a 6 F catheter parked in the
+/// arch, the 0.035" wire 58 cm in, steered into the left subclavian), held (arg 0) or pushed out of
+/// the catheter at the example's 1 cm/s (arg 1), 200 steps of 5 ms through the scene runner.
+/// Counters as BM_RealArchDriven's (the wire and the catheter are one Newton solve: its iterations).
+void BM_CatheterArchDriven(benchmark::State& state) {
+  const auto scene = std::filesystem::path(FLOWIRE_BENCH_SOURCE_DIR) / "examples/catheter_arch/scene.yaml";
+  const std::vector<std::string> sets = {
+      state.range(0) == 0 ? "insertion.speed=0" : "insertion.speed=1cm/s",
+      "solve.duration=1s",
+      "output.vtk=false",
+      "output.csv=false",
+      "output.png=false",
+      "output.dir=" + (std::filesystem::temp_directory_path() / "flowire-bench-catheter-driven").string()};
+  run_scene_file(state, scene, sets);
+}
+BENCHMARK(BM_CatheterArchDriven)->ArgName("pushed")->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1);
 
 /// A wall that yields against the rigid one: examples/deformable_wall/scene.yaml (a J tip
 /// pushed at 1 cm/s along a soft straight artery, 200 vertices) for 100 steps of 10 ms through
