@@ -21,6 +21,10 @@ if(NOT TARGET flowire_cholmod)
     ${SUITESPARSE_suitesparseconfig_LIBRARY})
 endif()
 
+# BLAS (whichever the system selects: scripts/install-deps.sh installs OpenBLAS) for the few
+# dense products called directly (the wall's contact compliance); CHOLMOD uses it too.
+find_package(BLAS REQUIRED)
+
 if(FLOWIRE_WITH_VTK)
   find_package(VTK 9.1 REQUIRED COMPONENTS
     CommonCore CommonDataModel IOXML IOLegacy IOGeometry FiltersCore FiltersSources

@@ -189,10 +189,12 @@ TEST(LumenCompliance, ColumnsDroppedForTheBudgetAreSolvedAgainAndGiveTheSameComp
 TEST(LumenCompliance, BlocksKeptFromTheLastCallGiveTheComplianceAFreshObjectGives) {
   // A wire sliding along the wall: each call's footprints a step further on. The node blocks kept
   // from the call before give the compliance that an object asked for the first time gives, and
-  // only the blocks of nodes new to the call are formed; after a clear (a new tangent) all are.
+  // that C = Zᵀ Z gives; only the blocks of nodes new to the call are formed; after a clear (a new
+  // tangent) all are.
   ElasticSolid s = supported_tube();
   s.linearize();
   LumenCompliance sliding(s, s.mesh().group_named("lumen"));
+  sliding.set_way(LumenCompliance::Way::blocks);
   auto footprints = [&](LumenCompliance& c, double z0) {
     std::vector<LumenPoint> p;
     for (int k = 0; k < 8; ++k) {
@@ -213,8 +215,16 @@ TEST(LumenCompliance, BlocksKeptFromTheLastCallGiveTheComplianceAFreshObjectGive
     const std::uint64_t before = sliding.block_products();
     const Eigen::MatrixXd kept = sliding.compliance(p, directions(p));
     LumenCompliance fresh(s, s.mesh().group_named("lumen"));
+    fresh.set_way(LumenCompliance::Way::blocks);
     const auto q = footprints(fresh, z0);
     const Eigen::MatrixXd first = fresh.compliance(q, directions(q));
+    // The other way, C = Zᵀ Z from the points' forward-solved forces, to the same compliance.
+    LumenCompliance columns(s, s.mesh().group_named("lumen"));
+    columns.set_way(LumenCompliance::Way::columns);
+    const auto r = footprints(columns, z0);
+    const Eigen::MatrixXd by_columns = columns.compliance(r, directions(r));
+    EXPECT_LT((by_columns - first).cwiseAbs().maxCoeff(), 1e-12 * first.cwiseAbs().maxCoeff()) << "step " << step;
+    EXPECT_EQ(columns.block_products(), 0u);
     EXPECT_LT((kept - first).cwiseAbs().maxCoeff(), 1e-12 * first.cwiseAbs().maxCoeff()) << "step " << step;
     EXPECT_LT((kept - kept.transpose()).cwiseAbs().maxCoeff(), 1e-15 * first.cwiseAbs().maxCoeff());
     if (step > 0) kept_products += sliding.block_products() - before, fresh_products += fresh.block_products();
@@ -238,6 +248,7 @@ TEST(LumenCompliance, BlocksKeptFromTheLastCallGiveTheComplianceAFreshObjectGive
     const Eigen::MatrixXd c_mine = sliding.compliance(mine, directions(mine), 0);
     EXPECT_EQ(sliding.block_products(), before) << "the other body's call displaced this body's blocks";
     LumenCompliance fresh(s, s.mesh().group_named("lumen"));
+    fresh.set_way(LumenCompliance::Way::blocks);
     const auto q_mine = footprints(fresh, 3e-3 + 0.4e-3 * 5), q_theirs = opposite(fresh);
     EXPECT_LT((c_mine - fresh.compliance(q_mine, directions(q_mine))).cwiseAbs().maxCoeff(),
               1e-12 * c_mine.cwiseAbs().maxCoeff());
@@ -251,6 +262,7 @@ TEST(LumenCompliance, BlocksKeptFromTheLastCallGiveTheComplianceAFreshObjectGive
   sliding.clear();
   (void)sliding.compliance(p, directions(p));
   LumenCompliance fresh(s, s.mesh().group_named("lumen"));
+  fresh.set_way(LumenCompliance::Way::blocks);
   const auto q = footprints(fresh, 3e-3);
   (void)fresh.compliance(q, directions(q));
   EXPECT_EQ(sliding.block_products() - before, fresh.block_products());

@@ -101,6 +101,10 @@ class LumenCompliance {
     kept_bytes_ = 0;
     blocks_.clear();
   }
+  /// @brief How `compliance` is formed: from the kept node blocks, as C = Zᵀ Z, or (the default) the
+  /// way the operation counts favour for each cache. Both are exact.
+  enum class Way { automatic, blocks, columns };
+  void set_way(Way way) { way_ = way; }
   /// @brief The 3 × 3 blocks G_ab = Y_aᵀ Y_b that `compliance` formed (not kept from its last call).
   [[nodiscard]] std::uint64_t block_products() const { return block_products_; }
 
@@ -125,11 +129,32 @@ class LumenCompliance {
   struct Blocks {
     std::vector<int> nodes, slot, last_call;
     Eigen::MatrixXd g;
+    int calls = 0;             ///< compliance calls made with this cache
+    bool by_blocks = true;     ///< the way its compliance is formed (by_blocks)
+    double mean_fresh = -1.0;  ///< nodes new to a call, averaged over its calls
   };
+  /// Whether cache @p cache's compliance at @p points is formed from its blocks (else as C = Zᵀ Z),
+  /// by the operation counts of both ways with the nodes new to a call averaged over its calls.
+  bool by_blocks(std::span<const LumenPoint> points, int cache);
+  /// The compliance as C = Zᵀ Z (the points' forces forward-solved, summed from their nodes' columns).
+  Eigen::MatrixXd compliance_by_columns(std::span<const LumenPoint> points, std::span<const Vec3> directions);
+  /// compliance_by_columns's workspace, kept across calls: each mesh node's place among a call's
+  /// distinct nodes and each row's among its rows (−1 between calls), the (point, w d) uses grouped
+  /// by node, Zᵀ, and the rows' places and weights of one node.
+  struct Use {
+    int node;
+    Eigen::Index point;
+    Vec3 weight;
+  };
+  std::vector<int> node_slot_, row_slot_;
+  std::vector<Use> uses_;
+  std::vector<double> zt_, node_weights_;
+  std::vector<int> node_rows_;
   /// Cache @p cache's blocks among @p points' nodes and its last call's, formed where not kept.
   Blocks& form_blocks(std::span<const LumenPoint> points, int cache);
   std::vector<Blocks> blocks_;  ///< by cache
-  std::vector<char> mark_;      ///< per mesh node (0 between calls)
+  Way way_ = Way::automatic;
+  std::vector<char> mark_;  ///< per mesh node (0 between calls)
   std::uint64_t block_products_ = 0;
   // A uniform grid of the lumen faces' bounding boxes for `locate`.
   Vec3 grid_origin_ = Vec3::Zero();
