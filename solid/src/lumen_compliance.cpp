@@ -367,11 +367,14 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
   }
 }
 
-LumenCompliance::Blocks& LumenCompliance::form_blocks(std::span<const LumenPoint> points, int cache) {
-  prefetch(points);
+LumenCompliance::Blocks& LumenCompliance::cache_at(int cache) {
   if (cache < 0) throw_usage_error(fmt::format("wall: no compliance cache {}", cache));
   if (static_cast<int>(blocks_.size()) <= cache) blocks_.resize(static_cast<size_t>(cache) + 1);
-  Blocks& kept = blocks_[static_cast<size_t>(cache)];
+  return blocks_[static_cast<size_t>(cache)];
+}
+
+LumenCompliance::Blocks& LumenCompliance::form_blocks(std::span<const LumenPoint> points, int cache) {
+  Blocks& kept = cache_at(cache);
   const auto num_nodes = static_cast<size_t>(solid_.mesh().num_nodes());
   if (kept.slot.empty()) kept.slot.assign(num_nodes, -1);
   if (mark_.empty()) mark_.assign(num_nodes, 0);
@@ -447,6 +450,7 @@ Eigen::MatrixXd LumenCompliance::compliance(std::span<const LumenPoint> points, 
 std::vector<Vec3> LumenCompliance::displacements(std::span<const LumenPoint> points, std::span<const Vec3> forces,
                                                  int cache) {
   // The forces gathered on the nodes (F_b = Σ_j w_jb f_j), moved by G, read with each point's weights.
+  prefetch(points);
   const Blocks& b = form_blocks(points, cache);
   Eigen::VectorXd f = Eigen::VectorXd::Zero(b.g.rows());
   for (size_t j = 0; j < points.size(); ++j)
@@ -470,9 +474,7 @@ bool LumenCompliance::by_blocks(std::span<const LumenPoint> points, int cache) {
   // nodes new to each call are averaged over the calls, and the way changes only where the other
   // is twice as cheap (switching to the blocks forms all of them once).
   prefetch(points);
-  if (cache < 0) throw_usage_error(fmt::format("wall: no compliance cache {}", cache));
-  if (static_cast<int>(blocks_.size()) <= cache) blocks_.resize(static_cast<size_t>(cache) + 1);
-  Blocks& kept = blocks_[static_cast<size_t>(cache)];
+  Blocks& kept = cache_at(cache);
   if (mark_.empty()) mark_.assign(static_cast<size_t>(solid_.mesh().num_nodes()), 0);
   for (int node : kept.last_call) mark_[static_cast<size_t>(node)] = 2;
   double nodes = 0.0, fresh = 0.0, uses = 0.0, rows = 0.0;

@@ -150,7 +150,10 @@ class LumenCompliance {
   std::vector<Use> uses_;
   std::vector<double> zt_, node_weights_;
   std::vector<int> node_rows_;
-  /// Cache @p cache's blocks among @p points' nodes and its last call's, formed where not kept.
+  /// Cache @p cache (made on first use).
+  Blocks& cache_at(int cache);
+  /// Cache @p cache's blocks among @p points' nodes (their columns solved) and its last call's,
+  /// formed where not kept.
   Blocks& form_blocks(std::span<const LumenPoint> points, int cache);
   std::vector<Blocks> blocks_;  ///< by cache
   Way way_ = Way::automatic;
