@@ -94,8 +94,7 @@ void WallContact::evaluate(const rod::RodView& rod, int free, Wall& wall, rod::F
     out.add_energy(pen.energy);
     energy_ += pen.energy;
     out.add_position_jacobian(i, -pen.hessian);
-    normal_force_[k] = pen.normal_force;
-    normal_[k] = n_wall;
+    record_normal(pen.normal_force, n_wall, normal_force_[k], normal_[k]);
     tally[k] += f;
   }
   if (deformable_) solve_compliant(out, tally, stats);
@@ -209,8 +208,7 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
     const Vec3 f = -l * cj.normal;
     out.add_conservative_force(cj.vertex, f);
     out.add_position_jacobian(cj.vertex, -(s(r, r) * cj.normal * cj.normal.transpose() + l * cj.hessian));
-    normal_force_[k] = l;
-    normal_[k] = cj.normal;
+    record_normal(l, cj.normal, normal_force_[k], normal_[k]);
     tally[k] += f;
     ++stats.contacts;
     vertices.push_back(cj.vertex);
@@ -223,6 +221,12 @@ void WallContact::solve_compliant(rod::ForceAccumulator& out, std::span<Vec3> ta
     off.diagonal().setZero();
     out.add_coupled_stiffness(vertices, directions, off);
   }
+}
+
+void WallContact::record_normal(double multiplier, const Vec3& grad, double& force, Vec3& normal) {
+  const double length = grad.norm();
+  force = multiplier * length;
+  normal = length > 0.0 ? Vec3(grad / length) : grad;
 }
 
 void WallContact::end_step(const rod::RodView& rod, Wall& wall, InteractionStats& stats, std::span<const Vec3> tally) {
@@ -246,10 +250,7 @@ void WallContact::end_step(const rod::RodView& rod, Wall& wall, InteractionStats
     const double shift = j >= 0 && j < wall_shift_.size() ? wall_shift_[j] : 0.0;
     const double fn =
         j >= 0 ? (j < lambda_.size() ? lambda_[j] : 0.0) : normal_force_at(w.contact_distance, a, rod.cell_weight(i));
-    if (fn > 0.0) {
-      lag_normal_force_[k] = fn;
-      lag_normal_[k] = w.normal;
-    }
+    if (fn > 0.0) record_normal(fn, w.normal, lag_normal_force_[k], lag_normal_[k]);
     if (deformable_ && k < tally.size() && (tally[k] - intro_force_[k]).squaredNorm() > 0.0) {
       wall_points.push_back(rod.position(i) - w.contact_distance * w.normal);
       wall_forces.push_back(-(tally[k] - intro_force_[k]));  // the wall's share, opposite

@@ -19,19 +19,24 @@ using vessels::Vec3;
 
 namespace {
 
-/// A wire of n vertices lying 0.1 mm deep in the bottom wall of a straight tube along x.
+/// Vertices x0 pressed into the wall of a network (by default: a wire of n vertices lying
+/// 0.1 mm deep in the bottom wall of a straight tube along x).
 struct TubeFloor {
   static constexpr double R = 3e-3, a = 0.45e-3, dt = 1e-2;
-  vessels::Network net =
-      vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = R}), {.max_segment_length = 5e-3});
+  vessels::Network net;
   vessels::SpatialIndex index{net};
   WireLocation where{index};
   NetworkWall wall{where};
   std::vector<Vec3> x0;
   std::vector<double> arc;
-  explicit TubeFloor(int n) {
+  explicit TubeFloor(int n)
+      : net(vessels::Network::build(vessels::straight_tube({.length = 0.1, .radius = R}),
+                                    {.max_segment_length = 5e-3})) {
     for (int i = 0; i < n; ++i) x0.emplace_back(0.03 + 1e-3 * i, 0.0, -(R - a) - 1e-4);
     for (int i = 0; i < n; ++i) arc.push_back(1e-3 * (n - i));
+  }
+  TubeFloor(vessels::Network network, std::vector<Vec3> points) : net(std::move(network)), x0(std::move(points)) {
+    for (size_t i = 0; i < x0.size(); ++i) arc.push_back(1e-3 * static_cast<double>(x0.size() - i));
   }
   rod::RodView view(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double step) {
     rod::RodView r;
@@ -98,6 +103,55 @@ TEST(WallFriction, ItsIncrementalPotentialsGradientIsTheForceAndItsVelocityJacob
       const Vec3 col = (ap.forces()[i] - am.forces()[i]) / (2 * h) * TubeFloor::dt;
       EXPECT_LT((col - acc.velocity_jacobians()[i].col(c)).norm(), 1e-5 * acc.velocity_jacobians()[i].norm() + 1e-12)
           << "vertex " << i << " column " << c;
+    }
+  }
+}
+
+TEST(WallFriction, WhereCapsulesBlendItIsPressedAlongTheUnitNormalAndStillTheGradientOfItsPotential) {
+  // Where the capsules of a junction blend, the wall distance's gradient is shorter than 1.
+  // The contact records the normal force as the penalty's multiplier times that length and
+  // the direction normalized; with the gradient itself, I − n nᵀ was no projector, the
+  // friction force not the gradient of its potential (by a factor up to 2 on the arch's
+  // aortic bifurcation), and the line search stalled where Newton had converged.
+  auto net = vessels::Network::build(vessels::y_bifurcation({}), {.max_segment_length = 5e-3});
+  std::vector<Vec3> points;
+  {
+    const vessels::SpatialIndex index(net);
+    for (int i = 0; i <= 4000 && points.size() < 8; ++i) {  // across the crease between the daughters
+      const Vec3 p(0.035 + 0.02 * i / 4000.0, -0.01 + 0.02 * i / 4000.0, 0.002);
+      Vec3 grad;
+      const double d = index.wall_distance(p, -1, &grad);
+      if (d + TubeFloor::a > 1e-5 && d + TubeFloor::a < 2e-4 && grad.norm() < 0.98 &&
+          (points.empty() || (p - points.back()).norm() > 2e-5))
+        points.push_back(p);
+    }
+  }
+  ASSERT_GE(points.size(), 3u) << "no blended wall points found";
+  TubeFloor crease(std::move(net), points);
+  ContactParams p{.stiffness = 3e4, .friction = 0.3, .tip_friction = 0.3, .slip_speed = 1e-4};
+  WallContact contact(p, TubeFloor::a);
+  crease.press(contact, true);
+  WallFriction friction(p);
+  std::vector<Vec3> x = crease.x0;
+  std::mt19937 rng(2);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (size_t i = 0; i < x.size(); ++i)  // sliding, from 0.1 to 2 cm/s
+    x[i] += TubeFloor::dt * (1e-3 + 2e-3 * static_cast<double>(i)) * Vec3(g(rng), g(rng), g(rng));
+  const auto acc = crease.friction(friction, contact, x, TubeFloor::dt);
+  for (size_t i = 0; i < x.size(); ++i) {
+    const int k = static_cast<int>(i);
+    ASSERT_GT(contact.normal_force(k), 0.0) << i;
+    EXPECT_NEAR(contact.normal(k).norm(), 1.0, 1e-12) << i;
+    const double f = acc.forces()[i].norm();
+    EXPECT_LT(f, p.friction * contact.normal_force(k) * (1.0 + 1e-12)) << i;
+    for (int c = 0; c < 3; ++c) {
+      const double h = 1e-3 * p.slip_speed * TubeFloor::dt;
+      auto xp = x, xm = x;
+      xp[i][c] += h;
+      xm[i][c] -= h;
+      const auto ap = crease.friction(friction, contact, xp, TubeFloor::dt);
+      const auto am = crease.friction(friction, contact, xm, TubeFloor::dt);
+      EXPECT_NEAR(-(ap.energy() - am.energy()) / (2 * h), acc.forces()[i][c], 1e-6 * f) << "vertex " << i;
     }
   }
 }

@@ -44,7 +44,8 @@ double capsule_distance(const Vec3& x, const Vec3& a, const Vec3& b, double r, V
 /// @brief Smooth Coulomb friction: the dissipation potential
 /// \f[ D(v) = \mu N\,(\sqrt{|v_t|^2 + \varepsilon^2} - \varepsilon),\quad v_t = (I - n n^T) v \f]
 /// gives f = −∇_v D = −μN v_t/√(|v_t|² + ε²): viscous below the slip speed ε (sticking),
-/// saturating at μN when sliding. ∂f/∂v = −∇²_v D is symmetric negative semi-definite.
+/// saturating at μN when sliding. ∂f/∂v = −∇²_v D is symmetric negative semi-definite. @p n
+/// must be a unit vector (else I − n nᵀ is no projector and f is not −∇D).
 struct FrictionResult {
   double dissipation = 0.0;  ///< D(v)
   Vec3 force = Vec3::Zero();

@@ -46,8 +46,11 @@ class WallContact {
   }
   [[nodiscard]] const CompliantWall* deformable() const { return deformable_; }
 
-  /// @brief Vertex @p i's normal force [N] and normal: those of the step's start once a step
-  /// has ended (lagged, as in IPC), else those of the last evaluation.
+  /// @brief Vertex @p i's normal force [N] and its unit direction: those of the step's start
+  /// once a step has ended (lagged, as in IPC), else those of the last evaluation. (Where
+  /// capsules blend, the wall distance's gradient is shorter than 1: the force is the penalty's
+  /// multiplier times its length, the direction the gradient normalized, so that the friction
+  /// pressed by them is Coulomb's and the gradient of its potential.)
   [[nodiscard]] double normal_force(int i) const {
     const auto k = static_cast<size_t>(i);
     return lagged() ? lag_normal_force_[k] : normal_force_[k];
@@ -77,6 +80,9 @@ class WallContact {
   void invalidate_anchors() { anchors_stale_ = true; }
 
  private:
+  /// @brief Record vertex @p k's normal force and direction from the penalty's (or the
+  /// compliant solve's) multiplier and the wall distance's gradient @p grad (any length).
+  static void record_normal(double multiplier, const Vec3& grad, double& force, Vec3& normal);
   void ensure_size(int n);
   /// The step's candidate contacts with a deformable wall: free vertices within reach of the
   /// rest wall at the step's first evaluation, anchored at their closest wall points, with the
