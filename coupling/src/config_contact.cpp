@@ -27,11 +27,11 @@ void declare_contact_keys(config::Schema& s) {
   s.add("contact.introducer", Type::Bool, "true", D::None,
         "the entry is an introducer sheath: the wire cannot come back out behind the entry plane (within twice the "
         "entry vessel's radius of its axis)");
-  s.add("contact.onset", Type::Number, "0", D::Length,
+  s.add("contact.onset", Type::Number, "", D::Length,
         "width of the wall penalty's smoothed onset: the contact force ramps in over +-onset/2 around first touch "
         "(its stiffness without a jump), so that Newton sees a wall before it reaches it; a lightly touching wire "
-        "rests up to onset/2 short of the wall (0: the sharp onset; about 0.2 wire radii takes a third of the Newton "
-        "iterations off a pushed wire on the arch but leaves some other pushes unconverged: docs/performance.md)")
+        "rests up to onset/2 short of the wall (default: 0.2 wire radii, which takes 10-30% of the Newton iterations "
+        "and most line-search cuts off a pushed wire: docs/performance.md; 0: the sharp onset)")
       .non_negative();
   s.add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)")
       .non_negative();
@@ -45,7 +45,7 @@ ContactSettings contact_settings(const config::Config& scene) {
   k.params.friction = c.number("contact.friction");
   k.params.tip_friction = c.number_or("contact.tip_friction", k.params.friction);
   k.params.viscous_friction = c.number("contact.viscous_friction");
-  k.params.onset = c.number("contact.onset");
+  k.params.onset = c.number_or("contact.onset", 0.2 * given_or_declared(scene, "wire").number("wire.radius"));
   k.settle = c.boolean("contact.settle");
   k.allow_outside = c.boolean("contact.allow_outside");
   k.introducer = c.boolean("contact.introducer");

@@ -686,7 +686,9 @@ TEST(CatheterPair, ACatheterSlidesOnTheWallWhenPushedWithMuTimesItsWeight) {
   // and 0 without friction. The catheter's wall friction is the wire's (VesselForces, the same
   // contact: keys). The 1 cm of wire inside hangs from its own clamp (its sag, 1e-9 m, is far
   // within the lumen's clearance), and the clamp carries the catheter's weight over a boundary
-  // layer of about (EI / k)^¼ ≈ 2 cm on the soft penalty foundation: 25 cm are inserted.
+  // layer of about (EI / k)^¼ ≈ 2 cm on the soft penalty foundation: 25 cm are inserted. The
+  // clamp holds the catheter exactly on the wall (δ = 0), so the wall's onset is sharp here: a
+  // smoothed one already presses there with k·onset/8, a hundred times the weight.
   const double g = 9.81, pi = std::numbers::pi, rho = 1200, ro = 1e-3, ri = 0.55e-3;
   for (const double mu : {0.0, 0.1, 0.3}) {
     const auto dir = flowire::testing::scratch_dir("catheter-coulomb");
@@ -698,7 +700,8 @@ insertion: {speed: 0, initial_length: 1 cm}
 catheter: {length: 0.4, outer_radius: 1 mm, inner_radius: 0.55 mm, youngs_modulus: 2 GPa, density: 1200,
            initial_length: 24 cm, insertion: {speed: 1 cm/s}}
 loads: [{type: gravity, value: [0, 0, -9.81]}]
-contact: {friction: )" + std::to_string(mu) +
+contact: {onset: 0, friction: )" +
+                             std::to_string(mu) +
                              R"(}
 solve: {dt: 5 ms, duration: 1 s}
 output: {csv: false, vtk: false}

@@ -39,7 +39,9 @@ TEST(ConfigContact, WithoutAContactSectionTheDeclaredDefaultsApply) {
   EXPECT_DOUBLE_EQ(absent.params.friction, 0.1);
   EXPECT_DOUBLE_EQ(absent.params.tip_friction, 0.1);
   EXPECT_DOUBLE_EQ(absent.params.viscous_friction, 0.0);
-  EXPECT_DOUBLE_EQ(absent.params.onset, 0.0);
+  // The onset: 0.2 of the wire's radius (the declared 0.45 mm, or the scene's own).
+  EXPECT_DOUBLE_EQ(absent.params.onset, 0.2 * 0.45e-3);
+  EXPECT_DOUBLE_EQ(contact_settings(test::scene("wire: {radius: 0.3 mm}\n")).params.onset, 0.2 * 0.3e-3);
   EXPECT_TRUE(absent.settle);
   EXPECT_FALSE(absent.allow_outside);
   EXPECT_TRUE(absent.introducer);
