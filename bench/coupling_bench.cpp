@@ -148,7 +148,8 @@ flow:
     cp.stiffness = 3e4;
     cp.friction = 0.2;
     cp.tip_friction = 0.05;
-    coupling::DragModel dp;  // the example's law: cylinder cross-flow drag + annular shear
+    cp.onset = 0.2 * w.radius;  // the scene's default (contact.onset)
+    coupling::DragModel dp;     // the example's law: cylinder cross-flow drag + annular shear
     dp.law = coupling::DragLaw::Cylinder;
     dp.wire_radius = w.radius;
     dp.wire_length = w.length;
