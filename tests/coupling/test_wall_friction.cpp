@@ -69,6 +69,17 @@ struct TubeFloor {
     for (size_t i = 0; i < x.size(); ++i) EXPECT_LT((tally[i] - acc.forces()[i]).norm(), 1e-15);
     return acc;
   }
+  /// Central differences in vertex @p i's coordinate @p c (step @p h): −∂E/∂x_ic of the
+  /// friction's incremental potential, and ∂f_i/∂x_ic.
+  std::pair<double, Vec3> differences(const WallFriction& f, const WallContact& c, const std::vector<Vec3>& x, size_t i,
+                                      int coord, double h) {
+    auto xp = x, xm = x;
+    xp[i][coord] += h;
+    xm[i][coord] -= h;
+    const auto ap = friction(f, c, xp, dt);
+    const auto am = friction(f, c, xm, dt);
+    return {-(ap.energy() - am.energy()) / (2 * h), Vec3((ap.forces()[i] - am.forces()[i]) / (2 * h))};
+  }
 };
 
 }  // namespace
@@ -92,15 +103,11 @@ TEST(WallFriction, ItsIncrementalPotentialsGradientIsTheForceAndItsVelocityJacob
     EXPECT_EQ(acc.forces()[i], acc.conservative_forces()[i]);
     const double speed = ((x[i] - floor.x0[i]) / TubeFloor::dt).norm();
     for (int c = 0; c < 3; ++c) {
-      const double h = 1e-3 * std::min(speed, p.slip_speed) * TubeFloor::dt;
-      auto xp = x, xm = x;
-      xp[i][c] += h;
-      xm[i][c] -= h;
-      const auto ap = floor.friction(friction, contact, xp, TubeFloor::dt);
-      const auto am = floor.friction(friction, contact, xm, TubeFloor::dt);
-      EXPECT_NEAR(-(ap.energy() - am.energy()) / (2 * h), acc.forces()[i][c], 1e-5 * f) << "vertex " << i;
+      const auto [force, dfdx] =
+          floor.differences(friction, contact, x, i, c, 1e-3 * std::min(speed, p.slip_speed) * TubeFloor::dt);
+      EXPECT_NEAR(force, acc.forces()[i][c], 1e-5 * f) << "vertex " << i;
       // ∂f/∂v = Δt ∂f/∂x.
-      const Vec3 col = (ap.forces()[i] - am.forces()[i]) / (2 * h) * TubeFloor::dt;
+      const Vec3 col = dfdx * TubeFloor::dt;
       EXPECT_LT((col - acc.velocity_jacobians()[i].col(c)).norm(), 1e-5 * acc.velocity_jacobians()[i].norm() + 1e-12)
           << "vertex " << i << " column " << c;
     }
@@ -144,15 +151,10 @@ TEST(WallFriction, WhereCapsulesBlendItIsPressedAlongTheUnitNormalAndStillTheGra
     EXPECT_NEAR(contact.normal(k).norm(), 1.0, 1e-12) << i;
     const double f = acc.forces()[i].norm();
     EXPECT_LT(f, p.friction * contact.normal_force(k) * (1.0 + 1e-12)) << i;
-    for (int c = 0; c < 3; ++c) {
-      const double h = 1e-3 * p.slip_speed * TubeFloor::dt;
-      auto xp = x, xm = x;
-      xp[i][c] += h;
-      xm[i][c] -= h;
-      const auto ap = crease.friction(friction, contact, xp, TubeFloor::dt);
-      const auto am = crease.friction(friction, contact, xm, TubeFloor::dt);
-      EXPECT_NEAR(-(ap.energy() - am.energy()) / (2 * h), acc.forces()[i][c], 1e-6 * f) << "vertex " << i;
-    }
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(crease.differences(friction, contact, x, i, c, 1e-3 * p.slip_speed * TubeFloor::dt).first,
+                  acc.forces()[i][c], 1e-6 * f)
+          << "vertex " << i;
   }
 }
 
