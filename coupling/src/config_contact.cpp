@@ -30,7 +30,7 @@ void declare_contact_keys(config::Schema& s) {
   s.add("contact.onset", Type::Number, "", D::Length,
         "width of the wall penalty's smoothed onset: the contact force ramps in over +-onset/2 around first touch "
         "(its stiffness without a jump), so that Newton sees a wall before it reaches it; a lightly touching wire "
-        "rests up to onset/2 short of the wall (default: 0.2 wire radii, which takes 10-30% of the Newton iterations "
+        "rests up to onset/2 short of the wall (default: 0.2 wire radii, which takes 5-20% of the Newton iterations "
         "and most line-search cuts off a pushed wire: docs/performance.md; 0: the sharp onset)")
       .non_negative();
   s.add("contact.viscous_friction", Type::Number, "0", D::None, "viscous wall friction (N*s/m per unit length)")
