@@ -237,6 +237,7 @@ nlohmann::json run_fem(const config::Config& c, const vessels::Network& net, con
         "has no capacitor; use flow.model: rlc with fem.frames for the windkessel dynamics)");
   flow::fem::FemOptions fo = fem_options(c);
   fo.segment_laws = spec.segment_laws;
+  fo.junction_losses = !spec.junctions.empty();
   fo.total_pressure = spec.total_pressure;
   fo.end_alpha = spec.end_alpha;
   const long frames = c.integer("fem.frames");  // checked by check_fem
@@ -317,11 +318,12 @@ nlohmann::json calibrate_scene(const config::Config& c, const CalibrateOptions& 
   (void)take_warnings();
   const vessels::Network net = build_scene_network(c);
   flow::FlowSpec spec = scene_flow(c, net);
-  if (!spec.segment_laws.empty()) {
+  if (!spec.segment_laws.empty() || !spec.junctions.empty()) {
     warn(fmt::format("calibrate: the scene's {} set aside; the fit starts from Poiseuille segments",
                      c.has("vessels.calibration") ? "vessels.calibration is" : "flow.losses are"));
     spec.segment_laws.clear();
     spec.stenoses.clear();
+    spec.junctions.clear();
     spec.total_pressure = false;
     spec.end_alpha.clear();
   }

@@ -215,7 +215,8 @@ flow::FlowSpec scene_flow_conditions(const config::Config& c, const vessels::Net
 flow::FlowSpec scene_flow(const config::Config& c, const vessels::Network& net) {
   flow::FlowSpec spec = scene_flow_conditions(c, net);
   if (c.has("vessels.calibration")) {
-    for (const char* key : {"flow.losses.stenosis", "flow.losses.curvature", "flow.losses.entrance"})
+    for (const char* key :
+         {"flow.losses.stenosis", "flow.losses.curvature", "flow.losses.entrance", "flow.losses.junction"})
       if (c.string_or(key, "none") != "none")
         throw_input_error(c.where(key), fmt::format("vessels.calibration already holds the 3D solution's losses: {} "
                                                     "would count them twice (give one or the other)",

@@ -106,6 +106,8 @@ void CoSimulation::build_flow(nlohmann::json& s) {
     s["flow"]["losses"]["entrance"] = {{"model", "shah"},
                                        {"inlet_profile", scene_.string("flow.losses.inlet_profile")},
                                        {"entrances", fsolver_->spec().entrances}};
+  if (scene_.string_or("flow.losses.junction", "none") != "none")
+    s["flow"]["losses"]["junction"] = {{"model", "unified"}, {"junctions", fsolver_->spec().junctions.size()}};
 }
 
 void CoSimulation::build_wire(nlohmann::json& s) {

@@ -15,8 +15,19 @@
 // backtracking line search on |F| converge to the tolerance in a few iterations; between frames
 // the last factorization is reused (chord steps, one solve each) while it still converges fast; the superposition of
 // unit responses does not hold for a nonlinear network, so every frame is solved.
+//
+// With junction losses (junction.hpp) the static pressure of a collecting branch's end is below
+// its junction node's by a drop that depends on every flow at that junction, so a segment
+// touching a junction no longer has its flow as a function of its two node pressures alone. The
+// flows of those segments join the unknowns and their laws the equations, each divided by the
+// segment's linear resistance (a flow, like the node balances):
+//   (Δp(Q) − (p_from − δ_from) + (p_to − δ_to)) / R = 0,
+// δ the junction's drop at that end (0 at an ordinary node). The Jacobian is no longer symmetric
+// (a drop depends on the other branches' flows); it is factored by KLU on the pattern analysed
+// once, with the same Newton, chord and line-search steps.
 #include <fmt/format.h>
 #include <Eigen/CholmodSupport>
+#include <Eigen/KLUSupport>
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <array>
@@ -33,13 +44,21 @@ class NewtonSolver final : public FrameSolver {
   NewtonSolver(const Network& net, FlowSpec spec) : FrameSolver(net, std::move(spec)) {
     Stopwatch sw;
     a_ = assemble(net_, spec_, resistance_);
+    if (spec_.segment_laws.empty()) spec_.segment_laws.assign(static_cast<size_t>(net_.num_segments()), SegmentLaw{});
     const int nu = a_.num_unknowns();
-    x_ = Eigen::VectorXd::Zero(nu);
-    f_ = Eigen::VectorXd::Zero(nu);
-    inj_ = Eigen::VectorXd::Zero(nu);
+    set_up_junctions();
+    const int nx = nu + static_cast<int>(jseg_.size());
+    x_ = Eigen::VectorXd::Zero(nx);
+    f_ = Eigen::VectorXd::Zero(nx);
+    inj_ = Eigen::VectorXd::Zero(nx);
     coef_.resize(static_cast<size_t>(a_.num_sources()));
     dq_.resize(static_cast<size_t>(net_.num_segments()));
-    if (nu > 0) {
+    if (!jseg_.empty()) {
+      triplets_ = tangent_triplets(nullptr);
+      jac_.resize(nx, nx);
+      jac_.setFromTriplets(triplets_.begin(), triplets_.end());
+      lu_.analyzePattern(jac_);
+    } else if (nu > 0) {
       jac_ = nodal_matrix(net_, a_);
       chol_.analyzePattern(jac_);
       // Where each conductance goes among the matrix's values: refilled in place every factorization.
@@ -107,8 +126,13 @@ class NewtonSolver final : public FrameSolver {
       double qmax = 0.0;
       for (int s = 0; s < net_.num_segments(); ++s) {
         const auto& seg = net_.segment(s);
-        const double dp = p[seg.node_from] - p[seg.node_to];
-        q[s] = spec_.segment_laws[static_cast<size_t>(s)].flow(dp, r_eff_[static_cast<size_t>(s)], q[s]);
+        const int k = jindex_.empty() ? -1 : jindex_[static_cast<size_t>(s)];
+        if (k >= 0) {
+          q[s] = x_[nu + k];
+        } else {
+          const double dp = p[seg.node_from] - p[seg.node_to];
+          q[s] = spec_.segment_laws[static_cast<size_t>(s)].flow(dp, r_eff_[static_cast<size_t>(s)], q[s]);
+        }
         qmax = std::max(qmax, std::abs(q[s]));
       }
       f_ = -inj_;
@@ -123,9 +147,10 @@ class NewtonSolver final : public FrameSolver {
         if (uf >= 0) f_[uf] += q[s];
         if (ut >= 0) f_[ut] -= q[s];
       }
+      if (!jseg_.empty()) junction_residuals(p, q, false);
       return qmax;
     };
-    if (nu == 0) {
+    if (x_.size() == 0) {
       (void)balance();
       return;
     }
@@ -151,16 +176,23 @@ class NewtonSolver final : public FrameSolver {
     // The last factorization is kept (a chord step, one solve) while it still cuts the imbalance
     // at least fourfold a step; otherwise the tangent is refactored (a Newton step).
     bool refactor = !factored_, stalled = false;
+    const bool cold = !jseg_.empty() && history_ == 0;
     for (; it < kMaxIterations; ++it) {
       if (!(f_.lpNorm<Eigen::Infinity>() > kTolerance * scale)) break;
       // Round-off: a Newton step that no longer halves an imbalance already below the floor.
       if (stalled && !(f_.lpNorm<Eigen::Infinity>() > kFloor * scale)) break;
       const bool newton = refactor;
       if (refactor) {
-        factorize_tangent(t, q);
+        if (jseg_.empty())
+          factorize_tangent(t, q);
+        else
+          factorize_mixed(t, p, q);
         refactor = false;
       }
-      step_ = chol_.solve(f_);
+      if (jseg_.empty())
+        step_ = chol_.solve(f_);
+      else
+        step_ = lu_.solve(f_);
       const double before = norm;
       x0_ = x_;
       double alpha = 1.0;
@@ -169,7 +201,10 @@ class NewtonSolver final : public FrameSolver {
         set_unknowns(x_);
         scale = std::max(balance(), inj_scale);
         const double trial = f_.norm();
-        if (trial <= (1.0 - 1e-4 * alpha) * norm || cut == 30) {
+        // A cold start with junction losses takes its first step whole: from zero flows (where the
+        // drops and their slopes vanish) it is the linear network's solution, the start Newton's
+        // method needs for drops that grow as the square of the flows.
+        if (trial <= (1.0 - 1e-4 * alpha) * norm || cut == 30 || (cold && it == 0)) {
           norm = trial;
           break;
         }
@@ -187,13 +222,126 @@ class NewtonSolver final : public FrameSolver {
       history_ = std::min(history_ + 1, 3);
     }
     if (f_.lpNorm<Eigen::Infinity>() > kFloor * scale || !std::isfinite(norm))
-      throw_numerical_error(
-          fmt::format("flow: Newton's method on the nonlinear losses did not converge at t = {} s ({} iterations, node "
-                      "imbalance {:.3g} of the largest flow {:.3g} m³/s)",
-                      t, it, f_.lpNorm<Eigen::Infinity>() / scale, scale));
+      throw_numerical_error(fmt::format(
+          "flow: Newton's method on the nonlinear losses did not converge at t = {} s ({} iterations, node "
+          "imbalance {:.3g} of the largest flow {:.3g} m³/s){}",
+          t, it, f_.lpNorm<Eigen::Infinity>() / scale, scale,
+          jseg_.empty() ? ""
+                        : "; with junction losses the static pressure a junction recovers (where the flow slows "
+                          "into wider branches) grows with the square of the flow and can outgrow the network's "
+                          "resistance, leaving no steady flow under a prescribed pressure: give the outlets "
+                          "resistances or the inlet a flow"));
   }
 
  private:
+  /// The segments that touch a junction get a flow unknown each (after the node pressures).
+  void set_up_junctions() {
+    if (spec_.junctions.empty()) return;
+    jindex_.assign(static_cast<size_t>(net_.num_segments()), -1);
+    for (const auto& j : spec_.junctions)
+      for (const auto& b : j.branches)
+        if (jindex_[static_cast<size_t>(b.segment)] < 0) {
+          jindex_[static_cast<size_t>(b.segment)] = static_cast<int>(jseg_.size());
+          jseg_.push_back(b.segment);
+        }
+    jdrop_.assign(jseg_.size(), {0.0, 0.0});
+    jjac_.resize(spec_.junctions.size());
+    for (size_t i = 0; i < spec_.junctions.size(); ++i) {
+      const size_t n = spec_.junctions[i].branches.size();
+      jjac_[i].assign(n * n, 0.0);
+    }
+  }
+
+  /// The junctions' drops at the flows @p q (and their derivatives where @p jacobian), and the
+  /// junction segments' scaled law residuals into f_.
+  void junction_residuals(const double* p, const double* q, bool jacobian) const {
+    const int nu = a_.num_unknowns();
+    for (auto& d : jdrop_) d = {0.0, 0.0};
+    for (size_t i = 0; i < spec_.junctions.size(); ++i) {
+      const auto& j = spec_.junctions[i];
+      const size_t n = j.branches.size();
+      outward_.resize(n);
+      drop_.resize(n);
+      for (size_t b = 0; b < n; ++b) outward_[b] = j.branches[b].outward * q[j.branches[b].segment];
+      unified_junction_drops(j, spec_.density, outward_.data(), drop_.data(), jacobian ? jjac_[i].data() : nullptr);
+      for (size_t b = 0; b < n; ++b) {
+        const int s = j.branches[b].segment;
+        jdrop_[static_cast<size_t>(jindex_[static_cast<size_t>(s)])][net_.segment(s).node_from == j.node ? 0 : 1] =
+            drop_[b];
+      }
+    }
+    for (size_t k = 0; k < jseg_.size(); ++k) {
+      const int s = jseg_[k];
+      const auto& seg = net_.segment(s);
+      const double r = r_eff_[static_cast<size_t>(s)];
+      const double law = spec_.segment_laws[static_cast<size_t>(s)].pressure_drop(q[s], r);
+      const double dp = (p[seg.node_from] - jdrop_[k][0]) - (p[seg.node_to] - jdrop_[k][1]);
+      f_[nu + static_cast<int>(k)] = (law - dp) / r;
+    }
+  }
+
+  /// The mixed system's Jacobian (node balances and junction segments' laws against node
+  /// pressures and junction segments' flows) at the flows @p q, or its pattern (zeros) without them.
+  std::vector<Eigen::Triplet<double>> tangent_triplets(const double* q) const {
+    const int nu = a_.num_unknowns();
+    std::vector<Eigen::Triplet<double>> t;
+    for (int u = 0; u < nu; ++u)
+      t.emplace_back(u, u, a_.outlet_conductance[static_cast<size_t>(a_.node_of_unknown[static_cast<size_t>(u)])]);
+    for (int s = 0; s < net_.num_segments(); ++s) {
+      const auto& seg = net_.segment(s);
+      const int uf = a_.unknown_of_node[static_cast<size_t>(seg.node_from)];
+      const int ut = a_.unknown_of_node[static_cast<size_t>(seg.node_to)];
+      const int k = jindex_[static_cast<size_t>(s)];
+      const double r = q ? r_eff_[static_cast<size_t>(s)] : 1.0;
+      const double slope = q ? spec_.segment_laws[static_cast<size_t>(s)].slope(q[s], r) : 0.0;
+      if (k < 0) {
+        const double c = q ? 1.0 / slope : 0.0;
+        if (uf >= 0) t.emplace_back(uf, uf, c);
+        if (ut >= 0) t.emplace_back(ut, ut, c);
+        if (uf >= 0 && ut >= 0) {
+          t.emplace_back(uf, ut, -c);
+          t.emplace_back(ut, uf, -c);
+        }
+        continue;
+      }
+      const int row = nu + k;
+      if (uf >= 0) t.emplace_back(uf, row, 1.0);
+      if (ut >= 0) t.emplace_back(ut, row, -1.0);
+      t.emplace_back(row, row, slope / r);
+      if (uf >= 0) t.emplace_back(row, uf, -1.0 / r);
+      if (ut >= 0) t.emplace_back(row, ut, 1.0 / r);
+    }
+    // The drops' dependence on every flow at their junction: +δ at a segment's start, −δ at its end.
+    for (size_t i = 0; i < spec_.junctions.size(); ++i) {
+      const auto& j = spec_.junctions[i];
+      const size_t n = j.branches.size();
+      for (size_t b = 0; b < n; ++b) {
+        const int s = j.branches[b].segment;
+        const double sign = net_.segment(s).node_from == j.node ? 1.0 : -1.0;
+        const double r = q ? r_eff_[static_cast<size_t>(s)] : 1.0;
+        for (size_t l = 0; l < n; ++l) {
+          const auto& bl = j.branches[l];
+          const double v = q ? sign * jjac_[i][b * n + l] * bl.outward / r : 0.0;
+          t.emplace_back(nu + jindex_[static_cast<size_t>(s)], nu + jindex_[static_cast<size_t>(bl.segment)], v);
+        }
+      }
+    }
+    return t;
+  }
+
+  /// The mixed system's Jacobian at @p p, @p q, factored by KLU.
+  void factorize_mixed(double t, const double* p, const double* q) const {
+    junction_residuals(p, q, true);
+    triplets_ = tangent_triplets(q);
+    jac_.setFromTriplets(triplets_.begin(), triplets_.end());
+    lu_.factorize(jac_);
+    if (lu_.info() != Eigen::Success)
+      throw_numerical_error(
+          fmt::format("flow: the network's Jacobian with junction losses is singular at t = {} s", t));
+    factored_ = true;
+    ++factorizations_;
+  }
+
   /// The tangent conductance matrix at the flows @p q the last balance found (their pressures'
   /// roots: dQ/dΔp = 1 / (dΔp/dQ) there, no law inverted again), refilled in place and factored.
   void factorize_tangent(double t, const double* q) const {
@@ -228,6 +376,14 @@ class NewtonSolver final : public FrameSolver {
   mutable bool factored_ = false;                 // chol_ holds a tangent of this network
   mutable long factorizations_ = 0;
   mutable Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
+  // Junction losses: the segments with a flow unknown (k -> segment, segment -> k or -1), their
+  // drops at their two ends, each junction's Jacobian of its drops, the mixed system's factor.
+  std::vector<int> jseg_, jindex_;
+  mutable std::vector<std::array<double, 2>> jdrop_;
+  mutable std::vector<std::vector<double>> jjac_;
+  mutable std::vector<double> outward_, drop_;
+  mutable std::vector<Eigen::Triplet<double>> triplets_;
+  mutable Eigen::KLU<Eigen::SparseMatrix<double>> lu_;
   mutable Eigen::VectorXd x_, f_, inj_, step_, x0_;  // unknown pressures (the last frame's), balance, injections
   mutable std::vector<double> coef_, dq_, r_eff_;    // ..., tangent conductances, linear resistances
   mutable long iterations_ = 0;

@@ -147,7 +147,8 @@ std::string_view to_string(SolverKind s) {
 }
 
 bool FlowSpec::has_nonlinear_losses() const {
-  return std::any_of(segment_laws.begin(), segment_laws.end(), [](const SegmentLaw& l) { return l.nonlinear(); });
+  return !junctions.empty() ||
+         std::any_of(segment_laws.begin(), segment_laws.end(), [](const SegmentLaw& l) { return l.nonlinear(); });
 }
 
 double FlowSpec::cycle() const {
@@ -500,6 +501,11 @@ void declare_scene_keys(config::Schema& s) {
         "flow.losses.inlet_profile: flat): the excess drop of Shah's entrance correlation (1978), up to 1.25 "
         "rho/2 U^2 beyond Poiseuille's | none",
         {"none", "shah"});
+  s.add("flow.losses.junction", Type::Enum, "none", D::None,
+        "unified: at every junction each collecting branch's static pressure is below the supplying ones' by "
+        "C rho U^2, C from the flows' shares, areas and angles (Mynard & Valen-Sendstad 2015; negative where the "
+        "flow slows into a wider branch); quasi-steady poiseuille model only | none",
+        {"none", "unified"});
   s.add("flow.losses.inlet_profile", Type::Enum, "developed", D::None,
         "with flow.losses.entrance: developed (the inlet's flow is already Poiseuille's) | flat (it develops from "
         "the inlet too)",
@@ -753,6 +759,12 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
     if (cfg.string_or("flow.losses.inlet_profile", "developed") == "flat")
       for (const auto& in : s.inlets) entrance[static_cast<size_t>(in.node)] = 1;
     s.entrances = add_entrance_losses(net, s.density, s.viscosity, entrance, s.segment_laws);
+  }
+  if (cfg.string_or("flow.losses.junction", "none") == "unified") {
+    if (s.model == Model::Rlc)
+      throw_input_error(cfg.where("flow.losses.junction"),
+                        "junction losses are built for the quasi-steady model (flow.model: poiseuille), not rlc");
+    s.junctions = find_junctions(net);
   }
   return s;
 }

@@ -157,8 +157,16 @@ CompareResult compare_fields(const Network& net, const TetMesh& mesh, const Stok
       sp.branch = b;
       sp.s = s;
       sp.x = a + w * (c - a);
-      const double pa = node_value[static_cast<size_t>(br.nodes[k])];
-      const double pc = node_value[static_cast<size_t>(br.nodes[k + 1])];
+      // A junction's collecting branch starts below the junction's pressure (junction.hpp).
+      double drop_a = 0.0, drop_c = 0.0;
+      if (!flow.segment_end_drop.empty()) {
+        const auto& sd = net.segment(br.segments[k]);
+        const auto& d = flow.segment_end_drop[static_cast<size_t>(br.segments[k])];
+        drop_a = d[sd.node_from == br.nodes[k] ? 0 : 1];
+        drop_c = d[sd.node_from == br.nodes[k] ? 1 : 0];
+      }
+      const double pa = node_value[static_cast<size_t>(br.nodes[k])] - drop_a;
+      const double pc = node_value[static_cast<size_t>(br.nodes[k + 1])] - drop_c;
       sp.pressure_network = pa + w * (pc - pa);
       const double da = dist[static_cast<size_t>(br.nodes[k])], dc = dist[static_cast<size_t>(br.nodes[k + 1])];
       sp.path_distance = da + w * (dc - da);
@@ -337,7 +345,7 @@ CompareResult compare(const Network& net, const BoundaryValues& bv, const FemOpt
   const auto cond = group_conditions(d.mesh, d.bv);
   const StokesSolution sol =
       solve_stokes(d.mesh, std::span<const GroupCondition>(cond), comparison_stokes_options(opt, d.bv));
-  NetworkFlow nf = network_flow(d.network, d.bv, d.laws(net, opt.segment_laws));
+  NetworkFlow nf = network_flow(d.network, d.bv, d.laws(net, opt.segment_laws), opt.junction_losses);
   if (opt.total_pressure) {
     nf.kinetic_density = d.bv.density;
     nf.end_alpha = d.nodal(opt.end_alpha, 1.0);

@@ -163,7 +163,7 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
       out.factorizations += sol.factorizations;
       out.basis_seconds += sol.assemble_seconds + sol.solve_seconds;
     }
-    NetworkFlow nf = network_flow(dnet, bv, laws);
+    NetworkFlow nf = network_flow(dnet, bv, laws, opt.junction_losses);
     if (opt.total_pressure) {
       nf.kinetic_density = bv.density;
       nf.end_alpha = domain.nodal(opt.end_alpha, 1.0);
@@ -186,7 +186,8 @@ PulsatileResult compare_pulsatile(const Network& net, std::span<const double> ti
   for (size_t i = 0; i < frames.size(); ++i) {
     CompareResult r;
     if (dyn) {
-      NetworkFlow nf = dyn->network_at ? dyn->network_at(times[i]) : network_flow(dnet, on_domain(frames[i]), laws);
+      NetworkFlow nf = dyn->network_at ? dyn->network_at(times[i])
+                                       : network_flow(dnet, on_domain(frames[i]), laws, opt.junction_losses);
       if (opt.total_pressure && !dyn->network_at) {
         nf.kinetic_density = frames[i].density;
         nf.end_alpha = domain.nodal(opt.end_alpha, 1.0);

@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "flowire/flow/junction.hpp"
 #include "flowire/vessels/network.hpp"
 
 namespace flowire::config {
@@ -267,6 +268,9 @@ struct FlowSpec {
   int curved_segments = 0;
   /// The branch ends where flow develops again (`flow.losses.entrance`, losses.hpp).
   int entrances = 0;
+  /// The junctions whose static pressure changes the unified model gives (`flow.losses.junction`,
+  /// junction.hpp); empty: every branch meeting at a node has its pressure.
+  std::vector<Junction> junctions;
   /// The segment laws are a calibration in total pressure (flow/calibration.hpp): the nodes hold
   /// p + ½ρū², but for the outlets (static values), and the laws of the segments that end at an
   /// outlet carry its dynamic pressure.
@@ -292,7 +296,8 @@ struct FlowSpec {
   /// @brief The period after which every periodic inlet repeats (the least common multiple of
   /// their periods: T for inlets of T and T/2), or 0 if all are constant.
   [[nodiscard]] double cycle() const;
-  /// @brief Whether a segment law is nonlinear (a quadratic term or a curved segment's Dean law).
+  /// @brief Whether the network is nonlinear (a segment law's quadratic term, Dean law or entrance, or
+  /// a junction's losses).
   [[nodiscard]] bool has_nonlinear_losses() const;
 };
 

@@ -8,6 +8,7 @@
 /// a flow at the inlet end, and at every outlet end a pressure or a resistance to a distal
 /// pressure. The FEM enforces them through its affine structure (stokes.hpp); the network
 /// solves them with its quasi-steady Poiseuille model (flowire::flow, sparse solver).
+#include <array>
 #include <span>
 #include <utility>
 #include <vector>
@@ -57,6 +58,9 @@ struct NetworkFlow {
   /// (nodes, or empty: 1) in total pressure, the kinetic energy factor α of each outlet: its total
   /// is its static value plus α½ρ(Q/A)²
   std::vector<double> end_alpha;
+  /// (segments, or empty) with junction losses, each segment's static pressure below its node's
+  /// at its start and at its end (flow/junction.hpp; 0 away from junctions)
+  std::vector<std::array<double, 2>> segment_end_drop;
 };
 
 /// @brief The inlet end node of the boundary values: `bv.inlet_node`, or
@@ -76,8 +80,10 @@ BoundaryValues renumbered(const BoundaryValues& bv, const Network& net, std::spa
 
 /// @brief Network pressures and flows for the boundary values (flowire::flow quasi-steady
 /// Poiseuille model, sparse solver; Newton's method where `laws`, one per segment, have quadratic
-/// terms).
-NetworkFlow network_flow(const Network& net, const BoundaryValues& bv, std::span<const flow::SegmentLaw> laws = {});
+/// terms; with @p junction_losses, Mynard & Valen-Sendstad's junction model at every junction,
+/// flow/junction.hpp, and the drops it gives each branch's end in NetworkFlow::segment_end_drop).
+NetworkFlow network_flow(const Network& net, const BoundaryValues& bv, std::span<const flow::SegmentLaw> laws = {},
+                         bool junction_losses = false);
 
 /// @brief Condition of each mesh group (wall: ignored) for the boundary values.
 /// @throws flowire::Error (usage) for a negative outlet resistance.

@@ -52,6 +52,8 @@ struct FemOptions {
   /// The network's segment laws (a calibration, flow::FlowSpec::segment_laws), one per segment of
   /// the input network, or empty: Poiseuille. The network side of the comparison obeys them.
   std::vector<flow::SegmentLaw> segment_laws;
+  /// The network side has Mynard & Valen-Sendstad's junction losses (`flow.losses.junction`).
+  bool junction_losses = false;
   /// The laws are a calibration in total pressure (NetworkFlow::kinetic_density).
   bool total_pressure = false;
   /// (input nodes, or empty) in total pressure, each outlet's α (flow::Calibration::end_alpha)
