@@ -5,6 +5,7 @@
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -114,8 +115,11 @@ class RlcBoundary final : public svzerod::Block {
 
 /// The segments' nonlinear losses (FlowSpec::segment_laws: a stenosis, a bend, a calibration):
 /// what each lossy segment's law adds to its linear drop R Q, Δp(Q) − R Q, on its row
-/// (R Q + L Q̇ − p_from + p_to + [Δp(Q) − R Q] = 0): the system's only nonlinear terms, so that the
-/// integrator iterates Newton's method within a step where a scene has them.
+/// (R Q + L Q̇ − p_from + p_to + [Δp(Q) − R Q] = 0), and the junctions' static pressure changes
+/// (junction.hpp): a segment's end at a junction is at p_J − δ, which adds +δ at its start and −δ
+/// at its end to its row, δ a function of every flow at that junction. These are the system's only
+/// nonlinear terms, so that the integrator iterates Newton's method within a step where a scene has
+/// them. (The assembler sets entries, so each row's terms are summed here before they are written.)
 class RlcLosses final : public svzerod::Block {
  public:
   struct Lossy {
@@ -123,7 +127,14 @@ class RlcLosses final : public svzerod::Block {
     SegmentLaw law;
     double resistance = 0.0;  // R: f R_P
   };
-  explicit RlcLosses(std::vector<Lossy> lossy) : Block("rlc losses"), lossy_(std::move(lossy)) {}
+  RlcLosses(std::vector<Lossy> lossy, std::vector<Junction> junctions, std::vector<int> junction_rows,
+            std::vector<std::vector<double>> junction_signs, double density)
+      : Block("rlc losses"),
+        lossy_(std::move(lossy)),
+        junctions_(std::move(junctions)),
+        rows_(std::move(junction_rows)),
+        signs_(std::move(junction_signs)),
+        density_(density) {}
   [[nodiscard]] const char* type() const override { return "RlcLosses"; }
   [[nodiscard]] std::string check_connections() const override { return {}; }
   [[nodiscard]] int num_equations() const override { return 0; }
@@ -131,15 +142,43 @@ class RlcLosses final : public svzerod::Block {
   void assemble(svzerod::Assembler& /*a*/, double /*t*/) const override {}
   void assemble_nonlinear(svzerod::Assembler& a, double /*t*/, const Eigen::VectorXd& y,
                           const Eigen::VectorXd& /*yd*/) const override {
+    c_.clear();
+    d_.clear();
     for (const Lossy& l : lossy_) {
       const double q = y[l.row];
-      a.c_nl(l.row, l.law.pressure_drop(q, l.resistance) - l.resistance * q);
-      a.dy(l.row, l.row, l.law.slope(q, l.resistance) - l.resistance);
+      c_[l.row] += l.law.pressure_drop(q, l.resistance) - l.resistance * q;
+      d_[{l.row, l.row}] += l.law.slope(q, l.resistance) - l.resistance;
     }
+    size_t first = 0;  // each junction's branches' rows and signs, in rows_ / signs_ order
+    for (size_t i = 0; i < junctions_.size(); ++i) {
+      const auto& j = junctions_[i];
+      const size_t n = j.branches.size();
+      outward_.resize(n);
+      drop_.resize(n);
+      jac_.resize(n * n);
+      for (size_t b = 0; b < n; ++b) outward_[b] = j.branches[b].outward * y[rows_[first + b]];
+      unified_junction_drops(j, density_, outward_.data(), drop_.data(), jac_.data());
+      for (size_t b = 0; b < n; ++b) {
+        const int row = rows_[first + b];
+        const double sign = signs_[i][b];
+        c_[row] += sign * drop_[b];
+        for (size_t l = 0; l < n; ++l) d_[{row, rows_[first + l]}] += sign * jac_[b * n + l] * j.branches[l].outward;
+      }
+      first += n;
+    }
+    for (const auto& [row, v] : c_) a.c_nl(row, v);
+    for (const auto& [rc, v] : d_) a.dy(rc.first, rc.second, v);
   }
 
  private:
   std::vector<Lossy> lossy_;
+  std::vector<Junction> junctions_;
+  std::vector<int> rows_;                   // every junction's branches' flow rows, junction after junction
+  std::vector<std::vector<double>> signs_;  // +1: the branch's segment starts at its junction, −1: ends there
+  double density_;
+  mutable std::map<int, double> c_;
+  mutable std::map<std::pair<int, int>, double> d_;
+  mutable std::vector<double> outward_, drop_, jac_;
 };
 
 /// Unknown layout: [p (num_nodes) | Q (num_segments) | per RCR or coronary outlet its outflow and its own unknowns].
@@ -276,8 +315,18 @@ class RlcSolver final : public FlowSolver {
     std::vector<RlcLosses::Lossy> lossy;
     for (size_t s = 0; s < spec_.segment_laws.size(); ++s)
       if (spec_.segment_laws[s].nonlinear()) lossy.push_back({qi(s), spec_.segment_laws[s], resistance_[s]});
-    if (!lossy.empty()) {
-      losses_ = std::make_unique<RlcLosses>(std::move(lossy));
+    std::vector<int> jrows;
+    std::vector<std::vector<double>> jsigns;
+    for (const auto& j : spec_.junctions) {
+      jsigns.emplace_back();
+      for (const auto& b : j.branches) {
+        jrows.push_back(qi(static_cast<size_t>(b.segment)));
+        jsigns.back().push_back(net_.segment(b.segment).node_from == j.node ? 1.0 : -1.0);
+      }
+    }
+    if (!lossy.empty() || !spec_.junctions.empty()) {
+      losses_ = std::make_unique<RlcLosses>(std::move(lossy), spec_.junctions, std::move(jrows), std::move(jsigns),
+                                            spec_.density);
       blocks.push_back(losses_.get());
     }
     for (auto& b : outlets_) blocks.push_back(b.get());

@@ -504,7 +504,7 @@ void declare_scene_keys(config::Schema& s) {
   s.add("flow.losses.junction", Type::Enum, "none", D::None,
         "unified: at every junction each collecting branch's static pressure is below the supplying ones' by "
         "C rho U^2, C from the flows' shares, areas and angles (Mynard & Valen-Sendstad 2015; negative where the "
-        "flow slows into a wider branch); quasi-steady poiseuille model only | none",
+        "flow slows into a wider branch) | none",
         {"none", "unified"});
   s.add("flow.losses.inlet_profile", Type::Enum, "developed", D::None,
         "with flow.losses.entrance: developed (the inlet's flow is already Poiseuille's) | flat (it develops from "
@@ -760,12 +760,7 @@ FlowSpec from_config(const config::Config& cfg, const Network& net) {
       for (const auto& in : s.inlets) entrance[static_cast<size_t>(in.node)] = 1;
     s.entrances = add_entrance_losses(net, s.density, s.viscosity, entrance, s.segment_laws);
   }
-  if (cfg.string_or("flow.losses.junction", "none") == "unified") {
-    if (s.model == Model::Rlc)
-      throw_input_error(cfg.where("flow.losses.junction"),
-                        "junction losses are built for the quasi-steady model (flow.model: poiseuille), not rlc");
-    s.junctions = find_junctions(net);
-  }
+  if (cfg.string_or("flow.losses.junction", "none") == "unified") s.junctions = find_junctions(net);
   return s;
 }
 
