@@ -133,14 +133,8 @@ TEST(UnifiedJunction, ItsDerivativesAgreeWithFiniteDifferences) {
   }
 }
 
-/// A Y (parent 3 mm, daughters 30% asymmetric) with every node's pressure and every segment's flow.
-struct YFlow {
-  Network net;
-  std::unique_ptr<FlowSolver> solver;
-};
-
-YFlow y_flow(const std::string& inlet, const std::string& junction) {
-  YFlow y;
+/// A Y at carotid scale: parent radius 3 mm, 24 mm branches, daughters 30% asymmetric (Murray).
+Network carotid_y() {
   vessels::YBifurcationParams yp;
   yp.parent_radius = 3e-3;
   yp.parent_length = 24e-3;
@@ -148,7 +142,18 @@ YFlow y_flow(const std::string& inlet, const std::string& junction) {
   yp.asymmetry = 0.3;
   vessels::BuildOptions bo;
   bo.max_segment_length = 6e-3;
-  y.net = Network::build(vessels::y_bifurcation(yp), bo);
+  return Network::build(vessels::y_bifurcation(yp), bo);
+}
+
+/// That Y with every node's pressure and every segment's flow.
+struct YFlow {
+  Network net;
+  std::unique_ptr<FlowSolver> solver;
+};
+
+YFlow y_flow(const std::string& inlet, const std::string& junction) {
+  YFlow y;
+  y.net = carotid_y();
   const auto cfg = config::load_config_text(
       "flow:\n  inlet: " + inlet + "\n  outlets: {pressure: 0}\n  losses: {junction: " + junction + "}\n",
       "junction.yaml", test::flow_schema());
@@ -202,14 +207,7 @@ TEST(UnifiedJunctionNetwork, TheRlcModelReachesTheQuasiSteadyModelsFlowUnderACon
   // The same Y, its junction in the rlc model (flows are its unknowns there): under a constant
   // inflow and outlet resistances its steady state and the state it keeps over a few steps are the
   // quasi-steady Newton solution's.
-  vessels::YBifurcationParams yp;
-  yp.parent_radius = 3e-3;
-  yp.parent_length = 24e-3;
-  yp.child_length = 24e-3;
-  yp.asymmetry = 0.3;
-  vessels::BuildOptions bo;
-  bo.max_segment_length = 6e-3;
-  const Network net = Network::build(vessels::y_bifurcation(yp), bo);
+  const Network net = carotid_y();
   auto solver = [&](const std::string& model) {
     const auto cfg = config::load_config_text("flow:\n  model: " + model +
                                                   "\n  inlet: {flow: 9.3e-6}\n  outlets: {resistance: 2e6}\n"
