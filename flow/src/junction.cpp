@@ -188,9 +188,8 @@ void unified_junction_drops(const Junction& j, double density, const double* out
     return q * q / (j.branches[i].area * j.branches[i].area);
   };
   if (jacobian == nullptr) {
-    std::vector<double> c(n);
-    coefficients<double>(j, outward, c.data());
-    for (size_t i = 0; i < n; ++i) drop[i] = c[i] * density * velocity2(i, outward[i]);
+    coefficients<double>(j, outward, drop);  // C, then C ρ U² in place
+    for (size_t i = 0; i < n; ++i) drop[i] = drop[i] * density * velocity2(i, outward[i]);
     return;
   }
   std::vector<Dual> o(n), c(n);
@@ -201,6 +200,30 @@ void unified_junction_drops(const Junction& j, double density, const double* out
     drop[i] = d.value();
     for (size_t k = 0; k < n; ++k)
       jacobian[i * n + k] = d.derivatives().size() > 0 ? d.derivatives()[static_cast<Eigen::Index>(k)] : 0.0;
+  }
+}
+
+void segment_end_drops(const Network& net, const std::vector<Junction>& junctions, double density, const double* q,
+                       std::vector<std::array<double, 2>>& drops, std::vector<std::vector<double>>* jacobians) {
+  drops.assign(static_cast<size_t>(net.num_segments()), {0.0, 0.0});
+  if (jacobians) jacobians->resize(junctions.size());
+  thread_local std::vector<double> outward, drop;  // (a junction's branches) reused from call to call
+  for (size_t i = 0; i < junctions.size(); ++i) {
+    const auto& j = junctions[i];
+    const size_t n = j.branches.size();
+    outward.resize(n);
+    drop.resize(n);
+    for (size_t b = 0; b < n; ++b) outward[b] = j.branches[b].outward * q[j.branches[b].segment];
+    double* jac = nullptr;
+    if (jacobians) {
+      (*jacobians)[i].resize(n * n);
+      jac = (*jacobians)[i].data();
+    }
+    unified_junction_drops(j, density, outward.data(), drop.data(), jac);
+    for (size_t b = 0; b < n; ++b) {
+      const int s = j.branches[b].segment;
+      drops[static_cast<size_t>(s)][net.segment(s).node_from == j.node ? 0 : 1] = drop[b];
+    }
   }
 }
 

@@ -54,7 +54,7 @@ class NewtonSolver final : public FrameSolver {
     coef_.resize(static_cast<size_t>(a_.num_sources()));
     dq_.resize(static_cast<size_t>(net_.num_segments()));
     if (!jseg_.empty()) {
-      triplets_ = tangent_triplets(nullptr);
+      tangent_triplets(nullptr, triplets_);
       jac_.resize(nx, nx);
       jac_.setFromTriplets(triplets_.begin(), triplets_.end());
       lu_.analyzePattern(jac_);
@@ -244,47 +244,30 @@ class NewtonSolver final : public FrameSolver {
           jindex_[static_cast<size_t>(b.segment)] = static_cast<int>(jseg_.size());
           jseg_.push_back(b.segment);
         }
-    jdrop_.assign(jseg_.size(), {0.0, 0.0});
-    jjac_.resize(spec_.junctions.size());
-    for (size_t i = 0; i < spec_.junctions.size(); ++i) {
-      const size_t n = spec_.junctions[i].branches.size();
-      jjac_[i].assign(n * n, 0.0);
-    }
   }
 
   /// The junctions' drops at the flows @p q (and their derivatives where @p jacobian), and the
   /// junction segments' scaled law residuals into f_.
   void junction_residuals(const double* p, const double* q, bool jacobian) const {
     const int nu = a_.num_unknowns();
-    for (auto& d : jdrop_) d = {0.0, 0.0};
-    for (size_t i = 0; i < spec_.junctions.size(); ++i) {
-      const auto& j = spec_.junctions[i];
-      const size_t n = j.branches.size();
-      outward_.resize(n);
-      drop_.resize(n);
-      for (size_t b = 0; b < n; ++b) outward_[b] = j.branches[b].outward * q[j.branches[b].segment];
-      unified_junction_drops(j, spec_.density, outward_.data(), drop_.data(), jacobian ? jjac_[i].data() : nullptr);
-      for (size_t b = 0; b < n; ++b) {
-        const int s = j.branches[b].segment;
-        jdrop_[static_cast<size_t>(jindex_[static_cast<size_t>(s)])][net_.segment(s).node_from == j.node ? 0 : 1] =
-            drop_[b];
-      }
-    }
+    segment_end_drops(net_, spec_.junctions, spec_.density, q, jdrop_, jacobian ? &jjac_ : nullptr);
     for (size_t k = 0; k < jseg_.size(); ++k) {
       const int s = jseg_[k];
       const auto& seg = net_.segment(s);
       const double r = r_eff_[static_cast<size_t>(s)];
       const double law = spec_.segment_laws[static_cast<size_t>(s)].pressure_drop(q[s], r);
-      const double dp = (p[seg.node_from] - jdrop_[k][0]) - (p[seg.node_to] - jdrop_[k][1]);
+      const auto& d = jdrop_[static_cast<size_t>(s)];
+      const double dp = (p[seg.node_from] - d[0]) - (p[seg.node_to] - d[1]);
       f_[nu + static_cast<int>(k)] = (law - dp) / r;
     }
   }
 
   /// The mixed system's Jacobian (node balances and junction segments' laws against node
   /// pressures and junction segments' flows) at the flows @p q, or its pattern (zeros) without them.
-  std::vector<Eigen::Triplet<double>> tangent_triplets(const double* q) const {
+  /// (Into @p t, emptied first: its storage is kept from one factorization to the next.)
+  void tangent_triplets(const double* q, std::vector<Eigen::Triplet<double>>& t) const {
     const int nu = a_.num_unknowns();
-    std::vector<Eigen::Triplet<double>> t;
+    t.clear();
     for (int u = 0; u < nu; ++u)
       t.emplace_back(u, u, a_.outlet_conductance[static_cast<size_t>(a_.node_of_unknown[static_cast<size_t>(u)])]);
     for (int s = 0; s < net_.num_segments(); ++s) {
@@ -326,13 +309,12 @@ class NewtonSolver final : public FrameSolver {
         }
       }
     }
-    return t;
   }
 
   /// The mixed system's Jacobian at @p p, @p q, factored by KLU.
   void factorize_mixed(double t, const double* p, const double* q) const {
     junction_residuals(p, q, true);
-    triplets_ = tangent_triplets(q);
+    tangent_triplets(q, triplets_);
     jac_.setFromTriplets(triplets_.begin(), triplets_.end());
     lu_.factorize(jac_);
     if (lu_.info() != Eigen::Success)
@@ -376,12 +358,11 @@ class NewtonSolver final : public FrameSolver {
   mutable bool factored_ = false;                 // chol_ holds a tangent of this network
   mutable long factorizations_ = 0;
   mutable Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> chol_;
-  // Junction losses: the segments with a flow unknown (k -> segment, segment -> k or -1), their
-  // drops at their two ends, each junction's Jacobian of its drops, the mixed system's factor.
+  // Junction losses: the segments with a flow unknown (k -> segment, segment -> k or -1), every
+  // segment's drops at its two ends, each junction's Jacobian of its drops, the mixed system's factor.
   std::vector<int> jseg_, jindex_;
   mutable std::vector<std::array<double, 2>> jdrop_;
   mutable std::vector<std::vector<double>> jjac_;
-  mutable std::vector<double> outward_, drop_;
   mutable std::vector<Eigen::Triplet<double>> triplets_;
   mutable Eigen::KLU<Eigen::SparseMatrix<double>> lu_;
   mutable Eigen::VectorXd x_, f_, inj_, step_, x0_;  // unknown pressures (the last frame's), balance, injections

@@ -127,18 +127,8 @@ NetworkFlow network_flow(const Network& net, const BoundaryValues& bv, std::span
   nf.node_pressure.resize(static_cast<size_t>(net.num_nodes()));
   nf.segment_flow.resize(static_cast<size_t>(net.num_segments()));
   solver->solve_at(0.0, nf.node_pressure, nf.segment_flow);
-  if (!spec.junctions.empty()) {
-    nf.segment_end_drop.assign(static_cast<size_t>(net.num_segments()), {0.0, 0.0});
-    for (const auto& j : spec.junctions) {
-      std::vector<double> outward, drop(j.branches.size());
-      for (const auto& b : j.branches) outward.push_back(b.outward * nf.segment_flow[static_cast<size_t>(b.segment)]);
-      flow::unified_junction_drops(j, spec.density, outward.data(), drop.data());
-      for (size_t i = 0; i < j.branches.size(); ++i) {
-        const int s = j.branches[i].segment;
-        nf.segment_end_drop[static_cast<size_t>(s)][net.segment(s).node_from == j.node ? 0 : 1] = drop[i];
-      }
-    }
-  }
+  if (!spec.junctions.empty())
+    flow::segment_end_drops(net, spec.junctions, spec.density, nf.segment_flow.data(), nf.segment_end_drop);
   return nf;
 }
 

@@ -29,6 +29,7 @@
 /// pseudo-collector's axis, which reduces to the planar model where the branches are coplanar.
 /// The merged collector direction is the mean of the collectors' unit vectors (the authors take
 /// the mean of their angles, the same wherever the collectors span less than π).
+#include <array>
 #include <vector>
 
 #include "flowire/vessels/network.hpp"
@@ -63,6 +64,14 @@ struct Junction {
 /// the drops are smooth in the flows and the derivatives exact (forward automatic differentiation).
 void unified_junction_drops(const Junction& j, double density, const double* outward, double* drop,
                             double* jacobian = nullptr);
+
+/// @brief Every segment's static pressure below its nodes' at its start ([0]) and its end ([1]) at
+/// the segment flows @p q (m³/s, node_from → node_to): the unified model's drop where that end
+/// meets one of @p junctions, 0 elsewhere. @p drops is resized to the network's segments; where
+/// @p jacobians is given it gets each junction's ∂drop/∂outward (unified_junction_drops).
+void segment_end_drops(const Network& net, const std::vector<Junction>& junctions, double density, const double* q,
+                       std::vector<std::array<double, 2>>& drops,
+                       std::vector<std::vector<double>>* jacobians = nullptr);
 
 /// @brief The unified model's coefficient C of every branch (0 for the suppliers), as the authors
 /// tabulate it: p_J − p_c = C_c ρ U_c².
