@@ -152,10 +152,10 @@ __attribute__((always_inline)) inline bool factorize_band(double* __restrict L, 
 /// the interior rows run with a compile-time bandwidth.
 template <int B>
 __attribute__((always_inline)) inline void solve_band(const double* __restrict L, int n, int b_runtime,
-                                                      double* __restrict x) {
+                                                      double* __restrict x, int first) {
   const int b = B > 0 ? B : b_runtime;
   const size_t stride = static_cast<size_t>(b) + 1;
-  for (int i = 0; i < n; ++i) {  // L y = rhs
+  for (int i = first; i < n; ++i) {  // L y = rhs (zero above row first: y too)
     const double* li = L + static_cast<size_t>(i) * stride;
     if (B > 0 && i >= B) {
       // Only x[i−1] was just computed: sum the older terms in independent pairs so the
@@ -179,8 +179,8 @@ __attribute__((always_inline)) inline void solve_band(const double* __restrict L
     for (int k = k0; k < i; ++k) s -= li[k - i + b] * x[k];
     x[i] = s;
   }
-  for (int i = 0; i < n; ++i) x[i] /= L[static_cast<size_t>(i) * stride + b];  // D z = y
-  for (int i = n - 1; i >= 0; --i) {                                           // Lᵀ x = z
+  for (int i = first; i < n; ++i) x[i] /= L[static_cast<size_t>(i) * stride + b];  // D z = y
+  for (int i = n - 1; i >= 0; --i) {                                               // Lᵀ x = z
     const double* li = L + static_cast<size_t>(i) * stride;
     const double xi = x[i];
     if (B > 0 && i >= B) {
@@ -215,14 +215,15 @@ bool BandedLDLT::factorize(const BandedMatrix& a, double min_pivot) {
 }
 
 FLOWIRE_KERNEL_CLONES
-void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const {
+void BandedLDLT::solve_in_place(Eigen::Ref<Eigen::VectorXd> x, int first) const {
   const int n = l_.size();
   const int b = l_.bandwidth();
   assert(x.size() == n);
+  first = std::clamp(first, 0, n);
   if (b == 10)
-    solve_band<10>(l_.data().data(), n, b, x.data());
+    solve_band<10>(l_.data().data(), n, b, x.data(), first);
   else
-    solve_band<0>(l_.data().data(), n, b, x.data());
+    solve_band<0>(l_.data().data(), n, b, x.data(), first);
 }
 
 void LowRankStiffness::multiply_add(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const {

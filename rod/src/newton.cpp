@@ -148,7 +148,8 @@ bool NewtonSolver::direction(NewtonProblem& p, const NewtonOptions& o, bool chor
     if (o.linear_solver == LinearSolver::Banded) {
       ok = attempt == 0 ? (ldlt_.factorize(H) && ldlt_.negative_pivots() == 0) : ldlt_.factorize(H, 1e-12 * scale());
       if (ok)
-        ok = low_rank_.prepare(low_rank, nd, first_free, first_fixed, [&](auto col) { ldlt_.solve_in_place(col); });
+        ok = low_rank_.prepare(low_rank, nd, first_free, first_fixed,
+                               [&](auto col, int first) { ldlt_.solve_in_place(col, first); });
       if (ok) {
         dq_.head(nd) = rhs;
         ldlt_.solve_in_place(dq_.head(nd));
@@ -171,7 +172,7 @@ bool NewtonSolver::direction(NewtonProblem& p, const NewtonOptions& o, bool chor
         ok = sparse_ldlt_.info() == Eigen::Success && (sparse_ldlt_.vectorD().array() > 0.0).all();
       }
       if (ok)
-        ok = low_rank_.prepare(low_rank, nd, first_free, first_fixed, [&](auto col) {
+        ok = low_rank_.prepare(low_rank, nd, first_free, first_fixed, [&](auto col, int) {
           const Eigen::VectorXd x = sparse_ldlt_.solve(col);
           col = x;
         });

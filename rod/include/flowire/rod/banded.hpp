@@ -97,8 +97,9 @@ class BandedLDLT {
   /// turns an indefinite Newton matrix into a nearby positive definite one while leaving
   /// the well-conditioned directions untouched; only non-finite values then fail.
   bool factorize(const BandedMatrix& a, double min_pivot = 0.0);
-  /// @brief Solve A x = rhs in place (after a successful factorize).
-  void solve_in_place(Eigen::Ref<Eigen::VectorXd> x) const;
+  /// @brief Solve A x = rhs in place (after a successful factorize). With @p first > 0, rhs is
+  /// zero above row @p first, and the forward sweep starts there (the same result).
+  void solve_in_place(Eigen::Ref<Eigen::VectorXd> x, int first = 0) const;
   /// @brief Number of negative pivots of the last factorization.
   [[nodiscard]] int negative_pivots() const { return negative_; }
   /// @brief Number of pivots replaced by a modified factorization.
@@ -135,40 +136,54 @@ struct LowRankStiffness {
 
 /// @brief Solves with H + U R Uᵀ from a solver of H (Sherman–Morrison–Woodbury):
 /// (H + U R Uᵀ)⁻¹ b = x − Y (I + R W)⁻¹ R Uᵀ x, with x = H⁻¹ b, Y = H⁻¹ U, W = Uᵀ Y.
-/// R need not be invertible (no R⁻¹ is formed); the m × m system is solved by LU.
+/// R need not be invertible (no R⁻¹ is formed); the m × m system is solved by LU. U is kept as
+/// its columns' 3-vectors: Uᵀ Y and Uᵀ x are read at three rows a column.
 class LowRankSolve {
  public:
-  /// @brief Y and the small system for @p term with the solver @p solve_h (x ← H⁻¹ x in
-  /// place) of an n × n H; the columns' entries at unknowns outside [first_free, first_fixed)
-  /// (held) are dropped. Returns false if I + R W is singular.
+  /// @brief Y and the small system for @p term with the solver @p solve_h (solve_h(x, first):
+  /// x ← H⁻¹ x in place, x zero above row first) of an n × n H; the columns' entries at unknowns
+  /// outside [first_free, first_fixed) (held) are dropped. Returns false if I + R W is singular.
   template <class SolveH>
   bool prepare(const LowRankStiffness& term, int n, int first_free, int first_fixed, SolveH&& solve_h) {
     active_ = !term.empty();
     if (!active_) return true;
     const int m = term.rank();
-    u_.setZero(n, m);
+    dofs_ = term.dofs;
+    directions_.resize(static_cast<size_t>(m));
+    y_.setZero(n, m);
+    for (int j = 0; j < m; ++j) {
+      const int d0 = dofs_[static_cast<size_t>(j)];
+      Eigen::Vector3d& u = directions_[static_cast<size_t>(j)];
+      for (int c = 0; c < 3; ++c)
+        u[c] = d0 + c >= first_free && d0 + c < first_fixed ? term.directions[static_cast<size_t>(j)][c] : 0.0;
+      y_.col(j).segment<3>(d0) = u;
+      solve_h(y_.col(j), d0);
+    }
+    w_.resize(m, m);
     for (int j = 0; j < m; ++j)
-      for (int c = 0; c < 3; ++c) {
-        const int d = term.dofs[static_cast<size_t>(j)] + c;
-        if (d >= first_free && d < first_fixed) u_(d, j) = term.directions[static_cast<size_t>(j)][c];
-      }
-    y_ = u_;
-    for (int j = 0; j < m; ++j) solve_h(y_.col(j));
+      for (int i = 0; i < m; ++i)
+        w_(i, j) = directions_[static_cast<size_t>(i)].dot(y_.col(j).segment<3>(dofs_[static_cast<size_t>(i)]));
     r_ = term.core;
-    small_.compute(Eigen::MatrixXd::Identity(m, m) + r_ * (u_.transpose() * y_));
+    small_.compute(Eigen::MatrixXd::Identity(m, m) + r_ * w_);
     return std::abs(small_.determinant()) > 0.0 && std::isfinite(small_.determinant());
   }
   /// @brief x ← (H + U R Uᵀ)⁻¹ b given x = H⁻¹ b (no-op without a term).
   void correct(Eigen::Ref<Eigen::VectorXd> x) const {
     if (!active_) return;
-    const Eigen::VectorXd z = small_.solve(r_ * (u_.transpose() * x));
-    x -= y_ * z;
+    const auto m = static_cast<Eigen::Index>(dofs_.size());
+    Eigen::VectorXd ux(m);
+    for (Eigen::Index j = 0; j < m; ++j)
+      ux[j] = directions_[static_cast<size_t>(j)].dot(x.segment<3>(dofs_[static_cast<size_t>(j)]));
+    const Eigen::VectorXd z = small_.solve(r_ * ux);
+    x.noalias() -= y_ * z;
   }
   [[nodiscard]] bool active() const { return active_; }
 
  private:
   bool active_ = false;
-  Eigen::MatrixXd u_, y_, r_;
+  std::vector<int> dofs_;                    ///< U's columns: first unknown of each 3-vector
+  std::vector<Eigen::Vector3d> directions_;  ///< and the 3-vector (held unknowns' entries zero)
+  Eigen::MatrixXd y_, w_, r_;
   Eigen::PartialPivLU<Eigen::MatrixXd> small_;
 };
 
