@@ -339,6 +339,7 @@ void run_counters(benchmark::State& state, const nlohmann::json& summary) {
   if (summary.contains("wall")) {
     state.counters["wall_seconds"] = summary["wall"]["seconds"].get<double>();
     state.counters["compliance_columns"] = summary["wall"]["compliance_columns"].get<double>();
+    state.counters["columns_ahead"] = summary["wall"]["compliance_columns_ahead"].get<double>();
   }
 }
 

@@ -149,6 +149,7 @@ CompliantWall::Anchored DeformableWall::anchor(const void* body, std::span<const
   auto cache = std::find(cache_bodies_.begin(), cache_bodies_.end(), body);
   if (cache == cache_bodies_.end()) cache = cache_bodies_.insert(cache_bodies_.end(), body);
   a.compliance = lumen_->compliance(at, normals, 1 + static_cast<int>(cache - cache_bodies_.begin()));
+  anticipate(points, radii);
   const bool pressed = pressure_response_.size() > 0 && last_pressure_.size() > 0, based = relinearizations_ > 0;
   bool others = false;
   for (const auto& [who, l] : loads_) others = others || (who != body && !l->points.empty());
@@ -198,6 +199,15 @@ void DeformableWall::load(const void* body, std::span<const Vec3> points, std::s
   field_current_ = false;
   seconds_ += since(t0);
   if (relinearize_ > 0.0 && moved_beyond_linearization()) relinearize();
+  anticipate(points, radii);
+}
+
+void DeformableWall::anticipate(std::span<const Vec3> points, std::span<const double> radii) {
+  // The next step's footprints lie a little further along from these: their columns are solved on
+  // the second thread meanwhile, the faces within a footprint and kAnticipation of each point.
+  double radius = 0.0;
+  for (double r : radii) radius = std::max(radius, r);
+  lumen_->anticipate(points, radius + kAnticipation);
 }
 
 const Eigen::VectorXd& DeformableWall::response(BodyLoad& l) {
@@ -237,6 +247,7 @@ bool DeformableWall::moved_beyond_linearization() {
 
 void DeformableWall::relinearize() {
   const auto t0 = Clock::now();
+  lumen_->clear();  // (the columns' second thread reads the factor this solve replaces)
   Eigen::VectorXd f = load_;
   if (last_pressure_.size() > 0) f += pressure_basis_ * last_pressure_;
   // Newton on the neo-Hookean solid under the loads as they stand (dead loads), then its tangent
@@ -541,6 +552,7 @@ nlohmann::json DeformableWall::summary() const {
             {"final_max_displacement", max_displacement_},
             {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
             {"compliance_columns", compliance_columns()},
+            {"compliance_columns_ahead", lumen_->anticipated_nodes()},
             {"compliance_columns_dropped", lumen_->dropped_nodes()},
             {"blood_pressure_max_lumen_displacement", pressure_response_.size() > 0 && last_pressure_.size() > 0
                                                           ? nlohmann::json(max_pressure_displacement())

@@ -34,8 +34,11 @@ void supernode_forward(const double* lx, int nsrow, int off, int nscol, int nrhs
   const int m = nsrow - off, ncol = nscol - off;
   const auto ld = static_cast<size_t>(nsrow);
   const double* base = lx + static_cast<size_t>(off) * ld + off;  // row i, column j of the tail: base[j·ld + i]
-  for (int j0 = 0; j0 < ncol; j0 += kBlock) {
-    const int jb = std::min(kBlock, ncol - j0);
+  // Blocks start at the supernode's columns 0, 8, 16, ...: a right-hand side entering at a later
+  // column than the tail's has zeros before it, so its sums are the same terms in the same order
+  // whichever batch it is solved in.
+  for (int j0 = 0; j0 < ncol;) {
+    const int jb = std::min(kBlock - (off + j0) % kBlock, ncol - j0);
     const double* __restrict c0 = base + static_cast<size_t>(j0) * ld;
     for (int r = 0; r < nrhs; ++r) {
       double* __restrict xr = x + static_cast<size_t>(r) * static_cast<size_t>(m);
@@ -54,7 +57,7 @@ void supernode_forward(const double* lx, int nsrow, int off, int nscol, int nrhs
           for (int jj = 0; jj < kBlock; ++jj) sum += c0[static_cast<size_t>(jj) * ld + i] * a[jj];
           xr[i] -= sum;
         }
-      } else {  // the supernode's last, narrower block
+      } else {  // a narrower block (the first or the last of the tail)
         for (int i = j0 + jb; i < m; ++i) {
           double sum = 0.0;
           for (int jj = 0; jj < jb; ++jj) sum += c0[static_cast<size_t>(jj) * ld + i] * a[jj];
@@ -62,6 +65,7 @@ void supernode_forward(const double* lx, int nsrow, int off, int nscol, int nrhs
         }
       }
     }
+    j0 += jb;
   }
 }
 
@@ -181,13 +185,11 @@ struct ElasticSolid::Factor {
   void forget_maps() { col_super.clear(); }
   Llt llt;
   bool analysed = false;
-  // For half_solve, made on first use after each factorization: the inverse permutation, each
-  // column's supernode, each supernode's parent in the supernodal elimination tree, the first
-  // column of each supernode a solve reaches (INT_MAX: none), the right-hand sides (row by row, room
-  // for 3 × kHalfSolveBatch a row, zero between calls) and one supernode's rows gathered (one
-  // contiguous run a right-hand side).
-  std::vector<int> iperm, col_super, parent, entry, touched, starts;
-  std::vector<double> x, gathered;
+  // For half_solve, made by prepare_half_solve after each factorization: the inverse permutation,
+  // each column's supernode, each supernode's parent in the supernodal elimination tree; and the
+  // workspace of the calls that bring none.
+  std::vector<int> iperm, col_super, parent;
+  HalfSolveWork work;
 };
 
 ElasticSolid::ElasticSolid(mesh::TetMesh mesh, NeoHookean law)
@@ -440,13 +442,46 @@ void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>
 
 void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>>> loads,
                               std::span<HalfColumns> y) const {
+  prepare_half_solve();
+  half_solve(loads, y, factor_->work);
+}
+
+void ElasticSolid::prepare_half_solve() const {
+  if (!linearized_) throw_usage_error("wall: half_solve before linearize");
+  Factor& f = *factor_;
+  if (!f.col_super.empty()) return;
+  const cholmod_factor& l = *f.llt.factor();
+  if (!l.is_super || !l.is_ll) throw_numerical_error("wall: the tangent's factor is not a supernodal LLᵀ");
+  const int n = num_dofs();
+  const auto* super = static_cast<const int*>(l.super);
+  const auto* pi = static_cast<const int*>(l.pi);
+  const auto* ls = static_cast<const int*>(l.s);
+  const auto nsuper = static_cast<int>(l.nsuper);
+  const auto* perm = static_cast<const int*>(l.Perm);
+  f.iperm.resize(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k) f.iperm[static_cast<size_t>(perm ? perm[k] : k)] = k;
+  f.parent.resize(static_cast<size_t>(nsuper));
+  std::vector<int> col_super(static_cast<size_t>(n));
+  for (int s = 0; s < nsuper; ++s)
+    for (int k = super[s]; k < super[s + 1]; ++k) col_super[static_cast<size_t>(k)] = s;
+  // A supernode's parent holds its first row below the diagonal block.
+  for (int s = 0; s < nsuper; ++s) {
+    const int nscol = super[s + 1] - super[s];
+    f.parent[static_cast<size_t>(s)] =
+        pi[s + 1] - pi[s] > nscol ? col_super[static_cast<size_t>(ls[pi[s] + nscol])] : -1;
+  }
+  f.col_super = std::move(col_super);  // (last: its being filled says the maps are made)
+}
+
+void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>>> loads, std::span<HalfColumns> y,
+                              HalfSolveWork& work) const {
   if (!linearized_) throw_usage_error("wall: half_solve before linearize");
   if (y.size() > kHalfSolveBatch || loads.size() != 3 * y.size())
     throw_usage_error(fmt::format("wall: half_solve takes three loads for each of at most {} results ({} for {})",
                                   kHalfSolveBatch, loads.size(), y.size()));
-  Factor& f = *factor_;
+  const Factor& f = *factor_;
+  if (f.col_super.empty()) throw_usage_error("wall: half_solve before prepare_half_solve");
   const cholmod_factor& l = *f.llt.factor();
-  if (!l.is_super || !l.is_ll) throw_numerical_error("wall: the tangent's factor is not a supernodal LLᵀ");
   const int n = num_dofs();
   const auto nrhs = static_cast<int>(loads.size());
   const auto stride = static_cast<size_t>(nrhs);         // x: the right-hand sides row by row
@@ -455,32 +490,19 @@ void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>
   const auto* px = static_cast<const int*>(l.px);        // its values: column-major from lx[px[s]]
   const auto* ls = static_cast<const int*>(l.s);
   const auto* lx = static_cast<const double*>(l.x);
-  const auto nsuper = static_cast<int>(l.nsuper);
-  if (f.col_super.empty()) {
-    const auto* perm = static_cast<const int*>(l.Perm);
-    f.iperm.resize(static_cast<size_t>(n));
-    for (int k = 0; k < n; ++k) f.iperm[static_cast<size_t>(perm ? perm[k] : k)] = k;
-    f.col_super.resize(static_cast<size_t>(n));
-    f.parent.resize(static_cast<size_t>(nsuper));
-    for (int s = 0; s < nsuper; ++s)
-      for (int k = super[s]; k < super[s + 1]; ++k) f.col_super[static_cast<size_t>(k)] = s;
-    // A supernode's parent holds its first row below the diagonal block.
-    for (int s = 0; s < nsuper; ++s) {
-      const int nscol = super[s + 1] - super[s];
-      f.parent[static_cast<size_t>(s)] =
-          pi[s + 1] - pi[s] > nscol ? f.col_super[static_cast<size_t>(ls[pi[s] + nscol])] : -1;
-    }
-    f.entry.assign(static_cast<size_t>(nsuper), std::numeric_limits<int>::max());
-    f.x.assign(3 * kHalfSolveBatch * static_cast<size_t>(n), 0.0);
-  }
+  const auto nsuper = static_cast<size_t>(l.nsuper);
+  HalfSolveWork& w = work;
+  if (w.entry.size() != nsuper) w.entry.assign(nsuper, std::numeric_limits<int>::max());
+  if (w.x.size() != 3 * kHalfSolveBatch * static_cast<size_t>(n))
+    w.x.assign(3 * kHalfSolveBatch * static_cast<size_t>(n), 0.0);
   // The loads in the factor's numbering (x holds the right-hand sides row by row).
-  f.starts.clear();
+  w.starts.clear();
   for (size_t col = 0; col < loads.size(); ++col)
     for (const auto& [dof, value] : loads[col]) {
       if (held_[static_cast<size_t>(dof)] || value == 0.0) continue;
       const int row = f.iperm[static_cast<size_t>(dof)];
-      f.starts.push_back(row);
-      f.x[stride * static_cast<size_t>(row) + col] += value;
+      w.starts.push_back(row);
+      w.x[stride * static_cast<size_t>(row) + col] += value;
     }
   for (auto& yk : y) {
     yk.index.clear();
@@ -489,13 +511,13 @@ void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>
   // The rows of L⁻¹b are the loads' rows and their ancestors in the elimination tree; in a
   // supernode, column k's parent is k + 1, so a solve reaches the tail of each supernode on the
   // paths from the loads' supernodes to the root, from the first column it enters by.
-  f.touched.clear();
-  for (int row : f.starts) {
+  w.touched.clear();
+  for (int row : w.starts) {
     int s = f.col_super[static_cast<size_t>(row)], col = row;
     while (s >= 0) {
-      int& entry = f.entry[static_cast<size_t>(s)];
+      int& entry = w.entry[static_cast<size_t>(s)];
       const bool seen = entry != std::numeric_limits<int>::max();
-      if (!seen) f.touched.push_back(s);
+      if (!seen) w.touched.push_back(s);
       entry = std::min(entry, col);
       if (seen) break;  // its ancestors are already on the list
       const int nscol = super[s + 1] - super[s];
@@ -505,16 +527,16 @@ void ElasticSolid::half_solve(std::span<const std::vector<std::pair<int, double>
     }
   }
   // Descendants before ancestors: supernodes are numbered in a postorder.
-  std::sort(f.touched.begin(), f.touched.end());
-  double* x = f.x.data();
-  for (int s : f.touched) {
+  std::sort(w.touched.begin(), w.touched.end());
+  double* x = w.x.data();
+  for (int s : w.touched) {
     const int k0 = super[s], nscol = super[s + 1] - k0, nsrow = pi[s + 1] - pi[s];
-    const int off = f.entry[static_cast<size_t>(s)] - k0;
-    f.entry[static_cast<size_t>(s)] = std::numeric_limits<int>::max();
+    const int off = w.entry[static_cast<size_t>(s)] - k0;
+    w.entry[static_cast<size_t>(s)] = std::numeric_limits<int>::max();
     const auto m = static_cast<size_t>(nsrow - off);
     const int* rows = ls + pi[s] + off;
-    f.gathered.resize(static_cast<size_t>(nrhs) * m);
-    double* g = f.gathered.data();
+    w.gathered.resize(static_cast<size_t>(nrhs) * m);
+    double* g = w.gathered.data();
     for (size_t i = 0; i < m; ++i)
       for (size_t r = 0; r < static_cast<size_t>(nrhs); ++r)
         g[r * m + i] = x[stride * static_cast<size_t>(rows[i]) + r];

@@ -8,10 +8,14 @@
 #include <Eigen/Sparse>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
 #include <limits>
+#include <mutex>
 #include <numbers>
+#include <thread>
 #include <unordered_map>
 
 #include "flowire/common/element.hpp"
@@ -90,6 +94,11 @@ Mat3 column_block(const HalfColumns& a, const HalfColumns& b) {
     }
   }
   return g;
+}
+
+/// The key of the ordered node pair (a, b).
+std::uint64_t pair_key(int a, int b) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
 }
 
 /// Closest point of triangle (a, b, c) to p, with its barycentric coordinates (Ericson,
@@ -171,6 +180,13 @@ LumenCompliance::LumenCompliance(const ElasticSolid& solid, int lumen, double bu
       flo = flo.cwiseMin(m.nodes[static_cast<size_t>(node)]);
       fhi = fhi.cwiseMax(m.nodes[static_cast<size_t>(node)]);
     }
+    Vec3 clo = m.nodes[static_cast<size_t>(face[0])], chi = clo;  // (the flat triangle closer() measures)
+    for (int c = 1; c < 3; ++c) {
+      clo = clo.cwiseMin(m.nodes[static_cast<size_t>(face[static_cast<size_t>(c)])]);
+      chi = chi.cwiseMax(m.nodes[static_cast<size_t>(face[static_cast<size_t>(c)])]);
+    }
+    face_lo_.push_back(clo);
+    face_hi_.push_back(chi);
     std::array<int, 3> c0{}, c1{};
     for (int d = 0; d < 3; ++d) {
       c0[static_cast<size_t>(d)] =
@@ -221,11 +237,14 @@ LumenPoint LumenCompliance::locate(const Vec3& x) const {
     }
     if (std::sqrt(best_d2) <= std::max(ring * cell_, inside)) break;
   }
-  if (best.face >= 0) shape_weights(best);
+  if (best.face >= 0) set_normal(best), shape_weights(best);
   return best;
 }
 
 void LumenCompliance::closer(const Vec3& x, int k, LumenPoint& best, double& best_d2) const {
+  // (no nearer than its corners' box)
+  const Vec3 out = (face_lo_[static_cast<size_t>(k)] - x).cwiseMax(x - face_hi_[static_cast<size_t>(k)]).cwiseMax(0.0);
+  if (out.squaredNorm() >= best_d2) return;
   const auto& m = solid_.mesh();
   const auto& face = m.faces[static_cast<size_t>(faces_[static_cast<size_t>(k)])];
   const Vec3& a = m.nodes[static_cast<size_t>(face[0])];
@@ -239,8 +258,16 @@ void LumenCompliance::closer(const Vec3& x, int k, LumenPoint& best, double& bes
     best.face = faces_[static_cast<size_t>(k)];
     best.bary = bary;
     best.point = q;
-    best.normal = (b - a).cross(c - a).normalized();
   }
+}
+
+void LumenCompliance::set_normal(LumenPoint& p) const {
+  const auto& m = solid_.mesh();
+  const auto& face = m.faces[static_cast<size_t>(p.face)];
+  const Vec3& a = m.nodes[static_cast<size_t>(face[0])];
+  const Vec3& b = m.nodes[static_cast<size_t>(face[1])];
+  const Vec3& c = m.nodes[static_cast<size_t>(face[2])];
+  p.normal = (b - a).cross(c - a).normalized();
 }
 
 void LumenCompliance::shape_weights(LumenPoint& p) const {
@@ -251,6 +278,32 @@ void LumenCompliance::shape_weights(LumenPoint& p) const {
   for (int a = 0; a < 6; ++a)
     p.weights.emplace_back(solid_.mesh().faces[static_cast<size_t>(p.face)][static_cast<size_t>(a)],
                            w[static_cast<size_t>(a)]);
+}
+
+void LumenCompliance::faces_within(const Vec3& x, double r, std::vector<int>& near) const {
+  near.clear();
+  std::array<int, 3> c0{}, c1{};
+  for (int d = 0; d < 3; ++d) {
+    const auto dd = static_cast<size_t>(d);
+    c0[dd] = std::clamp(static_cast<int>((x[d] - r - grid_origin_[d]) / cell_), 0, dims_[dd] - 1);
+    c1[dd] = std::clamp(static_cast<int>((x[d] + r - grid_origin_[d]) / cell_), 0, dims_[dd] - 1);
+  }
+  for (int i = c0[0]; i <= c1[0]; ++i)
+    for (int j = c0[1]; j <= c1[1]; ++j)
+      for (int l = c0[2]; l <= c1[2]; ++l) {
+        const auto& cell = cells_[(static_cast<size_t>(l) * static_cast<size_t>(dims_[1]) + static_cast<size_t>(j)) *
+                                      static_cast<size_t>(dims_[0]) +
+                                  static_cast<size_t>(i)];
+        near.insert(near.end(), cell.begin(), cell.end());
+      }
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  std::erase_if(near, [&](int k) {
+    LumenPoint probe;
+    double d2 = r * r * (1.0 + 1e-12);
+    closer(x, k, probe, d2);
+    return probe.face < 0;
+  });
 }
 
 LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
@@ -271,38 +324,34 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
   const Vec3 e1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
   const Vec3 e2 = n.cross(e1);
   // A sample y lies within ρ of the centre c, so its nearest lumen point q does within 2ρ of c
-  // (|q − y| ≤ |c − y| ≤ ρ): the faces whose cells meet that box are all a sample's search needs.
+  // (|q − y| ≤ |c − y| ≤ ρ): the faces within 2ρ of the centre are all a sample's search needs.
   std::vector<int> near;
-  std::array<int, 3> c0{}, c1{};
-  for (int d = 0; d < 3; ++d) {
-    const auto dd = static_cast<size_t>(d);
-    c0[dd] = std::clamp(static_cast<int>((centre.point[d] - 2.0 * radius - grid_origin_[d]) / cell_), 0, dims_[dd] - 1);
-    c1[dd] = std::clamp(static_cast<int>((centre.point[d] + 2.0 * radius - grid_origin_[d]) / cell_), 0, dims_[dd] - 1);
-  }
-  for (int i = c0[0]; i <= c1[0]; ++i)
-    for (int j = c0[1]; j <= c1[1]; ++j)
-      for (int l = c0[2]; l <= c1[2]; ++l) {
-        const auto& cell = cells_[(static_cast<size_t>(l) * static_cast<size_t>(dims_[1]) + static_cast<size_t>(j)) *
-                                      static_cast<size_t>(dims_[0]) +
-                                  static_cast<size_t>(i)];
-        near.insert(near.end(), cell.begin(), cell.end());
-      }
-  std::sort(near.begin(), near.end());
-  near.erase(std::unique(near.begin(), near.end()), near.end());
-  // Of those, the faces that do come within 2ρ of the centre.
-  std::erase_if(near, [&](int k) {
-    LumenPoint probe;
-    double d2 = 4.0 * radius * radius * (1.0 + 1e-12);
-    closer(centre.point, k, probe, d2);
-    return probe.face < 0;
-  });
-  std::unordered_map<int, double> acc;
+  faces_within(centre.point, 2.0 * radius, near);
+  std::vector<std::pair<int, double>> acc;  // (node, weight): a few dozen
   LumenPoint sample;
+  if (near.empty()) return centre;  // (never: the centre's face is within)
+  // The last sample's face, tried first: the next sample's is mostly the same, and its distance
+  // prunes the others by their boxes. The first is the centre's.
+  size_t hint = 0;
+  for (size_t i = 0; i < near.size(); ++i)
+    if (faces_[static_cast<size_t>(near[i])] == centre.face) hint = i;
   auto add = [&](const Vec3& y, double w) {
     double best_d2 = std::numeric_limits<double>::infinity();
-    for (int k : near) closer(y, k, sample, best_d2);
+    closer(y, near[hint], sample, best_d2);
+    for (size_t i = 0; i < near.size(); ++i)
+      if (i != hint) {
+        const int before = sample.face;
+        closer(y, near[i], sample, best_d2);
+        if (sample.face != before) hint = i;
+      }
     shape_weights(sample);
-    for (const auto& [node, wn] : sample.weights) acc[node] += w * wn;
+    for (const auto& [node, wn] : sample.weights) {
+      auto it = std::find_if(acc.begin(), acc.end(), [node = node](const auto& e) { return e.first == node; });
+      if (it == acc.end())
+        acc.emplace_back(node, w * wn);
+      else
+        it->second += w * wn;
+    }
   };
   const double dr = 1.0 / rings;
   add(centre.point, dr * dr);
@@ -316,9 +365,188 @@ LumenPoint LumenCompliance::locate_patch(const Vec3& x, double radius) const {
       add(centre.point + rc * (std::cos(phi) * e1 + std::sin(phi) * e2), w);
     }
   }
-  centre.weights.assign(acc.begin(), acc.end());
-  std::sort(centre.weights.begin(), centre.weights.end());
+  std::sort(acc.begin(), acc.end());
+  centre.weights = std::move(acc);
   return centre;
+}
+
+struct LumenCompliance::Ahead {
+  // Each lumen node's column: not kept (0), kept or being solved by the caller (1), being solved by
+  // the second thread (2), solved by it and not yet taken (3). Under `m`, as everything below but
+  // the thread's workspace and `solved`.
+  enum State : char { free = 0, caller = 1, solving = 2, solved_ahead = 3 };
+  std::mutex m;
+  std::condition_variable wake, done;
+  std::vector<Vec3> points;  ///< the last request: its points and reach, not yet taken
+  double reach = 0.0;
+  /// and the kept columns of the nodes the caller's compliance last used: the new nodes' blocks
+  /// with them are formed too
+  std::vector<std::pair<int, std::shared_ptr<const HalfColumns>>> partners;
+  std::unordered_map<std::uint64_t, Mat3> blocks;  ///< formed, not yet taken
+  bool pending = false, stop = false, failed = false, busy = false;
+  std::uint64_t generation = 0;  ///< raised by clear(): the thread's older requests are void
+  std::vector<char> state;
+  std::vector<int> inflight;  ///< the nodes of the batch being solved
+  std::unordered_map<int, std::shared_ptr<const HalfColumns>> ready;
+  std::atomic<int> solved{0};
+  HalfSolveWork work;
+  std::thread thread;
+};
+
+LumenCompliance::~LumenCompliance() {
+  if (!ahead_) return;
+  {
+    const std::lock_guard<std::mutex> lock(ahead_->m);
+    ahead_->stop = true;
+  }
+  ahead_->wake.notify_all();
+  ahead_->thread.join();
+}
+
+int LumenCompliance::anticipated_nodes() const { return ahead_ ? ahead_->solved.load() : 0; }
+
+std::vector<int> LumenCompliance::nodes_near(std::span<const Vec3> points, double reach) const {
+  const auto& m = solid_.mesh();
+  std::vector<char> seen(static_cast<size_t>(m.num_nodes()), 0);
+  std::vector<int> nodes, near;
+  for (const Vec3& p : points) {
+    faces_within(p, reach, near);
+    for (int k : near)
+      for (int node : m.faces[static_cast<size_t>(faces_[static_cast<size_t>(k)])])
+        if (!seen[static_cast<size_t>(node)]) seen[static_cast<size_t>(node)] = 1, nodes.push_back(node);
+  }
+  return nodes;
+}
+
+void LumenCompliance::anticipate(std::span<const Vec3> points, double reach) {
+  if (std::thread::hardware_concurrency() < 2) return;
+  solid_.prepare_half_solve();  // (the maps the thread's solves read, made here before it reads them)
+  if (!ahead_) {
+    ahead_ = std::make_unique<Ahead>();
+    ahead_->state.assign(static_cast<size_t>(solid_.mesh().num_nodes()), Ahead::free);
+    for (const auto& [node, y] : columns_) {
+      (void)y;
+      ahead_->state[static_cast<size_t>(node)] = Ahead::caller;
+    }
+    ahead_->thread = std::thread([this] {
+      Ahead& a = *ahead_;
+      std::vector<std::vector<std::pair<int, double>>> unit;
+      std::vector<HalfColumns> solved;
+      std::unique_lock<std::mutex> lock(a.m);
+      for (;;) {
+        a.busy = false;
+        a.done.notify_all();
+        a.wake.wait(lock, [&] { return a.stop || a.pending; });
+        if (a.stop) return;
+        a.busy = true;
+        const std::vector<Vec3> at = std::move(a.points);
+        auto partners = std::move(a.partners);
+        const double reach_now = a.reach;
+        const std::uint64_t generation = a.generation;
+        a.pending = false;
+        lock.unlock();
+        const std::vector<int> nodes = nodes_near(at, reach_now);
+        lock.lock();
+        size_t next = 0;
+        while (!a.stop && !a.pending && generation == a.generation) {
+          a.inflight.clear();
+          for (; next < nodes.size() && a.inflight.size() < ElasticSolid::kHalfSolveBatch; ++next)
+            if (a.state[static_cast<size_t>(nodes[next])] == Ahead::free) {
+              a.inflight.push_back(nodes[next]);
+              a.state[static_cast<size_t>(nodes[next])] = Ahead::solving;
+            }
+          if (a.inflight.empty()) break;
+          const std::vector<int> batch = a.inflight;
+          lock.unlock();
+          unit.assign(3 * batch.size(), {});
+          for (size_t k = 0; k < batch.size(); ++k)
+            for (int c = 0; c < 3; ++c) unit[3 * k + static_cast<size_t>(c)] = {{3 * batch[k] + c, 1.0}};
+          solved.resize(batch.size());
+          bool ok = true;
+          try {
+            solid_.half_solve(unit, solved, a.work);
+          } catch (...) {  // (the caller solves these itself, and meets the error there)
+            ok = false;
+          }
+          // Each new column's blocks with the partners' and with the new columns before it.
+          std::vector<std::pair<std::uint64_t, Mat3>> blocks;
+          if (ok)
+            for (size_t k = 0; k < batch.size(); ++k) {
+              for (const auto& [node, y] : partners)
+                blocks.emplace_back(pair_key(batch[k], node), column_block(solved[k], *y));
+              for (size_t j = 0; j < k; ++j)
+                blocks.emplace_back(pair_key(batch[k], batch[j]), column_block(solved[k], solved[j]));
+            }
+          lock.lock();
+          for (auto& [key, g] : blocks) a.blocks[key] = g;
+          for (size_t k = 0; k < batch.size(); ++k) {
+            a.state[static_cast<size_t>(batch[k])] = ok ? Ahead::solved_ahead : Ahead::free;
+            if (ok) {
+              auto column = std::make_shared<const HalfColumns>(std::move(solved[k]));
+              partners.emplace_back(batch[k], column);  // (a later batch's blocks with this one)
+              a.ready[batch[k]] = std::move(column), ++a.solved;
+            }
+          }
+          a.inflight.clear();
+          a.done.notify_all();
+          if (!ok) {
+            a.failed = true;
+            a.busy = false;
+            a.done.notify_all();
+            return;
+          }
+        }
+      }
+    });
+  }
+  {
+    const std::lock_guard<std::mutex> lock(ahead_->m);
+    if (ahead_->failed) return;
+    ahead_->points.assign(points.begin(), points.end());
+    ahead_->reach = reach;
+    ahead_->partners.clear();
+    for (const Blocks& b : blocks_)
+      for (int node : b.nodes)
+        if (auto it = columns_.find(node); it != columns_.end()) ahead_->partners.emplace_back(node, it->second);
+    std::sort(ahead_->partners.begin(), ahead_->partners.end());
+    ahead_->partners.erase(std::unique(ahead_->partners.begin(), ahead_->partners.end()), ahead_->partners.end());
+    ahead_->pending = true;
+  }
+  ahead_->wake.notify_one();
+}
+
+void LumenCompliance::wait_anticipated() {
+  if (!ahead_) return;
+  Ahead& a = *ahead_;
+  std::unique_lock<std::mutex> lock(a.m);
+  a.done.wait(lock, [&] { return a.failed || (!a.pending && !a.busy); });
+}
+
+void LumenCompliance::keep(int node, std::shared_ptr<const HalfColumns> y) {
+  auto& kept = columns_[node];
+  if (kept) kept_bytes_ -= kept->size() * (sizeof(int) + 3 * sizeof(double));
+  kept = std::move(y);
+  kept_bytes_ += kept->size() * (sizeof(int) + 3 * sizeof(double));
+  last_use_.try_emplace(node, tick_);
+}
+
+void LumenCompliance::take_ready() {
+  Ahead& a = *ahead_;
+  for (auto& [node, y] : a.ready) {
+    keep(node, std::move(y));
+    a.state[static_cast<size_t>(node)] = Ahead::caller;
+  }
+  a.ready.clear();
+  if (pair_blocks_.size() > 100000) pair_blocks_.clear();  // (a few MB: those of past steps)
+  for (const auto& [key, g] : a.blocks) pair_blocks_[key] = g;
+  a.blocks.clear();
+}
+
+Mat3 LumenCompliance::block_between(int a, int b) {
+  if (auto it = pair_blocks_.find(pair_key(a, b)); it != pair_blocks_.end()) return it->second;
+  if (auto it = pair_blocks_.find(pair_key(b, a)); it != pair_blocks_.end()) return it->second.transpose();
+  ++block_products_;
+  return column_block(column(a), column(b));
 }
 
 void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
@@ -329,6 +557,61 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
       last_use_[node] = tick_;
       if (!columns_.count(node) && std::find(fresh.begin(), fresh.end(), node) == fresh.end()) fresh.push_back(node);
     }
+  if (ahead_ && !fresh.empty()) {
+    // Take what the second thread has solved; the nodes it is solving are waited for once the
+    // caller has solved the others.
+    std::unique_lock<std::mutex> lock(ahead_->m);
+    Ahead& a = *ahead_;
+    take_ready();
+    std::vector<int> own, wait;
+    for (int node : fresh) {
+      char& st = a.state[static_cast<size_t>(node)];
+      if (st == Ahead::solving) {
+        wait.push_back(node);
+      } else if (!columns_.count(node)) {
+        st = Ahead::caller;
+        own.push_back(node);
+      }
+    }
+    fresh = std::move(own);
+    lock.unlock();
+    solve_columns(fresh);
+    if (!wait.empty()) {
+      lock.lock();
+      a.done.wait(lock, [&] {
+        return std::none_of(wait.begin(), wait.end(),
+                            [&](int node) { return a.state[static_cast<size_t>(node)] == Ahead::solving; });
+      });
+      take_ready();
+    }
+  } else {
+    solve_columns(fresh);
+  }
+  for (const auto& p : points)
+    for (const auto& [node, w] : p.weights) last_use_[node] = tick_;
+  // Over the budget: drop the columns asked for longest ago (never those of this call; at least
+  // a few hundred nodes are kept, a step's contacts).
+  if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) return;
+  std::vector<std::pair<std::uint64_t, int>> by_age;
+  for (const auto& [node, column] : columns_) {
+    (void)column;
+    const std::uint64_t used = last_use_[node];
+    if (used < tick_) by_age.emplace_back(used, node);
+  }
+  std::sort(by_age.begin(), by_age.end());
+  std::unique_lock<std::mutex> lock;
+  if (ahead_) lock = std::unique_lock<std::mutex>(ahead_->m);
+  for (const auto& [used, node] : by_age) {
+    if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) break;
+    kept_bytes_ -= columns_.at(node)->size() * (sizeof(int) + 3 * sizeof(double));
+    columns_.erase(node);
+    last_use_.erase(node);
+    if (ahead_) ahead_->state[static_cast<size_t>(node)] = Ahead::free;
+    ++dropped_;
+  }
+}
+
+void LumenCompliance::solve_columns(const std::vector<int>& fresh) {
   // The new nodes solved together, a batch at a time: their reaches end in the same top
   // separators, read once a batch.
   constexpr size_t batch = ElasticSolid::kHalfSolveBatch;
@@ -342,29 +625,28 @@ void LumenCompliance::prefetch(std::span<const LumenPoint> points) {
     solved.resize(count);
     solid_.half_solve(unit, solved);
     for (size_t k = 0; k < count; ++k) {
-      NodeColumns& y = columns_[fresh[first + k]];
-      y = std::move(solved[k]);
-      kept_bytes_ += y.size() * (sizeof(int) + 3 * sizeof(double));
+      keep(fresh[first + k], std::make_shared<const HalfColumns>(std::move(solved[k])));
       ++solved_;
     }
   }
-  // Over the budget: drop the columns asked for longest ago (never those of this call; at least
-  // a few hundred nodes are kept, a step's contacts).
-  if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) return;
-  std::vector<std::pair<std::uint64_t, int>> by_age;
-  for (const auto& [node, column] : columns_) {
-    (void)column;
-    const std::uint64_t used = last_use_[node];
-    if (used < tick_) by_age.emplace_back(used, node);
+}
+
+void LumenCompliance::clear() {
+  if (ahead_) {  // (the thread reads the factor: it finishes its batch, and its requests are void)
+    Ahead& a = *ahead_;
+    std::unique_lock<std::mutex> lock(a.m);
+    ++a.generation;
+    a.pending = false;
+    a.done.wait(lock, [&] { return a.inflight.empty(); });
+    a.ready.clear();
+    a.blocks.clear();
+    std::fill(a.state.begin(), a.state.end(), Ahead::free);
   }
-  std::sort(by_age.begin(), by_age.end());
-  for (const auto& [used, node] : by_age) {
-    if (static_cast<double>(kept_bytes_) <= budget_ || columns_.size() <= 256) break;
-    kept_bytes_ -= columns_.at(node).size() * (sizeof(int) + 3 * sizeof(double));
-    columns_.erase(node);
-    last_use_.erase(node);
-    ++dropped_;
-  }
+  columns_.clear();
+  pair_blocks_.clear();
+  last_use_.clear();
+  kept_bytes_ = 0;
+  blocks_.clear();
 }
 
 LumenCompliance::Blocks& LumenCompliance::cache_at(int cache) {
@@ -409,11 +691,9 @@ LumenCompliance::Blocks& LumenCompliance::form_blocks(std::span<const LumenPoint
   // The new blocks, each node's column read once against the few fresh nodes' (which stay in cache).
   for (Eigen::Index q = 0; q < nn; ++q) {
     const bool q_fresh = kept.slot[static_cast<size_t>(nodes[static_cast<size_t>(q)])] < 0;
-    const NodeColumns& yq = column(nodes[static_cast<size_t>(q)]);
     for (Eigen::Index p : fresh) {
       if (q_fresh && p > q) break;  // (a pair of fresh nodes once)
-      const Mat3 gpq = column_block(column(nodes[static_cast<size_t>(p)]), yq);
-      ++block_products_;
+      const Mat3 gpq = block_between(nodes[static_cast<size_t>(p)], nodes[static_cast<size_t>(q)]);
       g.block<3, 3>(3 * p, 3 * q) = gpq;
       g.block<3, 3>(3 * q, 3 * p) = gpq.transpose();
     }

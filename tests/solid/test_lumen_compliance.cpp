@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <thread>
 #include <vector>
 
 #include "flowire/common/element.hpp"
@@ -184,6 +185,56 @@ TEST(LumenCompliance, ColumnsDroppedForTheBudgetAreSolvedAgainAndGiveTheSameComp
   EXPECT_LT((again - first).cwiseAbs().maxCoeff(), 1e-12 * first.cwiseAbs().maxCoeff());
   EXPECT_LT((again - unbounded).cwiseAbs().maxCoeff(), 1e-12 * first.cwiseAbs().maxCoeff());
   EXPECT_EQ(kept.dropped_nodes(), 0);
+}
+
+TEST(LumenCompliance, AColumnIsTheSameToTheBitAloneInABatchOrSolvedAheadOnASecondThread) {
+  // What a run gives must not depend on which thread solved a column or with which others: a
+  // node's column solved alone and in a batch of eight, and a sliding wire's compliance with its
+  // columns solved ahead on the second thread (anticipate) and on the caller's, agree to the bit.
+  ElasticSolid s = supported_tube();
+  s.linearize();
+  const int lumen = s.mesh().group_named("lumen");
+  LumenCompliance probe(s, lumen);
+  const std::vector<int> nodes = probe.nodes_near(probe_points(), 0.5e-3);
+  ASSERT_GE(nodes.size(), ElasticSolid::kHalfSolveBatch);
+  std::vector<std::vector<std::pair<int, double>>> loads(3 * ElasticSolid::kHalfSolveBatch);
+  for (size_t k = 0; k < ElasticSolid::kHalfSolveBatch; ++k)
+    for (int c = 0; c < 3; ++c) loads[3 * k + static_cast<size_t>(c)] = {{3 * nodes[k] + c, 1.0}};
+  std::vector<HalfColumns> batch(ElasticSolid::kHalfSolveBatch);
+  s.half_solve(loads, batch);
+  for (size_t k = 0; k < ElasticSolid::kHalfSolveBatch; ++k) {
+    HalfColumns alone;
+    s.half_solve(std::span(loads).subspan(3 * k, 3), alone);
+    EXPECT_EQ(alone.index, batch[k].index) << "node " << nodes[k];
+    EXPECT_EQ(alone.value, batch[k].value) << "node " << nodes[k];
+  }
+  if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: nothing is solved ahead";
+  LumenCompliance caller(s, lumen), ahead(s, lumen);
+  auto footprints = [&](LumenCompliance& c, double z0, std::vector<Vec3>* at = nullptr) {
+    std::vector<LumenPoint> p;
+    for (int k = 0; k < 8; ++k) {
+      const double phi = 0.3 + 0.05 * k, z = z0 + 0.25e-3 * k;
+      const Vec3 x((kA - 0.05e-3) * std::cos(phi), (kA - 0.05e-3) * std::sin(phi), z);
+      p.push_back(c.locate_patch(x, 0.445e-3));
+      if (at) at->push_back(x);
+    }
+    return p;
+  };
+  for (int step = 0; step < 6; ++step) {
+    const double z0 = 3e-3 + 0.4e-3 * step;
+    const auto p = footprints(caller, z0);
+    std::vector<Vec3> at;
+    const auto q = footprints(ahead, z0, &at);
+    std::vector<Vec3> d;
+    for (const auto& x : p) d.push_back(-x.normal);
+    const Eigen::MatrixXd by_caller = caller.compliance(p, d), by_ahead = ahead.compliance(q, d);
+    EXPECT_EQ(by_caller, by_ahead) << "step " << step;
+    ahead.anticipate(at, 0.445e-3 + 1e-3);  // the next step's, a little further along
+    ahead.wait_anticipated();
+  }
+  EXPECT_GT(ahead.anticipated_nodes(), 0);
+  EXPECT_LT(ahead.solved_nodes() - ahead.anticipated_nodes(), caller.solved_nodes())
+      << "the second thread solved none of what was asked for";
 }
 
 TEST(LumenCompliance, BlocksKeptFromTheLastCallGiveTheComplianceAFreshObjectGives) {

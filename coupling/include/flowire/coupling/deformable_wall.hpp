@@ -130,6 +130,10 @@ class DeformableWall final : public CompliantWall {
   void write_vtu(const std::filesystem::path& path, const Eigen::VectorXd& state) const override;
 
  private:
+  /// How far beyond a footprint the columns a next step may ask for are solved ahead [m].
+  static constexpr double kAnticipation = 1e-3;
+  /// Solve ahead the columns about @p points (a body's anchored points or loads, of @p radii).
+  void anticipate(std::span<const Vec3> points, std::span<const double> radii);
   std::unique_ptr<solid::ElasticSolid> solid_;
   std::unique_ptr<solid::LumenCompliance> lumen_;
   /// Each body's last forces on the wall: where (on the lumen) and how much.

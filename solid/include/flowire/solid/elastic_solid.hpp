@@ -54,6 +54,15 @@ struct HalfColumns {
   [[nodiscard]] size_t size() const { return index.size(); }
 };
 
+/// @brief Room for `half_solve`'s work: a thread that solves while another does needs its own.
+struct HalfSolveWork {
+  /// per supernode, the first column a solve reaches (INT_MAX: none); the supernodes reached; the
+  /// loads' rows; the right-hand sides (row by row, room for 3 × kHalfSolveBatch a row, zero between
+  /// calls); one supernode's rows gathered (one contiguous run a right-hand side)
+  std::vector<int> entry, touched, starts;
+  std::vector<double> x, gathered;
+};
+
 /// @brief The wall as an elastic solid.
 class ElasticSolid {
  public:
@@ -134,6 +143,14 @@ class ElasticSolid {
   /// separators, which every lumen node's reach ends in). Each y[k] holds the rows its own loads
   /// reach.
   void half_solve(std::span<const std::vector<std::pair<int, double>>> loads, std::span<HalfColumns> y) const;
+  /// @brief The same in workspace @p work: calls with distinct workspaces may run at the same time
+  /// (they only read the factor) once `prepare_half_solve` has run after the last factorization, and
+  /// while nothing factorizes. Each right-hand side's values do not depend on the others it is
+  /// solved with (its supernodes' columns are taken in the same blocks whatever the batch).
+  void half_solve(std::span<const std::vector<std::pair<int, double>>> loads, std::span<HalfColumns> y,
+                  HalfSolveWork& work) const;
+  /// @brief Make the maps half_solve walks the factor by (once a factorization).
+  void prepare_half_solve() const;
   static constexpr size_t kHalfSolveBatch = 8;
   /// @brief Whether `tangent_solve` has a tangent (a `linearize`, or a `solve` that kept its own).
   [[nodiscard]] bool linearized() const { return linearized_; }

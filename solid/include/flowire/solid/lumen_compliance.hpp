@@ -24,10 +24,17 @@
 /// this construction; it is positive definite where the points are distinct. The blocks G_ab among
 /// the nodes of a cache's last two calls are kept: a wire that slides along the wall reaches a few
 /// new nodes a step, and only their blocks are formed.
+///
+/// A second thread can solve columns ahead (anticipate): the nodes around where the contacts are
+/// now, which the next step's footprints, a little further along, will ask for. A column is the
+/// same whichever thread solves it and whatever it is solved with (ElasticSolid::half_solve), so
+/// what the compliance gives does not depend on the threads' timing; only how many columns were
+/// solved, and by which thread, does.
 #include <Eigen/Dense>
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <unordered_map>
 #include <utility>
@@ -55,6 +62,9 @@ class LumenCompliance {
   /// @param lumen the boundary group the points lie on
   /// @param budget bytes the kept columns may take (those used longest ago are dropped beyond it)
   LumenCompliance(const ElasticSolid& solid, int lumen, double budget = 1024.0 * 1024.0 * 1024.0);
+  ~LumenCompliance();
+  LumenCompliance(const LumenCompliance&) = delete;
+  LumenCompliance& operator=(const LumenCompliance&) = delete;
 
   /// @brief The lumen point nearest to @p x.
   [[nodiscard]] LumenPoint locate(const Vec3& x) const;
@@ -88,37 +98,56 @@ class LumenCompliance {
   [[nodiscard]] Eigen::VectorXd nodal_forces(std::span<const LumenPoint> points, std::span<const Vec3> forces) const;
   /// @brief Solve the columns the faces of @p points still lack.
   void prefetch(std::span<const LumenPoint> points);
+  /// @brief Have a second thread solve, while the caller goes on, the columns of the lumen nodes on
+  /// the faces within @p reach of @p points that are not solved yet; the calls that then ask for
+  /// them take them solved (or wait for the few being solved). A later call replaces the nodes not
+  /// begun. Nothing is done on a machine with one core. The solid must not be factorized again
+  /// before `clear` (which waits for the thread).
+  void anticipate(std::span<const Vec3> points, double reach);
+  /// @brief Wait until the second thread has solved what it was last asked for.
+  void wait_anticipated();
+  /// @brief The lumen nodes on the faces within @p reach of @p points, in the points' order.
+  [[nodiscard]] std::vector<int> nodes_near(std::span<const Vec3> points, double reach) const;
   /// @brief Columns solved so far (a lumen node's, three forward solves, each time it was
   /// solved), and those dropped to keep within the budget.
-  [[nodiscard]] int solved_nodes() const { return solved_; }
+  [[nodiscard]] int solved_nodes() const { return solved_ + anticipated_nodes(); }
   [[nodiscard]] int dropped_nodes() const { return dropped_; }
+  /// @brief Of the columns solved, those the second thread solved (anticipate).
+  [[nodiscard]] int anticipated_nodes() const;
   /// @brief Bytes the kept columns take.
   [[nodiscard]] size_t kept_bytes() const { return kept_bytes_; }
-  /// @brief Forget the kept columns (after the solid was linearized again).
-  void clear() {
-    columns_.clear();
-    last_use_.clear();
-    kept_bytes_ = 0;
-    blocks_.clear();
-  }
+  /// @brief Forget the kept columns, and stop the second thread's (before the solid is factorized
+  /// again, and after).
+  void clear();
   /// @brief How `compliance` is formed: from the kept node blocks, as C = Zᵀ Z, or (the default) the
   /// way the operation counts favour for each cache. Both are exact.
   enum class Way { automatic, blocks, columns };
   void set_way(Way way) { way_ = way; }
-  /// @brief The 3 × 3 blocks G_ab = Y_aᵀ Y_b that `compliance` formed (not kept from its last call).
+  /// @brief The 3 × 3 blocks G_ab = Y_aᵀ Y_b that `compliance` formed on the caller's thread (not
+  /// kept from its last call, nor formed ahead).
   [[nodiscard]] std::uint64_t block_products() const { return block_products_; }
 
  private:
   /// Node @p node's Y (L⁻¹ P times its three unit loads), solved by prefetch.
   using NodeColumns = HalfColumns;
-  [[nodiscard]] const NodeColumns& column(int node) const { return columns_.at(node); }
+  [[nodiscard]] const NodeColumns& column(int node) const { return *columns_.at(node); }
+  /// @p near ← the lumen faces (indices into faces_) whose closest point to @p x is within @p r.
+  void faces_within(const Vec3& x, double r, std::vector<int>& near) const;
   /// @p best ← lumen face k (index into faces_) if its closest point to @p x is nearer than @p best_d2.
   void closer(const Vec3& x, int k, LumenPoint& best, double& best_d2) const;
+  /// @p p's normal: its flat face's.
+  void set_normal(LumenPoint& p) const;
   /// @p p's weights: its face's six shape functions at its barycentric coordinates.
   void shape_weights(LumenPoint& p) const;
   const ElasticSolid& solid_;
-  std::vector<int> faces_;  ///< the lumen's faces
-  std::unordered_map<int, NodeColumns> columns_;
+  std::vector<int> faces_;               ///< the lumen's faces
+  std::vector<Vec3> face_lo_, face_hi_;  ///< (by faces_) the bounding box of each one's corners
+  /// (shared: the second thread reads the kept columns it forms blocks with, whatever the caller drops)
+  std::unordered_map<int, std::shared_ptr<const NodeColumns>> columns_;
+  /// Blocks G_ab = Y_aᵀ Y_b the second thread formed (key a·2³² + b), taken with its columns.
+  std::unordered_map<std::uint64_t, Mat3> pair_blocks_;
+  /// G_ab from pair_blocks_ (or its transpose from G_ba's), else formed here.
+  Mat3 block_between(int a, int b);
   std::unordered_map<int, std::uint64_t> last_use_;  ///< per kept column, the prefetch that last asked
   std::uint64_t tick_ = 0;
   double budget_ = 0.0;    ///< bytes
@@ -159,6 +188,15 @@ class LumenCompliance {
   Way way_ = Way::automatic;
   std::vector<char> mark_;  ///< per mesh node (0 between calls)
   std::uint64_t block_products_ = 0;
+  /// The second thread of `anticipate` and what it hands over (made on first use).
+  struct Ahead;
+  std::unique_ptr<Ahead> ahead_;
+  /// Solve the columns of nodes @p fresh on this thread.
+  void solve_columns(const std::vector<int>& fresh);
+  /// Keep column @p y as node @p node's.
+  void keep(int node, std::shared_ptr<const HalfColumns> y);
+  /// Take what the second thread has solved and formed (its lock held).
+  void take_ready();
   // A uniform grid of the lumen faces' bounding boxes for `locate`.
   Vec3 grid_origin_ = Vec3::Zero();
   double cell_ = 1.0;
