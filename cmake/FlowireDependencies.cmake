@@ -24,6 +24,9 @@ endif()
 # BLAS (whichever the system selects: scripts/install-deps.sh installs OpenBLAS) for the few
 # dense products called directly (the wall's contact compliance); CHOLMOD uses it too.
 find_package(BLAS REQUIRED)
+# OpenMP's runtime (GCC's libgomp, which CHOLMOD already loads): the wall asks it for teams no
+# larger than the free cores (solid/src/elastic_solid.cpp).
+find_package(OpenMP REQUIRED COMPONENTS CXX)
 
 if(FLOWIRE_WITH_VTK)
   find_package(VTK 9.1 REQUIRED COMPONENTS

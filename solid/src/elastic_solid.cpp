@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include <omp.h>
+
 #include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <array>
@@ -416,6 +418,12 @@ bool ElasticSolid::factorize_tangent(const Eigen::VectorXd& u) {
     factor_->analysed = true;
   }
   factor_->forget_maps();
+  // CHOLMOD's supernodal factorization updates each large supernode with an OpenMP team of a fixed
+  // four threads (its num_threads clause); on a machine with fewer cores they take turns, woken and
+  // put to sleep for every supernode, and the factorization took twice as long on two cores (the
+  // tortuous example's relinearizations 13.6 → 6.3 s, 4 s of system time gone). Dynamic teams are
+  // given no more threads than there are cores free.
+  omp_set_dynamic(1);
   factor_->llt.factorize(h);
   return factor_->llt.info() == Eigen::Success;
 }
