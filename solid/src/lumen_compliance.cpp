@@ -537,7 +537,7 @@ void LumenCompliance::take_ready() {
     a.state[static_cast<size_t>(node)] = Ahead::caller;
   }
   a.ready.clear();
-  if (pair_blocks_.size() > 100000) pair_blocks_.clear();  // (a few MB: those of past steps)
+  if (pair_blocks_.size() > 100000) pair_blocks_.clear();  // (about 10 MB: mostly those of past steps)
   for (const auto& [key, g] : a.blocks) pair_blocks_[key] = g;
   a.blocks.clear();
 }
