@@ -4,6 +4,7 @@
 #include "flowire/solid/lumen_compliance.hpp"
 
 #include <fmt/format.h>
+#include <sched.h>
 
 #include <Eigen/Sparse>
 
@@ -94,6 +95,14 @@ Mat3 column_block(const HalfColumns& a, const HalfColumns& b) {
     }
   }
   return g;
+}
+
+/// The cores this process may run on (its affinity; a process pinned to one core of many has one).
+int usable_cores() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return CPU_COUNT(&set);
+  return static_cast<int>(std::thread::hardware_concurrency());
 }
 
 /// The key of the ordered node pair (a, b).
@@ -419,7 +428,8 @@ std::vector<int> LumenCompliance::nodes_near(std::span<const Vec3> points, doubl
 }
 
 void LumenCompliance::anticipate(std::span<const Vec3> points, double reach) {
-  if (std::thread::hardware_concurrency() < 2) return;
+  static const int cores = usable_cores();
+  if (cores < 2) return;
   solid_.prepare_half_solve();  // (the maps the thread's solves read, made here before it reads them)
   if (!ahead_) {
     ahead_ = std::make_unique<Ahead>();

@@ -101,7 +101,7 @@ class LumenCompliance {
   /// @brief Have a second thread solve, while the caller goes on, the columns of the lumen nodes on
   /// the faces within @p reach of @p points that are not solved yet; the calls that then ask for
   /// them take them solved (or wait for the few being solved). A later call replaces the nodes not
-  /// begun. Nothing is done on a machine with one core. The solid must not be factorized again
+  /// begun. Nothing is done where the process may run on one core only. The solid must not be factorized again
   /// before `clear` (which waits for the thread).
   void anticipate(std::span<const Vec3> points, double reach);
   /// @brief Wait until the second thread has solved what it was last asked for.
