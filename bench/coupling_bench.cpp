@@ -340,6 +340,7 @@ void run_counters(benchmark::State& state, const nlohmann::json& summary) {
     state.counters["wall_seconds"] = summary["wall"]["seconds"].get<double>();
     state.counters["compliance_columns"] = summary["wall"]["compliance_columns"].get<double>();
     state.counters["columns_ahead"] = summary["wall"]["compliance_columns_ahead"].get<double>();
+    state.counters["ms_per_step_ahead"] = 1e3 * summary["wall"]["seconds_ahead"].get<double>() / steps;
   }
 }
 

@@ -553,6 +553,7 @@ nlohmann::json DeformableWall::summary() const {
             {"final_load", {load_total_.x(), load_total_.y(), load_total_.z()}},
             {"compliance_columns", compliance_columns()},
             {"compliance_columns_ahead", lumen_->anticipated_nodes()},
+            {"seconds_ahead", lumen_->anticipated_seconds()},
             {"compliance_columns_dropped", lumen_->dropped_nodes()},
             {"blood_pressure_max_lumen_displacement", pressure_response_.size() > 0 && last_pressure_.size() > 0
                                                           ? nlohmann::json(max_pressure_displacement())

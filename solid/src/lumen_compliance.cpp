@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstring>
@@ -398,6 +399,7 @@ struct LumenCompliance::Ahead {
   std::vector<int> inflight;  ///< the nodes of the batch being solved
   std::unordered_map<int, std::shared_ptr<const HalfColumns>> ready;
   std::atomic<int> solved{0};
+  std::atomic<std::int64_t> nanoseconds{0};  ///< spent solving and forming blocks
   HalfSolveWork work;
   std::thread thread;
 };
@@ -413,6 +415,10 @@ LumenCompliance::~LumenCompliance() {
 }
 
 int LumenCompliance::anticipated_nodes() const { return ahead_ ? ahead_->solved.load() : 0; }
+
+double LumenCompliance::anticipated_seconds() const {
+  return ahead_ ? 1e-9 * static_cast<double>(ahead_->nanoseconds.load()) : 0.0;
+}
 
 std::vector<int> LumenCompliance::nodes_near(std::span<const Vec3> points, double reach) const {
   const auto& m = solid_.mesh();
@@ -472,6 +478,7 @@ void LumenCompliance::anticipate(std::span<const Vec3> points, double reach) {
           for (size_t k = 0; k < batch.size(); ++k)
             for (int c = 0; c < 3; ++c) unit[3 * k + static_cast<size_t>(c)] = {{3 * batch[k] + c, 1.0}};
           solved.resize(batch.size());
+          const auto t0 = std::chrono::steady_clock::now();
           bool ok = true;
           try {
             solid_.half_solve(unit, solved, a.work);
@@ -487,6 +494,8 @@ void LumenCompliance::anticipate(std::span<const Vec3> points, double reach) {
               for (size_t j = 0; j < k; ++j)
                 blocks.emplace_back(pair_key(batch[k], batch[j]), column_block(solved[k], solved[j]));
             }
+          a.nanoseconds +=
+              std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
           lock.lock();
           for (auto& [key, g] : blocks) a.blocks[key] = g;
           for (size_t k = 0; k < batch.size(); ++k) {

@@ -114,6 +114,8 @@ class LumenCompliance {
   [[nodiscard]] int dropped_nodes() const { return dropped_; }
   /// @brief Of the columns solved, those the second thread solved (anticipate).
   [[nodiscard]] int anticipated_nodes() const;
+  /// @brief The second thread's time solving them and forming their blocks [s].
+  [[nodiscard]] double anticipated_seconds() const;
   /// @brief Bytes the kept columns take.
   [[nodiscard]] size_t kept_bytes() const { return kept_bytes_; }
   /// @brief Forget the kept columns, and stop the second thread's (before the solid is factorized
