@@ -247,7 +247,9 @@ bool DeformableWall::moved_beyond_linearization() {
 
 void DeformableWall::relinearize() {
   const auto t0 = Clock::now();
-  lumen_->clear();  // (the columns' second thread reads the factor this solve replaces)
+  // The columns of the last tangent dropped, and their second thread stopped: it reads the factor
+  // this solve replaces.
+  lumen_->clear();
   Eigen::VectorXd f = load_;
   if (last_pressure_.size() > 0) f += pressure_basis_ * last_pressure_;
   // Newton on the neo-Hookean solid under the loads as they stand (dead loads), then its tangent
@@ -298,7 +300,6 @@ void DeformableWall::relinearize() {
   x = f;
   solid_->tangent_solve(x);
   base_ = base_u_ - x.col(0);
-  lumen_->clear();                                      // the columns of the last tangent
   for (auto& [who, l] : loads_) l->response.resize(0);  // (about the new tangent when asked)
   if (pressure_response_.size() > 0) {
     pressure_response_.resize(0, 0);
